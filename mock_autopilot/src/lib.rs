@@ -1,0 +1,1 @@
+//! A PX4-like MAVLink vehicle that standard clients can fly.

@@ -1,0 +1,5 @@
+//! prgenuav: finds obstacle layouts that make an autonomous drone fly dangerously close to obstacles.
+//!
+//! Data flows one way: [`model`] (missions, obstacles, tests) -> generator -> low-fidelity simulator
+//! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
+#![warn(missing_docs)]
