@@ -2,6 +2,7 @@
 
 mod check;
 mod distance;
+mod sample;
 
 use std::process::ExitCode;
 
@@ -26,6 +27,26 @@ enum Command {
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
+    /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
+    Sample(sample::Args),
+}
+
+/// Key spelling of written YAML files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Spelling {
+    /// `robot:` and `mission:` (Aerialist since 2025-09).
+    New,
+    /// `drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's).
+    Old,
+}
+
+impl From<Spelling> for prgenuav::model::Spelling {
+    fn from(s: Spelling) -> Self {
+        match s {
+            Spelling::New => Self::New,
+            Spelling::Old => Self::Old,
+        }
+    }
 }
 
 /// Runs the parsed command line.
@@ -33,6 +54,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
+        Command::Sample(a) => sample::run(a),
     }
 }
 
