@@ -3,6 +3,7 @@
 mod check;
 mod distance;
 mod sample;
+mod score;
 
 use std::process::ExitCode;
 
@@ -29,6 +30,8 @@ enum Command {
     Distance(distance::Args),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
     Sample(sample::Args),
+    /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
+    Score(score::Args),
 }
 
 /// Key spelling of written YAML files.
@@ -55,6 +58,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),
+        Command::Score(a) => score::run(a),
     }
 }
 

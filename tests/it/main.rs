@@ -5,6 +5,8 @@ mod generator;
 mod geometry_props;
 mod missions;
 mod rules;
+mod score;
+mod ulog;
 
 use std::path::{Path, PathBuf};
 
