@@ -4,4 +4,5 @@ pub mod journal;
 pub mod parallel;
 pub mod pool;
 pub mod rank;
+pub mod report;
 pub mod score;
