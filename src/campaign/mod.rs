@@ -5,4 +5,5 @@ pub mod parallel;
 pub mod pool;
 pub mod rank;
 pub mod report;
+pub mod run;
 pub mod score;
