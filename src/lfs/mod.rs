@@ -5,11 +5,13 @@
 //! metres, m/s); [`frames`] converts from and to our local NED. Angles are degrees unless named `_rad`.
 
 pub mod cloud;
+pub mod cost;
 pub mod fov;
 pub mod frames;
 pub mod histogram;
 pub mod params;
 pub mod polar;
+pub mod smoothing;
 
 pub use fov::Fov;
 pub use params::{CostParams, PlannerParams};
