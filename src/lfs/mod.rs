@@ -10,9 +10,11 @@ pub mod fov;
 pub mod frames;
 pub mod histogram;
 pub mod params;
+pub mod planner;
 pub mod polar;
 pub mod smoothing;
 pub mod tree;
+pub mod waypoint;
 
 pub use fov::Fov;
 pub use params::{CostParams, PlannerParams};
