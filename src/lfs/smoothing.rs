@@ -103,6 +103,24 @@ pub struct SmoothScratch {
 /// the correctly rounded kernel sum (the original's f32 sum order is Eigen's and not reproducible anyway).
 /// Only the band of rows that can receive a non-zero value is computed; the rest is exactly 0.
 pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the body is the same code, compiled for AVX2.
+        unsafe { smooth_avx2(m, rows, cols, radius, s) };
+        return;
+    }
+    smooth_body(m, rows, cols, radius, s);
+}
+
+/// [`smooth_body`] compiled with AVX2 enabled (no fused multiply-add contraction: same results).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn smooth_avx2(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
+    smooth_body(m, rows, cols, radius, s);
+}
+
+#[inline(always)]
+fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
     let n = radius;
     pad_polar_matrix_into(m, rows, cols, n, &mut s.padded);
     let p = &s.padded;
