@@ -17,8 +17,11 @@ pub fn pad_polar_matrix(m: &[f32], rows: usize, cols: usize, n: usize) -> Vec<f3
 /// [`pad_polar_matrix`] into a reused buffer.
 pub fn pad_polar_matrix_into(m: &[f32], rows: usize, cols: usize, n: usize, p: &mut Vec<f32>) {
     let (pr, pc) = (rows + 2 * n, cols + 2 * n);
-    p.clear();
-    p.resize(pr * pc, 0.0);
+    // Every cell is written below when n <= rows; only zero-fill otherwise (or on a size change).
+    if n > rows {
+        p.clear();
+    }
+    reuse(p, pr * pc);
     let half = cols / 2;
     for r in 0..rows {
         p[(r + n) * pc + n..(r + n) * pc + n + cols].copy_from_slice(&m[r * cols..(r + 1) * cols]);
@@ -141,8 +144,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
 
     // Pass 1, along elevation, all padded columns at once. B[j] = sum of padded rows j..=j+n, j from r_lo.
     let nb = wr + n;
-    s.box_sums.clear();
-    s.box_sums.resize(nb * pc, 0.0);
+    reuse(&mut s.box_sums, nb * pc);
     s.acc.clear();
     s.acc.resize(pc, 0.0);
     for r in r_lo..=r_lo + n {
@@ -159,8 +161,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
         s.box_sums[j * pc..(j + 1) * pc].copy_from_slice(&s.acc);
     }
     // T[r] = sum of B[r..=r+n]; pass-1 output stored transposed (pc x wr) for a vectorisable pass 2.
-    s.pass1_t.clear();
-    s.pass1_t.resize(pc * wr, 0.0);
+    reuse(&mut s.pass1_t, pc * wr);
     s.acc.iter_mut().for_each(|v| *v = 0.0);
     for a in 0..=n {
         let b = &s.box_sums[a * pc..(a + 1) * pc];
@@ -183,8 +184,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
 
     // Pass 2, along azimuth, all band rows at once on the transposed pass-1 output.
     let q = &s.pass1_t;
-    s.col_box.clear();
-    s.col_box.resize((cols + n) * wr, 0.0);
+    reuse(&mut s.col_box, (cols + n) * wr);
     s.acc.clear();
     s.acc.resize(wr, 0.0);
     for c in 0..=n {
@@ -218,6 +218,13 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
         for (r, a) in s.acc.iter().enumerate() {
             m[(r_lo + r) * cols + c] = (a * inv) as f32;
         }
+    }
+}
+
+/// Sizes a scratch buffer without clearing it: callers overwrite every element they read.
+fn reuse<T: Copy + Default>(v: &mut Vec<T>, len: usize) {
+    if v.len() != len {
+        v.resize(len, T::default());
     }
 }
 
