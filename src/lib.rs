@@ -9,5 +9,6 @@ pub mod generator;
 pub mod geometry;
 pub mod io;
 pub mod judge;
+pub mod lfs;
 pub mod model;
 pub mod rules;
