@@ -3,3 +3,9 @@
 //! Data flows one way: [`model`] (missions, obstacles, tests) -> generator -> low-fidelity simulator
 //! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
 #![warn(missing_docs)]
+
+pub mod geometry;
+pub mod io;
+pub mod judge;
+pub mod model;
+pub mod rules;
