@@ -4,4 +4,9 @@
 //! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
 #![warn(missing_docs)]
 
+pub mod geometry;
+pub mod io;
+pub mod judge;
+pub mod model;
+pub mod rules;
 pub mod lfs;

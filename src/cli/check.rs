@@ -1,0 +1,47 @@
+//! `prgenuav check TEST.yaml [--json]`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use prgenuav::model::{Arena, TestCase};
+use prgenuav::rules::{Violation, check};
+
+/// Arguments of `check`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The test (or case study) YAML.
+    test: PathBuf,
+    /// Print `{"valid", "violations": [{"path", "value", "rule"}]}`.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    valid: bool,
+    violations: &'a [Violation],
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let test = TestCase::load(&args.test)?;
+    let violations = check(&test, &Arena::default());
+    let valid = violations.is_empty();
+    if args.json {
+        super::print_json(&Report {
+            valid,
+            violations: &violations,
+        })?;
+    } else if valid {
+        println!("{}: valid ({} obstacles)", args.test.display(), test.obstacles.len());
+    } else {
+        println!("{}: {} violation(s)", args.test.display(), violations.len());
+        for v in &violations {
+            println!("  {} = {}: {}", v.path, v.value, v.rule);
+        }
+    }
+    Ok(if valid {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(super::EXIT_FAIL)
+    })
+}

@@ -1,0 +1,43 @@
+//! Subcommands, one file each: validate arguments, call the library, print, return an exit code.
+
+mod check;
+mod distance;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Exit code: the input broke a rule (or a flight failed a check).
+pub const EXIT_FAIL: u8 = 1;
+/// Exit code: the input could not be read or the job could not run.
+pub const EXIT_ERROR: u8 = 2;
+
+/// Pseudo-random UAV test generation with a low-fidelity simulator, and flights over MAVLink.
+#[derive(Debug, Parser)]
+#[command(name = "prgenuav", version, about, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Check a test against the competition's rules (exit 0 valid, 1 violations, 2 unreadable).
+    Check(check::Args),
+    /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
+    Distance(distance::Args),
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Check(a) => check::run(a),
+        Command::Distance(a) => distance::run(a),
+    }
+}
+
+/// Prints `value` as pretty JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}

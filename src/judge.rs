@@ -1,0 +1,257 @@
+//! How the competition judges a flight (competition.md section 4): minimum distance to the obstacles,
+//! points per run and the test score.
+
+use serde::Serialize;
+
+use crate::geometry::{Footprint, P2};
+use crate::model::{AERIALIST_BIN_S, Obstacle, Sample, Trajectory};
+
+/// Distance of a flight to one obstacle, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ObstacleDistance {
+    /// Index of the obstacle in the test.
+    pub index: usize,
+    /// Aerialist's value: origin-aligned, 0.5 s bins, 2-D with the height-gap rule.
+    pub distance: f64,
+    /// The same rule on the origin-aligned path without binning.
+    pub distance_raw: f64,
+}
+
+/// Where the un-binned path came closest to an obstacle (origin-aligned frame, `x` North, `y` East, `z` up).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ClosestApproach {
+    /// Seconds from the first sample.
+    pub t_s: f64,
+    /// North, metres.
+    pub x: f64,
+    /// East, metres.
+    pub y: f64,
+    /// Height, metres.
+    pub z: f64,
+    /// The obstacle's index.
+    pub obstacle: usize,
+    /// The distance there, metres.
+    pub distance: f64,
+}
+
+/// The verdict on one flight.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FlightDistance {
+    /// The competition's minimum distance, metres.
+    pub min_distance: f64,
+    /// The continuous minimum distance on the un-binned path, metres.
+    pub min_distance_raw: f64,
+    /// Per obstacle, in test order.
+    pub per_obstacle: Vec<ObstacleDistance>,
+    /// Closest approach on the un-binned path.
+    pub closest: ClosestApproach,
+    /// Whether the un-binned path entered a box.
+    pub collision: bool,
+}
+
+/// Judges a trajectory against obstacles, as Aerialist does; `None` without samples or obstacles.
+///
+/// The trajectory is first origin-aligned (its first sample becomes the origin, as Aerialist's
+/// `ALLIGN_ORIGIN`); the competition's value then uses 0.5 s bin averages, the raw value every sample.
+pub fn judge_flight(trajectory: &Trajectory, obstacles: &[Obstacle]) -> Option<FlightDistance> {
+    if trajectory.samples.is_empty() || obstacles.is_empty() {
+        return None;
+    }
+    let raw = trajectory.origin_aligned();
+    let binned = raw.binned(AERIALIST_BIN_S);
+    let per_obstacle: Vec<ObstacleDistance> = obstacles
+        .iter()
+        .enumerate()
+        .map(|(index, o)| ObstacleDistance {
+            index,
+            distance: obstacle_distance(o, &binned.samples),
+            distance_raw: obstacle_distance(o, &raw.samples),
+        })
+        .collect();
+    let min = |f: fn(&ObstacleDistance) -> f64| per_obstacle.iter().map(f).fold(f64::INFINITY, f64::min);
+    let min_distance_raw = min(|d| d.distance_raw);
+    let closest = closest_approach(obstacles, &raw.samples);
+    Some(FlightDistance {
+        min_distance: min(|d| d.distance),
+        min_distance_raw,
+        per_obstacle,
+        closest,
+        collision: min_distance_raw == 0.0,
+    })
+}
+
+/// Aerialist's `Obstacle.distance`: 2-D distance from the footprint to the path as a polyline; when that is 0
+/// and the path over the footprint is higher than the box everywhere, the height gap instead.
+pub fn obstacle_distance(obstacle: &Obstacle, path: &[Sample]) -> f64 {
+    let f = obstacle.footprint();
+    let pts: Vec<P2> = path.iter().map(|s| P2::new(s.x, s.y)).collect();
+    let d = f.distance_to_polyline(&pts).unwrap_or(f64::INFINITY);
+    if d > 0.0 {
+        return d;
+    }
+    match lowest_over(&f, path) {
+        Some(z) if z > obstacle.size.h => z - obstacle.size.h,
+        _ => 0.0,
+    }
+}
+
+/// Lowest height of the path where it lies over the footprint (heights interpolated along segments).
+fn lowest_over(f: &Footprint, path: &[Sample]) -> Option<f64> {
+    let mut low: Option<f64> = None;
+    let mut see = |z: f64| low = Some(low.map_or(z, |l| l.min(z)));
+    if let [s] = path
+        && f.contains(P2::new(s.x, s.y))
+    {
+        see(s.z);
+    }
+    for w in path.windows(2) {
+        let (a, b) = (P2::new(w[0].x, w[0].y), P2::new(w[1].x, w[1].y));
+        if let Some((t0, t1)) = f.clip_segment(a, b) {
+            // Height is linear along a segment, so its minimum over [t0, t1] is at an end.
+            let z = |t: f64| w[0].z + (w[1].z - w[0].z) * t;
+            see(z(t0).min(z(t1)));
+        }
+    }
+    low
+}
+
+fn closest_approach(obstacles: &[Obstacle], path: &[Sample]) -> ClosestApproach {
+    let mut best = ClosestApproach {
+        t_s: 0.0,
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        obstacle: 0,
+        distance: f64::INFINITY,
+    };
+    for (k, o) in obstacles.iter().enumerate() {
+        let f = o.footprint();
+        let at = |s: &Sample| f.distance_to_point(P2::new(s.x, s.y));
+        let segments: Vec<(Sample, Sample)> = if path.len() == 1 {
+            vec![(path[0], path[0])]
+        } else {
+            path.windows(2).map(|w| (w[0], w[1])).collect()
+        };
+        for (a, b) in segments {
+            // Distance to a convex set is convex along a segment: a ternary search finds its minimum.
+            let lerp = |t: f64| Sample {
+                t_s: a.t_s + (b.t_s - a.t_s) * t,
+                x: a.x + (b.x - a.x) * t,
+                y: a.y + (b.y - a.y) * t,
+                z: a.z + (b.z - a.z) * t,
+                r: None,
+            };
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..60 {
+                let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+                if at(&lerp(m1)) <= at(&lerp(m2)) {
+                    hi = m2
+                } else {
+                    lo = m1
+                }
+            }
+            let s = lerp((lo + hi) / 2.0);
+            let mut d = at(&s);
+            if d == 0.0 && s.z > o.size.h {
+                d = s.z - o.size.h;
+            }
+            if d < best.distance {
+                best = ClosestApproach {
+                    t_s: s.t_s,
+                    x: s.x,
+                    y: s.y,
+                    z: s.z,
+                    obstacle: k,
+                    distance: d,
+                };
+            }
+        }
+    }
+    best
+}
+
+/// The competition's points for one run: 5 below 0.25 m, 2 below 1 m, 1 below 1.5 m, else 0.
+pub fn points(min_distance: f64) -> u32 {
+    if min_distance < 0.25 {
+        5
+    } else if min_distance < 1.0 {
+        2
+    } else if min_distance < 1.5 {
+        1
+    } else {
+        0
+    }
+}
+
+/// Test score: mean points x 10 / (obstacles^2 x mean flight time in minutes); 0 when undefined.
+pub fn test_score(run_distances: &[f64], run_flight_times_s: &[f64], obstacle_count: usize) -> f64 {
+    if run_distances.is_empty() || run_flight_times_s.is_empty() || obstacle_count == 0 {
+        return 0.0;
+    }
+    let mean_points = run_distances.iter().map(|d| f64::from(points(*d))).sum::<f64>() / run_distances.len() as f64;
+    let minutes = run_flight_times_s.iter().sum::<f64>() / run_flight_times_s.len() as f64 / 60.0;
+    if minutes <= 0.0 {
+        return 0.0;
+    }
+    mean_points * 10.0 / ((obstacle_count * obstacle_count) as f64 * minutes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn path(points: &[(f64, f64, f64, f64)]) -> Trajectory {
+        Trajectory::new(
+            points
+                .iter()
+                .map(|&(t_s, x, y, z)| Sample { t_s, x, y, z, r: None })
+                .collect(),
+        )
+    }
+
+    #[test]
+    fn straight_pass_beside_a_box() {
+        let o = Obstacle::new(4.0, 2.0, 20.0, 10.0, 3.0, 0.0);
+        let t = path(&[(0.0, 0.0, 0.0, 0.0), (5.0, 20.0, 0.0, 10.0)]);
+        let j = judge_flight(&t, &[o]).unwrap();
+        assert!((j.min_distance - 2.0).abs() < 1e-12);
+        assert!((j.min_distance_raw - 2.0).abs() < 1e-12);
+        assert!(!j.collision);
+        assert!(
+            (7.999..=12.0).contains(&j.closest.x) && j.closest.y.abs() < 1e-9,
+            "{:?}",
+            j.closest
+        );
+        assert!((j.closest.distance - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn passing_over_a_low_box_counts_the_height_gap() {
+        let o = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
+        let t = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 8.0), (2.0, 20.0, 0.0, 8.0)]);
+        let j = judge_flight(&t, &[o]).unwrap();
+        assert!((j.min_distance_raw - 3.0).abs() < 1e-12);
+        let crash = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 4.0), (2.0, 20.0, 0.0, 4.0)]);
+        assert!(judge_flight(&crash, &[o]).unwrap().collision);
+    }
+
+    #[test]
+    fn binning_changes_the_competition_value_only() {
+        // A swerve towards the box lasting one sample is averaged away by the 0.5 s bins.
+        let o = Obstacle::new(2.0, 2.0, 20.0, 5.0, 3.0, 0.0);
+        let mut pts: Vec<(f64, f64, f64, f64)> =
+            (0..=20).map(|i| (i as f64 * 0.1, i as f64 * 0.5, 0.0, 10.0)).collect();
+        pts[10].2 = 1.5; // at x = 5, 0.5 m from the box's near side (y = 2)
+        let j = judge_flight(&path(&pts), &[o]).unwrap();
+        assert!((j.min_distance_raw - 0.5).abs() < 1e-12);
+        assert!(j.min_distance > 1.5, "binned {}", j.min_distance);
+    }
+
+    #[test]
+    fn points_and_score() {
+        assert_eq!([0.1, 0.5, 1.2, 2.0].map(points), [5, 2, 1, 0]);
+        // 2 obstacles, two runs of 60 s with 5 and 1 points: mean 3 x 10 / (4 x 1) = 7.5.
+        assert!((test_score(&[0.1, 1.2], &[60.0, 60.0], 2) - 7.5).abs() < 1e-12);
+        assert_eq!(test_score(&[], &[], 2), 0.0);
+    }
+}

@@ -1,0 +1,65 @@
+//! Integration tests: one binary, one module per area, shared helpers here.
+
+mod cli_errors;
+mod geometry_props;
+mod missions;
+mod rules;
+
+use std::path::{Path, PathBuf};
+
+use prgenuav::model::{Obstacle, TestCase};
+
+/// The repository root (tests run with it as the working directory).
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A case study from `missions/`.
+pub fn case(n: u32) -> TestCase {
+    let path = repo().join(format!("missions/mission{n}.yaml"));
+    TestCase::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Runs the `prgenuav` binary in the repo root; returns (exit code, stdout, stderr).
+pub fn prgenuav(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_prgenuav"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("run prgenuav");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Writes `text` to `name` in a fresh temp dir and returns the dir (kept alive by the caller) and the path.
+pub fn temp_file(name: &str, text: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).expect("write temp file");
+    (dir, path)
+}
+
+/// Two valid obstacles for mission 2 (a pair a human placed by hand, checked by `check`).
+pub fn valid_pair() -> Vec<Obstacle> {
+    vec![
+        Obstacle::new(10.0, 2.0, 20.0, -5.0, 20.0, 30.0),
+        Obstacle::new(12.0, 2.0, 20.0, -12.0, 32.0, 60.0),
+    ]
+}
+
+/// A YAML of mission `n` with `obstacles`, written in a temp dir.
+pub fn test_file(n: u32, obstacles: Vec<Obstacle>) -> (tempfile::TempDir, PathBuf) {
+    let t = case(n).with_obstacles(obstacles);
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("test.yaml");
+    t.save(&path, prgenuav::model::Spelling::Old).expect("save");
+    (dir, path)
+}
+
+#[allow(dead_code)]
+pub fn exists(p: &Path) -> bool {
+    p.exists()
+}
