@@ -53,6 +53,15 @@ impl PointMemory {
         }
     }
 
+    /// A memory holding exactly `points` (ENU metres) with age 0, without subsampling (as `setPointcloud`).
+    pub fn from_points(points: &[Vector3<f32>]) -> Self {
+        let mut m = Self::new();
+        for p in points {
+            m.push(p.x, p.y, p.z, 0.0);
+        }
+        m
+    }
+
     /// Number of points held.
     pub fn len(&self) -> usize {
         self.xs.len()

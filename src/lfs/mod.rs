@@ -12,6 +12,7 @@ pub mod histogram;
 pub mod params;
 pub mod polar;
 pub mod smoothing;
+pub mod tree;
 
 pub use fov::Fov;
 pub use params::{CostParams, PlannerParams};
