@@ -10,7 +10,8 @@ use super::fov::{Fov, point_inside_fov};
 use super::histogram::cell_and_range;
 use super::params::PlannerParams;
 use super::polar::{
-    FAST_ATAN2_MAX_ERR_DEG, PolarDeg, cartesian_to_polar_fcu, fast_atan2_deg, wrap_180, wrap_polar,
+    FAST_ATAN2_MAX_ERR_DEG, PolarDeg, cartesian_to_polar_fcu, fast_atan2_deg, floor_f32, wrap_180,
+    wrap_polar,
 };
 
 /// Subsampling cell size: ALPHA_RES / SCALE_FACTOR = 6 / 3 = 2 degrees.
@@ -217,7 +218,8 @@ fn near(a: f32, b: f32) -> bool {
 /// Near a discontinuity of `wrap_180` (an odd multiple of 180 degrees)?
 fn near_wrap(a: f32) -> bool {
     let u = (a - 180.0) / 360.0;
-    (u - u.round()).abs() * 360.0 < FOV_MARGIN_DEG
+    let f = u - floor_f32(u);
+    f.min(1.0 - f) * 360.0 < FOV_MARGIN_DEG
 }
 
 fn fast_inside_fov_body(fovs: &[Fov], dx: f32, dy: f32, dz: f32, pose: &CloudPose) -> Option<bool> {

@@ -210,9 +210,26 @@ pub fn cost_matrix(
         let pitch = ctx.pitch_term(index_to_polar(e, 0, ALPHA_RES, 1.0).e_deg, k);
         let step = t.step[e];
         let row = e * GRID_Z;
-        for z in (0..GRID_Z).step_by(step) {
-            other[row + z] = ctx.velocity_term(&t.unit[row + z], k) + yaw[z] + line[z] + pitch;
-            dist[row + z] = distance_cost(hist.at(super::polar::CellIndex { e, z }), k);
+        let hist_row = &hist.cells()[row..row + GRID_Z];
+        let units = &t.unit[row..row + GRID_Z];
+        if step == 1 {
+            let o = &mut other[row..row + GRID_Z];
+            for (((((o, u), y), l), d), h) in o
+                .iter_mut()
+                .zip(units)
+                .zip(&yaw)
+                .zip(&line)
+                .zip(&mut dist[row..row + GRID_Z])
+                .zip(hist_row)
+            {
+                *o = ctx.velocity_term(u, k) + y + l + pitch;
+                *d = distance_cost(*h, k);
+            }
+        } else {
+            for z in (0..GRID_Z).step_by(step) {
+                other[row + z] = ctx.velocity_term(&units[z], k) + yaw[z] + line[z] + pitch;
+                dist[row + z] = distance_cost(hist_row[z], k);
+            }
         }
         if step > 1 {
             let mut last = 0;
@@ -268,15 +285,26 @@ pub fn best_candidates(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candid
     if n == 0 {
         return;
     }
-    let mut best: Vec<(f32, usize)> = Vec::with_capacity(n + 1);
-    for (i, &c) in total.iter().enumerate() {
-        if c.is_nan() || (best.len() == n && c >= best[n - 1].0) {
-            continue;
-        }
-        let pos = best.partition_point(|&(bc, _)| bc <= c);
-        best.insert(pos, (c, i));
-        best.truncate(n);
+    // Every cell of the n cheapest costs at most the n-th smallest row minimum (n distinct rows hold cells that
+    // cheap), so only cells up to that threshold need sorting. Sorting by (cost, index) is exact, ties included.
+    let mut row_min = [f32::INFINITY; GRID_E];
+    for (m, row) in row_min.iter_mut().zip(total.chunks_exact(GRID_Z)) {
+        *m = row.iter().fold(f32::INFINITY, |a, &b| a.min(b));
     }
+    let threshold = if n <= GRID_E {
+        row_min.sort_unstable_by(f32::total_cmp);
+        row_min[n - 1]
+    } else {
+        f32::INFINITY
+    };
+    let mut best: Vec<(f32, usize)> = total
+        .iter()
+        .enumerate()
+        .filter(|&(_, &c)| c <= threshold)
+        .map(|(i, &c)| (c, i))
+        .collect();
+    best.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    best.truncate(n);
     out.extend(best.iter().map(|&(cost, i)| {
         let p = index_to_polar(i / GRID_Z, i % GRID_Z, ALPHA_RES, 1.0);
         Candidate {

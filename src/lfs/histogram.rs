@@ -9,31 +9,56 @@ use nalgebra::Vector3;
 
 use super::polar::{
     ALPHA_RES, CellIndex, FAST_ATAN2_MAX_ERR_DEG, GRID_CELLS, GRID_E, GRID_Z,
-    cartesian_to_polar_histogram, fast_atan2_deg, near_boundary, polar_to_index,
+    cartesian_to_polar_histogram, fast_atan2_deg, polar_to_index,
 };
 
 /// Fast-path cells closer than this to a boundary (degrees) are recomputed exactly; 5x the fast error bound.
 const BOUNDARY_MARGIN_DEG: f32 = 5.0 * FAST_ATAN2_MAX_ERR_DEG;
 
+/// Fast cell guess for the offset `d = point - origin`: `(row, column, range, reliable)`. When `reliable` is
+/// false the point is within a margin of a cell boundary (or a pole/wrap) and the exact formula must decide.
+/// Branch-free so that loops over points vectorise.
+#[inline(always)]
+fn fast_cell(dx: f32, dy: f32, dz: f32, res: f32) -> (u32, u32, f32, bool) {
+    let h2 = dx * dx + dy * dy;
+    let den = h2.sqrt();
+    let r = (h2 + dz * dz).sqrt();
+    let ue = fast_atan2_deg(dz, den) / res + 90.0 / res;
+    let uz = fast_atan2_deg(dx, dy) / res + 180.0 / res;
+    // Truncation is floor here: u < 0 can only happen next to the -90/-180 boundary, which is flagged below.
+    let ie = ue as i32;
+    let iz = uz as i32;
+    let fe = ue - ie as f32;
+    let fz = uz - iz as f32;
+    let m = BOUNDARY_MARGIN_DEG / res;
+    let reliable = (fe > m) & (fe < 1.0 - m) & (fz > m) & (fz < 1.0 - m);
+    (ie as u32, iz as u32, r, reliable)
+}
+
+/// The exact cell: `polar_to_index(cartesian_to_polar_histogram(..))`.
+fn exact_cell(dx: f32, dy: f32, dz: f32, res_deg: i32) -> CellIndex {
+    polar_to_index(
+        cartesian_to_polar_histogram(&Vector3::new(dx, dy, dz), &Vector3::zeros()),
+        res_deg,
+    )
+}
+
 /// Cell (on a `res_deg` grid) and range of the ENU offset `d = point - origin`, identical to the exact
 /// `polar_to_index(cartesian_to_polar_histogram(..))` but mostly without the exact `atan2`.
 #[inline]
 pub fn cell_and_range(dx: f32, dy: f32, dz: f32, res_deg: i32) -> (CellIndex, f32) {
-    let h2 = dx * dx + dy * dy;
-    let den = h2.sqrt();
-    let r = (h2 + dz * dz).sqrt();
-    let res = res_deg as f32;
-    let e_a = fast_atan2_deg(dz, den);
-    let z_a = fast_atan2_deg(dx, dy);
-    if near_boundary(e_a, res, BOUNDARY_MARGIN_DEG) || near_boundary(z_a, res, BOUNDARY_MARGIN_DEG)
-    {
-        let p = cartesian_to_polar_histogram(&Vector3::new(dx, dy, dz), &Vector3::zeros());
-        return (polar_to_index(p, res_deg), r);
+    let (e, z, r, reliable) = fast_cell(dx, dy, dz, res_deg as f32);
+    if reliable {
+        (
+            CellIndex {
+                e: e as usize,
+                z: z as usize,
+            },
+            r,
+        )
+    } else {
+        (exact_cell(dx, dy, dz, res_deg), r)
     }
-    // Away from boundaries the wraps are identities and floor() of the approximate angle is exact.
-    let e = (e_a / res + 90.0 / res).floor() as usize;
-    let z = (z_a / res + 180.0 / res).floor() as usize;
-    (CellIndex { e, z }, r)
 }
 
 /// Mean obstacle distance (metres) per 6-degree cell; 0 = empty.
@@ -99,11 +124,42 @@ impl Histogram {
     ) {
         self.dist.fill(0.0);
         scratch.count.fill(0);
-        for ((x, y), z) in xs.iter().zip(ys).zip(zs) {
-            let (c, r) = cell_and_range(x - origin.x, y - origin.y, z - origin.z, ALPHA_RES);
-            let i = c.e * GRID_Z + c.z;
-            scratch.count[i] += 1;
-            self.dist[i] += r;
+        const CHUNK: usize = 64;
+        let mut cell = [0u32; CHUNK];
+        let mut range = [0f32; CHUNK];
+        let mut reliable = [false; CHUNK];
+        let res = ALPHA_RES as f32;
+        let n = xs.len().min(ys.len()).min(zs.len());
+        let mut start = 0;
+        while start < n {
+            let m = CHUNK.min(n - start);
+            // Vectorisable pass: fast cell guesses for the chunk.
+            for k in 0..m {
+                let i = start + k;
+                let (e, z, r, ok) =
+                    fast_cell(xs[i] - origin.x, ys[i] - origin.y, zs[i] - origin.z, res);
+                cell[k] = e.wrapping_mul(GRID_Z as u32).wrapping_add(z);
+                range[k] = r;
+                reliable[k] = ok;
+            }
+            // Scalar pass in input order (the sums must add up in the original's order).
+            for k in 0..m {
+                let i = if reliable[k] {
+                    cell[k] as usize
+                } else {
+                    let j = start + k;
+                    let c = exact_cell(
+                        xs[j] - origin.x,
+                        ys[j] - origin.y,
+                        zs[j] - origin.z,
+                        ALPHA_RES,
+                    );
+                    c.e * GRID_Z + c.z
+                };
+                scratch.count[i] += 1;
+                self.dist[i] += range[k];
+            }
+            start += m;
         }
         for (d, &n) in self.dist.iter_mut().zip(scratch.count.iter()) {
             *d = if n > 0 { *d / n as f32 } else { 0.0 };

@@ -11,11 +11,13 @@ pub mod fov;
 pub mod frames;
 pub mod histogram;
 pub mod params;
+pub mod planner;
 pub mod polar;
 pub mod render;
 pub mod render_fast;
 pub mod smoothing;
 pub mod tree;
+pub mod waypoint;
 
 pub use fov::Fov;
 pub use params::{CostParams, PlannerParams};

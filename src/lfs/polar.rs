@@ -49,15 +49,28 @@ pub struct CellIndex {
     pub z: usize,
 }
 
+/// Exactly `x.floor()` without a libm call (baseline x86-64 has no rounding instruction; `floorf` showed up in
+/// profiles). Values of magnitude >= 2^23 are already integers; NaN stays NaN.
+#[inline]
+pub fn floor_f32(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        if t > x { t - 1.0 } else { t }
+    } else {
+        x
+    }
+}
+
 /// Wraps an angle to [-180, 180): `a - 360 floor(a/360 + 1/2)`, so +180 maps to -180.
+#[inline]
 pub fn wrap_180(a_deg: f32) -> f32 {
-    a_deg - 360.0 * (a_deg / 360.0 + 0.5).floor()
+    a_deg - 360.0 * floor_f32(a_deg / 360.0 + 0.5)
 }
 
 /// Wraps an angle in radians to [-pi, pi) with the same rule as [`wrap_180`].
 pub fn wrap_pi(a_rad: f32) -> f32 {
     let two_pi = 2.0 * std::f32::consts::PI;
-    a_rad - two_pi * (a_rad / two_pi + 0.5).floor()
+    a_rad - two_pi * floor_f32(a_rad / two_pi + 0.5)
 }
 
 /// Polar wrap: both angles to [-180, 180), then an elevation beyond a pole is folded back and the azimuth
@@ -86,7 +99,9 @@ pub fn wrap_polar(p: PolarDeg) -> PolarDeg {
 
 /// Signed difference `a - b` in degrees brought into [-180, 180) via `fmod` (the original `angleDifference`).
 pub fn angle_difference(a_deg: f32, b_deg: f32) -> f32 {
-    let angle = (a_deg - b_deg) % 360.0;
+    let d = a_deg - b_deg;
+    // fmod is exact and the identity below 360 in magnitude; skip the libm call there.
+    let angle = if d.abs() < 360.0 { d } else { d % 360.0 };
     if angle >= 0.0 {
         if angle < 180.0 { angle } else { angle - 360.0 }
     } else if angle >= -180.0 {
@@ -133,8 +148,8 @@ pub fn cartesian_to_polar_fcu(p: &Vector3<f32>, origin: &Vector3<f32>) -> PolarD
 pub fn polar_to_index(p: PolarDeg, res_deg: i32) -> CellIndex {
     let w = wrap_polar(p);
     let res = res_deg as f32;
-    let e = (w.e_deg / res + 90.0 / res).floor() as i32;
-    let z = (w.z_deg / res + 180.0 / res).floor() as i32;
+    let e = floor_f32(w.e_deg / res + 90.0 / res) as i32;
+    let z = floor_f32(w.z_deg / res + 180.0 / res) as i32;
     CellIndex {
         e: e.clamp(0, 180 / res_deg - 1) as usize,
         z: z.clamp(0, 360 / res_deg - 1) as usize,
@@ -159,32 +174,24 @@ pub const FAST_ATAN2_MAX_ERR_DEG: f32 = 2e-3;
 /// cells are exactly those of the exact formula.
 #[inline]
 pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
+    // Branch-free (selects only) so loops over many points vectorise.
     let ax = x.abs();
     let ay = y.abs();
-    let mx = ax.max(ay);
+    let mx = ax.max(ay).max(f32::MIN_POSITIVE);
     let mn = ax.min(ay);
-    let t = if mx > 0.0 { mn / mx } else { 0.0 };
+    let t = mn / mx;
     let t2 = t * t;
     let mut a = t
         * (0.999_866
             + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
-    if ay > ax {
-        a = std::f32::consts::FRAC_PI_2 - a;
-    }
-    if x < 0.0 {
-        a = std::f32::consts::PI - a;
-    }
-    if y < 0.0 {
-        a = -a;
-    }
+    a = if ay > ax {
+        std::f32::consts::FRAC_PI_2 - a
+    } else {
+        a
+    };
+    a = if x < 0.0 { std::f32::consts::PI - a } else { a };
+    a = if y < 0.0 { -a } else { a };
     a * RAD_TO_DEG
-}
-
-/// True if `angle_deg` lies within `margin_deg` of a multiple of `res_deg` (a cell boundary).
-#[inline]
-pub fn near_boundary(angle_deg: f32, res_deg: f32, margin_deg: f32) -> bool {
-    let u = angle_deg / res_deg;
-    (u - u.round()).abs() * res_deg < margin_deg
 }
 
 #[cfg(test)]
@@ -283,7 +290,32 @@ mod tests {
         assert!(worst < FAST_ATAN2_MAX_ERR_DEG, "worst error {worst}");
     }
 
+    #[test]
+    fn floor_matches_std() {
+        for x in [
+            0.0f32,
+            -0.5,
+            0.5,
+            -1.0,
+            1.0,
+            -1e-30,
+            2.5e7,
+            -2.5e7,
+            8_388_607.5,
+            -8_388_607.5,
+            f32::INFINITY,
+        ] {
+            assert_eq!(floor_f32(x), x.floor(), "{x}");
+        }
+        assert!(floor_f32(f32::NAN).is_nan());
+    }
+
     proptest! {
+        #[test]
+        fn floor_matches_std_everywhere(x in proptest::num::f32::NORMAL | proptest::num::f32::SUBNORMAL | proptest::num::f32::ZERO) {
+            prop_assert_eq!(floor_f32(x), x.floor());
+        }
+
         #[test]
         fn wrap_180_range_and_congruence(a in -5000.0f32..5000.0) {
             let w = wrap_180(a);

@@ -9,8 +9,16 @@
 /// Pads `m` (`rows x cols`) by `n` cells on every side following the polar wrapping rules.
 /// Returns a `(rows + 2n) x (cols + 2n)` row-major matrix.
 pub fn pad_polar_matrix(m: &[f32], rows: usize, cols: usize, n: usize) -> Vec<f32> {
+    let mut p = Vec::new();
+    pad_polar_matrix_into(m, rows, cols, n, &mut p);
+    p
+}
+
+/// [`pad_polar_matrix`] into a reused buffer.
+pub fn pad_polar_matrix_into(m: &[f32], rows: usize, cols: usize, n: usize, p: &mut Vec<f32>) {
     let (pr, pc) = (rows + 2 * n, cols + 2 * n);
-    let mut p = vec![0.0f32; pr * pc];
+    p.clear();
+    p.resize(pr * pc, 0.0);
     let half = cols / 2;
     for r in 0..rows {
         p[(r + n) * pc + n..(r + n) * pc + n + cols].copy_from_slice(&m[r * cols..(r + 1) * cols]);
@@ -34,7 +42,6 @@ pub fn pad_polar_matrix(m: &[f32], rows: usize, cols: usize, n: usize) -> Vec<f3
             row[n + cols + c] = row[n + c];
         }
     }
-    p
 }
 
 /// The conic kernel `max(0, 1 + R - |k - R|)` scaled by `1 / max` (multiplication by the reciprocal, in f32).
@@ -82,6 +89,7 @@ pub fn smooth_reference(m: &mut [f32], rows: usize, cols: usize, radius: usize) 
 /// Reusable buffers for [`smooth_fast`].
 #[derive(Debug, Clone, Default)]
 pub struct SmoothScratch {
+    padded: Vec<f32>,
     box_sums: Vec<f64>,
     acc: Vec<f64>,
     pass1_t: Vec<f32>,
@@ -93,79 +101,115 @@ pub struct SmoothScratch {
 /// The triangle kernel is the convolution of two boxes of width R + 1, so each pass is two running box sums.
 /// They are accumulated in f64, which for the cost magnitudes here (1e-3 .. 1e6) is exact, so each pass yields
 /// the correctly rounded kernel sum (the original's f32 sum order is Eigen's and not reproducible anyway).
+/// Only the band of rows that can receive a non-zero value is computed; the rest is exactly 0.
 pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
-    if m.iter().all(|&v| v == 0.0) {
-        return;
-    }
     let n = radius;
-    let p = pad_polar_matrix(m, rows, cols, n);
-    let pc = cols + 2 * n;
+    pad_polar_matrix_into(m, rows, cols, n, &mut s.padded);
+    let p = &s.padded;
+    let (pr, pc) = (rows + 2 * n, cols + 2 * n);
+    let nonzero = |r: usize| p[r * pc..(r + 1) * pc].iter().any(|&v| v != 0.0);
+    let (Some(lo), Some(hi)) = (
+        (0..pr).find(|&r| nonzero(r)),
+        (0..pr).rev().find(|&r| nonzero(r)),
+    ) else {
+        m.iter_mut().for_each(|v| *v = 0.0);
+        return;
+    };
+    // Output row r reads padded rows r..=r+2n.
+    let r_lo = lo.saturating_sub(2 * n);
+    let r_hi = hi.min(rows - 1);
+    let wr = r_hi + 1 - r_lo;
     let inv = 1.0 / (n + 1) as f64;
 
-    // Pass 1, along elevation, all padded columns at once. B[j] = sum of padded rows j..=j+n.
-    let nb = rows + n;
+    // Pass 1, along elevation, all padded columns at once. B[j] = sum of padded rows j..=j+n, j from r_lo.
+    let nb = wr + n;
     s.box_sums.clear();
     s.box_sums.resize(nb * pc, 0.0);
     s.acc.clear();
     s.acc.resize(pc, 0.0);
-    for r in 0..=n {
+    for r in r_lo..=r_lo + n {
         add_row(&mut s.acc, &p[r * pc..(r + 1) * pc], 1.0);
     }
     s.box_sums[..pc].copy_from_slice(&s.acc);
     for j in 1..nb {
-        add_row(&mut s.acc, &p[(j + n) * pc..(j + n + 1) * pc], 1.0);
-        add_row(&mut s.acc, &p[(j - 1) * pc..j * pc], -1.0);
+        let g = r_lo + j;
+        running_step(
+            &mut s.acc,
+            &p[(g + n) * pc..(g + n + 1) * pc],
+            &p[(g - 1) * pc..g * pc],
+        );
         s.box_sums[j * pc..(j + 1) * pc].copy_from_slice(&s.acc);
     }
-    // T[r] = sum of B[r..=r+n]; store pass-1 output transposed (pc x rows) for a vectorisable pass 2.
+    // T[r] = sum of B[r..=r+n]; pass-1 output stored transposed (pc x wr) for a vectorisable pass 2.
     s.pass1_t.clear();
-    s.pass1_t.resize(pc * rows, 0.0);
+    s.pass1_t.resize(pc * wr, 0.0);
     s.acc.iter_mut().for_each(|v| *v = 0.0);
     for a in 0..=n {
         let b = &s.box_sums[a * pc..(a + 1) * pc];
         s.acc.iter_mut().zip(b).for_each(|(x, y)| *x += y);
     }
-    for r in 0..rows {
+    for r in 0..wr {
         if r > 0 {
-            for c in 0..pc {
-                s.acc[c] += s.box_sums[(r + n) * pc + c] - s.box_sums[(r - 1) * pc + c];
-            }
+            let add = &s.box_sums[(r + n) * pc..(r + n + 1) * pc];
+            let sub = &s.box_sums[(r - 1) * pc..r * pc];
+            s.acc
+                .iter_mut()
+                .zip(add)
+                .zip(sub)
+                .for_each(|((a, x), y)| *a += x - y);
         }
-        for c in 0..pc {
-            s.pass1_t[c * rows + r] = (s.acc[c] * inv) as f32;
+        for (c, a) in s.acc.iter().enumerate() {
+            s.pass1_t[c * wr + r] = (a * inv) as f32;
         }
     }
 
-    // Pass 2, along azimuth, all rows at once on the transposed pass-1 output.
+    // Pass 2, along azimuth, all band rows at once on the transposed pass-1 output.
     let q = &s.pass1_t;
     s.col_box.clear();
-    s.col_box.resize((cols + n) * rows, 0.0);
+    s.col_box.resize((cols + n) * wr, 0.0);
     s.acc.clear();
-    s.acc.resize(rows, 0.0);
+    s.acc.resize(wr, 0.0);
     for c in 0..=n {
-        add_row(&mut s.acc, &q[c * rows..(c + 1) * rows], 1.0);
+        add_row(&mut s.acc, &q[c * wr..(c + 1) * wr], 1.0);
     }
-    s.col_box[..rows].copy_from_slice(&s.acc);
+    s.col_box[..wr].copy_from_slice(&s.acc);
     for j in 1..cols + n {
-        add_row(&mut s.acc, &q[(j + n) * rows..(j + n + 1) * rows], 1.0);
-        add_row(&mut s.acc, &q[(j - 1) * rows..j * rows], -1.0);
-        s.col_box[j * rows..(j + 1) * rows].copy_from_slice(&s.acc);
+        running_step(
+            &mut s.acc,
+            &q[(j + n) * wr..(j + n + 1) * wr],
+            &q[(j - 1) * wr..j * wr],
+        );
+        s.col_box[j * wr..(j + 1) * wr].copy_from_slice(&s.acc);
     }
+    m.iter_mut().for_each(|v| *v = 0.0);
     s.acc.iter_mut().for_each(|v| *v = 0.0);
     for a in 0..=n {
-        let b = &s.col_box[a * rows..(a + 1) * rows];
+        let b = &s.col_box[a * wr..(a + 1) * wr];
         s.acc.iter_mut().zip(b).for_each(|(x, y)| *x += y);
     }
     for c in 0..cols {
         if c > 0 {
-            for r in 0..rows {
-                s.acc[r] += s.col_box[(c + n) * rows + r] - s.col_box[(c - 1) * rows + r];
-            }
+            let add = &s.col_box[(c + n) * wr..(c + n + 1) * wr];
+            let sub = &s.col_box[(c - 1) * wr..c * wr];
+            s.acc
+                .iter_mut()
+                .zip(add)
+                .zip(sub)
+                .for_each(|((a, x), y)| *a += x - y);
         }
-        for r in 0..rows {
-            m[r * cols + c] = (s.acc[r] * inv) as f32;
+        for (r, a) in s.acc.iter().enumerate() {
+            m[(r_lo + r) * cols + c] = (a * inv) as f32;
         }
     }
+}
+
+/// `acc += add - sub` element-wise (one step of a running box sum).
+#[inline]
+fn running_step(acc: &mut [f64], add: &[f32], sub: &[f32]) {
+    acc.iter_mut()
+        .zip(add)
+        .zip(sub)
+        .for_each(|((a, &x), &y)| *a += x as f64 - y as f64);
 }
 
 #[inline]
@@ -320,10 +364,19 @@ mod tests {
             (s >> 40) as f32 / (1u64 << 24) as f32
         };
         let mut scratch = SmoothScratch::default();
-        for trial in 0..20 {
+        for trial in 0..40 {
             let mut m: Vec<f32> = (0..GRID_E * GRID_Z)
                 .map(|_| if next() < 0.3 { next() * 10_000.0 } else { 0.0 })
                 .collect();
+            if trial % 2 == 1 {
+                // Sparse band of rows (sky above, nothing below): exercises the banded fast path.
+                let (lo, hi) = (trial % 7 * 3, trial % 7 * 3 + 4);
+                for (i, v) in m.iter_mut().enumerate() {
+                    if !(lo..=hi).contains(&(i / GRID_Z)) {
+                        *v = 0.0;
+                    }
+                }
+            }
             let mut r = m.clone();
             let radius = [7, 5, 3, 1][trial % 4];
             smooth_reference(&mut r, GRID_E, GRID_Z, radius);
