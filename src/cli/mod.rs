@@ -2,6 +2,7 @@
 
 mod check;
 mod distance;
+mod simulate;
 
 use std::process::ExitCode;
 
@@ -26,6 +27,8 @@ enum Command {
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
+    /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
+    Simulate(simulate::Args),
 }
 
 /// Runs the parsed command line.
@@ -33,6 +36,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
+        Command::Simulate(a) => simulate::run(a),
     }
 }
 
