@@ -2,6 +2,7 @@
 
 mod check;
 mod distance;
+mod fidelity;
 mod simulate;
 
 use std::process::ExitCode;
@@ -29,6 +30,8 @@ enum Command {
     Distance(distance::Args),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
     Simulate(simulate::Args),
+    /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
+    Fidelity(fidelity::Args),
 }
 
 /// Runs the parsed command line.
@@ -37,6 +40,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::Fidelity(a) => fidelity::run(a),
     }
 }
 

@@ -7,6 +7,7 @@
 pub mod camera;
 pub mod cloud;
 pub mod cost;
+pub mod fidelity;
 pub mod fov;
 pub mod frames;
 pub mod histogram;

@@ -20,7 +20,7 @@ use super::render::{CameraPose, Scene};
 use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
 use super::waypoint::{NavState, WaypointGenerator, WaypointInput};
 use crate::judge::{FlightDistance, judge_flight};
-use crate::model::{Obstacle, Sample, TestCase, Trajectory};
+use crate::model::{Mission, Obstacle, Param, Sample, TestCase, Trajectory};
 
 /// The stages of one tick, in order.
 pub const STAGES: [&str; 5] = ["sense", "plan", "control", "integrate", "record"];
@@ -182,8 +182,18 @@ fn f32v(v: &Vector3<f64>) -> Vector3<f32> {
 }
 
 impl World {
-    /// A vehicle on the ground at home, facing along the first leg, ready to fly `test`'s mission.
+    /// A vehicle on the ground at home, facing North, ready to fly `test`'s mission among its obstacles.
     pub fn new(test: &TestCase, config: SimConfig) -> Result<Self, SimError> {
+        Self::from_parts(&test.mission, &test.obstacles, &test.params, config)
+    }
+
+    /// As [`World::new`], from a mission, obstacles and PX4 parameters.
+    pub fn from_parts(
+        mission: &Mission,
+        obstacles: &[Obstacle],
+        px4_params: &[Param],
+        config: SimConfig,
+    ) -> Result<Self, SimError> {
         let ok = |v: f64| v.is_finite() && v > 0.0;
         if !ok(config.dt_s) || !ok(config.timeout_s) || !ok(config.stuck_s) || !ok(config.progress_m) {
             return Err(SimError::Setting(
@@ -193,10 +203,8 @@ impl World {
         let mut params = config.planner.clone();
         params.fovs = vec![config.camera.fov()];
         let planner = Planner::new(params.clone())?;
-        let mission_params = config
-            .mission
-            .unwrap_or_else(|| MissionParams::from_params(&test.params));
-        let mission = MissionRunner::new(&test.mission, mission_params).ok_or(SimError::EmptyMission)?;
+        let mission_params = config.mission.unwrap_or_else(|| MissionParams::from_params(px4_params));
+        let mission = MissionRunner::new(mission, mission_params).ok_or(SimError::EmptyMission)?;
         // PX4 starts facing North (yaw 0) in Gazebo's default spawn; ENU yaw pi/2.
         let vehicle = Vehicle {
             position_enu: Vector3::zeros(),
@@ -212,8 +220,8 @@ impl World {
             cycles: 0,
             vehicle,
             status: None,
-            scene: Scene::new(&test.obstacles),
-            obstacles: test.obstacles.clone(),
+            scene: Scene::new(obstacles),
+            obstacles: obstacles.to_vec(),
             camera: config.camera.clone(),
             keep: KeepRange {
                 min_m: params.min_sensor_range_m,
@@ -439,7 +447,17 @@ pub fn step(world: &mut World, dt: f64) -> Option<Status> {
 
 /// Simulates `test`'s mission with its obstacles until the flight ends, and judges the trajectory.
 pub fn simulate(test: &TestCase, config: &SimConfig) -> Result<SimResult, SimError> {
-    let mut world = World::new(test, config.clone())?;
+    simulate_parts(&test.mission, &test.obstacles, &test.params, config)
+}
+
+/// As [`simulate`], from a mission, obstacles and PX4 parameters.
+pub fn simulate_parts(
+    mission: &Mission,
+    obstacles: &[Obstacle],
+    px4_params: &[Param],
+    config: &SimConfig,
+) -> Result<SimResult, SimError> {
+    let mut world = World::from_parts(mission, obstacles, px4_params, config.clone())?;
     let dt = config.dt_s;
     let status = loop {
         if let Some(s) = step(&mut world, dt) {
@@ -447,7 +465,7 @@ pub fn simulate(test: &TestCase, config: &SimConfig) -> Result<SimResult, SimErr
         }
     };
     let trajectory = world.trajectory();
-    let distance = judge_flight(&trajectory, &test.obstacles);
+    let distance = judge_flight(&trajectory, obstacles);
     Ok(SimResult {
         status,
         flight_time_s: world.time_s,
