@@ -3,6 +3,7 @@
 mod check;
 mod distance;
 mod fidelity;
+mod render;
 mod simulate;
 
 use std::process::ExitCode;
@@ -28,6 +29,8 @@ enum Command {
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
+    /// Render the depth image (and point cloud) the vehicle's camera sees at a pose.
+    Render(render::Args),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
     Simulate(simulate::Args),
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
@@ -39,6 +42,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
+        Command::Render(a) => render::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fidelity(a) => fidelity::run(a),
     }

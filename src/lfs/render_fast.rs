@@ -160,7 +160,20 @@ pub fn render_cloud(
         let az_ambiguous = near_edge(ux.atan2(uy).to_degrees());
         let scale = fl * n;
         let tan_y = std::mem::take(&mut scratch.tan_y);
-        let el_of = |j: u32| (-tan_y[j as usize] / n).atan().to_degrees();
+        let tan_band = std::mem::take(&mut scratch.tan_band);
+        // Row slope (rise per horizontal metre); its band k holds tan_band[k] <= s < tan_band[k + 1].
+        let slope = |j: u32| -tan_y[j as usize] / n;
+        // Within EDGE_EPS_DEG of a band edge, in slope units (d tan(a) = (1 + tan^2) da).
+        let near_band_edge = |s: f64, k: usize| {
+            let eps = EDGE_EPS_DEG.to_radians() * (1.0 + s * s);
+            (s - tan_band[k]).abs() < eps || (tan_band[k + 1] - s).abs() < eps
+        };
+        let band_below = |s: f64, mut k: usize| {
+            while k > 0 && s < tan_band[k] {
+                k -= 1;
+            }
+            k
+        };
         for &(s_lo, s_hi) in &intervals {
             // Slope s of row j is (cy - j) / (fl n): rows from the top edge of the interval down.
             let (top, bottom) = (cy - scale * s_hi, cy - scale * s_lo);
@@ -182,12 +195,13 @@ pub fn render_cloud(
             }
             let (ja, jb) = (ja as u32, jb as u32);
             let mut j = ja;
+            let el0 = slope(ja).atan().to_degrees();
+            let mut k = ((el0 / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
             loop {
-                let el = el_of(j);
-                let k = ((el / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
+                let s_j = slope(j);
                 // Pixels that may fall on either side of an edge once the planner rounds them are always cast
-                // (they never hide another candidate); the next row is then surely inside band k.
-                let el_ambiguous = near_edge(el);
+                // (they never hide another candidate); the next row is then surely inside its band.
+                let el_ambiguous = near_band_edge(s_j, k);
                 if az_ambiguous || el_ambiguous {
                     scratch.extras.push(j * w + i);
                 }
@@ -195,23 +209,25 @@ pub fn render_cloud(
                     if az_ambiguous {
                         scratch.extras.push((j + 1) * w + i);
                     } else {
-                        let k1 = ((el_of(j + 1) / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
+                        let k1 = band_below(slope(j + 1), k);
                         scratch.offer(k1 * SUB_Z + z_idx, (j + 1) * w + i);
                     }
                 } else if !az_ambiguous && !el_ambiguous {
                     scratch.offer(k * SUB_Z + z_idx, j * w + i);
                 }
-                if j > ja && near_edge(el_of(j - 1)) {
+                if j > ja && near_band_edge(slope(j - 1), band_below(slope(j - 1), (k + 1).min(SUB_E - 1))) {
                     scratch.extras.push((j - 1) * w + i);
                 }
                 // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).
-                let next = (cy - scale * scratch.tan_band[k]).floor() + 1.0;
+                let next = (cy - scale * tan_band[k]).floor() + 1.0;
                 if next > f64::from(jb) || k == 0 {
                     break;
                 }
                 j = (next as u32).max(j + 1);
+                k = band_below(slope(j), k);
             }
         }
+        scratch.tan_band = tan_band;
         scratch.tan_y = tan_y;
     }
     scratch.keys.extend(scratch.touched.iter().map(|&c| scratch.first[c]));

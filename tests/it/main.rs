@@ -2,6 +2,7 @@
 
 mod cli_errors;
 mod geometry_props;
+mod lfs;
 mod missions;
 mod rules;
 
