@@ -11,4 +11,5 @@ pub mod io;
 pub mod judge;
 pub mod lfs;
 pub mod model;
+pub mod plot;
 pub mod rules;

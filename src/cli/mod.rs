@@ -2,8 +2,11 @@
 
 mod check;
 mod distance;
+mod fidelity;
+mod render;
 mod sample;
 mod score;
+mod simulate;
 
 use std::process::ExitCode;
 
@@ -32,6 +35,12 @@ enum Command {
     Sample(sample::Args),
     /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
     Score(score::Args),
+    /// Render the depth image (and point cloud) the vehicle's camera sees at a pose.
+    Render(render::Args),
+    /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
+    Simulate(simulate::Args),
+    /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
+    Fidelity(fidelity::Args),
 }
 
 /// Key spelling of written YAML files.
@@ -59,6 +68,9 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Score(a) => score::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Fidelity(a) => fidelity::run(a),
     }
 }
 

@@ -4,14 +4,21 @@
 //! Every position, velocity and direction here is in the planner's **ENU** world frame (x East, y North, z Up,
 //! metres, m/s); [`frames`] converts from and to our local NED. Angles are degrees unless named `_rad`.
 
+pub mod camera;
 pub mod cloud;
 pub mod cost;
+pub mod fidelity;
 pub mod fov;
 pub mod frames;
 pub mod histogram;
+pub mod mission;
+pub mod motion;
 pub mod params;
 pub mod planner;
 pub mod polar;
+pub mod render;
+pub mod render_fast;
+pub mod sim;
 pub mod smoothing;
 pub mod tree;
 pub mod waypoint;

@@ -3,6 +3,7 @@
 mod cli_errors;
 mod generator;
 mod geometry_props;
+mod lfs;
 mod missions;
 mod rules;
 mod score;

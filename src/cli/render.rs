@@ -1,0 +1,95 @@
+//! `prgenuav render TEST.yaml --pose X,Y,Z,YAW [--camera NAME] --out depth.npy [--points cloud.csv]`.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use nalgebra::Vector3;
+use prgenuav::io::write_atomic;
+use prgenuav::lfs::camera::{Camera, PRESET_NAMES};
+use prgenuav::lfs::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
+use prgenuav::lfs::render::{CameraPose, Scene, cloud_from_depth, render_depth};
+use prgenuav::model::{Arena, TestCase};
+use prgenuav::rules::check;
+
+/// Arguments of `render`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The test YAML whose obstacles are rendered (with the ground plane).
+    test: PathBuf,
+    /// Vehicle pose `X,Y,Z,YAW`: X North and Y East in metres (local NED), Z height above ground in metres
+    /// (positive up), YAW in degrees clockwise from North (as PX4).
+    #[arg(long, allow_hyphen_values = true)]
+    pose: String,
+    /// Camera preset: hfs (default; 59 deg, 640 x 480), 2019 (64 x 48), d455 (86 deg, 848 x 480).
+    #[arg(long, default_value = "hfs")]
+    camera: String,
+    /// Output depth image: float32 NumPy .npy, shape (H, W), metres along the optical axis, NaN = no return.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the point cloud as CSV `x,y,z` in local NED metres (z down), as the planner receives it.
+    #[arg(long)]
+    points: Option<PathBuf>,
+}
+
+fn parse_pose(s: &str) -> anyhow::Result<[f64; 4]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 4 {
+        bail!("--pose must be X,Y,Z,YAW (4 numbers), got {s:?}");
+    }
+    let mut v = [0.0; 4];
+    for (k, p) in parts.iter().enumerate() {
+        v[k] = p
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .with_context(|| format!("--pose: {p:?} is not a finite number"))?;
+    }
+    Ok(v)
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let [x, y, z, yaw_deg] = parse_pose(&args.pose)?;
+    let Some(camera) = Camera::preset(&args.camera) else {
+        bail!(
+            "unknown camera {:?} (use one of {})",
+            args.camera,
+            PRESET_NAMES.join(", ")
+        );
+    };
+    let test = TestCase::load(&args.test)?;
+    let violations = check(&test, &Arena::default());
+    if !violations.is_empty() {
+        eprintln!("{}: {} violation(s)", args.test.display(), violations.len());
+        for v in &violations {
+            eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
+        }
+        return Ok(ExitCode::from(super::EXIT_FAIL));
+    }
+    let pose = CameraPose::level(north_east_up_to_enu(x, y, z), yaw_ned_deg_to_enu_rad(yaw_deg));
+    let scene = Scene::new(&test.obstacles);
+    let depth = render_depth(&scene, &camera, &pose).with_context(|| format!("cannot render pose {}", args.pose))?;
+    write_atomic(&args.out, &depth.to_npy()).with_context(|| format!("writing {}", args.out.display()))?;
+    let valid = depth.data.iter().filter(|d| d.is_finite()).count();
+    if let Some(path) = &args.points {
+        let cloud = cloud_from_depth(&camera, &pose, &depth);
+        let mut csv = String::from("x,y,z\n");
+        for p in &cloud {
+            // ENU (x East, y North, z Up) to local NED.
+            let ned = Vector3::new(p.y, p.x, -p.z);
+            let _ = writeln!(csv, "{:.4},{:.4},{:.4}", ned.x, ned.y, ned.z);
+        }
+        write_atomic(path, csv.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        println!("{}: {} points", path.display(), cloud.len());
+    }
+    println!(
+        "{}: {} x {} depth image ({} camera), {} pixels with a return",
+        args.out.display(),
+        camera.width_px,
+        camera.height_px,
+        camera.name,
+        valid
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,422 @@
+//! How well the simulator predicts real flights: reads the competition's recorded flights (the JSON format of
+//! `hfs-flights/`), simulates each with the same mission and obstacles, and compares minimum distances
+//! (mean absolute error, Spearman rank correlation, precision and recall of "below 1.5 m"), overall and per tier.
+//!
+//! Ground truth per tier: A = the printed Aerialist value (the digitised one when none was printed);
+//! B = Aerialist's newer definition, which subtracts half the vehicle width (0.125 m), so our prediction is
+//! converted to it (`max(0, d - 0.125)`) before comparing; C = the generator's logged Aerialist value.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use serde_json::Value;
+
+use super::sim::{SimConfig, Status, simulate_parts};
+use crate::model::{GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, Param, Position, SIM_HOME, Size};
+
+/// "Below 1.5 m" is a soft failure in the competition.
+pub const FAIL_BELOW_M: f64 = 1.5;
+/// Half the vehicle width Aerialist subtracts since October 2024 (tier B).
+pub const HALF_VEHICLE_WIDTH_M: f64 = 0.125;
+/// Box height used where a flight did not record it (above the 10 m flight altitude, as the rules require).
+pub const DEFAULT_HEIGHT_M: f64 = 15.0;
+
+/// Why a flight file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum FidelityError {
+    /// File or folder cannot be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file is not a flight JSON of the expected format.
+    #[error("{path}: {message}")]
+    Format {
+        /// The path.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// One recorded flight, ready to simulate.
+#[derive(Debug, Clone)]
+pub struct FlightCase {
+    /// `id` of the file.
+    pub id: String,
+    /// Tier letter (`A`, `B`, `C`).
+    pub tier: String,
+    /// Mission name (`mission1`..).
+    pub mission_name: String,
+    /// The mission, local positions from the file's waypoints.
+    pub mission: Mission,
+    /// The obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// PX4 parameters of the flight (the competition's `mission-params.csv` where the file names it).
+    pub params: Vec<Param>,
+    /// The real minimum distance, metres, in the tier's definition.
+    pub real_m: f64,
+    /// Metres to subtract from a centre-line prediction to match the tier's definition.
+    pub definition_offset_m: f64,
+    /// Identical obstacle sets flown more than once share a group.
+    pub repeat_group: Option<String>,
+}
+
+/// The competition's `mission-params.csv`.
+pub fn competition_params() -> Vec<Param> {
+    [
+        ("NAV_ACC_RAD", 0.5),
+        ("NAV_MC_ALT_RAD", 0.5),
+        ("NAV_RCL_ACT", 3.0),
+        ("NAV_DLL_ACT", 0.0),
+        ("MIS_YAW_ERR", 12.0),
+        ("MIS_TAKEOFF_ALT", 1.0),
+        ("MPC_YAW_MODE", 0.0),
+        ("SDLOG_PROFILE", 7.0),
+    ]
+    .into_iter()
+    .map(|(n, v)| Param {
+        name: n.into(),
+        value: v,
+    })
+    .collect()
+}
+
+fn num(v: &Value) -> Option<f64> {
+    v.as_f64().filter(|x| x.is_finite())
+}
+
+/// Reads one flight file; `Ok(None)` if it has no obstacles or no recorded distance (nothing to compare).
+pub fn load_flight(path: &Path) -> Result<Option<FlightCase>, FidelityError> {
+    let text = std::fs::read_to_string(path).map_err(|source| FidelityError::Io {
+        path: path.into(),
+        source,
+    })?;
+    let bad = |m: &str| FidelityError::Format {
+        path: path.into(),
+        message: m.into(),
+    };
+    let doc: Value = serde_json::from_str(&text).map_err(|e| bad(&format!("not JSON: {e}")))?;
+    let id = doc["id"].as_str().ok_or_else(|| bad("missing id"))?.to_string();
+    let tier = doc["tier"].as_str().ok_or_else(|| bad("missing tier"))?;
+    let tier = tier.get(..1).unwrap_or("?").to_string();
+    let wps = doc["mission"]["waypoints"]
+        .as_array()
+        .ok_or_else(|| bad("missing mission.waypoints"))?;
+    let mut items = Vec::new();
+    for w in wps {
+        let cmd = w["cmd"]
+            .as_u64()
+            .filter(|c| *c <= u64::from(u16::MAX))
+            .ok_or_else(|| bad("waypoint without cmd"))?;
+        let local = match (num(&w["x"]), num(&w["y"]), num(&w["z"])) {
+            (Some(n), Some(e), Some(a)) => Some(LocalPoint {
+                north_m: n,
+                east_m: e,
+                alt_m: a,
+            }),
+            _ => None,
+        };
+        let global = match (num(&w["lat"]), num(&w["lon"])) {
+            (Some(lat), Some(lon)) => Some(GeoPoint {
+                lat_deg: lat,
+                lon_deg: lon,
+                alt_m: local.map_or(0.0, |l| l.alt_m),
+            }),
+            _ => None,
+        };
+        items.push(MissionItem {
+            command: cmd as u16,
+            frame: w["frame"].as_u64().unwrap_or(3).min(255) as u8,
+            params: [None; 7],
+            auto_continue: true,
+            global,
+            local,
+        });
+    }
+    if !items.iter().any(|i| i.local.is_some()) {
+        return Err(bad("the mission has no positional waypoint"));
+    }
+    let mission = Mission {
+        items,
+        planned_home: None,
+        home: SIM_HOME,
+        source: path.into(),
+    };
+    let mut obstacles = Vec::new();
+    for o in doc["obstacles"].as_array().ok_or_else(|| bad("missing obstacles"))? {
+        let f = |k: &str| num(&o[k]);
+        let (Some(l), Some(w), Some(x), Some(y)) = (f("l"), f("w"), f("x"), f("y")) else {
+            return Err(bad("obstacle without l, w, x or y"));
+        };
+        obstacles.push(Obstacle {
+            size: Size {
+                l,
+                w,
+                h: f("h").unwrap_or(DEFAULT_HEIGHT_M),
+            },
+            position: Position {
+                x,
+                y,
+                z: f("z").unwrap_or(0.0),
+                r: f("r").unwrap_or(0.0),
+            },
+        });
+    }
+    let real = num(&doc["hfs_min_distance_aerialist"]).or_else(|| num(&doc["hfs_min_distance_digitized"]));
+    let Some(real_m) = real else { return Ok(None) };
+    if obstacles.is_empty() {
+        return Ok(None);
+    }
+    let params = match doc["drone_params"].as_object() {
+        Some(m) => m
+            .iter()
+            .filter_map(|(k, v)| num(v).map(|value| Param { name: k.clone(), value }))
+            .collect(),
+        None => competition_params(),
+    };
+    // Group numbers are per source (the id's prefix).
+    let repeat_group = doc["repeat_group"]
+        .as_u64()
+        .map(|g| format!("{}#{g}", id.rsplit_once('_').map_or(id.as_str(), |p| p.0)));
+    Ok(Some(FlightCase {
+        id,
+        definition_offset_m: if tier == "B" { HALF_VEHICLE_WIDTH_M } else { 0.0 },
+        tier,
+        mission_name: doc["mission"]["name"].as_str().unwrap_or("?").to_string(),
+        mission,
+        obstacles,
+        params,
+        real_m,
+        repeat_group,
+    }))
+}
+
+/// Reads every `*.json` flight of `dir` (sorted by name); returns the usable cases and the skipped file names.
+pub fn load_dir(dir: &Path) -> Result<(Vec<FlightCase>, Vec<String>), FidelityError> {
+    let io = |source| FidelityError::Io {
+        path: dir.into(),
+        source,
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    let (mut cases, mut skipped) = (Vec::new(), Vec::new());
+    for f in files {
+        match load_flight(&f)? {
+            Some(c) => cases.push(c),
+            None => skipped.push(
+                f.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+            ),
+        }
+    }
+    Ok((cases, skipped))
+}
+
+/// One compared flight.
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseResult {
+    /// Flight id.
+    pub id: String,
+    /// Tier letter.
+    pub tier: String,
+    /// Mission name.
+    pub mission: String,
+    /// Real minimum distance (tier's definition), metres.
+    pub real: f64,
+    /// Predicted minimum distance (same definition), metres; `None` if the simulation could not run.
+    pub predicted: Option<f64>,
+    /// How the simulated flight ended.
+    pub status: Option<Status>,
+    /// |predicted - real|, metres.
+    pub abs_error: Option<f64>,
+}
+
+/// Agreement over a set of cases.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Aggregates {
+    /// Cases with a prediction.
+    pub n: usize,
+    /// Mean absolute error, metres.
+    pub mae: Option<f64>,
+    /// Spearman rank correlation of predicted vs real.
+    pub spearman: Option<f64>,
+    /// Of the cases predicted below 1.5 m, the fraction really below 1.5 m.
+    pub precision: Option<f64>,
+    /// Of the cases really below 1.5 m, the fraction predicted below 1.5 m.
+    pub recall: Option<f64>,
+}
+
+/// The whole comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct FidelityReport {
+    /// Per flight.
+    pub cases: Vec<CaseResult>,
+    /// Overall mean absolute error, metres.
+    pub mae: Option<f64>,
+    /// Overall Spearman rank correlation.
+    pub spearman: Option<f64>,
+    /// Overall precision of "below 1.5 m".
+    pub precision: Option<f64>,
+    /// Overall recall of "below 1.5 m".
+    pub recall: Option<f64>,
+    /// Per tier.
+    pub tiers: BTreeMap<String, Aggregates>,
+    /// How much the real simulator disagrees with itself: mean |d_i - d_j| over pairs of flights of the same
+    /// obstacle set (`None` without repeats).
+    pub hfs_repeat_mae: Option<f64>,
+    /// Files without obstacles or a recorded distance.
+    pub skipped: Vec<String>,
+}
+
+/// Ranks with ties averaged (1-based).
+fn ranks(v: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..v.len()).collect();
+    idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+    let mut r = vec![0.0; v.len()];
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && v[idx[j + 1]] == v[idx[i]] {
+            j += 1;
+        }
+        let avg = (i + j) as f64 / 2.0 + 1.0;
+        for k in &idx[i..=j] {
+            r[*k] = avg;
+        }
+        i = j + 1;
+    }
+    r
+}
+
+/// Spearman's rank correlation (Pearson on tie-averaged ranks); `None` for fewer than 2 pairs or no spread.
+pub fn spearman(a: &[f64], b: &[f64]) -> Option<f64> {
+    if a.len() != b.len() || a.len() < 2 {
+        return None;
+    }
+    let (ra, rb) = (ranks(a), ranks(b));
+    let n = a.len() as f64;
+    let (ma, mb) = (ra.iter().sum::<f64>() / n, rb.iter().sum::<f64>() / n);
+    let cov: f64 = ra.iter().zip(&rb).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = ra.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = rb.iter().map(|y| (y - mb).powi(2)).sum();
+    (va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+}
+
+/// MAE, Spearman, precision and recall over `(predicted, real)` pairs.
+pub fn aggregate(pairs: &[(f64, f64)]) -> Aggregates {
+    let n = pairs.len();
+    let mae = (n > 0).then(|| pairs.iter().map(|(p, r)| (p - r).abs()).sum::<f64>() / n as f64);
+    let (p, r): (Vec<f64>, Vec<f64>) = pairs.iter().copied().unzip();
+    let tp = pairs
+        .iter()
+        .filter(|(p, r)| *p < FAIL_BELOW_M && *r < FAIL_BELOW_M)
+        .count();
+    let pred_pos = pairs.iter().filter(|(p, _)| *p < FAIL_BELOW_M).count();
+    let real_pos = pairs.iter().filter(|(_, r)| *r < FAIL_BELOW_M).count();
+    Aggregates {
+        n,
+        mae,
+        spearman: spearman(&p, &r),
+        precision: (pred_pos > 0).then(|| tp as f64 / pred_pos as f64),
+        recall: (real_pos > 0).then(|| tp as f64 / real_pos as f64),
+    }
+}
+
+/// Mean |d_i - d_j| over pairs within each repeat group.
+fn repeat_mae(cases: &[FlightCase]) -> Option<f64> {
+    let mut groups: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for c in cases {
+        if let Some(g) = &c.repeat_group {
+            groups.entry(g).or_default().push(c.real_m);
+        }
+    }
+    let mut diffs = Vec::new();
+    for v in groups.values() {
+        for i in 0..v.len() {
+            for j in i + 1..v.len() {
+                diffs.push((v[i] - v[j]).abs());
+            }
+        }
+    }
+    (!diffs.is_empty()).then(|| diffs.iter().sum::<f64>() / diffs.len() as f64)
+}
+
+/// Simulates one case and compares.
+pub fn evaluate_case(case: &FlightCase, config: &SimConfig) -> CaseResult {
+    let sim = simulate_parts(&case.mission, &case.obstacles, &case.params, config).ok();
+    let predicted = sim
+        .as_ref()
+        .and_then(|s| s.distance.as_ref())
+        .map(|d| (d.min_distance - case.definition_offset_m).max(0.0));
+    CaseResult {
+        id: case.id.clone(),
+        tier: case.tier.clone(),
+        mission: case.mission_name.clone(),
+        real: case.real_m,
+        predicted,
+        status: sim.map(|s| s.status),
+        abs_error: predicted.map(|p| (p - case.real_m).abs()),
+    }
+}
+
+/// Simulates every case on up to `jobs` threads (in input order) and aggregates.
+pub fn evaluate(cases: &[FlightCase], skipped: Vec<String>, config: &SimConfig, jobs: usize) -> FidelityReport {
+    let jobs = jobs.clamp(1, cases.len().max(1));
+    let mut results: Vec<Option<CaseResult>> = vec![None; cases.len()];
+    std::thread::scope(|s| {
+        let chunks: Vec<_> = results.chunks_mut(cases.len().div_ceil(jobs).max(1)).collect();
+        let mut start = 0;
+        for chunk in chunks {
+            let from = start;
+            start += chunk.len();
+            s.spawn(move || {
+                for (k, slot) in chunk.iter_mut().enumerate() {
+                    *slot = Some(evaluate_case(&cases[from + k], config));
+                }
+            });
+        }
+    });
+    let results: Vec<CaseResult> = results.into_iter().flatten().collect();
+    report(results, cases, skipped)
+}
+
+fn report(results: Vec<CaseResult>, cases: &[FlightCase], skipped: Vec<String>) -> FidelityReport {
+    let pairs = |tier: Option<&str>| -> Vec<(f64, f64)> {
+        results
+            .iter()
+            .filter(|c| tier.is_none_or(|t| c.tier == t))
+            .filter_map(|c| c.predicted.map(|p| (p, c.real)))
+            .collect()
+    };
+    let all = aggregate(&pairs(None));
+    let mut tiers = BTreeMap::new();
+    for c in &results {
+        tiers
+            .entry(c.tier.clone())
+            .or_insert_with(|| aggregate(&pairs(Some(&c.tier))));
+    }
+    FidelityReport {
+        mae: all.mae,
+        spearman: all.spearman,
+        precision: all.precision,
+        recall: all.recall,
+        tiers,
+        hfs_repeat_mae: repeat_mae(cases),
+        skipped,
+        cases: results,
+    }
+}
+
+#[cfg(test)]
+#[path = "fidelity_tests.rs"]
+mod tests;

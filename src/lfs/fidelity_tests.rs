@@ -1,0 +1,69 @@
+use super::*;
+
+#[test]
+fn spearman_known_answers() {
+    let a = [1.0, 2.0, 3.0, 4.0];
+    assert_eq!(spearman(&a, &[10.0, 20.0, 30.0, 40.0]), Some(1.0));
+    assert_eq!(spearman(&a, &[4.0, 3.0, 2.0, 1.0]), Some(-1.0));
+    // Ties get averaged ranks: ranks of b are (1.5, 1.5, 3, 4).
+    let s = spearman(&a, &[1.0, 1.0, 2.0, 3.0]).unwrap();
+    assert!((s - 0.948_683).abs() < 1e-5, "{s}");
+    assert_eq!(spearman(&a, &[1.0, 1.0, 1.0, 1.0]), None);
+    assert_eq!(spearman(&[1.0], &[1.0]), None);
+}
+
+#[test]
+fn aggregates_by_hand() {
+    // (predicted, real): TP, FP, FN, TN.
+    let a = aggregate(&[(1.0, 1.2), (1.0, 3.0), (2.0, 0.5), (4.0, 5.0)]);
+    assert_eq!(a.n, 4);
+    assert!((a.mae.unwrap() - (0.2 + 2.0 + 1.5 + 1.0) / 4.0).abs() < 1e-12);
+    assert_eq!((a.precision, a.recall), (Some(0.5), Some(0.5)));
+    let none = aggregate(&[]);
+    assert_eq!((none.n, none.mae, none.precision), (0, None, None));
+}
+
+#[test]
+fn loads_every_tier_of_the_recorded_flights() {
+    let dir = std::path::Path::new("tests/data/hfs-flights");
+    let (cases, skipped) = load_dir(dir).unwrap();
+    assert_eq!(cases.len() + skipped.len(), 130);
+    assert_eq!(skipped.len(), 3, "{skipped:?}");
+    let b = cases.iter().find(|c| c.tier == "B").unwrap();
+    assert_eq!(b.definition_offset_m, HALF_VEHICLE_WIDTH_M);
+    let c = cases.iter().find(|c| c.id == "case_zhekai_002").unwrap();
+    assert_eq!(c.mission_name, "mission2");
+    assert_eq!(c.obstacles.len(), 2);
+    assert!((c.real_m - 3.6818).abs() < 1e-12);
+    assert_eq!(c.mission.flight_path().len(), 3);
+    assert!(c.params.iter().any(|p| p.name == "NAV_ACC_RAD" && p.value == 0.5));
+    assert!(cases.iter().filter(|c| c.repeat_group.is_some()).count() > 70);
+}
+
+#[test]
+fn bad_files_are_errors_not_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("x.json");
+    for text in [
+        "not json",
+        "{}",
+        r#"{"id": "a", "tier": "A", "mission": {"waypoints": []}, "obstacles": []}"#,
+    ] {
+        std::fs::write(&p, text).unwrap();
+        assert!(load_flight(&p).is_err(), "{text}");
+    }
+    assert!(load_dir(&dir.path().join("missing")).is_err());
+}
+
+#[test]
+fn evaluates_a_real_case_end_to_end() {
+    let flight = std::path::Path::new("tests/data/hfs-flights/case_sefbk_001.json");
+    let case = load_flight(flight).unwrap().unwrap();
+    let report = evaluate(std::slice::from_ref(&case), vec![], &SimConfig::default(), 2);
+    let r = &report.cases[0];
+    assert_eq!(r.status, Some(Status::Landed));
+    let p = r.predicted.unwrap();
+    assert!((0.0..20.0).contains(&p), "{p}");
+    assert_eq!(report.mae, r.abs_error);
+    assert_eq!(report.tiers["A"].n, 1);
+}
