@@ -7,9 +7,7 @@
 
 use std::time::Duration;
 
-use mavlink::dialects::common::{
-    MavMessage, MavSeverity, MavState, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA,
-};
+use mavlink::dialects::common::{MavMessage, MavSeverity, MavState, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA};
 
 use crate::dynamics::{Ned, Setpoint};
 
@@ -42,8 +40,7 @@ pub struct Avoidance {
 }
 
 fn finite3(x: f32, y: f32, z: f32) -> Option<Ned> {
-    (x.is_finite() && y.is_finite() && z.is_finite())
-        .then(|| Ned::new(x.into(), y.into(), z.into()))
+    (x.is_finite() && y.is_finite() && z.is_finite()).then(|| Ned::new(x.into(), y.into(), z.into()))
 }
 
 impl Avoidance {
@@ -64,12 +61,7 @@ impl Avoidance {
             return;
         }
         let yaw = t.pos_yaw[0].is_finite().then(|| f64::from(t.pos_yaw[0]));
-        self.answer = Some(Answer {
-            pos,
-            vel,
-            yaw,
-            at: now,
-        });
+        self.answer = Some(Answer { pos, vel, yaw, at: now });
         self.timeout_reported = false;
         self.hold = None;
     }
@@ -102,10 +94,7 @@ impl Avoidance {
         });
         if self.heartbeat.is_some() && !self.is_healthy(now) && !self.lost_reported {
             self.lost_reported = true;
-            texts.push((
-                MavSeverity::MAV_SEVERITY_CRITICAL,
-                "Avoidance system lost".into(),
-            ));
+            texts.push((MavSeverity::MAV_SEVERITY_CRITICAL, "Avoidance system lost".into()));
         }
         if nav_sp == Setpoint::Idle {
             return (nav_sp, msg);
@@ -145,15 +134,11 @@ impl Avoidance {
                 None => other,
             },
             (None, _) => {
-                if now.saturating_sub(self.answer.map_or(since, |a| a.at.max(since)))
-                    > ANSWER_TIMEOUT
+                if now.saturating_sub(self.answer.map_or(since, |a| a.at.max(since))) > ANSWER_TIMEOUT
                     && !self.timeout_reported
                 {
                     self.timeout_reported = true;
-                    texts.push((
-                        MavSeverity::MAV_SEVERITY_CRITICAL,
-                        "Avoidance system timeout".into(),
-                    ));
+                    texts.push((MavSeverity::MAV_SEVERITY_CRITICAL, "Avoidance system timeout".into()));
                 }
                 let h = *self.hold.get_or_insert(pos);
                 if h.z >= -0.05 {
@@ -197,9 +182,7 @@ fn request(
     };
     match *nav_sp {
         Setpoint::Position {
-            target_ned,
-            yaw_rad,
-            ..
+            target_ned, yaw_rad, ..
         } => {
             set_point(&mut t, 0, target_ned);
             t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
@@ -252,14 +235,7 @@ mod tests {
         let mut texts = vec![];
         let air = Ned::new(0.0, 0.0, -10.0);
         let ms = Duration::from_millis;
-        let (s, m) = a.apply(
-            ms(0),
-            sp(Ned::new(50.0, 0.0, -10.0)),
-            air,
-            [None, None],
-            0,
-            &mut texts,
-        );
+        let (s, m) = a.apply(ms(0), sp(Ned::new(50.0, 0.0, -10.0)), air, [None, None], 0, &mut texts);
         assert!(m.is_some(), "first request goes out at once");
         assert!(
             matches!(s, Setpoint::Position { target_ned, .. } if target_ned == air),
@@ -284,9 +260,7 @@ mod tests {
             &mut texts,
         );
         assert!(m.is_some());
-        assert!(
-            matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(3.0, 1.0, -10.0))
-        );
+        assert!(matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(3.0, 1.0, -10.0)));
         assert!(texts.is_empty());
         let (s, _) = a.apply(
             ms(700),
@@ -296,9 +270,7 @@ mod tests {
             0,
             &mut texts,
         );
-        assert!(
-            matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(1.0, 0.0, -10.0))
-        );
+        assert!(matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(1.0, 0.0, -10.0)));
         assert_eq!(texts.len(), 1);
         assert!(texts[0].1.contains("timeout"));
     }

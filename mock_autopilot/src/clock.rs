@@ -23,9 +23,7 @@ impl SpeedFactor {
         }
         match s.parse::<f64>() {
             Ok(k) if k.is_finite() && k > 0.0 => Ok(Self::Times(k)),
-            _ => Err(format!(
-                "speed factor {s:?}: expected a positive number or \"max\""
-            )),
+            _ => Err(format!("speed factor {s:?}: expected a positive number or \"max\"")),
         }
     }
 }
@@ -58,9 +56,7 @@ impl Pacer {
     /// The simulated time the simulation may reach at `wall_now` (None: unbounded).
     pub fn sim_target(&self, wall_now: Instant) -> Option<Duration> {
         match self.speed {
-            SpeedFactor::Times(k) => {
-                Some(wall_now.saturating_duration_since(self.start).mul_f64(k))
-            }
+            SpeedFactor::Times(k) => Some(wall_now.saturating_duration_since(self.start).mul_f64(k)),
             SpeedFactor::AsFastAsPossible => None,
         }
     }

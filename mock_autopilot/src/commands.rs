@@ -1,9 +1,7 @@
 //! COMMAND_LONG / COMMAND_INT handling with PX4's results; anything unknown is UNSUPPORTED.
 #![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
 
-use mavlink::dialects::common::{
-    COMMAND_ACK_DATA, MESSAGE_INTERVAL_DATA, MavCmd, MavMessage, MavResult, MavSeverity,
-};
+use mavlink::dialects::common::{COMMAND_ACK_DATA, MESSAGE_INTERVAL_DATA, MavCmd, MavMessage, MavResult, MavSeverity};
 
 use crate::modes::FlightMode;
 use crate::telemetry::{IntervalResult, ids};
@@ -32,11 +30,10 @@ impl Vehicle {
                 MavCmd::MAV_CMD_GET_HOME_POSITION => Some(ids::HOME_POSITION),
                 MavCmd::MAV_CMD_GET_MESSAGE_INTERVAL => {
                     let id = p[0] as u32;
-                    self.outbox
-                        .push(MavMessage::MESSAGE_INTERVAL(MESSAGE_INTERVAL_DATA {
-                            interval_us: self.streams.interval_us(id),
-                            message_id: id.min(u32::from(u16::MAX)) as u16,
-                        }));
+                    self.outbox.push(MavMessage::MESSAGE_INTERVAL(MESSAGE_INTERVAL_DATA {
+                        interval_us: self.streams.interval_us(id),
+                        message_id: id.min(u32::from(u16::MAX)) as u16,
+                    }));
                     None
                 }
                 _ => None,
@@ -82,7 +79,7 @@ impl Vehicle {
                 // param7 is AMSL altitude (NaN: MIS_TAKEOFF_ALT); COMMAND_INT z as well.
                 let _ = is_int;
                 let rel = if p[6].is_finite() {
-                    f64::from(p[6]) - self.origin.alt_amsl_m
+                    f64::from(p[6]) - self.origin.alt_m
                 } else {
                     f64::NAN
                 };
@@ -102,13 +99,11 @@ impl Vehicle {
                 self.set_mode(FlightMode::Rtl, self.nav_params.takeoff_alt_m);
                 MAV_RESULT_ACCEPTED
             }
-            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => {
-                match self.streams.set_interval(p[0] as u32, p[1], self.now) {
-                    IntervalResult::Accepted => MAV_RESULT_ACCEPTED,
-                    IntervalResult::UnknownMessage => MAV_RESULT_DENIED,
-                    IntervalResult::BadInterval => MAV_RESULT_DENIED,
-                }
-            }
+            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => match self.streams.set_interval(p[0] as u32, p[1], self.now) {
+                IntervalResult::Accepted => MAV_RESULT_ACCEPTED,
+                IntervalResult::UnknownMessage => MAV_RESULT_DENIED,
+                IntervalResult::BadInterval => MAV_RESULT_DENIED,
+            },
             MavCmd::MAV_CMD_GET_MESSAGE_INTERVAL => MAV_RESULT_ACCEPTED,
             MavCmd::MAV_CMD_REQUEST_MESSAGE => {
                 if p[0].is_finite() && p[0] >= 0.0 && self.build_message(p[0] as u32).is_some() {
@@ -117,9 +112,7 @@ impl Vehicle {
                     MAV_RESULT_DENIED
                 }
             }
-            MavCmd::MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES | MavCmd::MAV_CMD_GET_HOME_POSITION => {
-                MAV_RESULT_ACCEPTED
-            }
+            MavCmd::MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES | MavCmd::MAV_CMD_GET_HOME_POSITION => MAV_RESULT_ACCEPTED,
             _ => MAV_RESULT_UNSUPPORTED,
         }
     }
@@ -133,10 +126,7 @@ impl Vehicle {
             return MavResult::MAV_RESULT_DENIED;
         }
         if !self.landed && !force {
-            self.text(
-                MavSeverity::MAV_SEVERITY_CRITICAL,
-                "Disarming denied: not landed",
-            );
+            self.text(MavSeverity::MAV_SEVERITY_CRITICAL, "Disarming denied: not landed");
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
         }
         self.disarm("external command");

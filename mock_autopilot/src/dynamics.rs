@@ -115,8 +115,7 @@ pub fn wrap_pi(a: f64) -> f64 {
 }
 
 fn approach_speed(dist: f64, cap: f64, brake_acc: f64) -> f64 {
-    cap.min((2.0 * brake_acc * dist).sqrt())
-        .min(POS_GAIN * dist)
+    cap.min((2.0 * brake_acc * dist).sqrt()).min(POS_GAIN * dist)
 }
 
 impl Body {
@@ -155,12 +154,7 @@ impl Body {
                 let err_h = Ned::new(err.x, err.y, 0.0);
                 let d_h = err_h.norm();
                 let v_h = if d_h > 1e-9 {
-                    err_h
-                        * (approach_speed(
-                            d_h,
-                            h_speed_m_s.min(lim.max_h_speed_m_s),
-                            0.5 * lim.acc_hor_m_s2,
-                        ) / d_h)
+                    err_h * (approach_speed(d_h, h_speed_m_s.min(lim.max_h_speed_m_s), 0.5 * lim.acc_hor_m_s2) / d_h)
                 } else {
                     Ned::zeros()
                 };
@@ -314,9 +308,6 @@ mod tests {
             ..Default::default()
         };
         let (roll, pitch) = b.roll_pitch_rad();
-        assert!(
-            roll.abs() < 1e-12 && pitch < 0.0,
-            "nose down to accelerate north"
-        );
+        assert!(roll.abs() < 1e-12 && pitch < 0.0, "nose down to accelerate north");
     }
 }

@@ -85,22 +85,14 @@ impl Fence {
     }
 
     /// Build the fence from stored FENCE items, projecting about the local origin.
-    pub fn from_items(
-        items: &[MISSION_ITEM_INT_DATA],
-        proj: &LocalProjection,
-    ) -> Result<Fence, String> {
-        let to_ned = |it: &MISSION_ITEM_INT_DATA| {
-            proj.project(f64::from(it.x) * 1e-7, f64::from(it.y) * 1e-7)
-        };
+    pub fn from_items(items: &[MISSION_ITEM_INT_DATA], proj: &LocalProjection) -> Result<Fence, String> {
+        let to_ned = |it: &MISSION_ITEM_INT_DATA| proj.project(f64::from(it.x) * 1e-7, f64::from(it.y) * 1e-7);
         let mut shapes = Vec::new();
         for (start, len) in groups(items)? {
             let first = &items[start];
             if let Some(inclusion) = polygon_kind(first.command) {
                 let vertices = items[start..start + len].iter().map(to_ned).collect();
-                shapes.push(FenceShape::Polygon {
-                    inclusion,
-                    vertices,
-                });
+                shapes.push(FenceShape::Polygon { inclusion, vertices });
                 continue;
             }
             let inclusion = match first.command {
@@ -129,18 +121,12 @@ impl Fence {
         let mut inside_inclusion = false;
         for (i, s) in self.shapes.iter().enumerate() {
             let (inclusion, inside) = match s {
-                FenceShape::Polygon {
-                    inclusion,
-                    vertices,
-                } => (*inclusion, point_in_polygon(p, vertices)),
+                FenceShape::Polygon { inclusion, vertices } => (*inclusion, point_in_polygon(p, vertices)),
                 FenceShape::Circle {
                     inclusion,
                     center,
                     radius_m,
-                } => (
-                    *inclusion,
-                    (p.0 - center.0).hypot(p.1 - center.1) <= *radius_m,
-                ),
+                } => (*inclusion, (p.0 - center.0).hypot(p.1 - center.1) <= *radius_m),
             };
             if inclusion {
                 any_inclusion = true;
@@ -172,16 +158,10 @@ pub fn point_in_polygon(p: (f64, f64), vertices: &[(f64, f64)]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geo::DEFAULT_HOME;
+    use crate::geo::SIM_HOME;
     use proptest::prelude::*;
 
-    fn vertex(
-        cmd: MavCmd,
-        n: f32,
-        proj: &LocalProjection,
-        north: f64,
-        east: f64,
-    ) -> MISSION_ITEM_INT_DATA {
+    fn vertex(cmd: MavCmd, n: f32, proj: &LocalProjection, north: f64, east: f64) -> MISSION_ITEM_INT_DATA {
         let (lat, lon) = proj.unproject(north, east);
         MISSION_ITEM_INT_DATA {
             command: cmd,
@@ -194,7 +174,7 @@ mod tests {
 
     #[test]
     fn exclusion_square_and_inclusion_circle() {
-        let proj = LocalProjection::new(DEFAULT_HOME.lat_deg, DEFAULT_HOME.lon_deg);
+        let proj = LocalProjection::new(SIM_HOME);
         let ex = MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION;
         let mut items: Vec<_> = [(10.0, 10.0), (10.0, 20.0), (20.0, 20.0), (20.0, 10.0)]
             .iter()
@@ -216,15 +196,11 @@ mod tests {
 
     #[test]
     fn broken_polygons_are_refused() {
-        let proj = LocalProjection::new(DEFAULT_HOME.lat_deg, DEFAULT_HOME.lon_deg);
+        let proj = LocalProjection::new(SIM_HOME);
         let inc = MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION;
-        let items: Vec<_> = (0..3)
-            .map(|k| vertex(inc, 4.0, &proj, k as f64, 0.0))
-            .collect();
+        let items: Vec<_> = (0..3).map(|k| vertex(inc, 4.0, &proj, k as f64, 0.0)).collect();
         assert!(Fence::validate(&items).is_err());
-        let mut items: Vec<_> = (0..3)
-            .map(|k| vertex(inc, 3.0, &proj, k as f64, 1.0))
-            .collect();
+        let mut items: Vec<_> = (0..3).map(|k| vertex(inc, 3.0, &proj, k as f64, 1.0)).collect();
         items[2].param1 = 5.0;
         assert!(Fence::validate(&items).is_err());
     }

@@ -98,8 +98,7 @@ impl FaultyLink {
 
     /// True when nothing passes at `now` (silenced or rebooting).
     pub fn is_dead(&self, now: Duration) -> bool {
-        self.faults.silence_after.is_some_and(|t| now >= t)
-            || self.dead_until.is_some_and(|t| now < t)
+        self.faults.silence_after.is_some_and(|t| now >= t) || self.dead_until.is_some_and(|t| now < t)
     }
 
     /// Kill the link until `until` and drop everything in flight (a reboot).
@@ -190,8 +189,7 @@ mod tests {
         for k in 0..n {
             let now = Duration::from_millis(u64::from(k));
             l.outgoing(now, msg(k));
-            while let Some(MavMessage::ATTITUDE(a)) = l.pop_outgoing(now + Duration::from_secs(10))
-            {
+            while let Some(MavMessage::ATTITUDE(a)) = l.pop_outgoing(now + Duration::from_secs(10)) {
                 got.push(a.time_boot_ms);
             }
         }

@@ -1,10 +1,9 @@
 //! Builders for the telemetry messages, filled the way PX4 fills them.
 
 use mavlink::dialects::common::{
-    ATTITUDE_DATA, AUTOPILOT_VERSION_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA,
-    HEARTBEAT_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA,
-    MavAutopilot, MavMessage, MavMissionType, MavProtocolCapability, MavSysStatusSensor, MavType,
-    MavVtolState, MissionState, SYS_STATUS_DATA, VFR_HUD_DATA,
+    ATTITUDE_DATA, AUTOPILOT_VERSION_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, HEARTBEAT_DATA,
+    HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA, MavAutopilot, MavMessage, MavMissionType,
+    MavProtocolCapability, MavSysStatusSensor, MavType, MavVtolState, MissionState, SYS_STATUS_DATA, VFR_HUD_DATA,
 };
 
 use crate::modes::FlightMode;
@@ -98,8 +97,8 @@ impl Vehicle {
     fn global_position(&self) -> MavMessage {
         let (p, v) = (self.body.pos_ned, self.body.vel_ned);
         let (lat, lon) = self.proj.unproject(p.x, p.y);
-        let alt_amsl = self.origin.alt_amsl_m - p.z;
-        let home_alt = self.origin.alt_amsl_m - self.home_ned.z;
+        let alt_amsl = self.origin.alt_m - p.z;
+        let home_alt = self.origin.alt_m - self.home_ned.z;
         let hdg = self.body.yaw_rad.to_degrees().rem_euclid(360.0);
         MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
             time_boot_ms: self.time_boot_ms(),
@@ -119,7 +118,7 @@ impl Vehicle {
         MavMessage::VFR_HUD(VFR_HUD_DATA {
             airspeed: v.norm() as f32,
             groundspeed: v.xy().norm() as f32,
-            alt: (self.origin.alt_amsl_m - self.body.pos_ned.z) as f32,
+            alt: (self.origin.alt_m - self.body.pos_ned.z) as f32,
             climb: -v.z as f32,
             heading: self.body.yaw_rad.to_degrees().rem_euclid(360.0) as i16,
             throttle: if self.armed { 50 } else { 0 },
@@ -132,7 +131,7 @@ impl Vehicle {
         MavMessage::HOME_POSITION(HOME_POSITION_DATA {
             latitude: (lat * 1e7).round() as i32,
             longitude: (lon * 1e7).round() as i32,
-            altitude: ((self.origin.alt_amsl_m - h.z) * 1000.0).round() as i32,
+            altitude: ((self.origin.alt_m - h.z) * 1000.0).round() as i32,
             x: h.x as f32,
             y: h.y as f32,
             z: h.z as f32,
@@ -163,18 +162,9 @@ impl Vehicle {
             total,
             mission_state,
             mission_mode: u8::from(in_mission),
-            mission_id: self
-                .missions
-                .plan(MavMissionType::MAV_MISSION_TYPE_MISSION)
-                .opaque_id,
-            fence_id: self
-                .missions
-                .plan(MavMissionType::MAV_MISSION_TYPE_FENCE)
-                .opaque_id,
-            rally_points_id: self
-                .missions
-                .plan(MavMissionType::MAV_MISSION_TYPE_RALLY)
-                .opaque_id,
+            mission_id: self.missions.plan(MavMissionType::MAV_MISSION_TYPE_MISSION).opaque_id,
+            fence_id: self.missions.plan(MavMissionType::MAV_MISSION_TYPE_FENCE).opaque_id,
+            rally_points_id: self.missions.plan(MavMissionType::MAV_MISSION_TYPE_RALLY).opaque_id,
         })
     }
 

@@ -103,10 +103,7 @@ fn is_fence_cmd(cmd: MavCmd) -> bool {
 }
 
 /// Check one item of an upload of `ty` the way PX4's parser does.
-pub fn validate_item(
-    ty: MavMissionType,
-    item: &MISSION_ITEM_INT_DATA,
-) -> Result<(), MavMissionResult> {
+pub fn validate_item(ty: MavMissionType, item: &MISSION_ITEM_INT_DATA) -> Result<(), MavMissionResult> {
     let cmd = item.command;
     let allowed = match ty {
         MavMissionType::MAV_MISSION_TYPE_MISSION => {
@@ -150,9 +147,7 @@ pub fn validate_item(
         {
             Err(MavMissionResult::MAV_MISSION_INVALID_PARAM1)
         }
-        MAV_CMD_NAV_WAYPOINT | MAV_CMD_NAV_LOITER_TIME
-            if item.param1.is_nan() || item.param1 < 0.0 =>
-        {
+        MAV_CMD_NAV_WAYPOINT | MAV_CMD_NAV_LOITER_TIME if item.param1.is_nan() || item.param1 < 0.0 => {
             Err(MavMissionResult::MAV_MISSION_INVALID_PARAM1)
         }
         _ => Ok(()),
@@ -193,11 +188,7 @@ pub fn from_float_item(m: &MISSION_ITEM_DATA) -> MISSION_ITEM_INT_DATA {
 pub fn to_float_item(m: &MISSION_ITEM_INT_DATA) -> MISSION_ITEM_DATA {
     let positional = is_positional(m.command);
     let conv = |v: i32| {
-        if positional {
-            v as f32 * 1e-7
-        } else {
-            v as f32
-        }
+        if positional { v as f32 * 1e-7 } else { v as f32 }
     };
     MISSION_ITEM_DATA {
         param1: m.param1,
@@ -262,22 +253,13 @@ mod tests {
     fn px4_item_rules() {
         let m = MavMissionType::MAV_MISSION_TYPE_MISSION;
         let rel = MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT;
+        assert_eq!(validate_item(m, &item(MavCmd::MAV_CMD_NAV_WAYPOINT, rel)), Ok(()));
         assert_eq!(
-            validate_item(m, &item(MavCmd::MAV_CMD_NAV_WAYPOINT, rel)),
-            Ok(())
-        );
-        assert_eq!(
-            validate_item(
-                m,
-                &item(MavCmd::MAV_CMD_NAV_WAYPOINT, MavFrame::MAV_FRAME_LOCAL_NED)
-            ),
+            validate_item(m, &item(MavCmd::MAV_CMD_NAV_WAYPOINT, MavFrame::MAV_FRAME_LOCAL_NED)),
             Err(MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME)
         );
         assert_eq!(
-            validate_item(
-                m,
-                &item(MavCmd::MAV_CMD_SET_CAMERA_MODE, MavFrame::MAV_FRAME_MISSION)
-            ),
+            validate_item(m, &item(MavCmd::MAV_CMD_SET_CAMERA_MODE, MavFrame::MAV_FRAME_MISSION)),
             Ok(())
         );
         assert_eq!(
@@ -307,10 +289,7 @@ mod tests {
 
     #[test]
     fn float_roundtrip_and_checksum() {
-        let it = item(
-            MavCmd::MAV_CMD_NAV_WAYPOINT,
-            MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT,
-        );
+        let it = item(MavCmd::MAV_CMD_NAV_WAYPOINT, MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT);
         let back = from_float_item(&to_float_item(&it));
         assert!((back.x - it.x).abs() <= 40 && (back.y - it.y).abs() <= 40);
         let a = plan_checksum(std::slice::from_ref(&it));

@@ -7,8 +7,8 @@
 use std::time::Duration;
 
 use mavlink::dialects::common::{
-    MISSION_ACK_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MISSION_REQUEST_DATA,
-    MISSION_REQUEST_INT_DATA, MavMessage, MavMissionResult, MavMissionType, MavSeverity,
+    MISSION_ACK_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MISSION_REQUEST_DATA, MISSION_REQUEST_INT_DATA,
+    MavMessage, MavMissionResult, MavMissionType, MavSeverity,
 };
 
 use crate::mission_items::{from_float_item, plan_checksum, to_float_item, validate_item};
@@ -81,12 +81,7 @@ fn capacity(ty: MavMissionType) -> u16 {
     }
 }
 
-fn ack(
-    partner: (u8, u8),
-    ty: MavMissionType,
-    result: MavMissionResult,
-    opaque_id: u32,
-) -> MissionAction {
+fn ack(partner: (u8, u8), ty: MavMissionType, result: MavMissionResult, opaque_id: u32) -> MissionAction {
     MissionAction::Send(Box::new(MavMessage::MISSION_ACK(MISSION_ACK_DATA {
         target_system: partner.0,
         target_component: partner.1,
@@ -118,23 +113,14 @@ impl MissionServer {
     }
 
     /// Handle a message from `from` = (sysid, compid); non-mission messages return nothing.
-    pub fn on_message(
-        &mut self,
-        msg: &MavMessage,
-        from: (u8, u8),
-        now: Duration,
-    ) -> Vec<MissionAction> {
+    pub fn on_message(&mut self, msg: &MavMessage, from: (u8, u8), now: Duration) -> Vec<MissionAction> {
         match msg {
             MavMessage::MISSION_COUNT(c) => self.on_count(c, from, now),
             MavMessage::MISSION_ITEM_INT(it) => self.on_item(it.clone(), true, from, now),
             MavMessage::MISSION_ITEM(it) => self.on_item(from_float_item(it), false, from, now),
             MavMessage::MISSION_REQUEST_LIST(r) => self.on_request_list(r.mission_type, from, now),
-            MavMessage::MISSION_REQUEST_INT(r) => {
-                self.on_request(r.seq, r.mission_type, true, from, now)
-            }
-            MavMessage::MISSION_REQUEST(r) => {
-                self.on_request(r.seq, r.mission_type, false, from, now)
-            }
+            MavMessage::MISSION_REQUEST_INT(r) => self.on_request(r.seq, r.mission_type, true, from, now),
+            MavMessage::MISSION_REQUEST(r) => self.on_request(r.seq, r.mission_type, false, from, now),
             MavMessage::MISSION_ACK(_) => {
                 if matches!(self.transfer, Transfer::Sending { .. }) {
                     self.transfer = Transfer::Idle;
@@ -207,12 +193,7 @@ impl MissionServer {
         })))
     }
 
-    fn on_count(
-        &mut self,
-        c: &MISSION_COUNT_DATA,
-        from: (u8, u8),
-        now: Duration,
-    ) -> Vec<MissionAction> {
+    fn on_count(&mut self, c: &MISSION_COUNT_DATA, from: (u8, u8), now: Duration) -> Vec<MissionAction> {
         let ty = c.mission_type;
         let Some(i) = slot(ty) else {
             return vec![ack(from, ty, MavMissionResult::MAV_MISSION_ERROR, 0)];
@@ -250,13 +231,7 @@ impl MissionServer {
         self.request_next().into_iter().collect()
     }
 
-    fn on_item(
-        &mut self,
-        item: MISSION_ITEM_INT_DATA,
-        int: bool,
-        from: (u8, u8),
-        now: Duration,
-    ) -> Vec<MissionAction> {
+    fn on_item(&mut self, item: MISSION_ITEM_INT_DATA, int: bool, from: (u8, u8), now: Duration) -> Vec<MissionAction> {
         let Transfer::Receiving {
             ty,
             count,
@@ -292,10 +267,7 @@ impl MissionServer {
             return vec![
                 MissionAction::Text(
                     MavSeverity::MAV_SEVERITY_CRITICAL,
-                    format!(
-                        "Mission item {} rejected (result {})",
-                        item.seq, code as u32
-                    ),
+                    format!("Mission item {} rejected (result {})", item.seq, code as u32),
                 ),
                 ack(from, ty, code, 0),
             ];
@@ -327,12 +299,7 @@ impl MissionServer {
         ]
     }
 
-    fn on_request_list(
-        &mut self,
-        ty: MavMissionType,
-        from: (u8, u8),
-        now: Duration,
-    ) -> Vec<MissionAction> {
+    fn on_request_list(&mut self, ty: MavMissionType, from: (u8, u8), now: Duration) -> Vec<MissionAction> {
         let Some(i) = slot(ty) else {
             return vec![ack(from, ty, MavMissionResult::MAV_MISSION_ERROR, 0)];
         };
@@ -369,12 +336,7 @@ impl MissionServer {
             return vec![];
         }
         let Some(item) = slot(ty).and_then(|i| self.plans[i].items.get(usize::from(seq))) else {
-            return vec![ack(
-                from,
-                ty,
-                MavMissionResult::MAV_MISSION_INVALID_SEQUENCE,
-                0,
-            )];
+            return vec![ack(from, ty, MavMissionResult::MAV_MISSION_INVALID_SEQUENCE, 0)];
         };
         let mut item = item.clone();
         item.target_system = from.0;

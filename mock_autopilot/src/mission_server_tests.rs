@@ -1,8 +1,6 @@
 use super::*;
 use crate::scenarios::{item, mission2};
-use mavlink::dialects::common::{
-    MISSION_CLEAR_ALL_DATA, MISSION_REQUEST_LIST_DATA, MavCmd, MavFrame,
-};
+use mavlink::dialects::common::{MISSION_CLEAR_ALL_DATA, MISSION_REQUEST_LIST_DATA, MavCmd, MavFrame};
 
 const GCS: (u8, u8) = (255, 190);
 const MISSION: MavMissionType = MavMissionType::MAV_MISSION_TYPE_MISSION;
@@ -54,42 +52,23 @@ fn acks(a: &[MissionAction]) -> Vec<MavMissionResult> {
 fn upload_with_retries_duplicates_and_download() {
     let mut s = MissionServer::new(None);
     let items = mission2();
-    assert_eq!(
-        requested(&s.on_message(&count(4, MISSION), GCS, ms(0))),
-        vec![0]
-    );
+    assert_eq!(requested(&s.on_message(&count(4, MISSION), GCS, ms(0))), vec![0]);
     // No answer: re-request after 250 ms, not before.
     assert!(s.on_tick(ms(200)).is_empty());
     assert_eq!(requested(&s.on_tick(ms(250))), vec![0]);
-    let a = s.on_message(
-        &MavMessage::MISSION_ITEM_INT(items[0].clone()),
-        GCS,
-        ms(300),
-    );
+    let a = s.on_message(&MavMessage::MISSION_ITEM_INT(items[0].clone()), GCS, ms(300));
     assert_eq!(requested(&a), vec![1]);
     // A duplicate of item 0 and an out-of-order item 2 are dropped.
     assert!(
-        s.on_message(
-            &MavMessage::MISSION_ITEM_INT(items[0].clone()),
-            GCS,
-            ms(310)
-        )
-        .is_empty()
+        s.on_message(&MavMessage::MISSION_ITEM_INT(items[0].clone()), GCS, ms(310))
+            .is_empty()
     );
     assert!(
-        s.on_message(
-            &MavMessage::MISSION_ITEM_INT(items[2].clone()),
-            GCS,
-            ms(320)
-        )
-        .is_empty()
+        s.on_message(&MavMessage::MISSION_ITEM_INT(items[2].clone()), GCS, ms(320))
+            .is_empty()
     );
     for (k, it) in items.iter().enumerate().skip(1) {
-        let a = s.on_message(
-            &MavMessage::MISSION_ITEM_INT(it.clone()),
-            GCS,
-            ms(400 + k as u64),
-        );
+        let a = s.on_message(&MavMessage::MISSION_ITEM_INT(it.clone()), GCS, ms(400 + k as u64));
         if k < 3 {
             assert_eq!(requested(&a), vec![k as u16 + 1]);
         } else {
@@ -100,11 +79,7 @@ fn upload_with_retries_duplicates_and_download() {
     assert_eq!(s.plan(MISSION).items.len(), 4);
     assert_ne!(s.plan(MISSION).opaque_id, 0);
     // The last item again (our ACK was lost): ACK again.
-    let a = s.on_message(
-        &MavMessage::MISSION_ITEM_INT(items[3].clone()),
-        GCS,
-        ms(600),
-    );
+    let a = s.on_message(&MavMessage::MISSION_ITEM_INT(items[3].clone()), GCS, ms(600));
     assert_eq!(acks(&a), vec![MavMissionResult::MAV_MISSION_ACCEPTED]);
     // Download.
     let a = s.on_message(
@@ -128,14 +103,9 @@ fn upload_with_retries_duplicates_and_download() {
         })
     };
     let a = s.on_message(&req(2), GCS, ms(710));
-    assert!(
-        matches!(sent(&a)[0], MavMessage::MISSION_ITEM_INT(i) if i.seq == 2 && i.x == items[2].x)
-    );
+    assert!(matches!(sent(&a)[0], MavMessage::MISSION_ITEM_INT(i) if i.seq == 2 && i.x == items[2].x));
     let a = s.on_message(&req(9), GCS, ms(720));
-    assert_eq!(
-        acks(&a),
-        vec![MavMissionResult::MAV_MISSION_INVALID_SEQUENCE]
-    );
+    assert_eq!(acks(&a), vec![MavMissionResult::MAV_MISSION_INVALID_SEQUENCE]);
 }
 
 #[test]
@@ -166,21 +136,14 @@ fn errors_reject_codes_and_clear() {
     let mut local = item(0, MavCmd::MAV_CMD_NAV_WAYPOINT, 47.0, 8.0, 10.0);
     local.frame = MavFrame::MAV_FRAME_LOCAL_NED;
     let a = s.on_message(&MavMessage::MISSION_ITEM_INT(local), GCS, ms(1));
-    assert_eq!(
-        acks(&a),
-        vec![MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME]
-    );
+    assert_eq!(acks(&a), vec![MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME]);
     assert!(!s.is_receiving());
     assert_eq!(
         acks(&s.on_message(&count(5000, MISSION), GCS, ms(2))),
         vec![MavMissionResult::MAV_MISSION_NO_SPACE]
     );
     // Wrong mission_type inside a transfer.
-    s.on_message(
-        &count(1, MavMissionType::MAV_MISSION_TYPE_FENCE),
-        GCS,
-        ms(3),
-    );
+    s.on_message(&count(1, MavMissionType::MAV_MISSION_TYPE_FENCE), GCS, ms(3));
     let a = s.on_message(
         &MavMessage::MISSION_ITEM_INT(item(0, MavCmd::MAV_CMD_NAV_WAYPOINT, 47.0, 8.0, 10.0)),
         GCS,
@@ -204,12 +167,7 @@ fn errors_reject_codes_and_clear() {
         ms(5),
     );
     assert_eq!(acks(&a), vec![MavMissionResult::MAV_MISSION_ACCEPTED]);
-    assert_eq!(
-        a.iter()
-            .filter(|a| matches!(a, MissionAction::Updated(_)))
-            .count(),
-        3
-    );
+    assert_eq!(a.iter().filter(|a| matches!(a, MissionAction::Updated(_))).count(), 3);
     // count = 0 clears as well.
     assert_eq!(
         acks(&s.on_message(&count(0, MISSION), GCS, ms(6))),
@@ -222,13 +180,7 @@ fn fence_upload_is_stored_separately() {
     let mut s = MissionServer::new(None);
     let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
     s.on_message(&count(1, fence), GCS, ms(0));
-    let mut c = item(
-        0,
-        MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
-        47.3977,
-        8.5456,
-        0.0,
-    );
+    let mut c = item(0, MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION, 47.3977, 8.5456, 0.0);
     c.mission_type = fence;
     c.param1 = 5.0;
     let a = s.on_message(&MavMessage::MISSION_ITEM_INT(c), GCS, ms(1));

@@ -66,10 +66,7 @@ impl FlightMode {
 
     /// Decode a HEARTBEAT `custom_mode`.
     pub fn from_custom_mode(custom_mode: u32) -> Option<Self> {
-        Self::from_px4(
-            ((custom_mode >> 16) & 0xFF) as u8,
-            (custom_mode >> 24) as u8,
-        )
+        Self::from_px4(((custom_mode >> 16) & 0xFF) as u8, (custom_mode >> 24) as u8)
     }
 
     /// True for the AUTO modes (where the avoidance interface is active).

@@ -58,11 +58,7 @@ pub enum NavKind {
 }
 
 /// Convert stored items to navigator items (x,y as degrees × 1e7, z relative or AMSL).
-pub fn nav_items(
-    items: &[MISSION_ITEM_INT_DATA],
-    proj: &LocalProjection,
-    origin_alt_m: f64,
-) -> Vec<(MavCmd, NavKind)> {
+pub fn nav_items(items: &[MISSION_ITEM_INT_DATA], proj: &LocalProjection, origin_alt_m: f64) -> Vec<(MavCmd, NavKind)> {
     items
         .iter()
         .map(|it| {
@@ -76,25 +72,23 @@ pub fn nav_items(
             let target = Ned::new(n, e, -alt);
             let global = is_global_frame(it.frame);
             let kind = match it.command {
-                MavCmd::MAV_CMD_NAV_TAKEOFF | MavCmd::MAV_CMD_NAV_VTOL_TAKEOFF => {
-                    NavKind::Takeoff {
+                MavCmd::MAV_CMD_NAV_TAKEOFF | MavCmd::MAV_CMD_NAV_VTOL_TAKEOFF => NavKind::Takeoff {
+                    target,
+                    xy_set: xy_set && global,
+                },
+                MavCmd::MAV_CMD_NAV_WAYPOINT | MavCmd::MAV_CMD_NAV_LOITER_TO_ALT | MavCmd::MAV_CMD_NAV_LOITER_TURNS => {
+                    NavKind::Waypoint {
                         target,
-                        xy_set: xy_set && global,
+                        hold_s: if it.command == MavCmd::MAV_CMD_NAV_WAYPOINT {
+                            f64::from(it.param1.max(0.0))
+                        } else {
+                            0.0
+                        },
+                        acc_rad_m: (it.command == MavCmd::MAV_CMD_NAV_WAYPOINT && it.param2 > 0.0)
+                            .then_some(f64::from(it.param2)),
+                        forever: false,
                     }
                 }
-                MavCmd::MAV_CMD_NAV_WAYPOINT
-                | MavCmd::MAV_CMD_NAV_LOITER_TO_ALT
-                | MavCmd::MAV_CMD_NAV_LOITER_TURNS => NavKind::Waypoint {
-                    target,
-                    hold_s: if it.command == MavCmd::MAV_CMD_NAV_WAYPOINT {
-                        f64::from(it.param1.max(0.0))
-                    } else {
-                        0.0
-                    },
-                    acc_rad_m: (it.command == MavCmd::MAV_CMD_NAV_WAYPOINT && it.param2 > 0.0)
-                        .then_some(f64::from(it.param2)),
-                    forever: false,
-                },
                 MavCmd::MAV_CMD_NAV_LOITER_TIME => NavKind::Waypoint {
                     target,
                     hold_s: f64::from(it.param1.max(0.0)),
@@ -363,26 +357,14 @@ impl Navigator {
         if self.hold.z >= -0.05 && ctx.body.on_ground() {
             return Setpoint::Idle;
         }
-        self.goto(
-            self.hold,
-            ctx.p.cruise_m_s,
-            ctx.p.up_m_s,
-            ctx.p.down_m_s,
-            None,
-        )
+        self.goto(self.hold, ctx.p.cruise_m_s, ctx.p.up_m_s, ctx.p.down_m_s, None)
     }
 
     fn descend(&self, ctx: &NavCtx, xy: (f64, f64)) -> Setpoint {
         let alt = -ctx.body.pos_ned.z;
         let v = ctx.p.land_speed_at(alt);
         // Aim below the ground so the descent never stops short of touchdown.
-        self.goto(
-            Ned::new(xy.0, xy.1, 1.0),
-            ctx.p.cruise_m_s,
-            ctx.p.up_m_s,
-            v,
-            None,
-        )
+        self.goto(Ned::new(xy.0, xy.1, 1.0), ctx.p.cruise_m_s, ctx.p.up_m_s, v, None)
     }
 
     /// One update: the setpoint to fly and what happened.
@@ -520,23 +502,14 @@ impl Navigator {
                         self.phase = if pos.z <= z + p.alt_rad_m {
                             Phase::Approach
                         } else {
-                            Phase::Climb {
-                                xy: (pos.x, pos.y),
-                                z,
-                            }
+                            Phase::Climb { xy: (pos.x, pos.y), z }
                         };
                     }
                     if let Phase::Climb { xy, z } = self.phase {
                         if (pos.z - z).abs() <= p.alt_rad_m {
                             self.phase = Phase::Approach;
                         } else {
-                            return self.goto(
-                                Ned::new(xy.0, xy.1, z),
-                                cruise,
-                                p.takeoff_speed_m_s,
-                                p.down_m_s,
-                                None,
-                            );
+                            return self.goto(Ned::new(xy.0, xy.1, z), cruise, p.takeoff_speed_m_s, p.down_m_s, None);
                         }
                     }
                     let goal = if xy_set {
@@ -559,22 +532,13 @@ impl Navigator {
                     if self.phase == Phase::Start {
                         self.phase = Phase::Approach;
                     }
-                    let sp = self.goto(
-                        target,
-                        cruise,
-                        p.up_m_s,
-                        p.down_m_s,
-                        heading_to(&pos, &target),
-                    );
+                    let sp = self.goto(target, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &target));
                     match self.phase {
                         Phase::Approach => {
                             let acc = acc_rad_m.unwrap_or(p.acc_rad_m);
-                            if (target - pos).xy().norm() <= acc
-                                && (target.z - pos.z).abs() <= p.alt_rad_m
-                            {
+                            if (target - pos).xy().norm() <= acc && (target.z - pos.z).abs() <= p.alt_rad_m {
                                 self.phase = Phase::Hold {
-                                    until: (!forever)
-                                        .then(|| ctx.now + Duration::from_secs_f64(hold_s)),
+                                    until: (!forever).then(|| ctx.now + Duration::from_secs_f64(hold_s)),
                                 };
                                 if forever {
                                     ev.push(NavEvent::Reached(self.current as u16));
@@ -605,13 +569,7 @@ impl Navigator {
                                 self.phase = Phase::Descend { xy: (n, e) };
                                 continue;
                             }
-                            return self.goto(
-                                goal,
-                                cruise,
-                                p.up_m_s,
-                                p.down_m_s,
-                                heading_to(&pos, &goal),
-                            );
+                            return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
                         }
                         Phase::Descend { xy } => {
                             if ctx.body.on_ground() {

@@ -78,12 +78,7 @@ fn jumps_are_bounded_and_speed_changes_apply() {
     for _ in 0..20 {
         let _ = nav.update(&ctx(Duration::ZERO, &body, &p), &mut ev);
     }
-    assert!(
-        ev.iter()
-            .filter(|e| matches!(e, NavEvent::Reached(0)))
-            .count()
-            == 3
-    );
+    assert!(ev.iter().filter(|e| matches!(e, NavEvent::Reached(0))).count() == 3);
     assert_eq!(nav.speed_m_s, Some(2.0));
 }
 

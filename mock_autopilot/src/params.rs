@@ -4,8 +4,7 @@
 //! the bit pattern of the i32 inside the `f32` field, not as a converted float.
 
 use mavlink::dialects::common::{
-    MavMessage, MavParamType, MavSeverity, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA,
-    PARAM_VALUE_DATA,
+    MavMessage, MavParamType, MavSeverity, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA, PARAM_VALUE_DATA,
 };
 
 /// A parameter value with the type PX4 declares for it.
@@ -158,11 +157,7 @@ impl ParamTable {
 
     /// PARAM_REQUEST_LIST: every parameter.
     pub fn on_request_list(&self) -> ParamReply {
-        ParamReply::Values(
-            (0..self.entries.len())
-                .filter_map(|i| self.value_msg(i))
-                .collect(),
-        )
+        ParamReply::Values((0..self.entries.len()).filter_map(|i| self.value_msg(i)).collect())
     }
 
     /// PARAM_REQUEST_READ: by index, or by name when index is -1.
@@ -187,9 +182,7 @@ impl ParamTable {
             | MavParamType::MAV_PARAM_TYPE_INT16
             | MavParamType::MAV_PARAM_TYPE_UINT16
             | MavParamType::MAV_PARAM_TYPE_INT8
-            | MavParamType::MAV_PARAM_TYPE_UINT8 => {
-                ParamValue::Int(set.param_value.to_bits() as i32)
-            }
+            | MavParamType::MAV_PARAM_TYPE_UINT8 => ParamValue::Int(set.param_value.to_bits() as i32),
             _ if set.param_value.is_finite() => ParamValue::Float(set.param_value),
             _ => {
                 return ParamReply::Text(
@@ -209,10 +202,7 @@ impl ParamTable {
 }
 
 fn unknown(name: &str) -> ParamReply {
-    ParamReply::Text(
-        MavSeverity::MAV_SEVERITY_ERROR,
-        format!("[pm] unknown param: {name}"),
-    )
+    ParamReply::Text(MavSeverity::MAV_SEVERITY_ERROR, format!("[pm] unknown param: {name}"))
 }
 
 #[cfg(test)]
@@ -237,9 +227,7 @@ mod tests {
         };
         assert_eq!(v.len(), t.len());
         let found = v.iter().find_map(|m| match m {
-            MavMessage::PARAM_VALUE(p) if p.param_id.to_str().ok() == Some("GF_ACTION") => {
-                Some(p.clone())
-            }
+            MavMessage::PARAM_VALUE(p) if p.param_id.to_str().ok() == Some("GF_ACTION") => Some(p.clone()),
             _ => None,
         });
         let p = found.expect("GF_ACTION listed");
@@ -257,18 +245,10 @@ mod tests {
         ));
         assert!(matches!(r, ParamReply::Values(_)));
         assert_eq!(t.get("COM_OBS_AVOID"), Some(ParamValue::Int(1)));
-        t.on_set(&set_msg(
-            "NAV_ACC_RAD",
-            0.5,
-            MavParamType::MAV_PARAM_TYPE_REAL32,
-        ));
+        t.on_set(&set_msg("NAV_ACC_RAD", 0.5, MavParamType::MAV_PARAM_TYPE_REAL32));
         assert_eq!(t.get("NAV_ACC_RAD"), Some(ParamValue::Float(0.5)));
         // A float sent for an int param is converted, not reinterpreted.
-        t.on_set(&set_msg(
-            "GF_ACTION",
-            3.0,
-            MavParamType::MAV_PARAM_TYPE_REAL32,
-        ));
+        t.on_set(&set_msg("GF_ACTION", 3.0, MavParamType::MAV_PARAM_TYPE_REAL32));
         assert_eq!(t.get("GF_ACTION"), Some(ParamValue::Int(3)));
         assert_eq!(t.version(), 3);
     }
@@ -278,11 +258,7 @@ mod tests {
         let mut t = ParamTable::default();
         let r = t.on_set(&set_msg("NOPE", 1.0, MavParamType::MAV_PARAM_TYPE_REAL32));
         assert!(matches!(r, ParamReply::Text(_, ref s) if s.contains("NOPE")));
-        let r = t.on_set(&set_msg(
-            "NAV_ACC_RAD",
-            f32::NAN,
-            MavParamType::MAV_PARAM_TYPE_REAL32,
-        ));
+        let r = t.on_set(&set_msg("NAV_ACC_RAD", f32::NAN, MavParamType::MAV_PARAM_TYPE_REAL32));
         assert!(matches!(r, ParamReply::Text(..)));
         let r = t.on_request_read(&PARAM_REQUEST_READ_DATA {
             param_index: 999,

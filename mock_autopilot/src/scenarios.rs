@@ -5,8 +5,8 @@ use std::time::Duration;
 
 use mavlink::MavHeader;
 use mavlink::dialects::common::{
-    COMMAND_LONG_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMessage,
-    MavMissionResult, MavMissionType,
+    COMMAND_LONG_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMessage, MavMissionResult,
+    MavMissionType,
 };
 
 use crate::vehicle::Vehicle;
@@ -19,13 +19,7 @@ pub const GCS: MavHeader = MavHeader {
 };
 
 /// One global-relative-alt item.
-pub fn item(
-    seq: u16,
-    command: MavCmd,
-    lat_deg: f64,
-    lon_deg: f64,
-    rel_alt_m: f32,
-) -> MISSION_ITEM_INT_DATA {
+pub fn item(seq: u16, command: MavCmd, lat_deg: f64, lon_deg: f64, rel_alt_m: f32) -> MISSION_ITEM_INT_DATA {
     MISSION_ITEM_INT_DATA {
         seq,
         command,
@@ -49,13 +43,7 @@ pub fn mission2() -> Vec<MISSION_ITEM_INT_DATA> {
     cam.param2 = 2.0;
     vec![
         cam,
-        item(
-            1,
-            MavCmd::MAV_CMD_NAV_TAKEOFF,
-            47.3977419,
-            8.545593799999999,
-            10.0,
-        ),
+        item(1, MavCmd::MAV_CMD_NAV_TAKEOFF, 47.3977419, 8.545593799999999, 10.0),
         item(
             2,
             MavCmd::MAV_CMD_NAV_WAYPOINT,
@@ -63,13 +51,7 @@ pub fn mission2() -> Vec<MISSION_ITEM_INT_DATA> {
             8.546310969707491,
             10.0,
         ),
-        item(
-            3,
-            MavCmd::MAV_CMD_NAV_LAND,
-            47.39763082431753,
-            8.545595709237233,
-            0.0,
-        ),
+        item(3, MavCmd::MAV_CMD_NAV_LAND, 47.39763082431753, 8.545595709237233, 0.0),
     ]
 }
 
@@ -92,11 +74,7 @@ pub fn case_study_params() -> Vec<(String, crate::params::ParamValue)> {
 }
 
 /// Upload `items` into `v` through the mission protocol, in process. Returns the final ACK code.
-pub fn upload(
-    v: &mut Vehicle,
-    ty: MavMissionType,
-    items: &[MISSION_ITEM_INT_DATA],
-) -> Option<MavMissionResult> {
+pub fn upload(v: &mut Vehicle, ty: MavMissionType, items: &[MISSION_ITEM_INT_DATA]) -> Option<MavMissionResult> {
     v.handle(
         &GCS,
         &MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {

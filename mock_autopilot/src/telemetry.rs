@@ -124,9 +124,7 @@ impl Streams {
     /// Interval in µs for MESSAGE_INTERVAL (-1 disabled, 0 unknown message).
     pub fn interval_us(&self, id: u32) -> i32 {
         match self.entries.iter().find(|s| s.id == id) {
-            Some(Stream {
-                interval: Some(iv), ..
-            }) => iv.as_micros().min(i32::MAX as u128) as i32,
+            Some(Stream { interval: Some(iv), .. }) => iv.as_micros().min(i32::MAX as u128) as i32,
             Some(_) => -1,
             None => 0,
         }

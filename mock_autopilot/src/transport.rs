@@ -78,8 +78,7 @@ impl Transport for UdpTransport {
             return Ok(()); // nobody to talk to yet
         };
         let mut buf = Vec::with_capacity(280);
-        mavlink::write_v2_msg(&mut buf, header(&self.sequence), msg)
-            .map_err(|e| io::Error::other(e.to_string()))?;
+        mavlink::write_v2_msg(&mut buf, header(&self.sequence), msg).map_err(|e| io::Error::other(e.to_string()))?;
         self.socket.send_to(&buf, remote).await.map(|_| ())
     }
 

@@ -8,14 +8,14 @@ use std::time::Duration;
 
 use mavlink::MavHeader;
 use mavlink::dialects::common::{
-    MavLandedState, MavMessage, MavMissionResult, MavMissionType, MavSeverity, MavState,
-    PositionTargetTypemask, SET_POSITION_TARGET_LOCAL_NED_DATA, STATUSTEXT_DATA,
+    MavLandedState, MavMessage, MavMissionResult, MavMissionType, MavSeverity, MavState, PositionTargetTypemask,
+    SET_POSITION_TARGET_LOCAL_NED_DATA, STATUSTEXT_DATA,
 };
 
 use crate::avoidance::Avoidance;
 use crate::dynamics::{Body, Limits, Ned, Setpoint};
 use crate::fence::Fence;
-use crate::geo::{DEFAULT_HOME, GeoPoint, LocalProjection};
+use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
 use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
 use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
@@ -52,7 +52,7 @@ pub struct VehicleConfig {
 impl Default for VehicleConfig {
     fn default() -> Self {
         Self {
-            home: DEFAULT_HOME,
+            home: SIM_HOME,
             reject_mission: None,
             fail_arm: false,
             collision: None,
@@ -134,7 +134,7 @@ impl Vehicle {
         for (name, v) in &cfg.params {
             params.set(name, *v);
         }
-        let proj = LocalProjection::new(cfg.home.lat_deg, cfg.home.lon_deg);
+        let proj = LocalProjection::new(cfg.home);
         Self {
             now: Duration::ZERO,
             boot_at: Duration::ZERO,
@@ -264,9 +264,7 @@ impl Vehicle {
             MavMessage::HEARTBEAT(hb) if header.component_id == AVOIDANCE_COMPONENT_ID => {
                 self.avoidance.on_heartbeat(self.now, hb.system_status);
             }
-            MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t)
-                if header.component_id == AVOIDANCE_COMPONENT_ID =>
-            {
+            MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) if header.component_id == AVOIDANCE_COMPONENT_ID => {
                 self.avoidance.on_trajectory(self.now, t);
             }
             MavMessage::PARAM_REQUEST_LIST(_) => self.param_reply(self.params.on_request_list()),
@@ -276,15 +274,11 @@ impl Vehicle {
                 self.param_reply(r);
             }
             MavMessage::COMMAND_LONG(c) => {
-                let p = [
-                    c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7,
-                ];
+                let p = [c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7];
                 self.on_command(from, c.command, p, false);
             }
             MavMessage::COMMAND_INT(c) => {
-                let p = [
-                    c.param1, c.param2, c.param3, c.param4, c.x as f32, c.y as f32, c.z,
-                ];
+                let p = [c.param1, c.param2, c.param3, c.param4, c.x as f32, c.y as f32, c.z];
                 self.on_command(from, c.command, p, true);
             }
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(s) => self.on_offboard_setpoint(s),
@@ -312,32 +306,21 @@ impl Vehicle {
             match a {
                 MissionAction::Send(m) => self.outbox.push(*m),
                 MissionAction::Text(sev, t) => self.text(sev, &t),
-                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_MISSION) => {
-                    self.reload_mission()
-                }
-                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_FENCE) => {
-                    self.reload_fence()
-                }
+                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_MISSION) => self.reload_mission(),
+                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_FENCE) => self.reload_fence(),
                 MissionAction::Updated(_) => {}
             }
         }
     }
 
     fn reload_mission(&mut self) {
-        let items = &self
-            .missions
-            .plan(MavMissionType::MAV_MISSION_TYPE_MISSION)
-            .items;
-        self.nav
-            .set_mission(nav_items(items, &self.proj, self.origin.alt_amsl_m));
+        let items = &self.missions.plan(MavMissionType::MAV_MISSION_TYPE_MISSION).items;
+        self.nav.set_mission(nav_items(items, &self.proj, self.origin.alt_m));
         self.reload_fence();
     }
 
     fn reload_fence(&mut self) {
-        let items = &self
-            .missions
-            .plan(MavMissionType::MAV_MISSION_TYPE_FENCE)
-            .items;
+        let items = &self.missions.plan(MavMissionType::MAV_MISSION_TYPE_FENCE).items;
         // Validated on upload, so this only fails if storage was bypassed.
         self.fence = Fence::from_items(items, &self.proj).unwrap_or_default();
         self.fence_breached = false;
@@ -346,8 +329,8 @@ impl Vehicle {
     fn on_offboard_setpoint(&mut self, s: &SET_POSITION_TARGET_LOCAL_NED_DATA) {
         use PositionTargetTypemask as T;
         let m = s.type_mask;
-        let yaw = (!m.contains(T::POSITION_TARGET_TYPEMASK_YAW_IGNORE) && s.yaw.is_finite())
-            .then_some(f64::from(s.yaw));
+        let yaw =
+            (!m.contains(T::POSITION_TARGET_TYPEMASK_YAW_IGNORE) && s.yaw.is_finite()).then_some(f64::from(s.yaw));
         let pos_used = !m.intersects(
             T::POSITION_TARGET_TYPEMASK_X_IGNORE
                 | T::POSITION_TARGET_TYPEMASK_Y_IGNORE
@@ -401,10 +384,7 @@ impl Vehicle {
         if self.armed {
             self.armed = false;
             self.avoidance.reset();
-            self.text(
-                MavSeverity::MAV_SEVERITY_INFO,
-                &format!("Disarmed by {why}"),
-            );
+            self.text(MavSeverity::MAV_SEVERITY_INFO, &format!("Disarmed by {why}"));
         }
     }
 
@@ -479,9 +459,7 @@ impl Vehicle {
             return;
         }
         let timeout = Duration::from_secs_f64(self.params.f64("COM_OF_LOSS_T").clamp(0.0, 60.0));
-        let stale = self
-            .offboard
-            .is_none_or(|(_, t)| self.now.saturating_sub(t) > timeout);
+        let stale = self.offboard.is_none_or(|(_, t)| self.now.saturating_sub(t) > timeout);
         if stale {
             self.offboard = None;
             self.failsafe = true;
@@ -513,15 +491,9 @@ impl Vehicle {
         if self.armed && self.landed {
             let secs = |name: &str| self.params.f64(name);
             let on_ground_for = self.now.saturating_sub(self.landed_since).as_secs_f64();
-            if self.took_off
-                && secs("COM_DISARM_LAND") >= 0.0
-                && on_ground_for >= secs("COM_DISARM_LAND")
-            {
+            if self.took_off && secs("COM_DISARM_LAND") >= 0.0 && on_ground_for >= secs("COM_DISARM_LAND") {
                 self.disarm("landing");
-            } else if !self.took_off
-                && secs("COM_DISARM_PRFLT") > 0.0
-                && on_ground_for >= secs("COM_DISARM_PRFLT")
-            {
+            } else if !self.took_off && secs("COM_DISARM_PRFLT") > 0.0 && on_ground_for >= secs("COM_DISARM_PRFLT") {
                 self.disarm("auto preflight disarming");
             }
         }
@@ -574,17 +546,11 @@ impl Vehicle {
         if self.crashed || !self.armed {
             return;
         }
-        let hit = self
-            .collision
-            .as_ref()
-            .and_then(|c| c.collision(&self.body.pos_ned));
+        let hit = self.collision.as_ref().and_then(|c| c.collision(&self.body.pos_ned));
         if let Some(what) = hit {
             self.crashed = true;
             self.crash_to_ground();
-            self.text(
-                MavSeverity::MAV_SEVERITY_EMERGENCY,
-                &format!("Crash detected: {what}"),
-            );
+            self.text(MavSeverity::MAV_SEVERITY_EMERGENCY, &format!("Crash detected: {what}"));
             self.disarm("crash");
         }
     }

@@ -18,11 +18,7 @@ fn vehicle() -> Vehicle {
 fn mission2_flies_to_landing_and_disarms() {
     let mut v = vehicle();
     assert_eq!(
-        upload(
-            &mut v,
-            MavMissionType::MAV_MISSION_TYPE_MISSION,
-            &mission2()
-        ),
+        upload(&mut v, MavMissionType::MAV_MISSION_TYPE_MISSION, &mission2()),
         Some(MavMissionResult::MAV_MISSION_ACCEPTED)
     );
     let mut reached = Vec::new();
@@ -32,9 +28,7 @@ fn mission2_flies_to_landing_and_disarms() {
     let t = fly_until_disarmed(&mut v, DT, Duration::from_secs(200), |v, m| {
         max_h_speed = max_h_speed.max(v.state().vel_ned.xy().norm());
         match m {
-            MavMessage::MISSION_ITEM_REACHED(r) if reached.last() != Some(&r.seq) => {
-                reached.push(r.seq)
-            }
+            MavMessage::MISSION_ITEM_REACHED(r) if reached.last() != Some(&r.seq) => reached.push(r.seq),
             MavMessage::EXTENDED_SYS_STATE(e) if landed_states.last() != Some(&e.landed_state) => {
                 landed_states.push(e.landed_state)
             }
@@ -71,10 +65,7 @@ fn mission2_flies_to_landing_and_disarms() {
         "Landing detected",
         "Disarmed by landing",
     ] {
-        assert!(
-            texts.iter().any(|t| t == want),
-            "missing {want:?} in {texts:?}"
-        );
+        assert!(texts.iter().any(|t| t == want), "missing {want:?} in {texts:?}");
     }
     assert!(v.state().mission_finished);
 }
@@ -83,11 +74,7 @@ fn mission2_flies_to_landing_and_disarms() {
 fn same_inputs_give_identical_flights() {
     let run = || {
         let mut v = vehicle();
-        upload(
-            &mut v,
-            MavMissionType::MAV_MISSION_TYPE_MISSION,
-            &mission2(),
-        );
+        upload(&mut v, MavMissionType::MAV_MISSION_TYPE_MISSION, &mission2());
         let mut trace = Vec::new();
         fly_until_disarmed(&mut v, DT, Duration::from_secs(200), |_, m| {
             if let MavMessage::LOCAL_POSITION_NED(p) = m {
