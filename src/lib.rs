@@ -4,6 +4,7 @@
 //! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
 #![warn(missing_docs)]
 
+pub mod bridge;
 pub mod generator;
 pub mod geometry;
 pub mod io;
