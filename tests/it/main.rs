@@ -1,5 +1,6 @@
 //! Integration tests: one binary, one module per area, shared helpers here.
 
+mod bridge;
 mod cli_errors;
 mod generator;
 mod geometry_props;
