@@ -28,6 +28,7 @@ pub mod mission_server;
 pub mod modes;
 pub mod navigator;
 pub mod obstacles;
+pub mod offboard;
 pub mod params;
 pub mod scenarios;
 pub mod server;
