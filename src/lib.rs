@@ -10,4 +10,6 @@ pub mod geometry;
 pub mod io;
 pub mod judge;
 pub mod model;
+pub mod plot;
 pub mod rules;
+pub mod lfs;

@@ -3,6 +3,7 @@
 mod check;
 mod distance;
 mod sample;
+mod simulate;
 
 use std::process::ExitCode;
 
@@ -29,6 +30,8 @@ enum Command {
     Distance(distance::Args),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
     Sample(sample::Args),
+    /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
+    Simulate(simulate::Args),
 }
 
 /// Key spelling of written YAML files.
@@ -55,6 +58,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),
+        Command::Simulate(a) => simulate::run(a),
     }
 }
 

@@ -1,0 +1,456 @@
+//! The planner cycle's render: only the pixels the 2-degree subsampling (3dvfh.md §3.2) would keep.
+//!
+//! The cloud processing keeps, of each 2-degree cell seen from the vehicle, the **first** valid point in pixel
+//! (row-major) order. Because the pipeline transforms the cloud with a zero-translation extrinsic, a pixel's
+//! point lies along its own ray direction from the body origin, so its cell depends only on the pixel, not on
+//! its depth. For a level camera every column is a vertical plane; in it, each box (a rectangle in
+//! horizontal-distance x height) and the ground (a line) are hit within the valid depth and range limits for
+//! one interval of ray slopes, computed in closed form. "Valid" is "some surface is hit within the limits"
+//! (the nearest hit is then too), so the first valid row of every (column, elevation band) follows without
+//! casting, and only the chosen pixels are ray cast with parry3d. The result equals the full render followed
+//! by subsampling (tested below); pitched poses or a box within the near clip fall back to the full render.
+
+use nalgebra::Vector3;
+
+use super::camera::Camera;
+use super::histogram::cell_and_range;
+use super::render::{CameraPose, RenderError, Scene, cloud_from_depth, pixel_point_enu, render_depth};
+
+const SUB_RES_DEG: i32 = 2;
+const SUB_E: usize = 90;
+const SUB_Z: usize = 180;
+/// Angles this close to a 2-degree edge (degrees) are treated as on either side: 4x the worst rounding of the
+/// planner's f32 point-to-angle path.
+const EDGE_EPS_DEG: f64 = 2e-3;
+/// Row positions this close to an integer (pixels) are treated as on either side (parry casts in f32).
+const ROW_EPS: f64 = 0.01;
+
+fn near_edge(angle_deg: f64) -> bool {
+    let u = angle_deg / f64::from(SUB_RES_DEG);
+    (u - u.round()).abs() * f64::from(SUB_RES_DEG) < EDGE_EPS_DEG
+}
+
+/// The range window (metres from the body origin) in which the planner keeps new points (strict both sides).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KeepRange {
+    /// Lower bound (`min_sensor_range`, 0.2 m).
+    pub min_m: f32,
+    /// Upper bound (`max_sensor_range`, 15 m).
+    pub max_m: f32,
+}
+
+/// Reusable buffers of [`render_cloud`].
+#[derive(Debug, Clone)]
+pub struct FastRenderScratch {
+    first: Vec<u32>,
+    stamp: Vec<u32>,
+    generation: u32,
+    touched: Vec<usize>,
+    keys: Vec<u32>,
+    extras: Vec<u32>,
+    tan_x: Vec<f64>,
+    tan_y: Vec<f64>,
+    tan_band: Vec<f64>,
+    camera: Option<Camera>,
+    /// Frames rendered in full because the fast path did not apply.
+    pub fallbacks: u64,
+}
+
+impl Default for FastRenderScratch {
+    fn default() -> Self {
+        Self {
+            first: vec![0; SUB_E * SUB_Z],
+            stamp: vec![0; SUB_E * SUB_Z],
+            generation: 0,
+            touched: Vec::new(),
+            keys: Vec::new(),
+            extras: Vec::new(),
+            tan_x: Vec::new(),
+            tan_y: Vec::new(),
+            tan_band: (0..=SUB_E)
+                .map(|k| ((k as f64 * 2.0 - 90.0).to_radians()).tan())
+                .collect(),
+            camera: None,
+            fallbacks: 0,
+        }
+    }
+}
+
+impl FastRenderScratch {
+    fn prepare(&mut self, camera: &Camera) {
+        if self.camera.as_ref() != Some(camera) {
+            self.tan_x = (0..camera.width_px).map(|i| camera.tan_x(i)).collect();
+            self.tan_y = (0..camera.height_px).map(|j| camera.tan_y(j)).collect();
+            self.camera = Some(camera.clone());
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.stamp.fill(0);
+            self.generation = 1;
+        }
+        self.touched.clear();
+        self.keys.clear();
+        self.extras.clear();
+    }
+
+    fn offer(&mut self, cell: usize, key: u32) {
+        if self.stamp[cell] != self.generation {
+            self.stamp[cell] = self.generation;
+            self.first[cell] = key;
+            self.touched.push(cell);
+        } else if key < self.first[cell] {
+            self.first[cell] = key;
+        }
+    }
+}
+
+/// Appends to `out` (ENU, planner frame, pixel order) a cloud that the 2-degree subsampling turns into exactly
+/// the same processed cloud as the full render's: for every 2-degree cell, its first valid pixel.
+pub fn render_cloud(
+    scene: &Scene,
+    camera: &Camera,
+    pose: &CameraPose,
+    keep: KeepRange,
+    scratch: &mut FastRenderScratch,
+    out: &mut Vec<Vector3<f32>>,
+) -> Result<(), RenderError> {
+    scene.check_pose(camera, pose)?;
+    let cam = pose.camera_position(camera);
+    let corner = camera.ray_body(0, 0).norm();
+    let margin = f64::from(camera.near_clip_m) * corner + 0.05;
+    let close_box = scene.boxes.iter().any(|b| b.distance(&cam) < margin);
+    let limit_lo = camera.near_clip_m.max(camera.cutoff_min_m);
+    if pose.pitch_rad.abs() > 1e-9 || close_box || keep.min_m > limit_lo {
+        scratch.fallbacks += 1;
+        let img = render_depth(scene, camera, pose)?;
+        out.extend(cloud_from_depth(camera, pose, &img));
+        return Ok(());
+    }
+    scratch.prepare(camera);
+    let (w, h) = (camera.width_px, camera.height_px);
+    let fl = camera.focal_px();
+    let cy = camera.center_px().1;
+    let (sy, cyaw) = pose.yaw_enu_rad.sin_cos();
+    let depth_lo = f64::from(limit_lo);
+    let depth_hi = f64::from(camera.far_clip_m.min(camera.cutoff_max_m));
+    let range_hi = f64::from(keep.max_m);
+    let cz = cam.z;
+    let mut intervals: Vec<(f64, f64)> = Vec::with_capacity(scene.boxes.len() + 1);
+    for i in 0..w {
+        let tx = scratch.tan_x[i as usize];
+        // Column direction: body (1, -tx) turned by yaw; n = horizontal metres per metre of depth.
+        let (bx, by) = (1.0, -tx);
+        let (ux, uy) = (cyaw * bx - sy * by, sy * bx + cyaw * by);
+        let n = (1.0 + tx * tx).sqrt();
+        let (rho_lo, rho_hi) = (depth_lo * n, depth_hi * n);
+        intervals.clear();
+        if let Some(iv) = ground_slopes(cz, rho_lo, rho_hi, range_hi) {
+            intervals.push(iv);
+        }
+        for b in &scene.boxes {
+            if let Some(iv) = box_slopes(b, &cam, ux / n, uy / n, cz, rho_lo, rho_hi, range_hi) {
+                intervals.push(iv);
+            }
+        }
+        if intervals.is_empty() {
+            continue;
+        }
+        let z_idx = cell_and_range(ux as f32, uy as f32, 0.0, SUB_RES_DEG).0.z;
+        // A column this close to an azimuth cell edge may fall on either side once its points are rounded.
+        let az_ambiguous = near_edge(ux.atan2(uy).to_degrees());
+        let scale = fl * n;
+        let tan_y = std::mem::take(&mut scratch.tan_y);
+        let el_of = |j: u32| (-tan_y[j as usize] / n).atan().to_degrees();
+        for &(s_lo, s_hi) in &intervals {
+            // Slope s of row j is (cy - j) / (fl n): rows from the top edge of the interval down.
+            let (top, bottom) = (cy - scale * s_hi, cy - scale * s_lo);
+            let ja = top.ceil().max(0.0);
+            let jb = bottom.floor().min(h as f64 - 1.0);
+            // Rows at an interval end may be valid or not once parry's f32 ray decides: cast both neighbours.
+            for end in [top, bottom] {
+                if (end - end.round()).abs() < ROW_EPS && end.round() >= 0.0 {
+                    let m = end.round() as u32;
+                    for r in [m.saturating_sub(1), m, m + 1] {
+                        if r < h {
+                            scratch.extras.push(r * w + i);
+                        }
+                    }
+                }
+            }
+            if ja > jb {
+                continue;
+            }
+            let (ja, jb) = (ja as u32, jb as u32);
+            let mut j = ja;
+            loop {
+                let el = el_of(j);
+                let k = ((el / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
+                // Pixels that may fall on either side of an edge once the planner rounds them are always cast
+                // (they never hide another candidate); the next row is then surely inside band k.
+                let el_ambiguous = near_edge(el);
+                if az_ambiguous || el_ambiguous {
+                    scratch.extras.push(j * w + i);
+                }
+                if el_ambiguous && j < jb {
+                    if az_ambiguous {
+                        scratch.extras.push((j + 1) * w + i);
+                    } else {
+                        let k1 = ((el_of(j + 1) / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
+                        scratch.offer(k1 * SUB_Z + z_idx, (j + 1) * w + i);
+                    }
+                } else if !az_ambiguous && !el_ambiguous {
+                    scratch.offer(k * SUB_Z + z_idx, j * w + i);
+                }
+                if j > ja && near_edge(el_of(j - 1)) {
+                    scratch.extras.push((j - 1) * w + i);
+                }
+                // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).
+                let next = (cy - scale * scratch.tan_band[k]).floor() + 1.0;
+                if next > f64::from(jb) || k == 0 {
+                    break;
+                }
+                j = (next as u32).max(j + 1);
+            }
+        }
+        scratch.tan_y = tan_y;
+    }
+    scratch.keys.extend(scratch.touched.iter().map(|&c| scratch.first[c]));
+    scratch.keys.extend_from_slice(&scratch.extras);
+    scratch.keys.sort_unstable();
+    scratch.keys.dedup();
+    let rot = pose.rotation();
+    for &key in &scratch.keys {
+        let (i, j) = (key % w, key / w);
+        let dir = rot * camera.ray_body(i, j);
+        if let Some(d) = scene.cast(&cam, &dir, camera)
+            && let Some(p) = pixel_point_enu(camera, pose, &rot, i, j, d)
+        {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+/// Slopes (rise per horizontal metre) of rays that meet the ground at horizontal distance in
+/// `[rho_lo, rho_hi]` and within `range` of the camera at height `cz`.
+fn ground_slopes(cz: f64, rho_lo: f64, rho_hi: f64, range: f64) -> Option<(f64, f64)> {
+    if cz >= range {
+        return None;
+    }
+    let far = rho_hi.min((range * range - cz * cz).sqrt());
+    (far >= rho_lo).then(|| (-cz / rho_lo, -cz / far))
+}
+
+/// Slopes of rays in the column plane (horizontal unit direction `(ux, uy)` from the camera) that meet box
+/// `b` at horizontal distance in `[rho_lo, rho_hi]` and within `range`: the slope interval of the convex set
+/// (box section rectangle) intersected with the range disc, from its corners and edge-circle crossings.
+#[allow(clippy::too_many_arguments)]
+fn box_slopes(
+    b: &super::render::SceneBox,
+    cam: &Vector3<f64>,
+    ux: f64,
+    uy: f64,
+    cz: f64,
+    rho_lo: f64,
+    rho_hi: f64,
+    range: f64,
+) -> Option<(f64, f64)> {
+    // 2-D slab test in the footprint's frame.
+    let (ou, ov) = b.to_local(cam.x, cam.y);
+    let [c, s] = b.axis_l;
+    let (du, dv) = (ux * c + uy * s, -ux * s + uy * c);
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (o, d, half) in [(ou, du, b.half_l), (ov, dv, b.half_w)] {
+        if d.abs() < 1e-12 {
+            if o.abs() > half {
+                return None;
+            }
+        } else {
+            let (a, e) = ((-half - o) / d, (half - o) / d);
+            t0 = t0.max(a.min(e));
+            t1 = t1.min(a.max(e));
+        }
+    }
+    let a = t0.max(rho_lo).max(1e-9);
+    let bb = t1.min(rho_hi).min(range);
+    if a > bb {
+        return None;
+    }
+    let (z0, z1) = (b.base - cz, b.top - cz);
+    let r2 = range * range;
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    // `on_circle` points are on the range circle by construction (no rounding-sensitive test).
+    let mut see = |rho: f64, dz: f64, on_circle: bool| {
+        if on_circle || rho * rho + dz * dz <= r2 {
+            let sl = dz / rho;
+            lo = lo.min(sl);
+            hi = hi.max(sl);
+        }
+    };
+    for rho in [a, bb] {
+        see(rho, z0, false);
+        see(rho, z1, false);
+        // Vertical edge meets the circle.
+        let q = r2 - rho * rho;
+        if q >= 0.0 {
+            let dz = q.sqrt();
+            for z in [dz, -dz] {
+                if z >= z0 && z <= z1 {
+                    see(rho, z, true);
+                }
+            }
+        }
+    }
+    for dz in [z0, z1] {
+        // Horizontal edge meets the circle.
+        let q = r2 - dz * dz;
+        if q >= 0.0 {
+            let rho = q.sqrt();
+            if rho >= a && rho <= bb {
+                see(rho, dz, true);
+            }
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lfs::cloud::{CloudPose, PointMemory};
+    use crate::lfs::histogram::Histogram;
+    use crate::lfs::params::PlannerParams;
+    use crate::model::Obstacle;
+
+    const KEEP: KeepRange = KeepRange {
+        min_m: 0.2,
+        max_m: 15.0,
+    };
+
+    fn processed(points: &[Vector3<f32>], pose: &CameraPose, cam: &Camera) -> PointMemory {
+        let params = PlannerParams {
+            fovs: vec![cam.fov()],
+            ..Default::default()
+        };
+        let mut m = PointMemory::new();
+        let p = pose.position_enu;
+        let cp = CloudPose {
+            position_enu: Vector3::new(p.x as f32, p.y as f32, p.z as f32),
+            yaw_enu_deg: pose.yaw_enu_rad.to_degrees() as f32,
+            pitch_deg: pose.pitch_rad.to_degrees() as f32,
+        };
+        m.process(points, &cp, &params, 0.1);
+        m
+    }
+
+    fn obstacles() -> Vec<Obstacle> {
+        vec![
+            Obstacle::new(10.0, 5.0, 20.0, 10.0, 20.0, 0.0),
+            Obstacle::new(12.0, 4.0, 8.0, -6.0, 24.0, 35.0),
+            Obstacle::new(3.0, 3.0, 12.0, 2.0, 8.0, 80.0),
+        ]
+    }
+
+    fn poses() -> Vec<CameraPose> {
+        let p = |e: f64, n: f64, z: f64, yaw_deg: f64| CameraPose::level(Vector3::new(e, n, z), yaw_deg.to_radians());
+        vec![
+            p(5.0, -5.0, 10.0, 45.0),
+            p(12.0, 0.0, 10.0, 0.0),
+            p(14.0, -1.0, 3.0, 30.0),
+            p(25.0, 6.0, 9.5, 160.0),
+            p(4.0, 4.0, 1.5, -45.0),
+            p(18.0, -14.0, 10.0, 45.0),
+            p(30.0, 2.0, 4.0, 179.9),
+            p(8.0, 14.0, 10.0, -60.0),
+        ]
+    }
+
+    #[test]
+    fn fast_cloud_equals_full_render_cloud() {
+        let scene = Scene::new(&obstacles());
+        for cam in [Camera::hfs(), Camera::v2019(), Camera::d455()] {
+            let mut scratch = FastRenderScratch::default();
+            for pose in poses() {
+                let full = cloud_from_depth(&cam, &pose, &render_depth(&scene, &cam, &pose).unwrap());
+                let mut fast = Vec::new();
+                render_cloud(&scene, &cam, &pose, KEEP, &mut scratch, &mut fast).unwrap();
+                let a = processed(&full, &pose, &cam);
+                let b = processed(&fast, &pose, &cam);
+                let pa: Vec<_> = a.points().map(|p| p.0).collect();
+                let pb: Vec<_> = b.points().map(|p| p.0).collect();
+                assert!(pa.len() > 20, "{} {:?}: only {} points", cam.name, pose, pa.len());
+                let only_a: Vec<_> = pa.iter().filter(|p| !pb.contains(p)).collect();
+                let only_b: Vec<_> = pb.iter().filter(|p| !pa.contains(p)).collect();
+                assert!(
+                    only_a.is_empty() && only_b.is_empty(),
+                    "{} {pose:?}: full only {only_a:?}, fast only {only_b:?}",
+                    cam.name
+                );
+                assert_eq!(pa, pb, "{} {:?}", cam.name, pose);
+                let o = Vector3::new(
+                    pose.position_enu.x as f32,
+                    pose.position_enu.y as f32,
+                    pose.position_enu.z as f32,
+                );
+                assert_eq!(Histogram::from_points(&pa, &o), Histogram::from_points(&pb, &o));
+                assert!(
+                    fast.len() < full.len() / 10 || cam.name == "2019",
+                    "{} of {}",
+                    fast.len(),
+                    full.len()
+                );
+            }
+            assert_eq!(scratch.fallbacks, 0);
+        }
+    }
+
+    #[test]
+    fn fast_cloud_equals_full_render_cloud_on_random_poses() {
+        use rand::{Rng, SeedableRng};
+        let scene = Scene::new(&obstacles());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut scratch = FastRenderScratch::default();
+        let mut checked = 0;
+        for n in 0..60 {
+            let cam = if n % 6 == 0 { Camera::hfs() } else { Camera::v2019() };
+            let pose = CameraPose::level(
+                Vector3::new(
+                    rng.random_range(-5.0..35.0),
+                    rng.random_range(-15.0..20.0),
+                    rng.random_range(0.3..14.0),
+                ),
+                rng.random_range(-3.2..3.2),
+            );
+            let Ok(img) = render_depth(&scene, &cam, &pose) else {
+                continue;
+            };
+            let full = cloud_from_depth(&cam, &pose, &img);
+            let mut fast = Vec::new();
+            render_cloud(&scene, &cam, &pose, KEEP, &mut scratch, &mut fast).unwrap();
+            let a: Vec<_> = processed(&full, &pose, &cam).points().collect();
+            let b: Vec<_> = processed(&fast, &pose, &cam).points().collect();
+            assert_eq!(a, b, "{} {pose:?}", cam.name);
+            checked += 1;
+        }
+        assert!(checked > 40);
+    }
+
+    #[test]
+    fn near_box_and_pitch_fall_back_to_the_full_render() {
+        let scene = Scene::new(&obstacles());
+        let cam = Camera::v2019();
+        let mut scratch = FastRenderScratch::default();
+        let near = CameraPose::level(Vector3::new(20.0, 4.7, 5.0), 90f64.to_radians());
+        let mut out = Vec::new();
+        render_cloud(&scene, &cam, &near, KEEP, &mut scratch, &mut out).unwrap();
+        let pitched = CameraPose {
+            pitch_rad: 0.1,
+            ..CameraPose::level(Vector3::new(0.0, 0.0, 10.0), 1.0)
+        };
+        render_cloud(&scene, &cam, &pitched, KEEP, &mut scratch, &mut out).unwrap();
+        assert_eq!(scratch.fallbacks, 2);
+        let inside = CameraPose::level(Vector3::new(20.0, 10.0, 5.0), 0.0);
+        assert!(render_cloud(&scene, &cam, &inside, KEEP, &mut scratch, &mut out).is_err());
+    }
+}

@@ -1,0 +1,463 @@
+//! The low-fidelity simulation loop: every simulated tick runs the named stages `sense` (render + cloud
+//! processing), `plan` (mission logic + 3DVFH* tree), `control` (motion model command), `integrate` and
+//! `record`, with time as a parameter (nothing reads a clock). A flight ends when landed, stuck (no progress for
+//! `stuck_s` simulated seconds), at the timeout, or on collision; its trajectory is judged as the competition
+//! judges a real one.
+//!
+//! Frames: the world is planner ENU (x East, y North, z Up, metres); the trajectory is Aerialist's (x North,
+//! y East, z height up, heading clockwise from North in radians).
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::camera::Camera;
+use super::frames::yaw_enu_to_ned_rad;
+use super::mission::{MissionParams, MissionRunner, Phase};
+use super::motion::{PaperParams, Px4Params, Vehicle, vertical_step};
+use super::params::PlannerParams;
+use super::planner::{PlanInput, Planner, VehicleState};
+use super::render::{CameraPose, Scene};
+use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
+use super::waypoint::{NavState, WaypointGenerator, WaypointInput};
+use crate::judge::{FlightDistance, judge_flight};
+use crate::model::{Obstacle, Sample, TestCase, Trajectory};
+
+/// The stages of one tick, in order.
+pub const STAGES: [&str; 5] = ["sense", "plan", "control", "integrate", "record"];
+
+/// Which motion model moves the vehicle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MotionModel {
+    /// The paper's rule towards the first tree node.
+    Paper(PaperParams),
+    /// The waypoint generator followed by a PX4-like tracker.
+    Px4(Px4Params),
+}
+
+impl MotionModel {
+    /// The model by CLI name (`paper` or `px4`) with its fitted defaults.
+    pub fn by_name(name: &str) -> Option<Self> {
+        match name {
+            "paper" => Some(Self::Paper(PaperParams::default())),
+            "px4" => Some(Self::Px4(Px4Params::default())),
+            _ => None,
+        }
+    }
+
+    /// CLI name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Paper(_) => "paper",
+            Self::Px4(_) => "px4",
+        }
+    }
+}
+
+/// How a flight ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// Touched down after the land item.
+    Landed,
+    /// No progress towards the current target for `stuck_s`.
+    Stuck,
+    /// Simulated time reached `timeout_s`.
+    Timeout,
+    /// The vehicle entered a box.
+    Collision,
+}
+
+/// Simulation settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimConfig {
+    /// Motion model.
+    pub motion: MotionModel,
+    /// Depth camera.
+    pub camera: Camera,
+    /// Planner parameters (its FOV is replaced by the camera's).
+    pub planner: PlannerParams,
+    /// Mission parameters; `None` = PX4 defaults overridden by the test's parameters.
+    pub mission: Option<MissionParams>,
+    /// Tick length, seconds (the planner period, 0.1 s).
+    pub dt_s: f64,
+    /// Simulated-time limit, seconds (the competition's 500 s).
+    pub timeout_s: f64,
+    /// A flight with no progress for this long (seconds) is stuck.
+    pub stuck_s: f64,
+    /// Progress means getting this much closer (metres) to the current target.
+    pub progress_m: f64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            motion: MotionModel::Paper(PaperParams::default()),
+            camera: Camera::hfs(),
+            planner: PlannerParams::default(),
+            mission: None,
+            dt_s: 0.1,
+            timeout_s: 500.0,
+            stuck_s: 20.0,
+            progress_m: 1.0,
+        }
+    }
+}
+
+/// Why a simulation cannot start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    /// The mission has no positional item.
+    #[error("the mission has no item with a position")]
+    EmptyMission,
+    /// Planner parameters are invalid.
+    #[error(transparent)]
+    Planner(#[from] super::LfsError),
+    /// A setting is out of range.
+    #[error("invalid simulation setting {0}")]
+    Setting(&'static str),
+}
+
+/// The outcome of one simulated flight.
+#[derive(Debug, Clone)]
+pub struct SimResult {
+    /// Flown path, Aerialist frame, one sample per tick from t = 0 (on the ground at home).
+    pub trajectory: Trajectory,
+    /// How it ended.
+    pub status: Status,
+    /// Simulated seconds until the end.
+    pub flight_time_s: f64,
+    /// Ticks simulated (one planner cycle each).
+    pub cycles: u64,
+    /// The competition's verdict on the trajectory (`None` without obstacles).
+    pub distance: Option<FlightDistance>,
+    /// Frames the fast renderer had to render in full (a box within the near clip).
+    pub full_renders: u64,
+}
+
+/// Motion-model state carried between ticks.
+#[derive(Debug, Clone)]
+enum MotionState {
+    Paper(PaperParams),
+    Px4(Px4Params, Box<WaypointGenerator>),
+}
+
+/// Everything one simulated flight holds.
+#[derive(Debug, Clone)]
+pub struct World {
+    /// Simulated time, seconds.
+    pub time_s: f64,
+    /// Ticks run.
+    pub cycles: u64,
+    /// The vehicle.
+    pub vehicle: Vehicle,
+    /// Set once the flight is over.
+    pub status: Option<Status>,
+    scene: Scene,
+    obstacles: Vec<Obstacle>,
+    camera: Camera,
+    keep: KeepRange,
+    scratch: FastRenderScratch,
+    frame: Vec<Vector3<f32>>,
+    planner: Planner,
+    mission: MissionRunner,
+    motion: MotionState,
+    command: Command,
+    samples: Vec<Sample>,
+    config: SimConfig,
+    best_goal_dist_m: f64,
+    last_progress_s: f64,
+}
+
+/// What the control stage asks the integrate stage to do.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Command {
+    Hold,
+    Vertical { alt_m: f64, speed_m_s: f64 },
+    Toward(Vector3<f64>),
+    Track { setpoint: Vector3<f64>, yaw_enu_rad: f64 },
+}
+
+fn f32v(v: &Vector3<f64>) -> Vector3<f32> {
+    Vector3::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+impl World {
+    /// A vehicle on the ground at home, facing along the first leg, ready to fly `test`'s mission.
+    pub fn new(test: &TestCase, config: SimConfig) -> Result<Self, SimError> {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if !ok(config.dt_s) || !ok(config.timeout_s) || !ok(config.stuck_s) || !ok(config.progress_m) {
+            return Err(SimError::Setting(
+                "dt_s, timeout_s, stuck_s and progress_m must be positive",
+            ));
+        }
+        let mut params = config.planner.clone();
+        params.fovs = vec![config.camera.fov()];
+        let planner = Planner::new(params.clone())?;
+        let mission_params = config
+            .mission
+            .unwrap_or_else(|| MissionParams::from_params(&test.params));
+        let mission = MissionRunner::new(&test.mission, mission_params).ok_or(SimError::EmptyMission)?;
+        // PX4 starts facing North (yaw 0) in Gazebo's default spawn; ENU yaw pi/2.
+        let vehicle = Vehicle {
+            position_enu: Vector3::zeros(),
+            velocity_enu: Vector3::zeros(),
+            yaw_enu_rad: std::f64::consts::FRAC_PI_2,
+        };
+        let motion = match config.motion {
+            MotionModel::Paper(p) => MotionState::Paper(p),
+            MotionModel::Px4(p) => MotionState::Px4(p, Box::new(WaypointGenerator::with_fovs(params.fovs.clone()))),
+        };
+        let mut w = Self {
+            time_s: 0.0,
+            cycles: 0,
+            vehicle,
+            status: None,
+            scene: Scene::new(&test.obstacles),
+            obstacles: test.obstacles.clone(),
+            camera: config.camera.clone(),
+            keep: KeepRange {
+                min_m: params.min_sensor_range_m,
+                max_m: params.max_sensor_range_m,
+            },
+            scratch: FastRenderScratch::default(),
+            frame: Vec::new(),
+            planner,
+            mission,
+            motion,
+            command: Command::Hold,
+            samples: Vec::new(),
+            config,
+            best_goal_dist_m: f64::INFINITY,
+            last_progress_s: 0.0,
+        };
+        w.record();
+        Ok(w)
+    }
+
+    /// The mission state.
+    pub fn mission(&self) -> &MissionRunner {
+        &self.mission
+    }
+
+    /// The planner.
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+
+    fn vehicle_state(&self) -> VehicleState {
+        VehicleState {
+            position_enu: f32v(&self.vehicle.position_enu),
+            velocity_enu: f32v(&self.vehicle.velocity_enu),
+            yaw_enu_rad: self.vehicle.yaw_enu_rad as f32,
+            pitch_rad: 0.0,
+        }
+    }
+
+    /// Stage `sense`: render the camera frame and feed it to the point memory.
+    fn sense(&mut self, dt: f64) {
+        if self.mission.phase() == Phase::Ground {
+            return;
+        }
+        let pose = CameraPose::level(self.vehicle.position_enu, self.vehicle.yaw_enu_rad);
+        self.frame.clear();
+        if self.vehicle.position_enu.z > 0.05 {
+            let r = render_cloud(
+                &self.scene,
+                &self.camera,
+                &pose,
+                self.keep,
+                &mut self.scratch,
+                &mut self.frame,
+            );
+            if r.is_err() {
+                // Only a pose inside a box fails here (the height was checked).
+                self.status = Some(Status::Collision);
+                return;
+            }
+        }
+        let state = self.vehicle_state();
+        if self.planner.update_cloud(&self.frame, &state, dt as f32).is_err() {
+            self.status = Some(Status::Stuck);
+        }
+    }
+
+    /// Stage `plan`: mission acceptance, then one planner iteration while cruising.
+    fn plan(&mut self) {
+        let pos = self.vehicle.position_enu;
+        if self.mission.update(&pos) {
+            self.best_goal_dist_m = f64::INFINITY;
+            self.last_progress_s = self.time_s;
+        }
+        if self.mission.phase() != Phase::Cruise {
+            return;
+        }
+        let input = PlanInput {
+            state: self.vehicle_state(),
+            goal_enu: f32v(&self.mission.goal_enu(&pos)),
+            prev_goal_enu: f32v(&self.mission.prev_goal_enu()),
+            now_s: self.time_s,
+        };
+        if self.planner.plan(&input).is_err() {
+            self.status = Some(Status::Stuck);
+        }
+    }
+
+    /// Stage `control`: the motion model's command for this tick.
+    fn control(&mut self) {
+        let pos = self.vehicle.position_enu;
+        let goal = self.mission.goal_enu(&pos);
+        let mp = *self.mission.params();
+        self.command = match self.mission.phase() {
+            Phase::Ground | Phase::Landed => Command::Hold,
+            Phase::Takeoff => Command::Vertical {
+                alt_m: goal.z,
+                speed_m_s: mp.takeoff_speed_m_s,
+            },
+            Phase::Descend => Command::Vertical {
+                alt_m: 0.0,
+                speed_m_s: mp.land_speed_m_s,
+            },
+            Phase::Cruise | Phase::Hold => {
+                let state = self.vehicle_state();
+                let plan = self.planner.last_plan();
+                match &mut self.motion {
+                    MotionState::Paper(_) => {
+                        // Without a fresh tree (nothing within sensor range: the planner keeps its old path) the
+                        // drone flies straight at the goal, as the waypoint generator's DIRECT state does.
+                        let path = &plan.path_enu;
+                        if plan.replanned && path.len() >= 2 {
+                            let n = path[path.len() - 2];
+                            Command::Toward(Vector3::new(f64::from(n.x), f64::from(n.y), f64::from(n.z)))
+                        } else {
+                            Command::Toward(goal)
+                        }
+                    }
+                    MotionState::Px4(_, wg) => {
+                        let input = WaypointInput {
+                            state,
+                            goal_enu: f32v(&goal),
+                            prev_goal_enu: f32v(&self.mission.prev_goal_enu()),
+                            stay: false,
+                            is_airborne: true,
+                            nav_state: NavState::Mission,
+                            is_land_waypoint: false,
+                            is_takeoff_waypoint: false,
+                            desired_vel_enu: None,
+                            plan,
+                        };
+                        let out = wg.step(&input, self.time_s);
+                        let sp = out.position_enu;
+                        Command::Track {
+                            setpoint: Vector3::new(f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)),
+                            yaw_enu_rad: f64::from(out.yaw_enu_rad),
+                        }
+                    }
+                }
+            }
+        };
+    }
+
+    /// Stage `integrate`: move the vehicle for `dt` seconds.
+    fn integrate(&mut self, dt: f64) {
+        let v = &mut self.vehicle;
+        match (self.command, &self.motion) {
+            (Command::Hold, _) => v.velocity_enu = Vector3::zeros(),
+            (Command::Vertical { alt_m, speed_m_s }, _) => vertical_step(v, alt_m, speed_m_s, dt),
+            (Command::Toward(t), MotionState::Paper(p)) => p.step(v, &t, dt),
+            (Command::Toward(t), MotionState::Px4(p, _)) => p.track(v, &t, v.yaw_enu_rad, dt),
+            (Command::Track { setpoint, yaw_enu_rad }, MotionState::Px4(p, _)) => {
+                p.track(v, &setpoint, yaw_enu_rad, dt)
+            }
+            (Command::Track { setpoint, .. }, MotionState::Paper(p)) => p.step(v, &setpoint, dt),
+        }
+        v.position_enu.z = v.position_enu.z.max(0.0);
+        self.time_s += dt;
+        self.cycles += 1;
+    }
+
+    /// Stage `record`: sample the trajectory and decide whether the flight is over.
+    fn record(&mut self) {
+        let p = self.vehicle.position_enu;
+        self.samples.push(Sample {
+            t_s: self.time_s,
+            x: p.y,
+            y: p.x,
+            z: p.z,
+            r: Some(yaw_enu_to_ned_rad(self.vehicle.yaw_enu_rad)),
+        });
+        if self.status.is_some() {
+            return;
+        }
+        let inside = self.obstacles.iter().any(|o| {
+            p.z < o.top_m() && p.z >= o.position.z && o.footprint().contains(crate::geometry::P2::new(p.y, p.x))
+        });
+        if inside {
+            self.status = Some(Status::Collision);
+        } else if self.mission.phase() == Phase::Landed {
+            self.status = Some(Status::Landed);
+        } else if self.time_s >= self.config.timeout_s - 1e-9 {
+            self.status = Some(Status::Timeout);
+        } else {
+            let d = (self.mission.goal_enu(&p) - p).norm();
+            if d <= self.best_goal_dist_m - self.config.progress_m || !self.best_goal_dist_m.is_finite() {
+                self.best_goal_dist_m = d;
+                self.last_progress_s = self.time_s;
+            } else if self.time_s - self.last_progress_s > self.config.stuck_s {
+                self.status = Some(Status::Stuck);
+            }
+        }
+    }
+
+    /// The trajectory so far.
+    pub fn trajectory(&self) -> Trajectory {
+        Trajectory::new(self.samples.clone())
+    }
+
+    /// The frames the renderer had to draw in full so far.
+    pub fn full_renders(&self) -> u64 {
+        self.scratch.fallbacks
+    }
+}
+
+/// Runs one tick of `dt` seconds through [`STAGES`]; returns the status once the flight is over (then further
+/// calls do nothing).
+pub fn step(world: &mut World, dt: f64) -> Option<Status> {
+    if world.status.is_some() {
+        return world.status;
+    }
+    world.sense(dt);
+    if world.status.is_none() {
+        world.plan();
+    }
+    if world.status.is_none() {
+        world.control();
+        world.integrate(dt);
+    }
+    world.record();
+    world.status
+}
+
+/// Simulates `test`'s mission with its obstacles until the flight ends, and judges the trajectory.
+pub fn simulate(test: &TestCase, config: &SimConfig) -> Result<SimResult, SimError> {
+    let mut world = World::new(test, config.clone())?;
+    let dt = config.dt_s;
+    let status = loop {
+        if let Some(s) = step(&mut world, dt) {
+            break s;
+        }
+    };
+    let trajectory = world.trajectory();
+    let distance = judge_flight(&trajectory, &test.obstacles);
+    Ok(SimResult {
+        status,
+        flight_time_s: world.time_s,
+        cycles: world.cycles,
+        distance,
+        full_renders: world.full_renders(),
+        trajectory,
+    })
+}
+
+#[cfg(test)]
+#[path = "sim_tests.rs"]
+mod tests;

@@ -1,0 +1,108 @@
+use std::path::Path;
+
+use super::*;
+use crate::model::Obstacle;
+
+fn mission(n: u32) -> TestCase {
+    TestCase::load(Path::new(&format!("missions/mission{n}.yaml"))).unwrap()
+}
+
+fn two_boxes() -> Vec<Obstacle> {
+    vec![
+        Obstacle::new(10.0, 5.0, 20.0, 10.0, 20.0, 0.0),
+        Obstacle::new(10.0, 5.0, 20.0, -10.0, 20.0, 0.0),
+    ]
+}
+
+#[test]
+fn free_mission_lands_near_the_land_item() {
+    for motion in ["paper", "px4"] {
+        let config = SimConfig {
+            motion: MotionModel::by_name(motion).unwrap(),
+            ..Default::default()
+        };
+        let r = simulate(&mission(1), &config).unwrap();
+        assert_eq!(r.status, Status::Landed, "{motion}");
+        let last = r.trajectory.samples.last().unwrap();
+        assert!(last.z.abs() < 1e-9);
+        assert!((last.x - 3.3).hypot(last.y - 53.09) < 1.0, "{motion}: {last:?}");
+        let top = r.trajectory.samples.iter().map(|s| s.z).fold(0.0, f64::max);
+        assert!((9.0..11.5).contains(&top), "{motion}: cruise altitude {top}");
+        assert!(r.distance.is_none());
+        assert_eq!(r.cycles as usize + 1, r.trajectory.samples.len());
+    }
+}
+
+#[test]
+fn two_obstacles_are_passed_without_collision() {
+    for motion in ["paper", "px4"] {
+        let test = mission(2).with_obstacles(two_boxes());
+        let config = SimConfig {
+            motion: MotionModel::by_name(motion).unwrap(),
+            ..Default::default()
+        };
+        let r = simulate(&test, &config).unwrap();
+        assert_eq!(r.status, Status::Landed, "{motion}");
+        let d = r.distance.unwrap();
+        assert!(
+            d.min_distance > 0.3 && d.min_distance < 10.0,
+            "{motion}: {}",
+            d.min_distance
+        );
+        assert_eq!(d.per_obstacle.len(), 2);
+        assert_eq!(r.full_renders, 0);
+    }
+}
+
+#[test]
+fn termination_statuses() {
+    let test = mission(2).with_obstacles(two_boxes());
+    let timeout = SimConfig {
+        timeout_s: 5.0,
+        ..Default::default()
+    };
+    let r = simulate(&test, &timeout).unwrap();
+    assert_eq!(r.status, Status::Timeout);
+    assert!((r.flight_time_s - 5.0).abs() < 1e-6 && r.cycles == 50);
+
+    let stuck = SimConfig {
+        stuck_s: 3.0,
+        progress_m: 1000.0,
+        ..Default::default()
+    };
+    let r = simulate(&test, &stuck).unwrap();
+    assert_eq!(r.status, Status::Stuck);
+    assert!(r.flight_time_s > 3.0 && r.flight_time_s < 3.5, "{}", r.flight_time_s);
+
+    // Home inside a (low) box: the vehicle is in it from the start.
+    let trapped = mission(2).with_obstacles(vec![Obstacle::new(4.0, 4.0, 5.0, 0.0, 0.0, 0.0)]);
+    let r = simulate(&trapped, &SimConfig::default()).unwrap();
+    assert_eq!(r.status, Status::Collision);
+    assert_eq!(r.distance.unwrap().min_distance, 0.0);
+}
+
+#[test]
+fn stages_are_named_in_order_and_step_is_idempotent_after_the_end() {
+    assert_eq!(STAGES, ["sense", "plan", "control", "integrate", "record"]);
+    let config = SimConfig {
+        timeout_s: 0.3,
+        ..Default::default()
+    };
+    let mut w = World::new(&mission(1), config).unwrap();
+    let mut last = None;
+    for _ in 0..10 {
+        last = step(&mut w, 0.1);
+    }
+    assert_eq!(last, Some(Status::Timeout));
+    assert_eq!(w.cycles, 3);
+}
+
+#[test]
+fn bad_settings_are_errors() {
+    let bad = SimConfig {
+        dt_s: 0.0,
+        ..Default::default()
+    };
+    assert!(matches!(World::new(&mission(1), bad), Err(SimError::Setting(_))));
+    assert!(MotionModel::by_name("jetpack").is_none());
+}
