@@ -83,17 +83,20 @@ impl Companion {
             return None;
         }
         let planned = match (view.pose, self.goal) {
-            (Some(pose), Some(goal)) => steer.steer(&SteerInput {
-                now_s: now.as_secs_f64(),
-                pos_ned: pose.pos_ned,
-                vel_ned: pose.vel_ned,
-                yaw_rad: pose.yaw_rad.unwrap_or(0.0),
-                goal_ned: goal,
-                prev_goal_ned: self.prev_goal.unwrap_or(goal),
-                desired_vel_ned: velocity(&req, 0),
-                nav: self.nav.unwrap_or(Nav::Mission),
-                airborne: view.armed,
-            }),
+            (Some(pose), Some(goal)) => {
+                let (nav, goal) = approach_land(self.nav.unwrap_or(Nav::Mission), goal, pose.pos_ned);
+                steer.steer(&SteerInput {
+                    now_s: now.as_secs_f64(),
+                    pos_ned: pose.pos_ned,
+                    vel_ned: pose.vel_ned,
+                    yaw_rad: pose.yaw_rad.unwrap_or(0.0),
+                    goal_ned: goal,
+                    prev_goal_ned: self.prev_goal.unwrap_or(goal),
+                    desired_vel_ned: velocity(&req, 0),
+                    nav,
+                    airborne: view.armed,
+                })
+            }
             _ => None,
         };
         let nan = [f32::NAN; 5];
@@ -138,6 +141,20 @@ impl Companion {
             }
         }
         Some(out)
+    }
+}
+
+/// Horizontal distance to a land point beyond which the vehicle still has to fly there.
+pub const LAND_APPROACH_M: f64 = 1.0;
+
+/// PX4 flies a land item in two parts: first to the land point at the current altitude (a plain position
+/// setpoint), then down. A vehicle that reports the land item for both parts gets the same treatment here.
+pub fn approach_land(nav: Nav, goal: [f64; 3], pos_ned: [f64; 3]) -> (Nav, [f64; 3]) {
+    let far = (goal[0] - pos_ned[0]).hypot(goal[1] - pos_ned[1]) > LAND_APPROACH_M;
+    if nav == Nav::Land && far {
+        (Nav::Mission, [goal[0], goal[1], pos_ned[2]])
+    } else {
+        (nav, goal)
     }
 }
 
@@ -287,5 +304,8 @@ mod tests {
         c.on_request(&request([1.0, 2.0, -3.0], [20.0, 0.0, -5.0], 21), Duration::ZERO);
         assert_eq!(c.nav, Some(Nav::Land));
         assert_eq!(c.prev_goal, Some([10.0, 0.0, -5.0]));
+        // Far from the land point: fly there at altitude first; above it: land.
+        assert_eq!(approach_land(Nav::Land, [20.0, 0.0, 0.0], [0.0, 0.0, -5.0]), (Nav::Mission, [20.0, 0.0, -5.0]));
+        assert_eq!(approach_land(Nav::Land, [20.0, 0.0, 0.0], [19.5, 0.0, -5.0]), (Nav::Land, [20.0, 0.0, 0.0]));
     }
 }

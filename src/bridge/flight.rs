@@ -17,7 +17,9 @@ use super::offboard::{self, Pilot, Progress};
 use super::recorder::Recorder;
 use super::report::Status;
 use super::session::{Session, Stop, stop_for};
+use super::planner_steer::PlannerSteer;
 use super::steer::{Mirror, Steer, Straight};
+use crate::lfs::camera::Camera;
 use super::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
 use super::{FlyMode as Mode, FlyOptions};
 use crate::model::{Command as TestCommand, TestCase};
@@ -65,12 +67,13 @@ pub fn schedule(commands: &[TestCommand], warnings: &mut Vec<String>) -> VecDequ
     out.into()
 }
 
-/// The steering for `opts.mode`: the LFS planner over the test's boxes when it has them.
+/// The steering for `opts.mode`: the LFS planner over the test's boxes; if it cannot be built, the
+/// interface's fallbacks (mirror PX4's setpoint; fly straight in offboard).
 pub fn steer_for(test: &TestCase, opts: &FlyOptions) -> Box<dyn Steer> {
-    let _ = test;
-    match opts.mode {
-        Mode::Avoidance => Box::new(Mirror),
-        Mode::Offboard | Mode::Mission => Box::new(Straight),
+    match (PlannerSteer::new(&test.obstacles, Camera::hfs()), opts.mode) {
+        (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
+        (_, Mode::Avoidance) => Box::new(Mirror),
+        _ => Box::new(Straight),
     }
 }
 

@@ -29,6 +29,7 @@ pub mod mission_upload;
 pub mod offboard;
 pub mod params;
 pub mod plan_items;
+pub mod planner_steer;
 pub mod recorder;
 pub mod report;
 pub mod session;

@@ -67,6 +67,14 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     m.shutdown().await.expect("mock stops");
     eprintln!("{mode:?} mission {n}: {}", serde_json::to_string(&r).unwrap_or_default());
     assert_flown(&r, &format!("{mode:?} mission {n}"));
+    // It flew the whole mission: it ended at the land point.
+    let land = test.mission.flight_path().last().copied().expect("land item");
+    let end = r.trajectory.samples.last().copied().expect("samples");
+    let off = (end.x - land.north_m).hypot(end.y - land.east_m);
+    assert!(off < 3.0, "{mode:?} mission {n}: landed {off:.1} m from the land point");
+    if mode != FlyMode::Mission {
+        assert_eq!(r.status, Status::Landed, "{mode:?} mission {n} avoids the boxes: {:?}", r.reason);
+    }
     r
 }
 
@@ -75,5 +83,19 @@ async fn mission_mode_missions_1_to_3() {
     for n in 1..=3 {
         let r = fly_mode(FlyMode::Mission, n).await;
         assert!(r.fence_uploaded, "the obstacles go up as a fence");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn avoidance_mode_missions_1_to_3() {
+    for n in 1..=3 {
+        fly_mode(FlyMode::Avoidance, n).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn offboard_mode_missions_1_to_3() {
+    for n in 1..=3 {
+        fly_mode(FlyMode::Offboard, n).await;
     }
 }
