@@ -15,13 +15,16 @@ use tokio::task::JoinHandle;
 
 use super::exchange::Target;
 use super::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
-use super::steer::{Nav, Steer, SteerInput};
+use super::steer::{Nav, Steer, SteerInput, SteerOutput};
+use super::steer_worker::SteerWorker;
 use super::vehicle::VehicleView;
 
 /// Answer period (10 Hz, as PX4-Avoidance's waypoint generator).
 pub const ANSWER_PERIOD: Duration = Duration::from_millis(100);
 /// Companion heartbeat period (PX4 declares the companion lost after 5 s without one).
 pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(500);
+/// A planner result computed from inputs older than this is not sent (PX4 itself gives up after 0.5 s).
+pub const STALE_PLAN: Duration = Duration::from_millis(500);
 /// A request older than this means PX4 left the auto modes: stop answering.
 pub const REQUEST_STALE: Duration = Duration::from_secs(1);
 
@@ -70,7 +73,28 @@ impl Companion {
         self.request = Some((t.clone(), now));
     }
 
-    /// The answer at vehicle time `now`, or `None` when PX4 is not asking (no fresh request).
+    /// The steering question at vehicle time `now`, if PX4 is asking and the pose is known.
+    pub fn steer_input(&self, view: &VehicleView, now: Duration) -> Option<SteerInput> {
+        let (req, at) = self.request.as_ref()?;
+        if now.saturating_sub(*at) > REQUEST_STALE {
+            return None;
+        }
+        let (pose, goal) = (view.pose?, self.goal?);
+        let (nav, goal) = approach_land(self.nav.unwrap_or(Nav::Mission), goal, pose.pos_ned);
+        Some(SteerInput {
+            now_s: now.as_secs_f64(),
+            pos_ned: pose.pos_ned,
+            vel_ned: pose.vel_ned,
+            yaw_rad: pose.yaw_rad.unwrap_or(0.0),
+            goal_ned: goal,
+            prev_goal_ned: self.prev_goal.unwrap_or(goal),
+            desired_vel_ned: velocity(req, 0),
+            nav,
+            airborne: view.armed,
+        })
+    }
+
+    /// Steers and answers in one go (see [`Companion::answer_with`]).
     pub fn answer(
         &mut self,
         view: &VehicleView,
@@ -78,27 +102,22 @@ impl Companion {
         now: Duration,
         time_usec: u64,
     ) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {
+        let planned = self.steer_input(view, now).and_then(|i| steer.steer(&i));
+        self.answer_with(planned, now, time_usec)
+    }
+
+    /// The answer with `planned` as point 0, or PX4's own point 0 mirrored when `None`; `None` when PX4 is not
+    /// asking (no fresh request).
+    pub fn answer_with(
+        &mut self,
+        planned: Option<SteerOutput>,
+        now: Duration,
+        time_usec: u64,
+    ) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {
         let (req, at) = self.request.clone()?;
         if now.saturating_sub(at) > REQUEST_STALE {
             return None;
         }
-        let planned = match (view.pose, self.goal) {
-            (Some(pose), Some(goal)) => {
-                let (nav, goal) = approach_land(self.nav.unwrap_or(Nav::Mission), goal, pose.pos_ned);
-                steer.steer(&SteerInput {
-                    now_s: now.as_secs_f64(),
-                    pos_ned: pose.pos_ned,
-                    vel_ned: pose.vel_ned,
-                    yaw_rad: pose.yaw_rad.unwrap_or(0.0),
-                    goal_ned: goal,
-                    prev_goal_ned: self.prev_goal.unwrap_or(goal),
-                    desired_vel_ned: velocity(&req, 0),
-                    nav,
-                    airborne: view.armed,
-                })
-            }
-            _ => None,
-        };
         let nan = [f32::NAN; 5];
         let mut out = TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
             time_usec,
@@ -174,48 +193,43 @@ pub fn heartbeat() -> MavMessage {
     })
 }
 
-/// Runs the companion until aborted: heartbeats, reads requests, answers at 10 Hz (vehicle time).
-pub fn spawn(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) -> JoinHandle<()> {
-    tokio::spawn(run(link, target, steer))
+/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers at 10 Hz
+/// (vehicle time) with the latest planner result.
+pub fn spawn(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) -> [JoinHandle<()>; 2] {
+    [tokio::spawn(beat(link.clone())), tokio::spawn(run(link, target, steer))]
 }
 
-async fn run(link: Arc<Link>, target: Target, mut steer: Box<dyn Steer>) {
+async fn beat(link: Arc<Link>) {
+    loop {
+        let _ = link.send(Sender::Companion, &heartbeat()).await;
+        tokio::time::sleep(link.clock().wall(HEARTBEAT_PERIOD)).await;
+    }
+}
+
+async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) {
     let clock = link.clock();
     let mut rx = link.subscribe();
     let mut view = VehicleView::default();
     let mut companion = Companion::default();
-    let mut next_beat = clock.now();
+    let mut worker = SteerWorker::new(steer);
     let mut next_answer = clock.now();
     loop {
         let now = clock.now();
-        if now >= next_beat {
-            let _ = link.send(Sender::Companion, &heartbeat()).await;
-            next_beat = now + HEARTBEAT_PERIOD;
-        }
         if now >= next_answer {
             next_answer = now + ANSWER_PERIOD;
+            if !worker.poll(companion.steer_input(&view, now), now).await {
+                return;
+            }
+            // A plan older than PX4's own patience (0.5 s) is not used: mirror instead.
+            let planned = worker.latest(now, STALE_PLAN).flatten();
             let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
-            // The planner is CPU work: keep it off the async threads.
-            let Ok((back, answer)) = tokio::task::spawn_blocking({
-                let view = view.clone();
-                let mut c = companion.clone();
-                move || {
-                    let a = c.answer(&view, steer.as_mut(), now, usec);
-                    ((steer, c), a)
-                }
-            })
-            .await
-            else {
-                return; // the runtime is shutting down
-            };
-            (steer, companion) = back;
-            if let Some(a) = answer {
+            if let Some(a) = companion.answer_with(planned, now, usec) {
                 let _ = link
                     .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
                     .await;
             }
         }
-        let wake = clock.wall_until(next_beat.min(next_answer));
+        let wake = clock.wall_until(next_answer);
         tokio::select! {
             r = rx.recv() => match r {
                 Ok(inb) => {

@@ -30,10 +30,12 @@ pub mod offboard;
 pub mod params;
 pub mod plan_items;
 pub mod planner_steer;
+pub mod predict;
 pub mod recorder;
 pub mod report;
 pub mod session;
 pub mod steer;
+pub mod steer_worker;
 pub mod url;
 pub mod vehicle;
 
@@ -42,6 +44,7 @@ use std::sync::Arc;
 
 pub use cancel::CancelToken;
 pub use link::{LinkStats, Transport};
+pub use predict::{Prediction, predict};
 pub use report::{FlightReport, Status};
 pub use url::{DEFAULT_URL, LinkAddress, UrlError};
 

@@ -12,13 +12,12 @@ use tokio::task::JoinHandle;
 use super::exchange::Target;
 use super::link::{Link, Sender};
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
+use super::steer_worker::SteerWorker;
 use super::vehicle::VehicleView;
 use crate::model::{CMD_LAND, Mission};
 
 /// Setpoint period (20 Hz; PX4 leaves OFFBOARD after 0.5 s without one).
 pub const SETPOINT_PERIOD: Duration = Duration::from_millis(50);
-/// The planner runs every other setpoint (10 Hz).
-pub const PLAN_EVERY: u32 = 2;
 
 /// The goals, local NED metres: takeoff point, waypoints, and the land item's position at the previous
 /// altitude (PX4 flies there, then descends in LAND).
@@ -56,6 +55,11 @@ impl Pilot {
             acceptance_m,
             start: None,
         }
+    }
+
+    /// The last goal, once every goal is reached (where to hold until LAND).
+    pub fn last_goal(&self) -> Option<[f64; 3]> {
+        if self.finished() { self.goals.last().copied() } else { None }
     }
 
     /// True once the last goal was reached.
@@ -131,57 +135,45 @@ pub fn spawn(
     (tokio::spawn(run(link, target, pilot, steer, tx)), rx)
 }
 
-async fn run(link: Arc<Link>, target: Target, mut pilot: Pilot, mut steer: Box<dyn Steer>, tx: watch::Sender<Progress>) {
+async fn run(link: Arc<Link>, target: Target, mut pilot: Pilot, steer: Box<dyn Steer>, tx: watch::Sender<Progress>) {
     let clock = link.clock();
     let mut rx = link.subscribe();
     let mut view = VehicleView::default();
-    let mut last: Option<SteerOutput> = None;
-    let mut n: u32 = 0;
+    let mut worker = SteerWorker::new(steer);
     let mut next = clock.now();
     loop {
         let now = clock.now();
         if now >= next {
             next = now + SETPOINT_PERIOD;
             let pose = view.pose;
-            let sp = match pose.and_then(|p| pilot.goal(p.pos_ned).map(|g| (p, g))) {
-                Some((p, (goal, prev))) if n % PLAN_EVERY == 0 || last.is_none() => {
-                    let input = SteerInput {
-                        now_s: now.as_secs_f64(),
-                        pos_ned: p.pos_ned,
-                        vel_ned: p.vel_ned,
-                        yaw_rad: p.yaw_rad.unwrap_or(0.0),
-                        goal_ned: goal,
-                        prev_goal_ned: prev,
-                        desired_vel_ned: None,
-                        nav: Nav::Offboard,
-                        airborne: view.armed,
-                    };
-                    let Ok((back, out)) = tokio::task::spawn_blocking(move || {
-                        let o = steer.steer(&input);
-                        (steer, o)
-                    })
-                    .await
-                    else {
-                        return;
-                    };
-                    steer = back;
-                    let out = out.unwrap_or(SteerOutput {
-                        pos_ned: goal,
-                        yaw_rad: None,
-                    });
-                    last = Some(out);
-                    Some(out)
-                }
-                Some(_) => last,
-                // Before the first position or after the last goal: hold where we are (or the first goal).
-                None => last.or_else(|| {
-                    pose.map(|p| SteerOutput {
-                        pos_ned: p.pos_ned,
-                        yaw_rad: None,
-                    })
+            let leg = pose.and_then(|p| pilot.goal(p.pos_ned).map(|g| (p, g)));
+            let input = leg.map(|(p, (goal, prev))| SteerInput {
+                now_s: now.as_secs_f64(),
+                pos_ned: p.pos_ned,
+                vel_ned: p.vel_ned,
+                yaw_rad: p.yaw_rad.unwrap_or(0.0),
+                goal_ned: goal,
+                prev_goal_ned: prev,
+                desired_vel_ned: None,
+                nav: Nav::Offboard,
+                airborne: view.armed,
+            });
+            if !worker.poll(input, now).await {
+                return;
+            }
+            let sp = match (leg, worker.latest(now, Duration::MAX)) {
+                (Some(_), Some(Some(out))) => Some(out),
+                // Cannot plan, or no result yet: straight at the goal.
+                (Some((_, (goal, _))), _) => Some(SteerOutput {
+                    pos_ned: goal,
+                    yaw_rad: None,
+                }),
+                // After the last goal: hold the last goal (the session lands); before a position: nothing.
+                (None, _) => pilot.last_goal().map(|g| SteerOutput {
+                    pos_ned: g,
+                    yaw_rad: None,
                 }),
             };
-            n = n.wrapping_add(1);
             if let Some(sp) = sp {
                 let ms = view.pose.map_or(0, |p| p.time_boot_ms);
                 let _ = link.send(Sender::Gcs, &setpoint_msg(target, ms, &sp)).await;

@@ -150,11 +150,25 @@ impl FlightReport {
             link: end.link.into(),
             mode: end.mode,
             fence_uploaded: end.fence_uploaded,
-            warnings: end.warnings,
+            warnings: collapse(end.warnings),
             samples: trajectory.samples.len(),
             trajectory,
         }
     }
+}
+
+/// Each distinct warning once, in order of first appearance, with a count when repeated.
+pub fn collapse(warnings: Vec<String>) -> Vec<String> {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    for w in warnings {
+        match seen.iter_mut().find(|(s, _)| *s == w) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((w, 1)),
+        }
+    }
+    seen.into_iter()
+        .map(|(w, n)| if n == 1 { w } else { format!("{w} (x{n})") })
+        .collect()
 }
 
 #[cfg(test)]
@@ -222,6 +236,7 @@ mod tests {
         let r = FlightReport::judge(line(0.0), &[o], ending(Status::Aborted));
         assert_eq!(r.status, Status::Aborted);
         assert_eq!(serde_json::to_value(Status::LinkLost).unwrap(), "link_lost");
+        assert_eq!(collapse(vec!["a".into(), "b".into(), "a".into()]), vec!["a (x2)".to_string(), "b".into()]);
         let empty = FlightReport::judge(Trajectory::default(), &[o], ending(Status::Rejected));
         assert_eq!(empty.min_distance, None);
     }

@@ -242,8 +242,10 @@ impl Session<'_> {
     /// Everything before the first command of the flight.
     async fn prepare(&mut self) -> Result<(), Stop> {
         if self.opts.mode == FlyMode::Avoidance {
-            let t = super::avoidance::spawn(self.link.clone(), self.target, super::flight::steer_for(self.test, self.opts));
-            self.tasks.push(t);
+            let steer = super::flight::steer_for(self.test, self.opts);
+            for t in super::avoidance::spawn(self.link.clone(), self.target, steer) {
+                self.tasks.push(t);
+            }
         }
         self.set_params().await?;
         self.upload_mission().await?;

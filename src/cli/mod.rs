@@ -2,6 +2,7 @@
 
 mod check;
 mod distance;
+mod fly;
 mod sample;
 mod simulate;
 
@@ -28,6 +29,9 @@ enum Command {
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
+    /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
+    /// distance (exit 0 landed or collision, 1 timeout/link lost/aborted/rejected, 2 error).
+    Fly(fly::Args),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
     Sample(sample::Args),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
@@ -57,6 +61,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
+        Command::Fly(a) => fly::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Simulate(a) => simulate::run(a),
     }
