@@ -301,11 +301,17 @@ mod tests {
         assert!(c.answer(&flying(), &mut Mirror, t0, 0).is_none(), "nobody asked");
         c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], 16), t0);
         let a = c.answer(&flying(), &mut Mirror, t0, 7).unwrap();
-        assert_eq!((a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points), (1.0, 2.0, -3.0, 1));
+        assert_eq!(
+            (a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points),
+            (1.0, 2.0, -3.0, 1)
+        );
         assert_eq!(a.time_usec, 7);
         assert!(a.pos_x[1].is_nan());
         assert_eq!(c.mirrored, 1);
-        assert!(c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(), "stale request");
+        assert!(
+            c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(),
+            "stale request"
+        );
     }
 
     #[test]
@@ -319,7 +325,13 @@ mod tests {
         assert_eq!(c.nav, Some(Nav::Land));
         assert_eq!(c.prev_goal, Some([10.0, 0.0, -5.0]));
         // Far from the land point: fly there at altitude first; above it: land.
-        assert_eq!(approach_land(Nav::Land, [20.0, 0.0, 0.0], [0.0, 0.0, -5.0]), (Nav::Mission, [20.0, 0.0, -5.0]));
-        assert_eq!(approach_land(Nav::Land, [20.0, 0.0, 0.0], [19.5, 0.0, -5.0]), (Nav::Land, [20.0, 0.0, 0.0]));
+        assert_eq!(
+            approach_land(Nav::Land, [20.0, 0.0, 0.0], [0.0, 0.0, -5.0]),
+            (Nav::Mission, [20.0, 0.0, -5.0])
+        );
+        assert_eq!(
+            approach_land(Nav::Land, [20.0, 0.0, 0.0], [19.5, 0.0, -5.0]),
+            (Nav::Land, [20.0, 0.0, 0.0])
+        );
     }
 }

@@ -139,7 +139,11 @@ mod tests {
         let mut n = 0;
         let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| {
             n += 1;
-            if n < 3 { vec![] } else { vec![ack(arm, MavResult::MAV_RESULT_ACCEPTED)] }
+            if n < 3 {
+                vec![]
+            } else {
+                vec![ack(arm, MavResult::MAV_RESULT_ACCEPTED)]
+            }
         });
         assert_eq!(r, Ok(()));
         let conf: Vec<u8> = sent
@@ -166,7 +170,10 @@ mod tests {
         });
         assert_eq!(sent.len(), 1);
         let e = r.unwrap_err();
-        assert!(e.to_string().contains("not possible in the vehicle's current state"), "{e}");
+        assert!(
+            e.to_string().contains("not possible in the vehicle's current state"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -14,14 +14,14 @@ use super::clock::secs;
 use super::command::Command;
 use super::exchange::Retry;
 use super::offboard::{self, Pilot, Progress};
+use super::planner_steer::PlannerSteer;
 use super::recorder::Recorder;
 use super::report::Status;
 use super::session::{Session, Stop, stop_for};
-use super::planner_steer::PlannerSteer;
 use super::steer::{Mirror, Steer, Straight};
-use crate::lfs::camera::Camera;
 use super::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
 use super::{FlyMode as Mode, FlyOptions};
+use crate::lfs::camera::Camera;
 use crate::model::{Command as TestCommand, TestCase};
 
 /// How often the end conditions are checked when nothing arrives (vehicle time).
@@ -54,7 +54,10 @@ pub fn schedule(commands: &[TestCommand], warnings: &mut Vec<String>) -> VecDequ
             20 => Action::Arm,
             21 => Action::Disarm,
             m => {
-                warnings.push(format!("command mode {m} at {} us is not supported by the bridge; skipped", c.timestamp_us));
+                warnings.push(format!(
+                    "command mode {m} at {} us is not supported by the bridge; skipped",
+                    c.timestamp_us
+                ));
                 continue;
             }
         };
@@ -123,8 +126,16 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             return Stop::new(Status::Landed, "landed and disarmed");
         }
         if was_armed && !s.view.armed && !s.view.took_off {
-            let why = s.view.warnings.last().cloned().unwrap_or_else(|| "no reason given".into());
-            return Stop::new(Status::Rejected, format!("the vehicle disarmed before taking off: {why}"));
+            let why = s
+                .view
+                .warnings
+                .last()
+                .cloned()
+                .unwrap_or_else(|| "no reason given".into());
+            return Stop::new(
+                Status::Rejected,
+                format!("the vehicle disarmed before taking off: {why}"),
+            );
         }
         if now.saturating_sub(start) > timeout {
             let why = format!("still flying after {} s", s.opts.timeout_s);
@@ -132,7 +143,13 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
         }
         if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
             landing_sent = true;
-            if let Err(e) = s.command(MavCmd::MAV_CMD_NAV_LAND, [0.0, 0.0, 0.0, f32::NAN, f32::NAN, f32::NAN, f32::NAN]).await {
+            if let Err(e) = s
+                .command(
+                    MavCmd::MAV_CMD_NAV_LAND,
+                    [0.0, 0.0, 0.0, f32::NAN, f32::NAN, f32::NAN, f32::NAN],
+                )
+                .await
+            {
                 return end(s, stop_for("landing after the last waypoint", e)).await;
             }
         }
@@ -156,22 +173,31 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     }
 }
 
-async fn execute(s: &mut Session<'_>, action: Action, progress: Option<&mut watch::Receiver<Progress>>) -> Result<(), Stop> {
+async fn execute(
+    s: &mut Session<'_>,
+    action: Action,
+    progress: Option<&mut watch::Receiver<Progress>>,
+) -> Result<(), Stop> {
     let nan = f32::NAN;
     let arm = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    let r = match (action, s.opts.mode) {
+    match (action, s.opts.mode) {
         (Action::Start, FlyMode::Offboard) => {
             if let Some(p) = progress {
                 let wait = s.link.clock().wall(Duration::from_secs(5));
                 if tokio::time::timeout(wait, p.wait_for(|p| p.streaming)).await.is_err() {
-                    return Err(Stop::new(Status::LinkLost, "no position from the vehicle to start offboard from"));
+                    return Err(Stop::new(
+                        Status::LinkLost,
+                        "no position from the vehicle to start offboard from",
+                    ));
                 }
             }
             let mode = [1.0, f32::from(PX4_MAIN_OFFBOARD), 0.0, 0.0, 0.0, 0.0, 0.0];
             s.command(MavCmd::MAV_CMD_DO_SET_MODE, mode)
                 .await
                 .map_err(|e| stop_for("switching to OFFBOARD", e))?;
-            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm).await.map_err(|e| stop_for("arming", e))
+            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
+                .await
+                .map_err(|e| stop_for("arming", e))
         }
         (Action::Start, _) => {
             s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
@@ -195,11 +221,13 @@ async fn execute(s: &mut Session<'_>, action: Action, progress: Option<&mut watc
             .await
             .map_err(|e| stop_for("arming", e)),
         (Action::Disarm, _) => s
-            .command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            .command(
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            )
             .await
             .map_err(|e| stop_for("disarming", e)),
-    };
-    r
+    }
 }
 
 /// Ends an abnormal flight: LAND (then RTL if LAND is refused) unless the vehicle is on the ground, bounded
@@ -263,6 +291,9 @@ mod tests {
         );
         assert_eq!(w.len(), 1);
         assert!(w[0].contains("mode 7"));
-        assert_eq!(schedule(&[], &mut w), VecDeque::from(vec![(Duration::ZERO, Action::Start)]));
+        assert_eq!(
+            schedule(&[], &mut w),
+            VecDeque::from(vec![(Duration::ZERO, Action::Start)])
+        );
     }
 }

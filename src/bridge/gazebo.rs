@@ -93,6 +93,9 @@ mod tests {
         assert_eq!(b.size, [2.0, 10.0, 20.0]);
         let sdf = world_sdf(&[o, o]);
         assert!(sdf.contains("obstacle_1") && sdf.contains("<size>2.0000 10.0000 20.0000</size>"));
-        assert!(sdf.contains("<pose>-3.0000 5.0000 10.0000 0 0 -0.523599</pose>"), "{sdf}");
+        assert!(
+            sdf.contains("<pose>-3.0000 5.0000 10.0000 0 0 -0.523599</pose>"),
+            "{sdf}"
+        );
     }
 }

@@ -232,7 +232,9 @@ impl Link {
                 _ = tokio::time::sleep(wait) => ex.on_timeout(self.clock.now()),
             };
             let r = ex.retries();
-            self.counters.retries.fetch_add(u64::from(r - counted), Ordering::Relaxed);
+            self.counters
+                .retries
+                .fetch_add(u64::from(r - counted), Ordering::Relaxed);
             counted = r;
             for m in &step.send {
                 let _ = self.send(Sender::Gcs, m).await;
@@ -349,12 +351,18 @@ mod tests {
         let link = Link::new(Arc::new(ours), VehicleClock::new(1.0));
         let mut rx = link.subscribe();
         theirs.send(from(7), &hb()).await.unwrap();
-        let got = tokio::time::timeout(Duration::from_secs(5), rx.recv()).await.unwrap().unwrap();
+        let got = tokio::time::timeout(Duration::from_secs(5), rx.recv())
+            .await
+            .unwrap()
+            .unwrap();
         assert_eq!(got.header.system_id, 7);
         link.lock(1);
         theirs.send(from(7), &hb()).await.unwrap();
         theirs.send(from(1), &hb()).await.unwrap();
-        let got = tokio::time::timeout(Duration::from_secs(5), rx.recv()).await.unwrap().unwrap();
+        let got = tokio::time::timeout(Duration::from_secs(5), rx.recv())
+            .await
+            .unwrap()
+            .unwrap();
         assert_eq!(got.header.system_id, 1);
         let s = link.stats();
         assert_eq!((s.packets_received, s.packets_ignored), (2, 1));
@@ -388,15 +396,22 @@ mod tests {
                 }
             }
         });
-        let t = Target { system: 1, component: 1 };
+        let t = Target {
+            system: 1,
+            component: 1,
+        };
         let cmd = Command::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], Retry::COMMAND);
         let cancel = CancelToken::new();
-        let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel)).await.unwrap();
+        let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel))
+            .await
+            .unwrap();
         assert_eq!(r, Ok(()));
         assert_eq!(link.stats().retries, 2);
         cancel.cancel();
         let cmd = Command::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], Retry::COMMAND);
-        let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel)).await.unwrap();
+        let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel))
+            .await
+            .unwrap();
         assert_eq!(r, Err(ProtocolError::Cancelled));
     }
 }

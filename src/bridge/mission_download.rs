@@ -178,7 +178,9 @@ mod tests {
         let (r, sent) = run_scripted(&mut d, Duration::from_millis(10), vehicle(3, |_| false));
         let items = r.unwrap();
         assert_eq!(items.iter().map(|i| i.x).collect::<Vec<_>>(), vec![0, 10, 20]);
-        assert!(matches!(sent.last(), Some(MavMessage::MISSION_ACK(a)) if a.mavtype == MavMissionResult::MAV_MISSION_ACCEPTED));
+        assert!(
+            matches!(sent.last(), Some(MavMessage::MISSION_ACK(a)) if a.mavtype == MavMissionResult::MAV_MISSION_ACCEPTED)
+        );
     }
 
     #[test]

@@ -266,7 +266,10 @@ mod tests {
             let e = r.unwrap_err();
             assert!(matches!(e, ProtocolError::MissionRefused { result, .. } if result == code));
             let text = e.to_string();
-            assert!(text.contains("refused the mission upload") && text.contains(&(code as u32).to_string()), "{text}");
+            assert!(
+                text.contains("refused the mission upload") && text.contains(&(code as u32).to_string()),
+                "{text}"
+            );
         }
     }
 
@@ -283,7 +286,10 @@ mod tests {
         let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(2), Retry::MISSION);
         up.start(Duration::ZERO);
         let accepted = ack(MavMissionResult::MAV_MISSION_ACCEPTED, 1);
-        assert!(up.on_message(&accepted, Duration::ZERO).done.is_none(), "ACK before the items");
+        assert!(
+            up.on_message(&accepted, Duration::ZERO).done.is_none(),
+            "ACK before the items"
+        );
         let fence_req = MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
             seq: 0,
             mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,

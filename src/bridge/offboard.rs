@@ -59,7 +59,11 @@ impl Pilot {
 
     /// The last goal, once every goal is reached (where to hold until LAND).
     pub fn last_goal(&self) -> Option<[f64; 3]> {
-        if self.finished() { self.goals.last().copied() } else { None }
+        if self.finished() {
+            self.goals.last().copied()
+        } else {
+            None
+        }
     }
 
     /// True once the last goal was reached.
@@ -78,7 +82,11 @@ impl Pilot {
             self.index += 1;
         }
         let g = *self.goals.get(self.index)?;
-        let prev = if self.index == 0 { start } else { self.goals[self.index - 1] };
+        let prev = if self.index == 0 {
+            start
+        } else {
+            self.goals[self.index - 1]
+        };
         Some((g, prev))
     }
 }
@@ -224,14 +232,44 @@ mod tests {
 
     #[test]
     fn setpoint_masks() {
-        let t = Target { system: 1, component: 1 };
-        let with_yaw = setpoint_msg(t, 5, &SteerOutput { pos_ned: [1.0, 2.0, -3.0], yaw_rad: Some(0.3) });
-        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = with_yaw else { panic!() };
-        assert!(!m.type_mask.contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE));
-        assert!(!m.type_mask.contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_X_IGNORE));
+        let t = Target {
+            system: 1,
+            component: 1,
+        };
+        let with_yaw = setpoint_msg(
+            t,
+            5,
+            &SteerOutput {
+                pos_ned: [1.0, 2.0, -3.0],
+                yaw_rad: Some(0.3),
+            },
+        );
+        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = with_yaw else {
+            panic!()
+        };
+        assert!(
+            !m.type_mask
+                .contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE)
+        );
+        assert!(
+            !m.type_mask
+                .contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_X_IGNORE)
+        );
         assert_eq!((m.x, m.z, m.target_system), (1.0, -3.0, 1));
-        let no_yaw = setpoint_msg(t, 5, &SteerOutput { pos_ned: [0.0; 3], yaw_rad: None });
-        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = no_yaw else { panic!() };
-        assert!(m.type_mask.contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE));
+        let no_yaw = setpoint_msg(
+            t,
+            5,
+            &SteerOutput {
+                pos_ned: [0.0; 3],
+                yaw_rad: None,
+            },
+        );
+        let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = no_yaw else {
+            panic!()
+        };
+        assert!(
+            m.type_mask
+                .contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE)
+        );
     }
 }

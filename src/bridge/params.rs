@@ -294,7 +294,13 @@ mod tests {
         assert_eq!((r[1].old, r[1].new), (2.0, 1.0));
         assert_eq!(r[1].param_type, MavParamType::MAV_PARAM_TYPE_INT32);
         assert_eq!(encode(1.0, MavParamType::MAV_PARAM_TYPE_INT32).to_bits(), 1);
-        assert_eq!(decode(encode(-3.0, MavParamType::MAV_PARAM_TYPE_INT32), MavParamType::MAV_PARAM_TYPE_INT32), -3.0);
+        assert_eq!(
+            decode(
+                encode(-3.0, MavParamType::MAV_PARAM_TYPE_INT32),
+                MavParamType::MAV_PARAM_TYPE_INT32
+            ),
+            -3.0
+        );
     }
 
     #[test]
@@ -307,7 +313,10 @@ mod tests {
     #[test]
     fn unknown_refused_and_silent() {
         let (r, _) = set(&[("NO_SUCH_PARAM", 1.0)], |_| false);
-        assert_eq!(r.unwrap_err().to_string(), "the vehicle has no parameter \"NO_SUCH_PARAM\"");
+        assert_eq!(
+            r.unwrap_err().to_string(),
+            "the vehicle has no parameter \"NO_SUCH_PARAM\""
+        );
         let (r, _) = set(&[("NAV_ACC_RAD", 500.0)], |_| false);
         assert!(matches!(r, Err(ProtocolError::ParamMismatch { got: 2.0, .. })), "{r:?}");
         let mut p = ParamSet::new(T, vec![("X".into(), 1.0)], Retry::PARAM);

@@ -151,8 +151,16 @@ mod tests {
         assert_eq!(first_difference(&items, &items), None);
         let mut moved = items.clone();
         moved[2].x += 5;
-        assert!(first_difference(&items, &moved).unwrap().starts_with("item 2: position"));
-        assert!(first_difference(&items, &items[..3]).unwrap().contains("4 items uploaded"));
+        assert!(
+            first_difference(&items, &moved)
+                .unwrap()
+                .starts_with("item 2: position")
+        );
+        assert!(
+            first_difference(&items, &items[..3])
+                .unwrap()
+                .contains("4 items uploaded")
+        );
     }
 
     #[test]
@@ -170,7 +178,10 @@ mod tests {
         for (item, corner) in items.iter().zip(o.footprint().corners()) {
             let (n, e) = home.project(f64::from(item.x) / 1e7, f64::from(item.y) / 1e7);
             // 1e-7 degree is about 1.1 cm.
-            assert!((n - corner.x).abs() < 0.02 && (e - corner.y).abs() < 0.02, "{n} {e} vs {corner}");
+            assert!(
+                (n - corner.x).abs() < 0.02 && (e - corner.y).abs() < 0.02,
+                "{n} {e} vs {corner}"
+            );
         }
     }
 }

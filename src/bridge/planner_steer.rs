@@ -32,7 +32,9 @@ pub struct PlannerSteer {
 
 impl std::fmt::Debug for PlannerSteer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("PlannerSteer").field("boxes", &self.scene.box_count()).finish()
+        f.debug_struct("PlannerSteer")
+            .field("boxes", &self.scene.box_count())
+            .finish()
     }
 }
 
@@ -43,8 +45,10 @@ fn v3(a: [f64; 3]) -> Vector3<f32> {
 impl PlannerSteer {
     /// A planner seeing `obstacles` through `camera`, with default planner parameters.
     pub fn new(obstacles: &[Obstacle], camera: Camera) -> Result<Self, LfsError> {
-        let mut params = PlannerParams::default();
-        params.fovs = vec![camera.fov()];
+        let params = PlannerParams {
+            fovs: vec![camera.fov()],
+            ..PlannerParams::default()
+        };
         Ok(Self {
             scene: Scene::new(obstacles),
             keep: KeepRange {
@@ -76,7 +80,15 @@ impl Steer for PlannerSteer {
         if pos.z > 0.05 {
             let pose = CameraPose::level(pos, f64::from(state.yaw_enu_rad));
             // Fails only with the camera inside a box: nothing sensible to plan.
-            render_cloud(&self.scene, &self.camera, &pose, self.keep, &mut self.scratch, &mut self.frame).ok()?;
+            render_cloud(
+                &self.scene,
+                &self.camera,
+                &pose,
+                self.keep,
+                &mut self.scratch,
+                &mut self.frame,
+            )
+            .ok()?;
         }
         self.planner.update_cloud(&self.frame, &state, dt as f32).ok()?;
         let goal = ned_to_enu(&v3(input.goal_ned));
@@ -150,7 +162,10 @@ mod tests {
             last = free.steer(&input(f64::from(k) * 0.1, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0]));
         }
         let sp = last.unwrap();
-        assert!(sp.pos_ned[0] > 0.1 && sp.pos_ned[1].abs() < 0.05, "straight North: {sp:?}");
+        assert!(
+            sp.pos_ned[0] > 0.1 && sp.pos_ned[1].abs() < 0.05,
+            "straight North: {sp:?}"
+        );
         // A wide wall 6 m ahead across the path: the setpoint leaves the straight line.
         let wall = Obstacle::new(2.0, 16.0, 20.0, 6.0, 0.0, 0.0);
         let mut blocked = PlannerSteer::new(&[wall], Camera::hfs()).unwrap();
@@ -159,6 +174,9 @@ mod tests {
             sp = blocked.steer(&input(f64::from(k) * 0.1, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0]));
         }
         let sp = sp.unwrap();
-        assert!(sp.pos_ned[1].abs() > 0.05 || sp.pos_ned[0] < 0.5, "deflected or braking: {sp:?}");
+        assert!(
+            sp.pos_ned[1].abs() > 0.05 || sp.pos_ned[0] < 0.5,
+            "deflected or braking: {sp:?}"
+        );
     }
 }

@@ -61,7 +61,13 @@ impl Recorder {
         self.samples.push(s);
         if let Some((path, w)) = self.out.as_mut() {
             let r = s.r.map(|r| format!("{r:.6}")).unwrap_or_default();
-            let line = format!("{},{:.4},{:.4},{:.4},{r}\n", (s.t_s * 1e6).round() as i64, s.x, s.y, s.z);
+            let line = format!(
+                "{},{:.4},{:.4},{:.4},{r}\n",
+                (s.t_s * 1e6).round() as i64,
+                s.x,
+                s.y,
+                s.z
+            );
             if let Err(e) = w.write_all(line.as_bytes()).and_then(|_| w.flush()) {
                 // Keep flying and recording in memory; report the problem once at the end.
                 if self.write_error.is_none() {

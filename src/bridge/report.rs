@@ -236,7 +236,10 @@ mod tests {
         let r = FlightReport::judge(line(0.0), &[o], ending(Status::Aborted));
         assert_eq!(r.status, Status::Aborted);
         assert_eq!(serde_json::to_value(Status::LinkLost).unwrap(), "link_lost");
-        assert_eq!(collapse(vec!["a".into(), "b".into(), "a".into()]), vec!["a (x2)".to_string(), "b".into()]);
+        assert_eq!(
+            collapse(vec!["a".into(), "b".into(), "a".into()]),
+            vec!["a (x2)".to_string(), "b".into()]
+        );
         let empty = FlightReport::judge(Trajectory::default(), &[o], ending(Status::Rejected));
         assert_eq!(empty.min_distance, None);
     }

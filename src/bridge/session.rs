@@ -327,7 +327,8 @@ impl Session<'_> {
             Err(ProtocolError::Cancelled) => Err(Stop::new(Status::Aborted, "cancelled")),
             Err(e) => {
                 // A fence that may act (e.g. Hold) would steer the test: take it away again.
-                self.warnings.push(format!("GF_ACTION not set to warning-only ({e}); fence removed"));
+                self.warnings
+                    .push(format!("GF_ACTION not set to warning-only ({e}); fence removed"));
                 let clear = MissionUpload::new(self.target, ty, Vec::new(), Retry::MISSION);
                 if let Err(e) = self.link.exchange(clear, &self.cancel).await {
                     return Err(stop_for("removing the geofence", e));
@@ -343,7 +344,8 @@ impl Session<'_> {
         for id in [32.0, 30.0] {
             let p = [id, interval_us, 0.0, 0.0, 0.0, 0.0, 0.0];
             if let Err(e) = self.command(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, p).await {
-                self.warnings.push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
+                self.warnings
+                    .push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
             }
         }
     }

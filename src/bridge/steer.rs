@@ -103,7 +103,10 @@ mod tests {
         };
         let out = s.steer(&input).unwrap();
         assert_eq!(out.pos_ned, [0.0, 10.0, -5.0]);
-        assert!((out.yaw_rad.unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12, "East is +90 degrees");
+        assert!(
+            (out.yaw_rad.unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "East is +90 degrees"
+        );
         assert_eq!(Mirror.steer(&input), None);
     }
 }

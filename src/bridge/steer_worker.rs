@@ -47,7 +47,8 @@ impl SteerWorker {
                 Err(_) => return false,
             }
         }
-        if let (Some(input), Some(mut steer)) = (input, self.idle.take()) {
+        let Some(input) = input else { return true };
+        if let Some(mut steer) = self.idle.take() {
             let job = tokio::task::spawn_blocking(move || {
                 let out = steer.steer(&input);
                 (steer, out)
@@ -93,6 +94,10 @@ mod tests {
             airborne: true,
         };
         let t = Duration::from_secs(1);
+        assert!(
+            w.poll(None, t).await,
+            "no question: nothing to do, the steering is kept"
+        );
         assert!(w.poll(Some(input), t).await);
         assert_eq!(w.latest(t, Duration::from_secs(1)), None, "nothing finished yet");
         for _ in 0..1000 {
@@ -102,8 +107,15 @@ mod tests {
             }
             tokio::time::sleep(Duration::from_millis(1)).await;
         }
-        let got = w.latest(t, Duration::from_millis(500)).expect("finished").expect("planned");
+        let got = w
+            .latest(t, Duration::from_millis(500))
+            .expect("finished")
+            .expect("planned");
         assert_eq!(got.pos_ned, [5.0, 0.0, -2.0]);
-        assert_eq!(w.latest(t + Duration::from_secs(2), Duration::from_millis(500)), None, "too old");
+        assert_eq!(
+            w.latest(t + Duration::from_secs(2), Duration::from_millis(500)),
+            None,
+            "too old"
+        );
     }
 }

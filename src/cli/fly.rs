@@ -114,7 +114,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let Some(p) = &prediction {
             plot.add_path(&p.trajectory, PathStyle::Simulated, "LFS prediction");
         }
-        plot.add_path(&report.trajectory, PathStyle::Flown, &format!("flown ({:?})", opts.mode));
+        plot.add_path(
+            &report.trajectory,
+            PathStyle::Flown,
+            &format!("flown ({:?})", opts.mode),
+        );
         if let Some(c) = &report.closest_approach {
             plot.mark_closest(c);
         }
@@ -124,12 +128,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         super::print_json(&report)?;
     } else {
         let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
-        println!("status            {}{}", report.status.as_str(), report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default());
+        println!(
+            "status            {}{}",
+            report.status.as_str(),
+            report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default()
+        );
         println!("min_distance      {} (competition: 0.5 s bins)", m(report.min_distance));
         println!("min_distance_raw  {}", m(report.min_distance_raw));
         println!("lfs_min_distance  {}", m(report.lfs_min_distance));
         for d in &report.per_obstacle {
-            println!("  obstacle {}: {:.3} m (raw {:.3} m)", d.index, d.distance, d.distance_raw);
+            println!(
+                "  obstacle {}: {:.3} m (raw {:.3} m)",
+                d.index, d.distance, d.distance_raw
+            );
         }
         if let Some(c) = &report.closest_approach {
             println!(
@@ -143,7 +154,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             report.samples,
             report.link.packets_received,
             report.link.retries,
-            if report.fence_uploaded { "on the vehicle" } else { "not uploaded" }
+            if report.fence_uploaded {
+                "on the vehicle"
+            } else {
+                "not uploaded"
+            }
         );
         for w in &report.warnings {
             println!("warning           {w}");

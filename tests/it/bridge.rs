@@ -1,14 +1,13 @@
 //! The MAVLink bridge against the in-process mock autopilot on ephemeral ports: every mode on missions 1-3
 //! with generated obstacles, a serial (pseudo-terminal) link, and faults. Every wait is bounded.
 
-use std::sync::Arc;
 use std::time::Duration;
 
 use mavlink::dialects::common::MavMissionResult;
 use mock_autopilot::{Faults, LinkSpec, MockAutopilot, MockHandle, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::generator::{Generator, GeneratorConfig};
-use prgenuav::model::{Trajectory, TestCase};
+use prgenuav::model::{TestCase, Trajectory};
 
 use super::case;
 
@@ -51,7 +50,13 @@ async fn fly_bounded(test: &TestCase, o: &FlyOptions, cancel: CancelToken) -> Fl
 }
 
 fn assert_flown(r: &FlightReport, what: &str) {
-    assert!(r.status.completed(), "{what}: {:?} {:?} {:?}", r.status, r.reason, r.warnings);
+    assert!(
+        r.status.completed(),
+        "{what}: {:?} {:?} {:?}",
+        r.status,
+        r.reason,
+        r.warnings
+    );
     assert!(r.samples > 100, "{what}: {} samples", r.samples);
     assert!(r.min_distance.is_some(), "{what}");
     assert!(r.flight_time_s > 5.0, "{what}: {} s", r.flight_time_s);
@@ -65,7 +70,10 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     let state = m.state();
     assert!(!state.armed, "{mode:?} mission {n}: still armed");
     m.shutdown().await.expect("mock stops");
-    eprintln!("{mode:?} mission {n}: {}", serde_json::to_string(&r).unwrap_or_default());
+    eprintln!(
+        "{mode:?} mission {n}: {}",
+        serde_json::to_string(&r).unwrap_or_default()
+    );
     assert_flown(&r, &format!("{mode:?} mission {n}"));
     // It flew the whole mission: it ended at the land point.
     let land = test.mission.flight_path().last().copied().expect("land item");
@@ -73,7 +81,12 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     let off = (end.x - land.north_m).hypot(end.y - land.east_m);
     assert!(off < 3.0, "{mode:?} mission {n}: landed {off:.1} m from the land point");
     if mode != FlyMode::Mission {
-        assert_eq!(r.status, Status::Landed, "{mode:?} mission {n} avoids the boxes: {:?}", r.reason);
+        assert_eq!(
+            r.status,
+            Status::Landed,
+            "{mode:?} mission {n} avoids the boxes: {:?}",
+            r.reason
+        );
     }
     r
 }
@@ -98,4 +111,168 @@ async fn offboard_mode_missions_1_to_3() {
     for n in 1..=3 {
         fly_mode(FlyMode::Offboard, n).await;
     }
+}
+
+/// The status of mission 2 (generated obstacles) in avoidance mode with `faults`.
+async fn avoidance_status(faults: Faults) -> FlightReport {
+    let test = generated(2);
+    let (m, url) = mock(SPEED, |b| b.faults(faults)).await;
+    let r = fly_bounded(&test, &opts(&url, FlyMode::Avoidance, SPEED), CancelToken::new()).await;
+    m.shutdown().await.expect("mock stops");
+    r
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn loss_and_latency_give_the_same_status() {
+    let clean = avoidance_status(Faults::default()).await;
+    let lossy = avoidance_status(Faults {
+        seed: 7,
+        loss: 0.2,
+        latency: Duration::from_millis(100),
+        ..Faults::default()
+    })
+    .await;
+    assert_eq!(clean.status, Status::Landed, "{:?}", clean.reason);
+    assert_eq!(lossy.status, clean.status, "{:?} {:?}", lossy.reason, lossy.warnings);
+    assert!(lossy.link.retries > 0, "20 % loss needs retries");
+    assert!(lossy.samples > 100);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn refusals_are_rejected_with_the_reason() {
+    let test = generated(1);
+    let (m, url) = mock(SPEED, |b| {
+        b.reject_mission(Some(MavMissionResult::MAV_MISSION_NO_SPACE))
+    })
+    .await;
+    let r = fly_bounded(&test, &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
+    m.shutdown().await.expect("mock stops");
+    assert_eq!(r.status, Status::Rejected);
+    let why = r.reason.unwrap_or_default();
+    assert!(
+        why.contains("refused the mission upload") && why.contains("storage"),
+        "{why}"
+    );
+    assert_eq!(r.samples, 0);
+
+    let (m, url) = mock(SPEED, |b| b.fail_arm(true)).await;
+    let r = fly_bounded(&test, &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
+    m.shutdown().await.expect("mock stops");
+    assert_eq!(r.status, Status::Rejected);
+    let why = r.reason.unwrap_or_default();
+    assert!(
+        why.starts_with("arming") && why.contains("TEMPORARILY_REJECTED"),
+        "{why}"
+    );
+    assert!(
+        r.warnings.iter().any(|w| w.contains("Arming denied")),
+        "{:?}",
+        r.warnings
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn reboot_and_silence_are_a_lost_link_with_the_recording_kept() {
+    let test = generated(2);
+    for (faults, words) in [
+        (
+            Faults {
+                reboot_after: Some(Duration::from_secs(20)),
+                ..Faults::default()
+            },
+            "rebooted",
+        ),
+        (
+            Faults {
+                silence_after: Some(Duration::from_secs(20)),
+                ..Faults::default()
+            },
+            "no message",
+        ),
+    ] {
+        let (m, url) = mock(SPEED, |b| b.faults(faults)).await;
+        let r = fly_bounded(&test, &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
+        m.shutdown().await.expect("mock stops");
+        assert_eq!(r.status, Status::LinkLost, "{:?}", r.reason);
+        assert!(r.reason.as_deref().unwrap_or("").contains(words), "{:?}", r.reason);
+        assert!(
+            r.samples > 50 && r.flight_time_s > 3.0,
+            "partial flight kept: {} samples",
+            r.samples
+        );
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancel_mid_flight_lands_and_keeps_the_partial_trajectory() {
+    let test = generated(3);
+    let (m, url) = mock(SPEED, |b| b).await;
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("flight.csv");
+    let mut o = opts(&url, FlyMode::Avoidance, SPEED);
+    o.trajectory_csv = Some(csv.clone());
+    let cancel = CancelToken::new();
+    let mut state = m.watch_state();
+    let flight = tokio::spawn({
+        let cancel = cancel.clone();
+        async move { fly(&test, &o, cancel).await }
+    });
+    // Cancel once the vehicle is well airborne and moving.
+    tokio::time::timeout(WALL_LIMIT, state.wait_for(|s| s.armed && s.pos_ned.z < -8.0))
+        .await
+        .expect("airborne in time")
+        .expect("mock alive");
+    cancel.cancel();
+    let r = tokio::time::timeout(WALL_LIMIT, flight)
+        .await
+        .expect("ends in time")
+        .expect("joined")
+        .expect("flight runs");
+    assert_eq!(r.status, Status::Aborted);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("MAV_CMD_NAV_LAND sent")),
+        "{:?}",
+        r.warnings
+    );
+    let mode = m.state().mode;
+    assert_eq!(mode, mock_autopilot::FlightMode::Land, "the vehicle is landing");
+    m.shutdown().await.expect("mock stops");
+    let kept = Trajectory::load_csv(&csv).expect("partial trajectory on disk");
+    assert!(kept.samples.len() > 50);
+    assert_eq!(kept.samples.len(), r.samples);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn no_vehicle_is_a_clear_error_in_bounded_time() {
+    // A bound UDP socket that never answers.
+    let quiet = std::net::UdpSocket::bind("127.0.0.1:0").expect("bind");
+    let url = format!("udpout:127.0.0.1:{}", quiet.local_addr().expect("addr").port());
+    let mut o = opts(&url, FlyMode::Mission, 100.0);
+    o.heartbeat_wait_s = 5.0;
+    let e = tokio::time::timeout(WALL_LIMIT, fly(&case(1), &o, CancelToken::new()))
+        .await
+        .expect("bounded")
+        .expect_err("no vehicle");
+    assert!(e.to_string().contains("no autopilot heartbeat"), "{e}");
+    let mut bad = o.clone();
+    bad.connect = "udpin:0.0.0.0".into();
+    let e = fly(&case(1), &bad, CancelToken::new()).await.expect_err("bad address");
+    assert!(e.to_string().contains("no :PORT"), "{e}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_flight_over_a_serial_link() {
+    let cable = super::pty::SerialCable::new().expect("pseudo-terminals");
+    let test = generated(2);
+    let m = MockAutopilot::builder()
+        .link(LinkSpec::Address(format!("serial:{}:57600", cable.b)))
+        .speed_factor(SpeedFactor::Times(SPEED))
+        .spawn()
+        .await
+        .expect("mock on serial");
+    let o = opts(&format!("serial:{}:57600", cable.a), FlyMode::Avoidance, SPEED);
+    let r = fly_bounded(&test, &o, CancelToken::new()).await;
+    m.shutdown().await.expect("mock stops");
+    assert_flown(&r, "serial");
+    assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
 }

@@ -5,6 +5,7 @@ mod cli_errors;
 mod generator;
 mod geometry_props;
 mod missions;
+mod pty;
 mod rules;
 
 use std::path::{Path, PathBuf};
