@@ -49,6 +49,9 @@ pub struct Args {
     /// Write the obstacles as a Gazebo Classic world (before flying).
     #[arg(long)]
     world: Option<PathBuf>,
+    /// Only write the `--world` file, do not fly (to start Gazebo with it first).
+    #[arg(long, requires = "world")]
+    world_only: bool,
     /// Do not upload the obstacles as a geofence.
     #[arg(long)]
     no_fence: bool,
@@ -67,6 +70,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.world {
         write_atomic(path, world_sdf(&test.obstacles).as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
+        if args.world_only {
+            return Ok(ExitCode::SUCCESS);
+        }
     }
     let prediction = if args.no_predict {
         None

@@ -13,6 +13,9 @@ use super::case;
 
 /// Mock speed factor for the fast tests (the bridge's clock follows it).
 const SPEED: f64 = 20.0;
+/// Speed factor when the planner steers: 10 Hz of vehicle time is 100 plans per wall second, which leaves a
+/// loaded 2-core CI machine headroom (a stale plan is mirrored, and the drone would fly straight).
+const PLANNED_SPEED: f64 = 10.0;
 /// No test may take longer than this (wall time).
 const WALL_LIMIT: Duration = Duration::from_secs(60);
 
@@ -65,8 +68,9 @@ fn assert_flown(r: &FlightReport, what: &str) {
 
 async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     let test = generated(n);
-    let (m, url) = mock(SPEED, |b| b).await;
-    let r = fly_bounded(&test, &opts(&url, mode, SPEED), CancelToken::new()).await;
+    let speed = if mode == FlyMode::Mission { SPEED } else { PLANNED_SPEED };
+    let (m, url) = mock(speed, |b| b).await;
+    let r = fly_bounded(&test, &opts(&url, mode, speed), CancelToken::new()).await;
     let state = m.state();
     assert!(!state.armed, "{mode:?} mission {n}: still armed");
     m.shutdown().await.expect("mock stops");
@@ -116,8 +120,13 @@ async fn offboard_mode_missions_1_to_3() {
 /// The status of mission 2 (generated obstacles) in avoidance mode with `faults`.
 async fn avoidance_status(faults: Faults) -> FlightReport {
     let test = generated(2);
-    let (m, url) = mock(SPEED, |b| b.faults(faults)).await;
-    let r = fly_bounded(&test, &opts(&url, FlyMode::Avoidance, SPEED), CancelToken::new()).await;
+    let (m, url) = mock(PLANNED_SPEED, |b| b.faults(faults)).await;
+    let r = fly_bounded(
+        &test,
+        &opts(&url, FlyMode::Avoidance, PLANNED_SPEED),
+        CancelToken::new(),
+    )
+    .await;
     m.shutdown().await.expect("mock stops");
     r
 }
@@ -266,13 +275,34 @@ async fn the_same_flight_over_a_serial_link() {
     let test = generated(2);
     let m = MockAutopilot::builder()
         .link(LinkSpec::Address(format!("serial:{}:57600", cable.b)))
-        .speed_factor(SpeedFactor::Times(SPEED))
+        .speed_factor(SpeedFactor::Times(PLANNED_SPEED))
         .spawn()
         .await
         .expect("mock on serial");
-    let o = opts(&format!("serial:{}:57600", cable.a), FlyMode::Avoidance, SPEED);
+    let o = opts(&format!("serial:{}:57600", cable.a), FlyMode::Avoidance, PLANNED_SPEED);
     let r = fly_bounded(&test, &o, CancelToken::new()).await;
     m.shutdown().await.expect("mock stops");
     assert_flown(&r, "serial");
     assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
+}
+
+#[test]
+fn fly_cli_checks_arguments_and_writes_the_world() {
+    let (code, _, err) = super::prgenuav(&["fly", "missions/mission2.yaml", "--connect", "udp-in:14540"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("unknown scheme \"udp-in\""), "{err}");
+    let (_dir, test) = super::test_file(2, super::valid_pair());
+    let world = test.with_file_name("scene.world");
+    let (code, _, err) = super::prgenuav(&[
+        "fly",
+        test.to_str().expect("utf-8 path"),
+        "--world",
+        world.to_str().expect("utf-8 path"),
+        "--world-only",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let sdf = std::fs::read_to_string(&world).expect("world written");
+    assert!(sdf.contains("obstacle_0") && sdf.contains("obstacle_1") && !sdf.contains("obstacle_2"));
+    let (code, _, err) = super::prgenuav(&["fly", "missions/mission2.yaml", "--world-only"]);
+    assert_eq!(code, 2, "--world-only needs --world: {err}");
 }
