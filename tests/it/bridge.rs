@@ -103,6 +103,41 @@ async fn mission_mode_missions_1_to_3() {
     }
 }
 
+/// GF_ACTION is warning-only during the flight and PX4's default (2, Hold) again afterwards.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn geofence_action_is_restored_after_the_flight() {
+    use prgenuav::bridge::exchange::{Retry, Target};
+    use prgenuav::bridge::link::{Link, MavTransport};
+    use prgenuav::bridge::params::ParamSet;
+    let test = generated(1);
+    let (m, url) = mock(SPEED, |b| b).await;
+    let r = fly_bounded(&test, &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
+    assert!(r.fence_uploaded && r.status.completed(), "{:?}", r.reason);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("warning only")),
+        "{:?}",
+        r.warnings
+    );
+    let addr = url.trim_start_matches("udpout:").to_string();
+    let t = MavTransport::open(&format!("udpout:{addr}")).await.expect("link");
+    let link = Link::new(
+        std::sync::Arc::new(t),
+        prgenuav::bridge::clock::VehicleClock::new(SPEED),
+    );
+    let target = Target {
+        system: 1,
+        component: 1,
+    };
+    // Setting the value it should already have reports the value it had.
+    let p = ParamSet::new(target, vec![("GF_ACTION".into(), 2.0)], Retry::PARAM);
+    let changes = tokio::time::timeout(WALL_LIMIT, link.exchange(p, &CancelToken::new()))
+        .await
+        .expect("bounded")
+        .expect("read back");
+    assert_eq!(changes[0].old, 2.0, "GF_ACTION restored");
+    m.shutdown().await.expect("mock stops");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn avoidance_mode_missions_1_to_3() {
     for n in 1..=3 {
