@@ -4,6 +4,7 @@
 //! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
 #![warn(missing_docs)]
 
+pub mod bridge;
 pub mod campaign;
 pub mod generator;
 pub mod geometry;

@@ -26,7 +26,9 @@ impl Screener for LfsScreener {
                 } else {
                     self.config.timeout_s
                 };
-                let status = serde_json::to_value(r.status).ok().and_then(|v| v.as_str().map(String::from));
+                let status = serde_json::to_value(r.status)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from));
                 (d, t, status.unwrap_or_else(|| "unknown".into()))
             }
             Err(e) => (NO_PREDICTION_M, self.config.timeout_s, format!("error: {e}")),

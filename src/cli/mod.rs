@@ -3,6 +3,7 @@
 mod check;
 mod distance;
 mod fidelity;
+mod fly;
 mod render;
 mod sample;
 mod score;
@@ -41,6 +42,9 @@ enum Command {
     Simulate(simulate::Args),
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
     Fidelity(fidelity::Args),
+    /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
+    /// distance (exit 0 landed or collision, 1 timeout/link lost/aborted/rejected, 2 error).
+    Fly(fly::Args),
 }
 
 /// Key spelling of written YAML files.
@@ -71,6 +75,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Render(a) => render::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fidelity(a) => fidelity::run(a),
+        Command::Fly(a) => fly::run(a),
     }
 }
 
