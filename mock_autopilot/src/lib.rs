@@ -20,7 +20,7 @@ pub mod clock;
 pub mod commands;
 pub mod dynamics;
 pub mod fence;
-pub use prgenuav::model::geo;
+pub mod geo;
 pub mod link;
 pub mod messages;
 pub mod mission_items;

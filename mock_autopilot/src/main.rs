@@ -115,12 +115,12 @@ async fn run(args: Args) -> Result<()> {
         .reject_mission(reject)
         .fail_arm(args.fail_arm);
     if let (Some(path), true) = (&args.obstacles, args.crash_on_collision) {
-        let world = ObstacleWorld::from_test_file(path).with_context(|| format!("--obstacles {}", path.display()))?;
+        let world = ObstacleWorld::from_test_file(path).map_err(|e| anyhow::anyhow!("--obstacles: {e}"))?;
         eprintln!("mock-autopilot: {} obstacles loaded", world.len());
         builder = builder.collision(Box::new(world));
     } else if let Some(path) = &args.obstacles {
         // Validate the file even when collisions are off, so typos surface early.
-        ObstacleWorld::from_test_file(path).with_context(|| format!("--obstacles {}", path.display()))?;
+        ObstacleWorld::from_test_file(path).map_err(|e| anyhow::anyhow!("--obstacles: {e}"))?;
     }
     let mock = builder.spawn().await?;
     match mock.local_addr() {
