@@ -11,8 +11,8 @@ use nalgebra::Vector3;
 use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
-    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference,
-    cartesian_to_polar_histogram, index_to_polar, polar_histogram_to_cartesian, polar_to_index,
+    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference, cartesian_to_polar_histogram,
+    index_to_polar, polar_histogram_to_cartesian, polar_to_index,
 };
 use super::smoothing::{SmoothScratch, smooth_fast};
 
@@ -43,10 +43,7 @@ fn tables() -> &'static CellTables {
         let mut unit = Vec::with_capacity(GRID_CELLS);
         for e in 0..GRID_E {
             for z in 0..GRID_Z {
-                let v = polar_histogram_to_cartesian(
-                    &index_to_polar(e, z, ALPHA_RES, 1.0),
-                    &Vector3::zeros(),
-                );
+                let v = polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &Vector3::zeros());
                 unit.push(v.normalize());
             }
         }
@@ -76,11 +73,7 @@ pub fn obstacle_facing_goal(
     let g = cartesian_to_polar_histogram(goal, origin);
     for j in -2..=2 {
         for i in -5..=5 {
-            let p = PolarDeg::new(
-                g.e_deg + (j * ALPHA_RES) as f32,
-                g.z_deg + (i * ALPHA_RES) as f32,
-                0.0,
-            );
+            let p = PolarDeg::new(g.e_deg + (j * ALPHA_RES) as f32, g.z_deg + (i * ALPHA_RES) as f32, 0.0);
             let d = hist.at(polar_to_index(p, ALPHA_RES));
             if d > min_m && d < max_m {
                 return true;
@@ -152,12 +145,7 @@ pub fn distance_cost(d_m: f32, k: &CostParams) -> f32 {
 }
 
 /// Cost of one candidate direction (cell centre, r = 1): `(distance_cost, velocity + yaw + yaw_to_line + pitch)`.
-pub fn cost_function(
-    candidate: &PolarDeg,
-    obstacle_distance_m: f32,
-    ctx: &CostContext,
-    k: &CostParams,
-) -> (f32, f32) {
+pub fn cost_function(candidate: &PolarDeg, obstacle_distance_m: f32, ctx: &CostContext, k: &CostParams) -> (f32, f32) {
     let unit = polar_histogram_to_cartesian(candidate, &Vector3::zeros()).normalize();
     let (yaw, line) = ctx.yaw_terms(candidate.z_deg, k);
     let other = ctx.velocity_term(&unit, k) + yaw + line + ctx.pitch_term(candidate.e_deg, k);
@@ -278,37 +266,110 @@ pub struct Candidate {
     pub z_deg: f32,
 }
 
+/// Integer key ordered exactly like [`f32::total_cmp`] (the standard library's own bit trick).
+#[inline(always)]
+fn total_key(c: f32) -> i32 {
+    let b = c.to_bits() as i32;
+    b ^ (((b >> 31) as u32) >> 1) as i32
+}
+
+/// The `n` smallest `(key, index)` pairs seen so far, ascending; `offer` order does not matter.
+struct TopN {
+    n: usize,
+    kept: Vec<(i32, u32)>,
+}
+
+impl TopN {
+    /// The worst kept key once `n` are kept (a cell with a larger key cannot enter).
+    #[inline(always)]
+    fn bound(&self) -> i32 {
+        if self.kept.len() == self.n {
+            self.kept[self.n - 1].0
+        } else {
+            i32::MAX
+        }
+    }
+
+    #[inline]
+    fn offer(&mut self, key: i32, index: u32) {
+        let item = (key, index);
+        if self.kept.len() == self.n {
+            if item >= self.kept[self.n - 1] {
+                return;
+            }
+            self.kept.pop();
+        }
+        let mut at = self.kept.len();
+        while at > 0 && self.kept[at - 1] > item {
+            at -= 1;
+        }
+        self.kept.insert(at, item);
+    }
+}
+
 /// The `n` cheapest cells sorted by ascending cost. Scan order is row-major; ties keep the earlier cell
 /// (a deterministic version of the original's max-heap, which replaces its worst only when strictly cheaper).
+///
+/// Equal to sorting all cells by `(cost.total_cmp, index)` and keeping the first `n` (checked against
+/// `reference::best_candidates`). The row with the smallest cost is scanned first; afterwards whole rows whose
+/// minimum exceeds the worst kept cost, and chunks none of whose cells reaches it, are skipped.
 pub fn best_candidates(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the body is the same integer code.
+        unsafe { best_candidates_avx2(total, n, out) };
+        return;
+    }
+    best_candidates_body(total, n, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn best_candidates_avx2(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
+    best_candidates_body(total, n, out);
+}
+
+#[inline(always)]
+fn best_candidates_body(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
     out.clear();
     if n == 0 {
         return;
     }
-    // Every cell of the n cheapest costs at most the n-th smallest row minimum (n distinct rows hold cells that
-    // cheap), so only cells up to that threshold need sorting. Sorting by (cost, index) is exact, ties included.
-    let mut row_min = [f32::INFINITY; GRID_E];
-    for (m, row) in row_min.iter_mut().zip(total.chunks_exact(GRID_Z)) {
-        *m = row.iter().fold(f32::INFINITY, |a, &b| a.min(b));
-    }
-    let threshold = if n <= GRID_E {
-        row_min.sort_unstable_by(f32::total_cmp);
-        row_min[n - 1]
-    } else {
-        f32::INFINITY
+    let mut top = TopN {
+        n: n.min(GRID_CELLS),
+        kept: Vec::with_capacity(n.min(GRID_CELLS) + 1),
     };
-    let mut best: Vec<(f32, usize)> = total
-        .iter()
-        .enumerate()
-        .filter(|&(_, &c)| c <= threshold)
-        .map(|(i, &c)| (c, i))
-        .collect();
-    best.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    best.truncate(n);
-    out.extend(best.iter().map(|&(cost, i)| {
+    // Keys are recomputed on the fly (3 integer ops) rather than stored: no 7 kB buffer to fill.
+    let mut row_min = [i32::MAX; GRID_E];
+    for (m, row) in row_min.iter_mut().zip(total.chunks_exact(GRID_Z)) {
+        *m = row.iter().fold(i32::MAX, |a, &c| a.min(total_key(c)));
+    }
+    let first = (0..GRID_E).min_by_key(|&r| row_min[r]).unwrap_or(0);
+    let rows = std::iter::once(first).chain((0..GRID_E).filter(|&r| r != first));
+    const CHUNK: usize = 16;
+    for r in rows {
+        if row_min[r] > top.bound() {
+            continue;
+        }
+        let base = r * GRID_Z;
+        for (ci, chunk) in total[base..base + GRID_Z].chunks(CHUNK).enumerate() {
+            let bound = top.bound();
+            if !chunk.iter().fold(false, |a, &c| a | (total_key(c) <= bound)) {
+                continue;
+            }
+            for (j, &c) in chunk.iter().enumerate() {
+                let k = total_key(c);
+                if k <= top.bound() {
+                    top.offer(k, (base + ci * CHUNK + j) as u32);
+                }
+            }
+        }
+    }
+    out.extend(top.kept.iter().map(|&(_, i)| {
+        let i = i as usize;
         let p = index_to_polar(i / GRID_Z, i % GRID_Z, ALPHA_RES, 1.0);
         Candidate {
-            cost,
+            cost: total[i],
             e_deg: p.e_deg,
             z_deg: p.z_deg,
         }

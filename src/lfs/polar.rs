@@ -100,8 +100,9 @@ pub fn wrap_polar(p: PolarDeg) -> PolarDeg {
 /// Signed difference `a - b` in degrees brought into [-180, 180) via `fmod` (the original `angleDifference`).
 pub fn angle_difference(a_deg: f32, b_deg: f32) -> f32 {
     let d = a_deg - b_deg;
-    // fmod is exact and the identity below 360 in magnitude; skip the libm call there.
-    let angle = if d.abs() < 360.0 { d } else { d % 360.0 };
+    // fmod is exact and the identity below 360 in magnitude; skip the libm call there. The call sits in a cold
+    // function so that vectorised callers do not evaluate it speculatively for every lane.
+    let angle = if d.abs() < 360.0 { d } else { fmod_360(d) };
     if angle >= 0.0 {
         if angle < 180.0 { angle } else { angle - 360.0 }
     } else if angle >= -180.0 {
@@ -109,6 +110,13 @@ pub fn angle_difference(a_deg: f32, b_deg: f32) -> f32 {
     } else {
         angle + 360.0
     }
+}
+
+/// `d % 360` (C `fmod`), out of line.
+#[cold]
+#[inline(never)]
+fn fmod_360(d: f32) -> f32 {
+    d % 360.0
 }
 
 /// Histogram polar of `p` seen from `origin` (both ENU, metres). Azimuth in (-180, 180], elevation in [-90, 90].
@@ -181,14 +189,8 @@ pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     let mn = ax.min(ay);
     let t = mn / mx;
     let t2 = t * t;
-    let mut a = t
-        * (0.999_866
-            + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
-    a = if ay > ax {
-        std::f32::consts::FRAC_PI_2 - a
-    } else {
-        a
-    };
+    let mut a = t * (0.999_866 + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
+    a = if ay > ax { std::f32::consts::FRAC_PI_2 - a } else { a };
     a = if x < 0.0 { std::f32::consts::PI - a } else { a };
     a = if y < 0.0 { -a } else { a };
     a * RAD_TO_DEG
@@ -233,14 +235,8 @@ mod tests {
 
     #[test]
     fn cell_centres_and_layout() {
-        assert_eq!(
-            index_to_polar(0, 0, ALPHA_RES, 1.0),
-            PolarDeg::new(-87.0, -177.0, 1.0)
-        );
-        assert_eq!(
-            index_to_polar(29, 59, ALPHA_RES, 1.0),
-            PolarDeg::new(87.0, 177.0, 1.0)
-        );
+        assert_eq!(index_to_polar(0, 0, ALPHA_RES, 1.0), PolarDeg::new(-87.0, -177.0, 1.0));
+        assert_eq!(index_to_polar(29, 59, ALPHA_RES, 1.0), PolarDeg::new(87.0, 177.0, 1.0));
         // South at column 0, West at 15, North at 30, East at 45 (checklist item 2).
         assert_eq!(idx(0.0, -180.0, ALPHA_RES).1, 0);
         assert_eq!(idx(0.0, -90.0, ALPHA_RES).1, 15);
