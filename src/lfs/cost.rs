@@ -31,28 +31,36 @@ pub struct CostInputs {
 
 /// Geometry shared by every cost matrix: cell-centre directions and the azimuth step of each row.
 struct CellTables {
-    /// Normalised unit vector of each cell centre (ENU), as `polarHistogramToCartesian(.., r = 1).normalized()`.
-    unit: Vec<Vector3<f32>>,
+    /// Normalised unit vector of each cell centre (ENU), as `polarHistogramToCartesian(.., r = 1).normalized()`,
+    /// stored as separate x, y, z arrays so the per-cell velocity term vectorises.
+    ux: [f32; GRID_CELLS],
+    uy: [f32; GRID_CELLS],
+    uz: [f32; GRID_CELLS],
     /// Azimuth step per row: `round(1 / cos(row centre elevation))`.
     step: [usize; GRID_E],
 }
 
 fn tables() -> &'static CellTables {
-    static TABLES: OnceLock<CellTables> = OnceLock::new();
+    static TABLES: OnceLock<Box<CellTables>> = OnceLock::new();
     TABLES.get_or_init(|| {
-        let mut unit = Vec::with_capacity(GRID_CELLS);
+        let mut t = Box::new(CellTables {
+            ux: [0.0; GRID_CELLS],
+            uy: [0.0; GRID_CELLS],
+            uz: [0.0; GRID_CELLS],
+            step: [1; GRID_E],
+        });
         for e in 0..GRID_E {
             for z in 0..GRID_Z {
                 let v = polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &Vector3::zeros());
-                unit.push(v.normalize());
+                let u = v.normalize();
+                (t.ux[e * GRID_Z + z], t.uy[e * GRID_Z + z], t.uz[e * GRID_Z + z]) = (u.x, u.y, u.z);
             }
         }
-        let mut step = [1; GRID_E];
-        for (e, s) in step.iter_mut().enumerate() {
+        for (e, s) in t.step.iter_mut().enumerate() {
             let bin_width = (index_to_polar(e, 0, ALPHA_RES, 1.0).e_deg * DEG_TO_RAD).cos();
             *s = (1.0 / bin_width).round() as usize;
         }
-        CellTables { unit, step }
+        t
     })
 }
 
@@ -184,61 +192,111 @@ pub fn cost_matrix(
     scratch: &mut CostScratch,
     total: &mut [f32; GRID_CELLS],
 ) {
-    let t = tables();
     let facing = obstacle_facing_goal(hist, &inputs.goal, &inputs.origin, min_range_m, max_range_m);
     let ctx = CostContext::new(inputs, facing);
+    fill_matrices(hist, &ctx, k, total, &mut scratch.distance);
+    let dist = &mut scratch.distance;
+    smooth_fast(dist, GRID_E, GRID_Z, smoothing_radius, &mut scratch.smooth);
+    for (o, d) in total.iter_mut().zip(dist.iter()) {
+        *o += *d;
+    }
+}
+
+/// Fills the unsmoothed "other" and distance matrices; AVX2-compiled where available (same code: Rust never
+/// contracts `a * b + c` into a fused multiply-add, so the results are the same bits).
+fn fill_matrices(hist: &Histogram, ctx: &CostContext, k: &CostParams, other: &mut [f32; GRID_CELLS], dist: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { fill_matrices_avx2(hist, ctx, k, other, dist) };
+        return;
+    }
+    fill_matrices_body(hist, ctx, k, other, dist);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn fill_matrices_avx2(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
+    fill_matrices_body(hist, ctx, k, other, dist);
+}
+
+/// The per-cell terms in exactly the order of [`cost_function`] (velocity, yaw, line, pitch; the velocity dot
+/// product as nalgebra's `(x*x' + y*y') + z*z'`), so each evaluated cell has the same bits.
+#[inline(always)]
+fn fill_matrices_body(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
+    let t = tables();
     let mut yaw = [0.0f32; GRID_Z];
     let mut line = [0.0f32; GRID_Z];
     for z in 0..GRID_Z {
         (yaw[z], line[z]) = ctx.yaw_terms(index_to_polar(0, z, ALPHA_RES, 1.0).z_deg, k);
     }
-    let other = total;
-    let dist = &mut scratch.distance;
+    let (vx, vy, vz) = (ctx.velocity.x, ctx.velocity.y, ctx.velocity.z);
+    let (kv, speed, k_obs) = (k.velocity_cost, ctx.speed, k.obstacle_cost_m);
+    let velocity = |i: usize| kv * (speed - ((t.ux[i] * vx + t.uy[i] * vy) + t.uz[i] * vz));
+    // distance_cost as a select, so the loop has no branch.
+    let dcost = |h: f32| {
+        let d = k_obs - h;
+        let c = 5000.0 * (1.0 + d / (1.0 + d * d).sqrt());
+        if h > 0.0 { c } else { 0.0 }
+    };
     for e in 0..GRID_E {
         let pitch = ctx.pitch_term(index_to_polar(e, 0, ALPHA_RES, 1.0).e_deg, k);
         let step = t.step[e];
         let row = e * GRID_Z;
         let hist_row = &hist.cells()[row..row + GRID_Z];
-        let units = &t.unit[row..row + GRID_Z];
+        let o_row = &mut other[row..row + GRID_Z];
+        let d_row = &mut dist[row..row + GRID_Z];
         if step == 1 {
-            let o = &mut other[row..row + GRID_Z];
-            for (((((o, u), y), l), d), h) in o
-                .iter_mut()
-                .zip(units)
-                .zip(&yaw)
-                .zip(&line)
-                .zip(&mut dist[row..row + GRID_Z])
-                .zip(hist_row)
-            {
-                *o = ctx.velocity_term(u, k) + y + l + pitch;
-                *d = distance_cost(*h, k);
+            for z in 0..GRID_Z {
+                o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
+                d_row[z] = dcost(hist_row[z]);
             }
-        } else {
-            for z in (0..GRID_Z).step_by(step) {
-                other[row + z] = ctx.velocity_term(&units[z], k) + yaw[z] + line[z] + pitch;
-                dist[row + z] = distance_cost(hist_row[z], k);
-            }
+            continue;
         }
-        if step > 1 {
+        let mut any_dist = false;
+        for z in (0..GRID_Z).step_by(step) {
+            o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
+            d_row[z] = dcost(hist_row[z]);
+            any_dist |= d_row[z] != 0.0;
+        }
+        let mut last = 0;
+        let mut z = step;
+        while z < GRID_Z {
+            interpolate(o_row, last, z, step);
+            last = z;
+            z += step;
+        }
+        interpolate_wrap(o_row, last);
+        if any_dist {
             let mut last = 0;
             let mut z = step;
             while z < GRID_Z {
-                interpolate(&mut other[row..row + GRID_Z], last, z, step);
-                interpolate(&mut dist[row..row + GRID_Z], last, z, step);
+                interpolate(d_row, last, z, step);
                 last = z;
                 z += step;
             }
-            interpolate_wrap(&mut other[row..row + GRID_Z], last);
-            interpolate_wrap(&mut dist[row..row + GRID_Z], last);
+            interpolate_wrap(d_row, last);
+        } else {
+            // Every evaluated cell is +0: the interpolated ones are 0 + 0 * i = +0 too.
+            d_row.fill(0.0);
         }
-    }
-    smooth_fast(dist, GRID_E, GRID_Z, smoothing_radius, &mut scratch.smooth);
-    for (o, d) in other.iter_mut().zip(dist.iter()) {
-        *o += *d;
     }
 }
 
 /// Fills `row[last+1 .. next)` on the straight line between `row[last]` and `row[next]`.
+#[inline(always)]
 fn interpolate(row: &mut [f32], last: usize, next: usize, step: usize) {
     let grad = (row[next] - row[last]) / step as f32;
     for i in 1..step {
@@ -247,6 +305,7 @@ fn interpolate(row: &mut [f32], last: usize, next: usize, step: usize) {
 }
 
 /// Fills the wrap segment after `last` towards column 0 (length `60 - last`).
+#[inline(always)]
 fn interpolate_wrap(row: &mut [f32], last: usize) {
     let span = GRID_Z - last;
     let grad = (row[0] - row[last]) / span as f32;
