@@ -197,9 +197,24 @@ pub fn cost_matrix(
     fill_matrices(hist, &ctx, k, total, &mut scratch.distance);
     let dist = &mut scratch.distance;
     smooth_fast(dist, GRID_E, GRID_Z, smoothing_radius, &mut scratch.smooth);
-    for (o, d) in total.iter_mut().zip(dist.iter()) {
-        *o += *d;
+    add_into(total, dist);
+}
+
+/// `total += dist`, AVX2-compiled where available (plain additions: same bits).
+fn add_into(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { add_into_avx2(total, dist) };
+        return;
     }
+    total.iter_mut().zip(dist).for_each(|(o, d)| *o += *d);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_into_avx2(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
+    total.iter_mut().zip(dist).for_each(|(o, d)| *o += *d);
 }
 
 /// Fills the unsmoothed "other" and distance matrices; AVX2-compiled where available (same code: Rust never
@@ -271,28 +286,51 @@ fn fill_matrices_body(
             d_row[z] = dcost(hist_row[z]);
             any_dist |= d_row[z] != 0.0;
         }
-        let mut last = 0;
-        let mut z = step;
-        while z < GRID_Z {
-            interpolate(o_row, last, z, step);
-            last = z;
-            z += step;
-        }
-        interpolate_wrap(o_row, last);
+        interpolate_row(o_row, step);
         if any_dist {
-            let mut last = 0;
-            let mut z = step;
-            while z < GRID_Z {
-                interpolate(d_row, last, z, step);
-                last = z;
-                z += step;
-            }
-            interpolate_wrap(d_row, last);
+            interpolate_row(d_row, step);
         } else {
             // Every evaluated cell is +0: the interpolated ones are 0 + 0 * i = +0 too.
             d_row.fill(0.0);
         }
     }
+}
+
+/// Fills the columns between the evaluated ones (every `step`-th, from 0) of one row, wrap segment included.
+/// The common steps get a compile-time segment length so the inner loop unrolls; same arithmetic.
+#[inline(always)]
+fn interpolate_row(row: &mut [f32], step: usize) {
+    match step {
+        2 => interpolate_segments::<2>(row),
+        3 => interpolate_segments::<3>(row),
+        4 => interpolate_segments::<4>(row),
+        6 => interpolate_segments::<6>(row),
+        _ => {
+            let mut last = 0;
+            let mut z = step;
+            while z < GRID_Z {
+                interpolate(row, last, z, step);
+                last = z;
+                z += step;
+            }
+            interpolate_wrap(row, last);
+        }
+    }
+}
+
+#[inline(always)]
+fn interpolate_segments<const STEP: usize>(row: &mut [f32]) {
+    let mut last = 0;
+    let mut z = STEP;
+    while z < GRID_Z {
+        let grad = (row[z] - row[last]) / STEP as f32;
+        for i in 1..STEP {
+            row[last + i] = row[last] + grad * i as f32;
+        }
+        last = z;
+        z += STEP;
+    }
+    interpolate_wrap(row, last);
 }
 
 /// Fills `row[last+1 .. next)` on the straight line between `row[last]` and `row[next]`.
