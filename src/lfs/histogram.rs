@@ -90,15 +90,19 @@ impl Default for Histogram {
 }
 
 /// Reusable buffers for [`Histogram::build_from_soa`], so the per-tree-node rebuild does not allocate.
+/// Invariant between builds: both arrays are all zero (the final pass of a build re-zeroes what it reads), so
+/// no build has to clear 14 kB up front.
 #[derive(Debug, Clone)]
 pub struct HistogramScratch {
     count: Box<[u32; GRID_CELLS]>,
+    sum: Box<[f32; GRID_CELLS]>,
 }
 
 impl Default for HistogramScratch {
     fn default() -> Self {
         Self {
             count: Box::new([0; GRID_CELLS]),
+            sum: Box::new([0.0; GRID_CELLS]),
         }
     }
 }
@@ -163,8 +167,6 @@ impl Histogram {
         origin: &Vector3<f32>,
         scratch: &mut HistogramScratch,
     ) {
-        self.dist.fill(0.0);
-        scratch.count.fill(0);
         const CHUNK: usize = 64;
         let mut cell = [0u32; CHUNK];
         let mut range = [0f32; CHUNK];
@@ -189,11 +191,18 @@ impl Histogram {
                     c.e * GRID_Z + c.z
                 };
                 scratch.count[i] += 1;
-                self.dist[i] += range[k];
+                scratch.sum[i] += range[k];
             }
         }
-        for (d, &n) in self.dist.iter_mut().zip(scratch.count.iter()) {
-            *d = if n > 0 { *d / n as f32 } else { 0.0 };
+        let cells = self
+            .dist
+            .iter_mut()
+            .zip(scratch.count.iter_mut())
+            .zip(scratch.sum.iter_mut());
+        for ((d, n), sum) in cells {
+            *d = if *n > 0 { *sum / *n as f32 } else { 0.0 };
+            *n = 0;
+            *sum = 0.0;
         }
     }
 
