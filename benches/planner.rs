@@ -3,7 +3,7 @@
 
 use std::hint::black_box;
 
-use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group};
 use nalgebra::Vector3;
 use prgenuav::lfs::cost::{CostInputs, CostScratch, cost_matrix};
 use prgenuav::lfs::histogram::{Histogram, HistogramScratch};
@@ -160,19 +160,7 @@ fn bench(c: &mut Criterion) {
     c.bench_function("planner_cycle", |b| {
         b.iter_batched(
             || (planner.clone(), wg.clone()),
-            |(mut p, mut g)| {
-                p.update_cloud(black_box(&pts), &s, 0.1).expect("finite state");
-                let plan = p
-                    .plan(&PlanInput {
-                        state: s,
-                        goal_enu: GOAL,
-                        prev_goal_enu: GOAL,
-                        now_s: 1.0,
-                    })
-                    .expect("ok");
-                let out = g.step(&waypoint_input(plan, s), 1.0);
-                black_box(out)
-            },
+            |(mut p, mut g)| one_cycle(&mut p, &mut g, black_box(&pts), s),
             BatchSize::SmallInput,
         )
     });
@@ -211,5 +199,51 @@ fn bench(c: &mut Criterion) {
     });
 }
 
+/// One full cycle, not inlined so `valgrind --tool=callgrind --toggle-collect=*one_cycle*` counts exactly it.
+#[inline(never)]
+fn one_cycle(p: &mut Planner, g: &mut WaypointGenerator, pts: &[Vector3<f32>], s: VehicleState) -> usize {
+    p.update_cloud(pts, &s, 0.1).expect("finite state");
+    let plan = p
+        .plan(&PlanInput {
+            state: s,
+            goal_enu: GOAL,
+            prev_goal_enu: GOAL,
+            now_s: 1.0,
+        })
+        .expect("ok");
+    let n = plan.path_enu.len();
+    black_box(g.step(&waypoint_input(plan, s), 1.0));
+    n
+}
+
+/// `PLANNER_CYCLES=N` runs N cycles without criterion (for instruction counts under callgrind, which are stable
+/// on a shared machine): `valgrind --tool=callgrind --toggle-collect='*one_cycle*' target/.../planner-HASH`.
+fn cycles_only(n: usize) {
+    let (planner, wg, pts) = warmed_up();
+    let s = state(-3.6);
+    let mut total = 0;
+    let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+    for _ in 0..n {
+        let (mut p, mut g) = (planner.clone(), wg.clone());
+        total += one_cycle(&mut p, &mut g, &pts, s);
+        // FNV-1a over every tree node's position and cost bits: equal digests mean bit-identical trees.
+        for node in p.tree() {
+            let v = &node.position_enu;
+            for b in [v.x, v.y, v.z, node.total_cost] {
+                digest = (digest ^ u64::from(b.to_bits())).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    }
+    eprintln!("{n} cycles, {total} path nodes in all, tree digest {digest:016x}");
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+
+fn main() {
+    if let Some(n) = std::env::var("PLANNER_CYCLES").ok().and_then(|v| v.parse().ok()) {
+        cycles_only(n);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -31,28 +31,36 @@ pub struct CostInputs {
 
 /// Geometry shared by every cost matrix: cell-centre directions and the azimuth step of each row.
 struct CellTables {
-    /// Normalised unit vector of each cell centre (ENU), as `polarHistogramToCartesian(.., r = 1).normalized()`.
-    unit: Vec<Vector3<f32>>,
+    /// Normalised unit vector of each cell centre (ENU), as `polarHistogramToCartesian(.., r = 1).normalized()`,
+    /// stored as separate x, y, z arrays so the per-cell velocity term vectorises.
+    ux: [f32; GRID_CELLS],
+    uy: [f32; GRID_CELLS],
+    uz: [f32; GRID_CELLS],
     /// Azimuth step per row: `round(1 / cos(row centre elevation))`.
     step: [usize; GRID_E],
 }
 
 fn tables() -> &'static CellTables {
-    static TABLES: OnceLock<CellTables> = OnceLock::new();
+    static TABLES: OnceLock<Box<CellTables>> = OnceLock::new();
     TABLES.get_or_init(|| {
-        let mut unit = Vec::with_capacity(GRID_CELLS);
+        let mut t = Box::new(CellTables {
+            ux: [0.0; GRID_CELLS],
+            uy: [0.0; GRID_CELLS],
+            uz: [0.0; GRID_CELLS],
+            step: [1; GRID_E],
+        });
         for e in 0..GRID_E {
             for z in 0..GRID_Z {
                 let v = polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &Vector3::zeros());
-                unit.push(v.normalize());
+                let u = v.normalize();
+                (t.ux[e * GRID_Z + z], t.uy[e * GRID_Z + z], t.uz[e * GRID_Z + z]) = (u.x, u.y, u.z);
             }
         }
-        let mut step = [1; GRID_E];
-        for (e, s) in step.iter_mut().enumerate() {
+        for (e, s) in t.step.iter_mut().enumerate() {
             let bin_width = (index_to_polar(e, 0, ALPHA_RES, 1.0).e_deg * DEG_TO_RAD).cos();
             *s = (1.0 / bin_width).round() as usize;
         }
-        CellTables { unit, step }
+        t
     })
 }
 
@@ -184,61 +192,149 @@ pub fn cost_matrix(
     scratch: &mut CostScratch,
     total: &mut [f32; GRID_CELLS],
 ) {
-    let t = tables();
     let facing = obstacle_facing_goal(hist, &inputs.goal, &inputs.origin, min_range_m, max_range_m);
     let ctx = CostContext::new(inputs, facing);
+    fill_matrices(hist, &ctx, k, total, &mut scratch.distance);
+    let dist = &mut scratch.distance;
+    smooth_fast(dist, GRID_E, GRID_Z, smoothing_radius, &mut scratch.smooth);
+    add_into(total, dist);
+}
+
+/// `total += dist`, AVX2-compiled where available (plain additions: same bits).
+fn add_into(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { add_into_avx2(total, dist) };
+        return;
+    }
+    total.iter_mut().zip(dist).for_each(|(o, d)| *o += *d);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_into_avx2(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
+    total.iter_mut().zip(dist).for_each(|(o, d)| *o += *d);
+}
+
+/// Fills the unsmoothed "other" and distance matrices; AVX2-compiled where available (same code: Rust never
+/// contracts `a * b + c` into a fused multiply-add, so the results are the same bits).
+fn fill_matrices(hist: &Histogram, ctx: &CostContext, k: &CostParams, other: &mut [f32; GRID_CELLS], dist: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { fill_matrices_avx2(hist, ctx, k, other, dist) };
+        return;
+    }
+    fill_matrices_body(hist, ctx, k, other, dist);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn fill_matrices_avx2(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
+    fill_matrices_body(hist, ctx, k, other, dist);
+}
+
+/// The per-cell terms in exactly the order of [`cost_function`] (velocity, yaw, line, pitch; the velocity dot
+/// product as nalgebra's `(x*x' + y*y') + z*z'`), so each evaluated cell has the same bits.
+#[inline(always)]
+fn fill_matrices_body(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
+    let t = tables();
     let mut yaw = [0.0f32; GRID_Z];
     let mut line = [0.0f32; GRID_Z];
     for z in 0..GRID_Z {
         (yaw[z], line[z]) = ctx.yaw_terms(index_to_polar(0, z, ALPHA_RES, 1.0).z_deg, k);
     }
-    let other = total;
-    let dist = &mut scratch.distance;
+    let (vx, vy, vz) = (ctx.velocity.x, ctx.velocity.y, ctx.velocity.z);
+    let (kv, speed, k_obs) = (k.velocity_cost, ctx.speed, k.obstacle_cost_m);
+    let velocity = |i: usize| kv * (speed - ((t.ux[i] * vx + t.uy[i] * vy) + t.uz[i] * vz));
+    // distance_cost as a select, so the loop has no branch.
+    let dcost = |h: f32| {
+        let d = k_obs - h;
+        let c = 5000.0 * (1.0 + d / (1.0 + d * d).sqrt());
+        if h > 0.0 { c } else { 0.0 }
+    };
     for e in 0..GRID_E {
         let pitch = ctx.pitch_term(index_to_polar(e, 0, ALPHA_RES, 1.0).e_deg, k);
         let step = t.step[e];
         let row = e * GRID_Z;
         let hist_row = &hist.cells()[row..row + GRID_Z];
-        let units = &t.unit[row..row + GRID_Z];
+        let o_row = &mut other[row..row + GRID_Z];
+        let d_row = &mut dist[row..row + GRID_Z];
         if step == 1 {
-            let o = &mut other[row..row + GRID_Z];
-            for (((((o, u), y), l), d), h) in o
-                .iter_mut()
-                .zip(units)
-                .zip(&yaw)
-                .zip(&line)
-                .zip(&mut dist[row..row + GRID_Z])
-                .zip(hist_row)
-            {
-                *o = ctx.velocity_term(u, k) + y + l + pitch;
-                *d = distance_cost(*h, k);
+            for z in 0..GRID_Z {
+                o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
+                d_row[z] = dcost(hist_row[z]);
             }
+            continue;
+        }
+        let mut any_dist = false;
+        for z in (0..GRID_Z).step_by(step) {
+            o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
+            d_row[z] = dcost(hist_row[z]);
+            any_dist |= d_row[z] != 0.0;
+        }
+        interpolate_row(o_row, step);
+        if any_dist {
+            interpolate_row(d_row, step);
         } else {
-            for z in (0..GRID_Z).step_by(step) {
-                other[row + z] = ctx.velocity_term(&units[z], k) + yaw[z] + line[z] + pitch;
-                dist[row + z] = distance_cost(hist_row[z], k);
-            }
+            // Every evaluated cell is +0: the interpolated ones are 0 + 0 * i = +0 too.
+            d_row.fill(0.0);
         }
-        if step > 1 {
-            let mut last = 0;
-            let mut z = step;
-            while z < GRID_Z {
-                interpolate(&mut other[row..row + GRID_Z], last, z, step);
-                interpolate(&mut dist[row..row + GRID_Z], last, z, step);
-                last = z;
-                z += step;
-            }
-            interpolate_wrap(&mut other[row..row + GRID_Z], last);
-            interpolate_wrap(&mut dist[row..row + GRID_Z], last);
-        }
-    }
-    smooth_fast(dist, GRID_E, GRID_Z, smoothing_radius, &mut scratch.smooth);
-    for (o, d) in other.iter_mut().zip(dist.iter()) {
-        *o += *d;
     }
 }
 
+/// Fills the columns between the evaluated ones (every `step`-th, from 0) of one row, wrap segment included.
+/// The common steps get a compile-time segment length so the inner loop unrolls; same arithmetic.
+#[inline(always)]
+fn interpolate_row(row: &mut [f32], step: usize) {
+    match step {
+        2 => interpolate_segments::<2>(row),
+        3 => interpolate_segments::<3>(row),
+        4 => interpolate_segments::<4>(row),
+        6 => interpolate_segments::<6>(row),
+        _ => {
+            let mut last = 0;
+            let mut z = step;
+            while z < GRID_Z {
+                interpolate(row, last, z, step);
+                last = z;
+                z += step;
+            }
+            interpolate_wrap(row, last);
+        }
+    }
+}
+
+#[inline(always)]
+fn interpolate_segments<const STEP: usize>(row: &mut [f32]) {
+    let mut last = 0;
+    let mut z = STEP;
+    while z < GRID_Z {
+        let grad = (row[z] - row[last]) / STEP as f32;
+        for i in 1..STEP {
+            row[last + i] = row[last] + grad * i as f32;
+        }
+        last = z;
+        z += STEP;
+    }
+    interpolate_wrap(row, last);
+}
+
 /// Fills `row[last+1 .. next)` on the straight line between `row[last]` and `row[next]`.
+#[inline(always)]
 fn interpolate(row: &mut [f32], last: usize, next: usize, step: usize) {
     let grad = (row[next] - row[last]) / step as f32;
     for i in 1..step {
@@ -247,6 +343,7 @@ fn interpolate(row: &mut [f32], last: usize, next: usize, step: usize) {
 }
 
 /// Fills the wrap segment after `last` towards column 0 (length `60 - last`).
+#[inline(always)]
 fn interpolate_wrap(row: &mut [f32], last: usize) {
     let span = GRID_Z - last;
     let grad = (row[0] - row[last]) / span as f32;
@@ -266,37 +363,110 @@ pub struct Candidate {
     pub z_deg: f32,
 }
 
+/// Integer key ordered exactly like [`f32::total_cmp`] (the standard library's own bit trick).
+#[inline(always)]
+fn total_key(c: f32) -> i32 {
+    let b = c.to_bits() as i32;
+    b ^ (((b >> 31) as u32) >> 1) as i32
+}
+
+/// The `n` smallest `(key, index)` pairs seen so far, ascending; `offer` order does not matter.
+struct TopN {
+    n: usize,
+    kept: Vec<(i32, u32)>,
+}
+
+impl TopN {
+    /// The worst kept key once `n` are kept (a cell with a larger key cannot enter).
+    #[inline(always)]
+    fn bound(&self) -> i32 {
+        if self.kept.len() == self.n {
+            self.kept[self.n - 1].0
+        } else {
+            i32::MAX
+        }
+    }
+
+    #[inline]
+    fn offer(&mut self, key: i32, index: u32) {
+        let item = (key, index);
+        if self.kept.len() == self.n {
+            if item >= self.kept[self.n - 1] {
+                return;
+            }
+            self.kept.pop();
+        }
+        let mut at = self.kept.len();
+        while at > 0 && self.kept[at - 1] > item {
+            at -= 1;
+        }
+        self.kept.insert(at, item);
+    }
+}
+
 /// The `n` cheapest cells sorted by ascending cost. Scan order is row-major; ties keep the earlier cell
 /// (a deterministic version of the original's max-heap, which replaces its worst only when strictly cheaper).
+///
+/// Equal to sorting all cells by `(cost.total_cmp, index)` and keeping the first `n` (checked against
+/// `reference::best_candidates`). The row with the smallest cost is scanned first; afterwards whole rows whose
+/// minimum exceeds the worst kept cost, and chunks none of whose cells reaches it, are skipped.
 pub fn best_candidates(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the body is the same integer code.
+        unsafe { best_candidates_avx2(total, n, out) };
+        return;
+    }
+    best_candidates_body(total, n, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn best_candidates_avx2(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
+    best_candidates_body(total, n, out);
+}
+
+#[inline(always)]
+fn best_candidates_body(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candidate>) {
     out.clear();
     if n == 0 {
         return;
     }
-    // Every cell of the n cheapest costs at most the n-th smallest row minimum (n distinct rows hold cells that
-    // cheap), so only cells up to that threshold need sorting. Sorting by (cost, index) is exact, ties included.
-    let mut row_min = [f32::INFINITY; GRID_E];
-    for (m, row) in row_min.iter_mut().zip(total.chunks_exact(GRID_Z)) {
-        *m = row.iter().fold(f32::INFINITY, |a, &b| a.min(b));
-    }
-    let threshold = if n <= GRID_E {
-        row_min.sort_unstable_by(f32::total_cmp);
-        row_min[n - 1]
-    } else {
-        f32::INFINITY
+    let mut top = TopN {
+        n: n.min(GRID_CELLS),
+        kept: Vec::with_capacity(n.min(GRID_CELLS) + 1),
     };
-    let mut best: Vec<(f32, usize)> = total
-        .iter()
-        .enumerate()
-        .filter(|&(_, &c)| c <= threshold)
-        .map(|(i, &c)| (c, i))
-        .collect();
-    best.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    best.truncate(n);
-    out.extend(best.iter().map(|&(cost, i)| {
+    // Keys are recomputed on the fly (3 integer ops) rather than stored: no 7 kB buffer to fill.
+    let mut row_min = [i32::MAX; GRID_E];
+    for (m, row) in row_min.iter_mut().zip(total.chunks_exact(GRID_Z)) {
+        *m = row.iter().fold(i32::MAX, |a, &c| a.min(total_key(c)));
+    }
+    let first = (0..GRID_E).min_by_key(|&r| row_min[r]).unwrap_or(0);
+    let rows = std::iter::once(first).chain((0..GRID_E).filter(|&r| r != first));
+    const CHUNK: usize = 16;
+    for r in rows {
+        if row_min[r] > top.bound() {
+            continue;
+        }
+        let base = r * GRID_Z;
+        for (ci, chunk) in total[base..base + GRID_Z].chunks(CHUNK).enumerate() {
+            let bound = top.bound();
+            if !chunk.iter().fold(false, |a, &c| a | (total_key(c) <= bound)) {
+                continue;
+            }
+            for (j, &c) in chunk.iter().enumerate() {
+                let k = total_key(c);
+                if k <= top.bound() {
+                    top.offer(k, (base + ci * CHUNK + j) as u32);
+                }
+            }
+        }
+    }
+    out.extend(top.kept.iter().map(|&(_, i)| {
+        let i = i as usize;
         let p = index_to_polar(i / GRID_Z, i % GRID_Z, ALPHA_RES, 1.0);
         Candidate {
-            cost,
+            cost: total[i],
             e_deg: p.e_deg,
             z_deg: p.z_deg,
         }

@@ -15,6 +15,16 @@ use super::polar::{
 /// Fast-path cells closer than this to a boundary (degrees) are recomputed exactly; 5x the fast error bound.
 const BOUNDARY_MARGIN_DEG: f32 = 5.0 * FAST_ATAN2_MAX_ERR_DEG;
 
+/// `floor(u)` for non-integer `u`: round-to-nearest of `u - 0.5` by the 1.5 * 2^23 trick (no saturating
+/// float-to-int conversion, which costs a compare and two selects per lane). It can differ from `floor(u)` only
+/// when `u` is an exact integer (a tie), and such `u` are flagged unreliable by the caller (fraction 0 or 1). Valid for |u| < 2^22; NaN gives garbage that the
+/// caller also flags (its fraction is NaN).
+#[inline(always)]
+fn floor_guess(u: f32) -> i32 {
+    const MAGIC: f32 = 12_582_912.0;
+    (((u - 0.5) + MAGIC).to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32)
+}
+
 /// Fast cell guess for the offset `d = point - origin`: `(row, column, range, reliable)`. When `reliable` is
 /// false the point is within a margin of a cell boundary (or a pole/wrap) and the exact formula must decide.
 /// Branch-free so that loops over points vectorise.
@@ -25,9 +35,8 @@ fn fast_cell(dx: f32, dy: f32, dz: f32, res: f32) -> (u32, u32, f32, bool) {
     let r = (h2 + dz * dz).sqrt();
     let ue = fast_atan2_deg(dz, den) / res + 90.0 / res;
     let uz = fast_atan2_deg(dx, dy) / res + 180.0 / res;
-    // Truncation is floor here: u < 0 can only happen next to the -90/-180 boundary, which is flagged below.
-    let ie = ue as i32;
-    let iz = uz as i32;
+    let ie = floor_guess(ue);
+    let iz = floor_guess(uz);
     let fe = ue - ie as f32;
     let fz = uz - iz as f32;
     let m = BOUNDARY_MARGIN_DEG / res;
@@ -81,15 +90,19 @@ impl Default for Histogram {
 }
 
 /// Reusable buffers for [`Histogram::build_from_soa`], so the per-tree-node rebuild does not allocate.
+/// Invariant between builds: both arrays are all zero (the final pass of a build re-zeroes what it reads), so
+/// no build has to clear 14 kB up front.
 #[derive(Debug, Clone)]
 pub struct HistogramScratch {
     count: Box<[u32; GRID_CELLS]>,
+    sum: Box<[f32; GRID_CELLS]>,
 }
 
 impl Default for HistogramScratch {
     fn default() -> Self {
         Self {
             count: Box::new([0; GRID_CELLS]),
+            sum: Box::new([0.0; GRID_CELLS]),
         }
     }
 }
@@ -154,8 +167,6 @@ impl Histogram {
         origin: &Vector3<f32>,
         scratch: &mut HistogramScratch,
     ) {
-        self.dist.fill(0.0);
-        scratch.count.fill(0);
         const CHUNK: usize = 64;
         let mut cell = [0u32; CHUNK];
         let mut range = [0f32; CHUNK];
@@ -180,11 +191,18 @@ impl Histogram {
                     c.e * GRID_Z + c.z
                 };
                 scratch.count[i] += 1;
-                self.dist[i] += range[k];
+                scratch.sum[i] += range[k];
             }
         }
-        for (d, &n) in self.dist.iter_mut().zip(scratch.count.iter()) {
-            *d = if n > 0 { *d / n as f32 } else { 0.0 };
+        let cells = self
+            .dist
+            .iter_mut()
+            .zip(scratch.count.iter_mut())
+            .zip(scratch.sum.iter_mut());
+        for ((d, n), sum) in cells {
+            *d = if *n > 0 { *sum / *n as f32 } else { 0.0 };
+            *n = 0;
+            *sum = 0.0;
         }
     }
 
@@ -309,6 +327,23 @@ mod tests {
                 assert_eq!(cell_and_range(dx, dy, dz, res).0, exact, "{dx},{dy},{dz} res {res}");
             }
         }
+    }
+
+    #[test]
+    fn portable_body_equals_the_dispatched_build() {
+        let origin = Vector3::new(0.2, 0.1, 3.0);
+        let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..3000 {
+            let a = i as f32 * 0.013;
+            xs.push((a * 7.0).sin() * (1.0 + a));
+            ys.push((a * 5.0).cos() * 6.0);
+            zs.push((a * 3.0).sin() * 4.0);
+        }
+        let (mut a, mut b) = (Histogram::new(), Histogram::new());
+        a.build_from_soa(&xs, &ys, &zs, &origin, &mut HistogramScratch::default());
+        b.build_body(&xs, &ys, &zs, &origin, &mut HistogramScratch::default());
+        let bits = |h: &Histogram| h.cells().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a), bits(&b));
     }
 
     proptest! {

@@ -23,6 +23,11 @@ pub mod smoothing;
 pub mod tree;
 pub mod waypoint;
 
+#[cfg(test)]
+mod equivalence_tests;
+#[cfg(test)]
+mod reference;
+
 pub use fov::Fov;
 pub use params::{CostParams, PlannerParams};
 

@@ -166,7 +166,9 @@ impl Planner {
                 goal: input.goal_enu,
                 closest_pt: closest,
             };
-            let path = self.star.build(&self.memory, &inputs, &self.params);
+            let path =
+                self.star
+                    .build_with_root_histogram(&self.memory, &inputs, &self.params, Some(&self.vehicle_hist));
             self.plan.path_enu.clear();
             self.plan.path_enu.extend_from_slice(path);
             self.plan.path_time_s = Some(input.now_s);

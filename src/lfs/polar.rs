@@ -100,8 +100,9 @@ pub fn wrap_polar(p: PolarDeg) -> PolarDeg {
 /// Signed difference `a - b` in degrees brought into [-180, 180) via `fmod` (the original `angleDifference`).
 pub fn angle_difference(a_deg: f32, b_deg: f32) -> f32 {
     let d = a_deg - b_deg;
-    // fmod is exact and the identity below 360 in magnitude; skip the libm call there.
-    let angle = if d.abs() < 360.0 { d } else { d % 360.0 };
+    // fmod is exact and the identity below 360 in magnitude; skip the libm call there. The call sits in a cold
+    // function so that vectorised callers do not evaluate it speculatively for every lane.
+    let angle = if d.abs() < 360.0 { d } else { fmod_360(d) };
     if angle >= 0.0 {
         if angle < 180.0 { angle } else { angle - 360.0 }
     } else if angle >= -180.0 {
@@ -109,6 +110,13 @@ pub fn angle_difference(a_deg: f32, b_deg: f32) -> f32 {
     } else {
         angle + 360.0
     }
+}
+
+/// `d % 360` (C `fmod`), out of line.
+#[cold]
+#[inline(never)]
+fn fmod_360(d: f32) -> f32 {
+    d % 360.0
 }
 
 /// Histogram polar of `p` seen from `origin` (both ENU, metres). Azimuth in (-180, 180], elevation in [-90, 90].

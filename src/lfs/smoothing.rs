@@ -82,19 +82,21 @@ pub fn smooth_reference(m: &mut [f32], rows: usize, cols: usize, radius: usize) 
 /// Reusable buffers for [`smooth_fast`].
 #[derive(Debug, Clone, Default)]
 pub struct SmoothScratch {
-    padded: Vec<f32>,
-    box_sums: Vec<f64>,
-    acc: Vec<f64>,
-    pass1_t: Vec<f32>,
-    col_box: Vec<f64>,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
 }
 
-/// Same result as [`smooth_reference`] up to f32 rounding, in O(1) work per cell instead of O(R).
+/// Same result as [`smooth_reference`] up to f32 rounding, in O(log R) vectorised work per cell instead of O(R).
 ///
-/// The triangle kernel is the convolution of two boxes of width R + 1, so each pass is two running box sums.
-/// They are accumulated in f64, which for the cost magnitudes here (1e-3 .. 1e6) is exact, so each pass yields
-/// the correctly rounded kernel sum (the original's f32 sum order is Eigen's and not reproducible anyway).
+/// The triangle kernel is the convolution of two boxes of width R + 1, so each pass is two box sums. They are
+/// accumulated in f64, which for the cost magnitudes here (1e-3 .. 1e6) is exact, so each pass yields the
+/// correctly rounded kernel sum whatever the summation order (the original's f32 order is Eigen's and not
+/// reproducible anyway); `reference::smooth` computes the same bits by direct kernel sums. Box sums are built by
+/// doubling (widths 1, 2, 4, ... combined by the binary digits of R + 1), flat loops that vectorise.
 /// Only the band of rows that can receive a non-zero value is computed; the rest is exactly 0.
+/// Requires `radius <= rows` and `radius <= cols` (as [`pad_polar_matrix`]).
 pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -112,14 +114,27 @@ fn smooth_avx2(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
     smooth_body(m, rows, cols, radius, s);
 }
 
+/// Original row and azimuth shift (0 or `cols / 2`) that padded row `p` copies (pole mirroring).
+#[inline(always)]
+fn padded_source(p: usize, rows: usize, n: usize, cols: usize) -> (usize, usize) {
+    if p < n {
+        (n - 1 - p, cols / 2)
+    } else if p >= n + rows {
+        (rows - 1 - (p - n - rows), cols / 2)
+    } else {
+        (p - n, 0)
+    }
+}
+
 #[inline(always)]
 fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
     let n = radius;
-    pad_polar_matrix_into(m, rows, cols, n, &mut s.padded);
-    let p = &s.padded;
-    let (pr, pc) = (rows + 2 * n, cols + 2 * n);
-    let nonzero = |r: usize| p[r * pc..(r + 1) * pc].iter().any(|&v| v != 0.0);
-    let (Some(lo), Some(hi)) = ((0..pr).find(|&r| nonzero(r)), (0..pr).rev().find(|&r| nonzero(r))) else {
+    assert!(n <= rows && n <= cols, "smoothing radius {n} exceeds the matrix");
+    let pr = rows + 2 * n;
+    let half = cols / 2;
+    let row_nonzero = |r: usize| m[r * cols..(r + 1) * cols].iter().fold(false, |a, &v| a | (v != 0.0));
+    let nonzero = |p: usize| row_nonzero(padded_source(p, rows, n, cols).0);
+    let (Some(lo), Some(hi)) = ((0..pr).find(|&p| nonzero(p)), (0..pr).rev().find(|&p| nonzero(p))) else {
         m.iter_mut().for_each(|v| *v = 0.0);
         return;
     };
@@ -127,68 +142,57 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
     let r_lo = lo.saturating_sub(2 * n);
     let r_hi = hi.min(rows - 1);
     let wr = r_hi + 1 - r_lo;
+    let nin = wr + 2 * n;
     let inv = 1.0 / (n + 1) as f64;
 
-    // Pass 1, along elevation, all padded columns at once. B[j] = sum of padded rows j..=j+n, j from r_lo.
-    let nb = wr + n;
-    reuse(&mut s.box_sums, nb * pc);
-    s.acc.clear();
-    s.acc.resize(pc, 0.0);
-    for r in r_lo..=r_lo + n {
-        add_row(&mut s.acc, &p[r * pc..(r + 1) * pc], 1.0);
-    }
-    s.box_sums[..pc].copy_from_slice(&s.acc);
-    for j in 1..nb {
-        let g = r_lo + j;
-        running_step(&mut s.acc, &p[(g + n) * pc..(g + n + 1) * pc], &p[(g - 1) * pc..g * pc]);
-        s.box_sums[j * pc..(j + 1) * pc].copy_from_slice(&s.acc);
-    }
-    // T[r] = sum of B[r..=r+n]; pass-1 output stored transposed (pc x wr) for a vectorisable pass 2.
-    reuse(&mut s.pass1_t, pc * wr);
-    s.acc.iter_mut().for_each(|v| *v = 0.0);
-    for a in 0..=n {
-        let b = &s.box_sums[a * pc..(a + 1) * pc];
-        s.acc.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-    }
-    for r in 0..wr {
-        if r > 0 {
-            let add = &s.box_sums[(r + n) * pc..(r + n + 1) * pc];
-            let sub = &s.box_sums[(r - 1) * pc..r * pc];
-            s.acc.iter_mut().zip(add).zip(sub).for_each(|((a, x), y)| *a += x - y);
-        }
-        for (c, a) in s.acc.iter().enumerate() {
-            s.pass1_t[c * wr + r] = (a * inv) as f32;
+    // Scratch buffers only ever grow (no zero-filling per call); lengths are tracked explicitly.
+    let pc = cols + 2 * n;
+    let cap = pr * pc;
+    for v in [&mut s.x, &mut s.y, &mut s.a, &mut s.b] {
+        if v.len() < cap {
+            v.resize(cap, 0.0);
         }
     }
 
-    // Pass 2, along azimuth, all band rows at once on the transposed pass-1 output.
-    let q = &s.pass1_t;
-    reuse(&mut s.col_box, (cols + n) * wr);
-    s.acc.clear();
-    s.acc.resize(wr, 0.0);
-    for c in 0..=n {
-        add_row(&mut s.acc, &q[c * wr..(c + 1) * wr], 1.0);
-    }
-    s.col_box[..wr].copy_from_slice(&s.acc);
-    for j in 1..cols + n {
-        running_step(&mut s.acc, &q[(j + n) * wr..(j + n + 1) * wr], &q[(j - 1) * wr..j * wr]);
-        s.col_box[j * wr..(j + 1) * wr].copy_from_slice(&s.acc);
-    }
-    m.iter_mut().for_each(|v| *v = 0.0);
-    s.acc.iter_mut().for_each(|v| *v = 0.0);
-    for a in 0..=n {
-        let b = &s.col_box[a * wr..(a + 1) * wr];
-        s.acc.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-    }
-    for c in 0..cols {
-        if c > 0 {
-            let add = &s.col_box[(c + n) * wr..(c + n + 1) * wr];
-            let sub = &s.col_box[(c - 1) * wr..c * wr];
-            s.acc.iter_mut().zip(add).zip(sub).for_each(|((a, x), y)| *a += x - y);
+    // Pass 1, along elevation: padded rows r_lo .. r_lo+nin (azimuth unpadded) as f64, box of box over rows.
+    for (i, dst) in s.x[..nin * cols].chunks_exact_mut(cols).enumerate() {
+        let (src, shift) = padded_source(r_lo + i, rows, n, cols);
+        let row = &m[src * cols..(src + 1) * cols];
+        // A shift of cols/2 turns the row by 180 degrees: columns [half, 2 half) first, then [0, half).
+        if shift == 0 {
+            dst.iter_mut().zip(row).for_each(|(d, &v)| *d = v as f64);
+        } else {
+            let (d1, rest) = dst.split_at_mut(half);
+            let (d2, d3) = rest.split_at_mut(half);
+            d1.iter_mut()
+                .zip(&row[half..2 * half])
+                .for_each(|(d, &v)| *d = v as f64);
+            d2.iter_mut().zip(&row[..half]).for_each(|(d, &v)| *d = v as f64);
+            d3.iter_mut().zip(&row[2 * half..]).for_each(|(d, &v)| *d = v as f64);
         }
-        for (r, a) in s.acc.iter().enumerate() {
-            m[(r_lo + r) * cols + c] = (a * inv) as f32;
-        }
+    }
+    let len = box_sum(&mut s.x, nin * cols, cols, n + 1, &mut s.y, &mut s.a, &mut s.b);
+    let len = box_sum(&mut s.y, len, cols, n + 1, &mut s.x, &mut s.a, &mut s.b);
+    debug_assert_eq!(len, wr * cols);
+    // Pass-1 output rounded to f32 like the original's float matrix, stored with the azimuth wrap padding.
+    for (t, out) in s.x[..len].chunks_exact(cols).zip(s.y[..wr * pc].chunks_exact_mut(pc)) {
+        let round = |v: f64| (v * inv) as f32 as f64;
+        let (left, rest) = out.split_at_mut(n);
+        let (mid, right) = rest.split_at_mut(cols);
+        mid.iter_mut().zip(t).for_each(|(o, &v)| *o = round(v));
+        left.copy_from_slice(&mid[cols - n..]);
+        right.copy_from_slice(&mid[..n]);
+    }
+
+    // Pass 2, along azimuth: box of box with stride 1 over the flat rows; sums that would straddle two rows
+    // are computed but never read.
+    let len = box_sum(&mut s.y, wr * pc, 1, n + 1, &mut s.x, &mut s.a, &mut s.b);
+    box_sum(&mut s.x, len, 1, n + 1, &mut s.y, &mut s.a, &mut s.b);
+    m[..r_lo * cols].iter_mut().for_each(|v| *v = 0.0);
+    m[(r_hi + 1) * cols..].iter_mut().for_each(|v| *v = 0.0);
+    for (r, out) in m[r_lo * cols..(r_hi + 1) * cols].chunks_exact_mut(cols).enumerate() {
+        let t = &s.y[r * pc..r * pc + cols];
+        out.iter_mut().zip(t).for_each(|(o, &v)| *o = (v * inv) as f32);
     }
 }
 
@@ -199,18 +203,85 @@ fn reuse<T: Copy + Default>(v: &mut Vec<T>, len: usize) {
     }
 }
 
-/// `acc += add - sub` element-wise (one step of a running box sum).
-#[inline]
-fn running_step(acc: &mut [f64], add: &[f32], sub: &[f32]) {
-    acc.iter_mut()
-        .zip(add)
-        .zip(sub)
-        .for_each(|((a, &x), &y)| *a += x as f64 - y as f64);
+/// `dst[k] = sum of src[k + j * stride] for j in 0..w` for every `k` that stays inside `src[..len]`; returns
+/// the number of sums, `len - (w - 1) * stride`. All four buffers have the same (sufficient) length.
+///
+/// Built by doubling: sums of width 1, 2, 4, ... (ping-pong in `a` and `b`); those whose bit is set in `w` are
+/// added into `dst` at the running offset. All sums are exact in f64 for the planner's magnitudes, so the order
+/// is immaterial. For a power of two (the default R + 1 = 8) the last doubling simply becomes `dst`.
+#[inline(always)]
+fn box_sum(
+    src: &mut Vec<f64>,
+    len: usize,
+    stride: usize,
+    w: usize,
+    dst: &mut Vec<f64>,
+    a: &mut Vec<f64>,
+    b: &mut Vec<f64>,
+) -> usize {
+    debug_assert!(w >= 1);
+    let out_len = len.saturating_sub((w - 1) * stride);
+    let (mut bits, mut width, mut offset, mut first) = (w, 1usize, 0usize, true);
+    // Which buffer holds the current width: 0 = src, 1 = a, 2 = b.
+    let mut which = 0u8;
+    loop {
+        if bits & 1 == 1 {
+            if first && bits == 1 {
+                // The only set bit: the current sums are the result (offset is 0).
+                std::mem::swap(
+                    dst,
+                    match which {
+                        0 => src,
+                        1 => a,
+                        _ => b,
+                    },
+                );
+                return out_len;
+            }
+            let cur: &[f64] = match which {
+                0 => src,
+                1 => a,
+                _ => b,
+            };
+            let part = &cur[offset * stride..offset * stride + out_len];
+            if first {
+                dst[..out_len].copy_from_slice(part);
+                first = false;
+            } else {
+                dst[..out_len].iter_mut().zip(part).for_each(|(d, &p)| *d += p);
+            }
+            offset += width;
+        }
+        bits >>= 1;
+        if bits == 0 {
+            return out_len;
+        }
+        let d = width * stride;
+        let valid = len.saturating_sub((2 * width - 1) * stride);
+        which = match which {
+            0 => {
+                double_into(src, d, valid, a);
+                1
+            }
+            1 => {
+                double_into(a, d, valid, b);
+                2
+            }
+            _ => {
+                double_into(b, d, valid, a);
+                1
+            }
+        };
+        width *= 2;
+    }
 }
 
-#[inline]
-fn add_row(acc: &mut [f64], row: &[f32], sign: f64) {
-    acc.iter_mut().zip(row).for_each(|(a, &v)| *a += sign * v as f64);
+/// `out[k] = cur[k] + cur[k + d]` for `k < valid`.
+#[inline(always)]
+fn double_into(cur: &[f64], d: usize, valid: usize, out: &mut [f64]) {
+    for ((o, x), y) in out[..valid].iter_mut().zip(&cur[..valid]).zip(&cur[d..d + valid]) {
+        *o = x + y;
+    }
 }
 
 #[cfg(test)]
@@ -251,6 +322,30 @@ mod tests {
         smooth_fast(&mut f, 10, 20, 4, &mut SmoothScratch::default());
         for (i, (a, b)) in f.iter().zip(AV_SMOOTH_EXPECTED.iter()).enumerate() {
             assert!((a - b).abs() < 1e-4, "fast cell {i}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn portable_body_equals_the_dispatched_path() {
+        // The AVX2 build and the baseline build of the same body must agree bit for bit.
+        let mut s: u64 = 11;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for radius in [0, 1, 4, 7, 9] {
+            let m: Vec<f32> = (0..GRID_E * GRID_Z)
+                .map(|_| if next() < 0.3 { next() * 10_000.0 } else { 0.0 })
+                .collect();
+            let (mut a, mut b) = (m.clone(), m);
+            smooth_fast(&mut a, GRID_E, GRID_Z, radius, &mut SmoothScratch::default());
+            smooth_body(&mut b, GRID_E, GRID_Z, radius, &mut SmoothScratch::default());
+            assert_eq!(
+                a.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                b.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
         }
     }
 

@@ -151,6 +151,19 @@ impl StarPlanner {
 
     /// Rebuilds the tree from the processed cloud and returns the path (deepest node first, root last).
     pub fn build(&mut self, cloud: &PointMemory, inputs: &TreeInputs, params: &PlannerParams) -> &[Vector3<f32>] {
+        self.build_with_root_histogram(cloud, inputs, params, None)
+    }
+
+    /// [`Self::build`] reusing `root_hist`, the histogram of `cloud` at `inputs.position` that the caller has
+    /// already built (the planner builds it to decide whether to plan), instead of building it again for the
+    /// root expansion. Passing a histogram of anything else changes the tree.
+    pub fn build_with_root_histogram(
+        &mut self,
+        cloud: &PointMemory,
+        inputs: &TreeInputs,
+        params: &PlannerParams,
+        root_hist: Option<&Histogram>,
+    ) -> &[Vector3<f32>] {
         self.nodes.clear();
         self.nx.clear();
         self.ny.clear();
@@ -173,8 +186,15 @@ impl StarPlanner {
         let mut origin = 0;
         for _ in 0..params.n_expanded_nodes {
             let o = self.nodes[origin];
-            self.hist
-                .build_from_soa(xs, ys, zs, &o.position_enu, &mut self.hist_scratch);
+            // The root (index 0) is expanded first and only once.
+            let hist = match root_hist {
+                Some(h) if origin == 0 => h,
+                _ => {
+                    self.hist
+                        .build_from_soa(xs, ys, zs, &o.position_enu, &mut self.hist_scratch);
+                    &self.hist
+                }
+            };
             let cost_inputs = CostInputs {
                 goal: inputs.goal,
                 origin: o.position_enu,
@@ -182,7 +202,7 @@ impl StarPlanner {
                 closest_pt: inputs.closest_pt,
             };
             cost_matrix(
-                &self.hist,
+                hist,
                 &cost_inputs,
                 &params.cost,
                 radius,

@@ -176,3 +176,27 @@ fn sqrt_threshold_is_exact() {
         assert!(t.next_down().sqrt() < limit);
     }
 }
+
+#[test]
+fn reusing_the_root_histogram_gives_the_same_tree() {
+    let mut pts = bar_cloud();
+    pts.extend((0..400).map(|i| Vector3::new((i % 20) as f32 - 10.0, (i / 20) as f32 - 3.0, 0.0)));
+    let cloud = PointMemory::from_points(&pts);
+    let params = PlannerParams::default();
+    let inputs = TreeInputs {
+        position: Vector3::new(1.2, 0.4, 4.0),
+        velocity: Vector3::new(0.0, 1.5, 0.0),
+        goal: Vector3::new(2.0, 14.0, 4.0),
+        closest_pt: Vector3::new(2.0, 14.0, 4.0),
+    };
+    let (xs, ys, zs) = cloud.soa();
+    let mut root = Histogram::new();
+    root.build_from_soa(xs, ys, zs, &inputs.position, &mut HistogramScratch::default());
+    let (mut a, mut b) = (StarPlanner::new(), StarPlanner::new());
+    let pa = a.build(&cloud, &inputs, &params).to_vec();
+    let pb = b
+        .build_with_root_histogram(&cloud, &inputs, &params, Some(&root))
+        .to_vec();
+    assert_eq!(pa, pb);
+    assert_eq!(a.nodes(), b.nodes());
+}
