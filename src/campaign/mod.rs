@@ -8,3 +8,4 @@ pub mod report;
 pub mod run;
 pub mod score;
 pub mod screen;
+pub mod vehicles;

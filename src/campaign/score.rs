@@ -150,7 +150,7 @@ pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>]) -> Su
     }
     let counted = || tests.iter().filter(|t| t.duplicate_of.is_none());
     SuiteScore {
-        failure_score: counted().map(|t| t.score).sum(),
+        failure_score: counted().map(|t| t.score).sum::<f64>() + 0.0,
         failing: counted().filter(|t| t.failed).count(),
         evaluated: tests.iter().filter(|t| !t.runs.is_empty()).count(),
         diversity: diversity(obstacles),

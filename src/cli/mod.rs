@@ -4,6 +4,8 @@ mod check;
 mod distance;
 mod fidelity;
 mod fly;
+mod generate;
+mod progress;
 mod render;
 mod sample;
 mod score;
@@ -28,6 +30,9 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The main job: sample candidates, screen them with the LFS, fly the most severe within BUDGET flights,
+    /// and write the failing tests best first with a report.
+    Generate(Box<generate::Args>),
     /// Check a test against the competition's rules (exit 0 valid, 1 violations, 2 unreadable).
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
@@ -68,6 +73,7 @@ impl From<Spelling> for prgenuav::model::Spelling {
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        Command::Generate(a) => generate::run(*a),
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),

@@ -1,0 +1,146 @@
+//! The high-fidelity side of a campaign: the embedded mock autopilot (a fresh one per flight, so every flight
+//! starts at home as in Aerialist) or MAVLink vehicles (PX4 SITL instances, flight controllers), flown with
+//! the bridge.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
+use tokio::runtime::Handle;
+
+use super::pool::{Flown, Vehicle, VehicleError};
+use crate::bridge::{BridgeError, CancelToken, FlightReport, FlyMode, FlyOptions, fly};
+use crate::model::TestCase;
+
+/// Flies with the bridge on `handle`'s runtime, turning the campaign's stop flag into a bridge cancel (the
+/// flight then lands and keeps its recording).
+fn fly_blocking(
+    handle: &Handle,
+    test: &TestCase,
+    opts: &FlyOptions,
+    stop: &AtomicBool,
+) -> Result<FlightReport, BridgeError> {
+    handle.block_on(async {
+        let token = CancelToken::new();
+        let watch = token.clone();
+        let watcher = async {
+            while !stop.load(Ordering::Relaxed) {
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+            watch.cancel();
+            std::future::pending::<()>().await;
+        };
+        tokio::select! {
+            r = fly(test, opts, token) => r,
+            () = watcher => unreachable!("the watcher never finishes"),
+        }
+    })
+}
+
+fn flown(report: FlightReport) -> Flown {
+    Flown {
+        status: report.status.as_str().to_string(),
+        min_distance: report.min_distance,
+        min_distance_raw: report.min_distance_raw,
+        flight_time_s: report.flight_time_s,
+    }
+}
+
+/// A MAVLink vehicle at a fixed address.
+pub struct LinkVehicle {
+    handle: Handle,
+    opts: FlyOptions,
+}
+
+impl LinkVehicle {
+    /// A vehicle at `url` (rust-mavlink or MAVSDK address syntax), flown in `mode`.
+    pub fn new(handle: Handle, url: &str, mode: FlyMode, heartbeat_wait_s: f64) -> Self {
+        let opts = FlyOptions {
+            connect: url.to_string(),
+            mode,
+            heartbeat_wait_s,
+            ..FlyOptions::default()
+        };
+        Self { handle, opts }
+    }
+}
+
+impl Vehicle for LinkVehicle {
+    fn name(&self) -> String {
+        self.opts.connect.clone()
+    }
+
+    fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
+        let opts = FlyOptions {
+            trajectory_csv: Some(csv.to_path_buf()),
+            ..self.opts.clone()
+        };
+        match fly_blocking(&self.handle, test, &opts, stop) {
+            Ok(report) => Ok(flown(report)),
+            Err(e) => Err(VehicleError::Unreachable {
+                vehicle: self.name(),
+                reason: e.to_string(),
+            }),
+        }
+    }
+}
+
+/// The embedded mock autopilot, started afresh for every flight on an ephemeral loopback port.
+pub struct MockVehicle {
+    handle: Handle,
+    name: String,
+    speed: f64,
+    mode: FlyMode,
+}
+
+impl MockVehicle {
+    /// Mock number `index`, its clock `speed` times faster than real time.
+    pub fn new(handle: Handle, index: usize, speed: f64, mode: FlyMode) -> Self {
+        Self {
+            handle,
+            name: format!("mock#{index}"),
+            speed,
+            mode,
+        }
+    }
+}
+
+impl Vehicle for MockVehicle {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
+        let unreachable = |reason: String| VehicleError::Unreachable {
+            vehicle: self.name.clone(),
+            reason,
+        };
+        let addr = "127.0.0.1:0".parse().map_err(|e| unreachable(format!("{e}")))?;
+        let mock = self
+            .handle
+            .block_on(
+                MockAutopilot::builder()
+                    .link(LinkSpec::UdpIn(addr))
+                    .speed_factor(SpeedFactor::Times(self.speed))
+                    .spawn(),
+            )
+            .map_err(|e| unreachable(e.to_string()))?;
+        let port = mock
+            .local_addr()
+            .map(|a| a.port())
+            .ok_or_else(|| unreachable("no local port".into()))?;
+        let opts = FlyOptions {
+            connect: format!("udpout:127.0.0.1:{port}"),
+            mode: self.mode,
+            time_scale: self.speed,
+            trajectory_csv: Some(csv.to_path_buf()),
+            heartbeat_wait_s: 20.0,
+            ..FlyOptions::default()
+        };
+        let result = fly_blocking(&self.handle, test, &opts, stop);
+        // Stopping the mock cannot fail in a way that matters to the flight already recorded.
+        let _ = self.handle.block_on(mock.shutdown());
+        result.map(flown).map_err(|e| unreachable(e.to_string()))
+    }
+}

@@ -1,0 +1,195 @@
+//! `prgenuav generate CASE.yaml BUDGET [--seed S] [--out DIR] [--hfs mock|URL[,URL...]] [--candidates N]
+//! [--threshold M] [--resume FOLDER] [--quiet] [--json]`: the competition's main job.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use anyhow::{Context, bail};
+use prgenuav::bridge::FlyMode;
+use prgenuav::campaign::parallel::available_threads;
+use prgenuav::campaign::pool::Vehicle;
+use prgenuav::campaign::report::timestamped_folder;
+use prgenuav::campaign::run::{CampaignConfig, run_campaign};
+use prgenuav::campaign::screen::LfsScreener;
+use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
+use prgenuav::lfs::sim::{MotionModel, SimConfig};
+
+use super::progress::Reporter;
+use super::sample::GeneratorArgs;
+
+/// Arguments of `generate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The case study YAML (mission, params, commands).
+    case: Option<PathBuf>,
+    /// High-fidelity flights allowed (the competition's budget).
+    budget: Option<usize>,
+    /// Seed of the generator: the same seed draws the same candidates.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where the timestamped output folder is created.
+    #[arg(long, default_value = "generated_tests")]
+    out: PathBuf,
+    /// High-fidelity side: `mock` (embedded mock autopilots, one per core) or MAVLink URLs separated by
+    /// commas, one flight per vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).
+    #[arg(long, default_value = "mock")]
+    hfs: String,
+    /// Candidates to draw and screen with the LFS (default: 3 x budget, at least 20).
+    #[arg(long)]
+    candidates: Option<usize>,
+    /// Fly only candidates the LFS predicts closer than this, metres.
+    #[arg(long, default_value_t = 3.0)]
+    threshold: f64,
+    /// Skip a candidate whose footprints overlap an already chosen one by more than this IoU.
+    #[arg(long, default_value_t = 0.5)]
+    max_iou: f64,
+    /// LFS motion model for screening: px4 or paper.
+    #[arg(long, default_value = "px4")]
+    motion: String,
+    /// Obstacle mode of the flights: avoidance (PX4 <= 1.14 companion), offboard, or mission (no avoidance).
+    #[arg(long, default_value = "avoidance")]
+    mode: String,
+    /// Clock speed of the embedded mock autopilots (times real time).
+    #[arg(long, default_value_t = 20.0)]
+    mock_speed: f64,
+    /// Seconds to wait for each MAVLink vehicle's first heartbeat.
+    #[arg(long, default_value_t = 15.0)]
+    connect_timeout: f64,
+    /// Continue a killed campaign in this folder (its campaign.json holds the settings).
+    #[arg(long, value_name = "FOLDER")]
+    resume: Option<PathBuf>,
+    /// No progress output.
+    #[arg(long)]
+    quiet: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    generator: GeneratorArgs,
+}
+
+fn parse_mode(s: &str) -> anyhow::Result<FlyMode> {
+    Ok(match s {
+        "avoidance" => FlyMode::Avoidance,
+        "offboard" => FlyMode::Offboard,
+        "mission" => FlyMode::Mission,
+        other => bail!("unknown --mode {other:?} (use avoidance, offboard or mission)"),
+    })
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let (cfg, folder) = match &args.resume {
+        Some(folder) => {
+            let path = folder.join("campaign.json");
+            let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+            let cfg: CampaignConfig =
+                serde_json::from_str(&text).with_context(|| format!("{}: not a campaign file", path.display()))?;
+            (cfg, folder.clone())
+        }
+        None => {
+            let (Some(case), Some(budget)) = (args.case.clone(), args.budget) else {
+                bail!("give CASE.yaml and BUDGET, or --resume FOLDER");
+            };
+            if budget == 0 {
+                bail!("BUDGET must be at least 1 flight");
+            }
+            if !(args.threshold.is_finite() && args.threshold > 0.0) || !(0.0..=1.0).contains(&args.max_iou) {
+                bail!("--threshold must be positive and --max-iou within 0..1");
+            }
+            let cfg = CampaignConfig {
+                case,
+                seed: args.seed,
+                budget,
+                candidates: args.candidates.unwrap_or((3 * budget).max(20)),
+                threshold_m: args.threshold,
+                max_iou: args.max_iou,
+                generator: args.generator.config()?,
+                old_spelling: args.generator.spelling == super::Spelling::Old,
+                hfs: args
+                    .hfs
+                    .split(',')
+                    .map(|s| s.trim().to_string())
+                    .filter(|s| !s.is_empty())
+                    .collect(),
+            };
+            (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
+        }
+    };
+    let Some(motion) = MotionModel::by_name(&args.motion) else {
+        bail!("unknown --motion {:?} (use px4 or paper)", args.motion);
+    };
+    let mode = parse_mode(&args.mode)?;
+    if !(args.mock_speed.is_finite() && args.mock_speed >= 1.0) {
+        bail!("--mock-speed must be at least 1");
+    }
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let on_signal = stop.clone();
+    runtime.spawn(async move {
+        if tokio::signal::ctrl_c().await.is_ok() {
+            eprintln!("Ctrl-C: landing the vehicles in flight, keeping every finished flight; resume with --resume");
+            on_signal.store(true, Ordering::SeqCst);
+        }
+    });
+    let vehicles: Vec<Box<dyn Vehicle>> = if cfg.hfs == ["mock"] {
+        (0..available_threads())
+            .map(|i| Box::new(MockVehicle::new(runtime.handle().clone(), i, args.mock_speed, mode)) as Box<dyn Vehicle>)
+            .collect()
+    } else {
+        if cfg.hfs.iter().any(|u| u == "mock") {
+            bail!("--hfs takes either `mock` or MAVLink URLs, not both");
+        }
+        cfg.hfs
+            .iter()
+            .map(|url| {
+                Box::new(LinkVehicle::new(
+                    runtime.handle().clone(),
+                    url,
+                    mode,
+                    args.connect_timeout,
+                )) as Box<dyn Vehicle>
+            })
+            .collect()
+    };
+    if vehicles.is_empty() {
+        bail!("--hfs names no vehicle");
+    }
+    let progress = Reporter::new(args.quiet || args.json);
+    let screener = LfsScreener {
+        config: SimConfig {
+            motion,
+            ..SimConfig::default()
+        },
+    };
+    let report = run_campaign(&cfg, &folder, &screener, vehicles, &progress, &stop)?;
+    if args.json {
+        let mut value = serde_json::to_value(&report)?;
+        value["output_folder"] = serde_json::json!(folder.display().to_string());
+        super::print_json(&value)?;
+    } else {
+        let s = &report.suite;
+        println!(
+            "{} failing tests of {} flights ({} candidates screened), failure score {:.2}, diversity {}",
+            s.failing,
+            s.flown,
+            s.candidates_screened,
+            s.failure_score,
+            s.diversity.map_or("n/a".into(), |d| format!("{d:.3}"))
+        );
+        println!("output folder: {}", folder.display());
+    }
+    if stop.load(Ordering::SeqCst) {
+        eprintln!(
+            "interrupted: resume with  prgenuav generate --resume {}",
+            folder.display()
+        );
+        return Ok(ExitCode::from(super::EXIT_FAIL));
+    }
+    Ok(ExitCode::SUCCESS)
+}
