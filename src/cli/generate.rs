@@ -95,7 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             if budget == 0 {
                 bail!("BUDGET must be at least 1 flight");
             }
-            if !(args.threshold.is_finite() && args.threshold > 0.0) || !(0.0..=1.0).contains(&args.max_iou) {
+            if !(args.threshold.is_finite() && args.threshold > 0.0 && (0.0..=1.0).contains(&args.max_iou)) {
                 bail!("--threshold must be positive and --max-iou within 0..1");
             }
             let cfg = CampaignConfig {

@@ -71,7 +71,7 @@ impl Progress for Reporter {
                 if let Ok(s) = state.lock() {
                     let (name, total, start) = &*s;
                     let step = (*total / 10).max(1);
-                    if done % step == 0 || done == *total {
+                    if done.is_multiple_of(step) || done == *total {
                         eprintln!("[{name}] {done}/{total} ({:.1} s)", start.elapsed().as_secs_f64());
                     }
                 }
