@@ -37,6 +37,27 @@ pub struct CampaignConfig {
     pub old_spelling: bool,
     /// The high-fidelity side as given (`mock` or MAVLink URLs).
     pub hfs: Vec<String>,
+    /// Obstacle mode of the flights (`avoidance`, `offboard`, `mission`).
+    #[serde(default = "default_mode")]
+    pub mode: String,
+    /// LFS motion model used for screening (`px4`, `paper`).
+    #[serde(default = "default_motion")]
+    pub motion: String,
+    /// Clock speed of the embedded mock autopilots.
+    #[serde(default = "default_mock_speed")]
+    pub mock_speed: f64,
+}
+
+fn default_mode() -> String {
+    "avoidance".into()
+}
+
+fn default_motion() -> String {
+    "px4".into()
+}
+
+fn default_mock_speed() -> f64 {
+    20.0
 }
 
 /// Predicts a test's flight with the low-fidelity simulator.

@@ -68,6 +68,9 @@ fn config(budget: usize) -> CampaignConfig {
         generator: GeneratorConfig::default(),
         old_spelling: false,
         hfs: vec!["scripted".into()],
+        mode: "avoidance".into(),
+        motion: "px4".into(),
+        mock_speed: 20.0,
     }
 }
 

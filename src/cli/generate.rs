@@ -51,7 +51,8 @@ pub struct Args {
     /// Obstacle mode of the flights: avoidance (PX4 <= 1.14 companion), offboard, or mission (no avoidance).
     #[arg(long, default_value = "avoidance")]
     mode: String,
-    /// Clock speed of the embedded mock autopilots (times real time).
+    /// Clock speed of the embedded mock autopilots (times real time); the planner must keep up with 10 Hz
+    /// of mock time, so raise it only with CPU to spare.
     #[arg(long, default_value_t = 20.0)]
     mock_speed: f64,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat.
@@ -113,15 +114,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     .map(|s| s.trim().to_string())
                     .filter(|s| !s.is_empty())
                     .collect(),
+                mode: args.mode.clone(),
+                motion: args.motion.clone(),
+                mock_speed: args.mock_speed,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
     };
-    let Some(motion) = MotionModel::by_name(&args.motion) else {
-        bail!("unknown --motion {:?} (use px4 or paper)", args.motion);
+    let Some(motion) = MotionModel::by_name(&cfg.motion) else {
+        bail!("unknown --motion {:?} (use px4 or paper)", cfg.motion);
     };
-    let mode = parse_mode(&args.mode)?;
-    if !(args.mock_speed.is_finite() && args.mock_speed >= 1.0) {
+    let mode = parse_mode(&cfg.mode)?;
+    if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
         bail!("--mock-speed must be at least 1");
     }
     let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -139,7 +143,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     });
     let vehicles: Vec<Box<dyn Vehicle>> = if cfg.hfs == ["mock"] {
         (0..available_threads())
-            .map(|i| Box::new(MockVehicle::new(runtime.handle().clone(), i, args.mock_speed, mode)) as Box<dyn Vehicle>)
+            .map(|i| Box::new(MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode)) as Box<dyn Vehicle>)
             .collect()
     } else {
         if cfg.hfs.iter().any(|u| u == "mock") {
