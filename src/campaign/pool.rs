@@ -3,8 +3,8 @@
 
 use std::collections::VecDeque;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use super::journal::{FlightRecord, Journal};
@@ -65,8 +65,18 @@ pub struct PoolOutcome {
     pub errors: Vec<String>,
 }
 
+/// Shared by the pool's workers: jobs left, flights in the air, flights finished.
+struct Ledger {
+    queue: VecDeque<Job>,
+    in_flight: usize,
+    finished: usize,
+}
+
 /// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
 /// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
+///
+/// A vehicle that turns out unreachable gives its job back; the others wait for that (rather than stopping
+/// at a budget that is only reserved) so the job is still flown.
 pub fn fly_all(
     vehicles: Vec<Box<dyn Vehicle>>,
     jobs: Vec<Job>,
@@ -76,30 +86,53 @@ pub fn fly_all(
     cancel: &AtomicBool,
     on_flight: &(dyn Fn(&FlightRecord) + Sync),
 ) -> PoolOutcome {
-    let queue = Mutex::new(jobs.into_iter().collect::<VecDeque<_>>());
-    let started = AtomicUsize::new(0);
+    let ledger = Mutex::new(Ledger {
+        queue: jobs.into_iter().collect(),
+        in_flight: 0,
+        finished: 0,
+    });
+    let changed = Condvar::new();
     let journal = Mutex::new(journal);
-    let outcome = Arc::new(Mutex::new(PoolOutcome::default()));
+    let outcome = Mutex::new(PoolOutcome::default());
     let stop = AtomicBool::new(false);
+    let lock = || ledger.lock().unwrap_or_else(|p| p.into_inner());
     std::thread::scope(|scope| {
         for mut vehicle in vehicles {
-            let (queue, started, journal, outcome, stop) = (&queue, &started, &journal, outcome.clone(), &stop);
+            let (journal, outcome, stop, changed, lock) = (&journal, &outcome, &stop, &changed, &lock);
             scope.spawn(move || {
                 loop {
-                    if cancel.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed) {
-                        return;
-                    }
-                    // Reserve a flight of the budget before taking a job.
-                    if started.fetch_add(1, Ordering::SeqCst) >= budget {
-                        return;
-                    }
-                    let Some(job) = queue.lock().ok().and_then(|mut q| q.pop_front()) else {
-                        return;
+                    // Take the next job, or learn there will be none.
+                    let job = {
+                        let mut l = lock();
+                        loop {
+                            if cancel.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed) {
+                                return;
+                            }
+                            let budget_left = l.finished + l.in_flight < budget;
+                            if budget_left && let Some(job) = l.queue.pop_front() {
+                                l.in_flight += 1;
+                                break job;
+                            }
+                            if l.in_flight == 0 {
+                                return; // budget spent or queue empty, and nothing can come back
+                            }
+                            // A flight in the air may yet hand its job back; wait, bounded so cancel is seen.
+                            l = changed
+                                .wait_timeout(l, std::time::Duration::from_millis(200))
+                                .map(|(g, _)| g)
+                                .unwrap_or_else(|p| p.into_inner().0);
+                        }
                     };
                     let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
                     let t0 = Instant::now();
-                    match vehicle.fly(&job.test, &folder.join(&rel), cancel) {
+                    let result = vehicle.fly(&job.test, &folder.join(&rel), cancel);
+                    let mut l = lock();
+                    l.in_flight -= 1;
+                    match result {
                         Ok(flown) => {
+                            l.finished += 1;
+                            drop(l);
+                            changed.notify_all();
                             let record = FlightRecord {
                                 candidate: job.screened.candidate,
                                 obstacles: job.test.obstacles.clone(),
@@ -132,11 +165,10 @@ pub fn fly_all(
                             }
                         }
                         Err(e) => {
-                            // Give the job and the reserved flight back; this vehicle is out.
-                            started.fetch_sub(1, Ordering::SeqCst);
-                            if let Ok(mut q) = queue.lock() {
-                                q.push_front(job);
-                            }
+                            // Give the job back for another vehicle; this one is out.
+                            l.queue.push_front(job);
+                            drop(l);
+                            changed.notify_all();
                             outcome
                                 .lock()
                                 .unwrap_or_else(|p| p.into_inner())
@@ -149,15 +181,14 @@ pub fn fly_all(
             });
         }
     });
-    Arc::try_unwrap(outcome)
-        .map(|m| m.into_inner().unwrap_or_else(|p| p.into_inner()))
-        .unwrap_or_default()
+    outcome.into_inner().unwrap_or_else(|p| p.into_inner())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::{Obstacle, SIM_HOME};
+    use std::sync::Arc;
 
     struct Fake {
         name: &'static str,
@@ -171,6 +202,8 @@ mod tests {
         }
         fn fly(&mut self, test: &TestCase, _csv: &Path, _c: &AtomicBool) -> Result<Flown, VehicleError> {
             if !self.reachable {
+                // Fail slowly, so the other vehicles see the whole budget reserved meanwhile.
+                std::thread::sleep(std::time::Duration::from_millis(100));
                 return Err(VehicleError::Unreachable {
                     vehicle: self.name.into(),
                     reason: "no heartbeat".into(),
@@ -258,6 +291,15 @@ mod tests {
         let mut ids: Vec<u64> = flown.iter().map(|f| f.1).collect();
         ids.sort();
         assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn a_job_handed_back_after_the_budget_was_reserved_is_still_flown() {
+        // Budget 1: the dead vehicle reserves it, fails, and the live one must still fly the job.
+        for _ in 0..5 {
+            let (out, flown, records) = run(vec![("dead", false), ("ok", true)], 3, 1);
+            assert_eq!((out.flown, flown.len(), records), (1, 1, 1), "{:?}", out.dropped);
+        }
     }
 
     #[test]

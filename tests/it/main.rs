@@ -1,6 +1,7 @@
 //! Integration tests: one binary, one module per area, shared helpers here.
 
 mod bridge;
+mod campaign;
 mod cli_errors;
 mod generator;
 mod geometry_props;

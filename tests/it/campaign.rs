@@ -1,0 +1,312 @@
+//! `generate` end to end against the embedded mock autopilot: outputs valid and best first, report numbers
+//! recomputable from the files, kill and resume, bad input. Every wait is bounded.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use prgenuav::judge::{judge_flight, test_score};
+use prgenuav::model::{Arena, TestCase, Trajectory};
+use prgenuav::rules::check;
+
+use super::{prgenuav, repo};
+
+/// Runs `prgenuav` with a wall-clock limit; kills it on overrun.
+fn run_bounded(args: &[&str], limit: Duration) -> (i32, String, String) {
+    let child = spawn(args);
+    wait_bounded(child, limit)
+}
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_prgenuav"))
+        .args(args)
+        .current_dir(repo())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start prgenuav")
+}
+
+fn wait_bounded(mut child: Child, limit: Duration) -> (i32, String, String) {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            let out = child.wait_with_output().expect("output");
+            return (
+                status.code().unwrap_or(-1),
+                String::from_utf8_lossy(&out.stdout).into_owned(),
+                String::from_utf8_lossy(&out.stderr).into_owned(),
+            );
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("output");
+            panic!(
+                "prgenuav {:?} ran over {limit:?}; stderr: {}",
+                "generate",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+fn output_folder(stdout: &str) -> PathBuf {
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("output folder: "))
+        .expect("output folder line");
+    repo().join(line.trim())
+}
+
+/// Recomputes every reported number from the folder's files and compares with report.json.
+fn verify_folder(folder: &Path) -> serde_json::Value {
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap()).unwrap();
+    let flights = report["flights"].as_array().unwrap();
+    let mut last = -1.0;
+    let mut score_sum = 0.0;
+    let mut i = 0;
+    while folder.join(format!("test_{i}.yaml")).exists() {
+        let test = TestCase::load(&folder.join(format!("test_{i}.yaml"))).unwrap();
+        assert!(check(&test, &Arena::default()).is_empty(), "test_{i} breaks a rule");
+        let trajectory = Trajectory::load_csv(&folder.join(format!("test_{i}.csv"))).unwrap();
+        let verdict = judge_flight(&trajectory, &test.obstacles).unwrap();
+        assert!(verdict.min_distance < 1.5, "test_{i} is reported but did not fail");
+        assert!(verdict.min_distance >= last, "not best first at test_{i}");
+        last = verdict.min_distance;
+        let f = flights
+            .iter()
+            .find(|f| f["reported_as"] == format!("test_{i}.yaml"))
+            .expect("in report");
+        let reported = f["min_distance"].as_f64().unwrap();
+        assert!(
+            (reported - verdict.min_distance).abs() < 1e-3,
+            "test_{i}: report {reported} vs file {}",
+            verdict.min_distance
+        );
+        let t = f["flight_time_s"].as_f64().unwrap();
+        let recomputed = test_score(&[verdict.min_distance], &[t], test.obstacles.len());
+        assert!((f["test_score"].as_f64().unwrap() - recomputed).abs() < 1e-9);
+        score_sum += recomputed;
+        i += 1;
+    }
+    assert_eq!(report["suite"]["failing"].as_u64().unwrap() as usize, i);
+    assert!((report["suite"]["failure_score"].as_f64().unwrap() - score_sum).abs() < 1e-6);
+    let journal = std::fs::read_to_string(folder.join("journal.jsonl")).unwrap();
+    assert_eq!(journal.lines().count(), flights.len());
+    report
+}
+
+#[test]
+fn campaigns_on_missions_1_to_3_report_recomputable_numbers() {
+    let out = tempfile::tempdir().unwrap();
+    for n in 1..=3 {
+        // Plain mission mode flies into obstacle 1, so failing tests exist to check.
+        let dir = out.path().join(format!("m{n}"));
+        let (code, stdout, stderr) = run_bounded(
+            &[
+                "generate",
+                &format!("missions/mission{n}.yaml"),
+                "2",
+                "--candidates",
+                "4",
+                "--mode",
+                "mission",
+                "--mock-speed",
+                "40",
+                "--seed",
+                "2",
+                "--out",
+                dir.to_str().unwrap(),
+            ],
+            Duration::from_secs(120),
+        );
+        assert_eq!(code, 0, "mission{n}: {stderr}");
+        let folder = output_folder(&stdout);
+        let report = verify_folder(&folder);
+        assert_eq!(report["suite"]["flown"], 2);
+        assert!(
+            report["suite"]["failing"].as_u64().unwrap() >= 1,
+            "the baseline must collide: {report}"
+        );
+        // `score` agrees with the campaign's own report.
+        let (code, json, err) = prgenuav(&["score", folder.to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{err}");
+        let s: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert!(
+            (s["failure_score"].as_f64().unwrap() - report["suite"]["failure_score"].as_f64().unwrap()).abs() < 1e-6
+        );
+    }
+}
+
+#[test]
+fn avoidance_campaign_runs_on_the_default_mock() {
+    let out = tempfile::tempdir().unwrap();
+    let (code, stdout, stderr) = run_bounded(
+        &[
+            "generate",
+            "missions/mission2.yaml",
+            "2",
+            "--candidates",
+            "4",
+            "--out",
+            out.path().to_str().unwrap(),
+            "--quiet",
+        ],
+        Duration::from_secs(150),
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let report = verify_folder(&output_folder(&stdout));
+    assert_eq!(report["suite"]["flown"], 2);
+    for f in report["flights"].as_array().unwrap() {
+        assert_eq!(f["status"], "landed", "{f}");
+    }
+}
+
+#[test]
+fn killed_campaign_resumes_without_flying_twice() {
+    let out = tempfile::tempdir().unwrap();
+    let child = spawn(&[
+        "generate",
+        "missions/mission2.yaml",
+        "4",
+        "--candidates",
+        "6",
+        "--mode",
+        "mission",
+        "--mock-speed",
+        "10",
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    // Wait (bounded) for the first journaled flight, then kill the process hard.
+    let start = Instant::now();
+    let folder = loop {
+        let found = std::fs::read_dir(out.path())
+            .ok()
+            .and_then(|mut d| d.next())
+            .and_then(|e| e.ok())
+            .map(|e| e.path());
+        if let Some(f) = found.filter(|f| std::fs::read_to_string(f.join("journal.jsonl")).is_ok_and(|j| !j.is_empty()))
+        {
+            break f;
+        }
+        assert!(start.elapsed() < Duration::from_secs(90), "no flight journaled in time");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut child = child;
+    child.kill().expect("kill");
+    let _ = child.wait();
+    let before = std::fs::read_to_string(folder.join("journal.jsonl"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!((1..4).contains(&before), "{before} flights before the kill");
+    let (code, stdout, stderr) = run_bounded(
+        &["generate", "--resume", folder.to_str().unwrap()],
+        Duration::from_secs(120),
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("resuming"), "{stderr}");
+    let report = verify_folder(&output_folder(&stdout));
+    assert_eq!(report["suite"]["flown"], 4, "the budget is 4");
+    let mut candidates: Vec<u64> = report["flights"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["candidate"].as_u64().unwrap())
+        .collect();
+    candidates.sort();
+    candidates.dedup();
+    assert_eq!(candidates.len(), 4, "a candidate was flown twice");
+}
+
+#[test]
+fn bad_input_fails_fast_and_clearly() {
+    let (code, _, err) = prgenuav(&["generate", "missions/mission2.yaml", "0"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("BUDGET"), "{err}");
+    let out = tempfile::tempdir().unwrap();
+    let (code, _, err) = prgenuav(&[
+        "generate",
+        "missions/nope.yaml",
+        "2",
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("nope.yaml"), "{err}");
+    // Nobody sends to this port: no reachable vehicle, a clear error within the connect timeout.
+    let dead = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let (code, _, err) = run_bounded(
+        &[
+            "generate",
+            "missions/mission2.yaml",
+            "1",
+            "--candidates",
+            "2",
+            "--hfs",
+            &format!("udpin:127.0.0.1:{dead}"),
+            "--connect-timeout",
+            "1",
+            "--out",
+            out.path().to_str().unwrap(),
+            "--quiet",
+        ],
+        Duration::from_secs(60),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no reachable vehicle"), "{err}");
+}
+
+#[test]
+fn an_unreachable_endpoint_is_dropped_and_the_campaign_goes_on() {
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let mock = rt
+        .block_on(
+            mock_autopilot::MockAutopilot::builder()
+                .link(mock_autopilot::LinkSpec::UdpIn("127.0.0.1:0".parse().unwrap()))
+                .speed_factor(mock_autopilot::SpeedFactor::Times(10.0))
+                .spawn(),
+        )
+        .unwrap();
+    let port = mock.local_addr().unwrap().port();
+    let dead = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let out = tempfile::tempdir().unwrap();
+    let hfs = format!("udpin:127.0.0.1:{dead},udpout:127.0.0.1:{port}");
+    let (code, stdout, stderr) = run_bounded(
+        &[
+            "generate",
+            "missions/mission2.yaml",
+            "1",
+            "--candidates",
+            "2",
+            "--mode",
+            "mission",
+            "--hfs",
+            &hfs,
+            "--connect-timeout",
+            "1",
+            "--out",
+            out.path().to_str().unwrap(),
+        ],
+        Duration::from_secs(120),
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("dropped"), "the dead endpoint is named: {stderr}");
+    let report = verify_folder(&output_folder(&stdout));
+    assert_eq!(report["suite"]["flown"], 1);
+    drop(mock);
+}
+
+#[allow(dead_code)]
+fn _unused(_: &Path) {}
