@@ -122,6 +122,38 @@ impl Histogram {
         origin: &Vector3<f32>,
         scratch: &mut HistogramScratch,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above); the body is the same code, compiled for AVX2.
+            unsafe { self.build_avx2(xs, ys, zs, origin, scratch) };
+            return;
+        }
+        self.build_body(xs, ys, zs, origin, scratch);
+    }
+
+    /// [`Self::build_body`] compiled with AVX2 enabled (no fused multiply-add contraction: same results).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn build_avx2(
+        &mut self,
+        xs: &[f32],
+        ys: &[f32],
+        zs: &[f32],
+        origin: &Vector3<f32>,
+        scratch: &mut HistogramScratch,
+    ) {
+        self.build_body(xs, ys, zs, origin, scratch);
+    }
+
+    #[inline(always)]
+    fn build_body(
+        &mut self,
+        xs: &[f32],
+        ys: &[f32],
+        zs: &[f32],
+        origin: &Vector3<f32>,
+        scratch: &mut HistogramScratch,
+    ) {
         self.dist.fill(0.0);
         scratch.count.fill(0);
         const CHUNK: usize = 64;
@@ -129,37 +161,30 @@ impl Histogram {
         let mut range = [0f32; CHUNK];
         let mut reliable = [false; CHUNK];
         let res = ALPHA_RES as f32;
-        let n = xs.len().min(ys.len()).min(zs.len());
-        let mut start = 0;
-        while start < n {
-            let m = CHUNK.min(n - start);
-            // Vectorisable pass: fast cell guesses for the chunk.
-            for k in 0..m {
-                let i = start + k;
-                let (e, z, r, ok) =
-                    fast_cell(xs[i] - origin.x, ys[i] - origin.y, zs[i] - origin.z, res);
-                cell[k] = e.wrapping_mul(GRID_Z as u32).wrapping_add(z);
-                range[k] = r;
-                reliable[k] = ok;
+        let (ox, oy, oz) = (origin.x, origin.y, origin.z);
+        for ((cx, cy), cz) in xs.chunks(CHUNK).zip(ys.chunks(CHUNK)).zip(zs.chunks(CHUNK)) {
+            // Vectorisable pass (iterators, no bounds checks): fast cell guesses for the chunk.
+            let out = cell
+                .iter_mut()
+                .zip(range.iter_mut())
+                .zip(reliable.iter_mut());
+            for (((x, y), z), ((c, r), ok)) in cx.iter().zip(cy).zip(cz).zip(out) {
+                let (e, zc, rr, good) = fast_cell(x - ox, y - oy, z - oz, res);
+                *c = e.wrapping_mul(GRID_Z as u32).wrapping_add(zc);
+                *r = rr;
+                *ok = good;
             }
             // Scalar pass in input order (the sums must add up in the original's order).
-            for k in 0..m {
+            for (k, ((x, y), z)) in cx.iter().zip(cy).zip(cz).enumerate() {
                 let i = if reliable[k] {
                     cell[k] as usize
                 } else {
-                    let j = start + k;
-                    let c = exact_cell(
-                        xs[j] - origin.x,
-                        ys[j] - origin.y,
-                        zs[j] - origin.z,
-                        ALPHA_RES,
-                    );
+                    let c = exact_cell(x - ox, y - oy, z - oz, ALPHA_RES);
                     c.e * GRID_Z + c.z
                 };
                 scratch.count[i] += 1;
                 self.dist[i] += range[k];
             }
-            start += m;
         }
         for (d, &n) in self.dist.iter_mut().zip(scratch.count.iter()) {
             *d = if n > 0 { *d / n as f32 } else { 0.0 };

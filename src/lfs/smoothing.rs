@@ -17,8 +17,11 @@ pub fn pad_polar_matrix(m: &[f32], rows: usize, cols: usize, n: usize) -> Vec<f3
 /// [`pad_polar_matrix`] into a reused buffer.
 pub fn pad_polar_matrix_into(m: &[f32], rows: usize, cols: usize, n: usize, p: &mut Vec<f32>) {
     let (pr, pc) = (rows + 2 * n, cols + 2 * n);
-    p.clear();
-    p.resize(pr * pc, 0.0);
+    // Every cell is written below when n <= rows; only zero-fill otherwise (or on a size change).
+    if n > rows {
+        p.clear();
+    }
+    reuse(p, pr * pc);
     let half = cols / 2;
     for r in 0..rows {
         p[(r + n) * pc + n..(r + n) * pc + n + cols].copy_from_slice(&m[r * cols..(r + 1) * cols]);
@@ -103,6 +106,24 @@ pub struct SmoothScratch {
 /// the correctly rounded kernel sum (the original's f32 sum order is Eigen's and not reproducible anyway).
 /// Only the band of rows that can receive a non-zero value is computed; the rest is exactly 0.
 pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the body is the same code, compiled for AVX2.
+        unsafe { smooth_avx2(m, rows, cols, radius, s) };
+        return;
+    }
+    smooth_body(m, rows, cols, radius, s);
+}
+
+/// [`smooth_body`] compiled with AVX2 enabled (no fused multiply-add contraction: same results).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn smooth_avx2(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
+    smooth_body(m, rows, cols, radius, s);
+}
+
+#[inline(always)]
+fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut SmoothScratch) {
     let n = radius;
     pad_polar_matrix_into(m, rows, cols, n, &mut s.padded);
     let p = &s.padded;
@@ -123,8 +144,7 @@ pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &m
 
     // Pass 1, along elevation, all padded columns at once. B[j] = sum of padded rows j..=j+n, j from r_lo.
     let nb = wr + n;
-    s.box_sums.clear();
-    s.box_sums.resize(nb * pc, 0.0);
+    reuse(&mut s.box_sums, nb * pc);
     s.acc.clear();
     s.acc.resize(pc, 0.0);
     for r in r_lo..=r_lo + n {
@@ -141,8 +161,7 @@ pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &m
         s.box_sums[j * pc..(j + 1) * pc].copy_from_slice(&s.acc);
     }
     // T[r] = sum of B[r..=r+n]; pass-1 output stored transposed (pc x wr) for a vectorisable pass 2.
-    s.pass1_t.clear();
-    s.pass1_t.resize(pc * wr, 0.0);
+    reuse(&mut s.pass1_t, pc * wr);
     s.acc.iter_mut().for_each(|v| *v = 0.0);
     for a in 0..=n {
         let b = &s.box_sums[a * pc..(a + 1) * pc];
@@ -165,8 +184,7 @@ pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &m
 
     // Pass 2, along azimuth, all band rows at once on the transposed pass-1 output.
     let q = &s.pass1_t;
-    s.col_box.clear();
-    s.col_box.resize((cols + n) * wr, 0.0);
+    reuse(&mut s.col_box, (cols + n) * wr);
     s.acc.clear();
     s.acc.resize(wr, 0.0);
     for c in 0..=n {
@@ -200,6 +218,13 @@ pub fn smooth_fast(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &m
         for (r, a) in s.acc.iter().enumerate() {
             m[(r_lo + r) * cols + c] = (a * inv) as f32;
         }
+    }
+}
+
+/// Sizes a scratch buffer without clearing it: callers overwrite every element they read.
+fn reuse<T: Copy + Default>(v: &mut Vec<T>, len: usize) {
+    if v.len() != len {
+        v.resize(len, T::default());
     }
 }
 
