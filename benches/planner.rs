@@ -45,11 +45,7 @@ fn frame(pos: &Vector3<f32>, yaw: f32, boxes: &[Aabb]) -> Vec<Vector3<f32>> {
             let x = (i as f32 - (w as f32 - 1.0) / 2.0) / fl;
             let y = (j as f32 - (h as f32 - 1.0) / 2.0) / fl;
             let d = fwd - left * x - up * y;
-            let mut t = if d.z < 0.0 {
-                -pos.z / d.z
-            } else {
-                f32::INFINITY
-            };
+            let mut t = if d.z < 0.0 { -pos.z / d.z } else { f32::INFINITY };
             for b in boxes {
                 if let Some(tb) = ray_box(pos, &d, b) {
                     t = t.min(tb);
@@ -102,10 +98,7 @@ fn warmed_up() -> (Planner, WaypointGenerator, Vec<Vector3<f32>>) {
         // Look around a bit so memory outside the FOV fills.
         let yaw = YAW_NORTH + [0.0, 0.5, -0.5, 0.0][k % 4];
         let pts = frame(&s.position_enu, yaw, &boxes);
-        let s = VehicleState {
-            yaw_enu_rad: yaw,
-            ..s
-        };
+        let s = VehicleState { yaw_enu_rad: yaw, ..s };
         planner.update_cloud(&pts, &s, 0.1).expect("finite state");
         let input = PlanInput {
             state: s,
@@ -168,8 +161,7 @@ fn bench(c: &mut Criterion) {
         b.iter_batched(
             || (planner.clone(), wg.clone()),
             |(mut p, mut g)| {
-                p.update_cloud(black_box(&pts), &s, 0.1)
-                    .expect("finite state");
+                p.update_cloud(black_box(&pts), &s, 0.1).expect("finite state");
                 let plan = p
                     .plan(&PlanInput {
                         state: s,

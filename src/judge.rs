@@ -196,6 +196,26 @@ pub fn test_score(run_distances: &[f64], run_flight_times_s: &[f64], obstacle_co
     mean_points * 10.0 / ((obstacle_count * obstacle_count) as f64 * minutes)
 }
 
+/// The competition's diversity of a suite: 1 - mean pairwise IoU of the tests' obstacle footprints;
+/// `None` for fewer than two tests.
+pub fn diversity(tests: &[Vec<Obstacle>]) -> Option<f64> {
+    if tests.len() < 2 {
+        return None;
+    }
+    let prints: Vec<Vec<Footprint>> = tests
+        .iter()
+        .map(|t| t.iter().map(Obstacle::footprint).collect())
+        .collect();
+    let (mut sum, mut pairs) = (0.0, 0usize);
+    for i in 0..prints.len() {
+        for j in i + 1..prints.len() {
+            sum += crate::geometry::union_iou(&prints[i], &prints[j]);
+            pairs += 1;
+        }
+    }
+    Some(1.0 - sum / pairs as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,6 +265,15 @@ mod tests {
         let j = judge_flight(&path(&pts), &[o]).unwrap();
         assert!((j.min_distance_raw - 0.5).abs() < 1e-12);
         assert!(j.min_distance > 1.5, "binned {}", j.min_distance);
+    }
+
+    #[test]
+    fn diversity_of_identical_and_disjoint_suites() {
+        let a = vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)];
+        let b = vec![Obstacle::new(2.0, 2.0, 20.0, 10.0, 20.0, 0.0)];
+        assert_eq!(diversity(&[a.clone(), a.clone()]), Some(0.0));
+        assert_eq!(diversity(&[a.clone(), b]), Some(1.0));
+        assert_eq!(diversity(&[a]), None);
     }
 
     #[test]

@@ -4,10 +4,13 @@
 //! -> MAVLink bridge -> report. The binary `prgenuav` is a thin CLI over this library.
 #![warn(missing_docs)]
 
+pub mod bridge;
+pub mod campaign;
+pub mod generator;
 pub mod geometry;
 pub mod io;
 pub mod judge;
+pub mod lfs;
 pub mod model;
 pub mod plot;
 pub mod rules;
-pub mod lfs;

@@ -1,1 +1,45 @@
-//! A PX4-like MAVLink vehicle that standard clients can fly.
+//! A PX4-like MAVLink vehicle for tests without hardware: mission, fence, parameter and command
+//! protocols as PX4 implements them, multirotor kinematics, telemetry, time scaling and faults.
+//!
+//! ```no_run
+//! # async fn demo() -> Result<(), mock_autopilot::MockError> {
+//! use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
+//! let mock = MockAutopilot::builder()
+//!     .link(LinkSpec::UdpIn("127.0.0.1:0".parse().unwrap()))
+//!     .speed_factor(SpeedFactor::Times(20.0))
+//!     .spawn()
+//!     .await?;
+//! let port = mock.local_addr().unwrap().port(); // connect with udpout:127.0.0.1:{port}
+//! mock.shutdown().await?;
+//! # let _ = port; Ok(()) }
+//! ```
+#![warn(missing_docs)]
+
+pub mod avoidance;
+pub mod clock;
+pub mod commands;
+pub mod dynamics;
+pub mod fence;
+pub use prgenuav::model::geo;
+pub mod link;
+pub mod messages;
+pub mod mission_items;
+pub mod mission_server;
+pub mod modes;
+pub mod navigator;
+pub mod obstacles;
+pub mod offboard;
+pub mod params;
+pub mod scenarios;
+pub mod server;
+pub mod telemetry;
+pub mod transport;
+pub mod vehicle;
+
+pub use clock::SpeedFactor;
+pub use dynamics::Ned;
+pub use link::Faults;
+pub use modes::FlightMode;
+pub use params::ParamValue;
+pub use server::{Builder, LinkSpec, MockAutopilot, MockError, MockHandle};
+pub use vehicle::{CollisionWorld, Vehicle, VehicleConfig, VehicleState};

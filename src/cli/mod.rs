@@ -3,7 +3,10 @@
 mod check;
 mod distance;
 mod fidelity;
+mod fly;
 mod render;
+mod sample;
+mod score;
 mod simulate;
 
 use std::process::ExitCode;
@@ -29,12 +32,37 @@ enum Command {
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
+    /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
+    Sample(sample::Args),
+    /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
+    Score(score::Args),
     /// Render the depth image (and point cloud) the vehicle's camera sees at a pose.
     Render(render::Args),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
     Simulate(simulate::Args),
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
     Fidelity(fidelity::Args),
+    /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
+    /// distance (exit 0 landed or collision, 1 timeout/link lost/aborted/rejected, 2 error).
+    Fly(fly::Args),
+}
+
+/// Key spelling of written YAML files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Spelling {
+    /// `robot:` and `mission:` (Aerialist since 2025-09).
+    New,
+    /// `drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's).
+    Old,
+}
+
+impl From<Spelling> for prgenuav::model::Spelling {
+    fn from(s: Spelling) -> Self {
+        match s {
+            Spelling::New => Self::New,
+            Spelling::Old => Self::Old,
+        }
+    }
 }
 
 /// Runs the parsed command line.
@@ -42,9 +70,12 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
+        Command::Sample(a) => sample::run(a),
+        Command::Score(a) => score::run(a),
         Command::Render(a) => render::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fidelity(a) => fidelity::run(a),
+        Command::Fly(a) => fly::run(a),
     }
 }
 

@@ -10,8 +10,7 @@ use super::fov::{Fov, point_inside_fov};
 use super::histogram::cell_and_range;
 use super::params::PlannerParams;
 use super::polar::{
-    FAST_ATAN2_MAX_ERR_DEG, PolarDeg, cartesian_to_polar_fcu, fast_atan2_deg, floor_f32, wrap_180,
-    wrap_polar,
+    FAST_ATAN2_MAX_ERR_DEG, PolarDeg, cartesian_to_polar_fcu, fast_atan2_deg, floor_f32, wrap_180, wrap_polar,
 };
 
 /// Subsampling cell size: ALPHA_RES / SCALE_FACTOR = 6 / 3 = 2 degrees.
@@ -80,12 +79,7 @@ impl PointMemory {
 
     /// Points (ENU metres) with their age in seconds (0 = from the latest frame).
     pub fn points(&self) -> impl Iterator<Item = (Vector3<f32>, f32)> + '_ {
-        (0..self.xs.len()).map(|i| {
-            (
-                Vector3::new(self.xs[i], self.ys[i], self.zs[i]),
-                self.ages_s[i],
-            )
-        })
+        (0..self.xs.len()).map(|i| (Vector3::new(self.xs[i], self.ys[i], self.zs[i]), self.ages_s[i]))
     }
 
     /// Forgets everything.
@@ -249,12 +243,8 @@ fn fast_inside_fov_body(fovs: &[Fov], dx: f32, dy: f32, dz: f32, pose: &CloudPos
             wrap_180(f.yaw_deg + f.h_fov_deg / 2.0),
             wrap_180(f.yaw_deg - f.h_fov_deg / 2.0),
         ];
-        let bounds_e = [
-            f.pitch_deg + f.v_fov_deg / 2.0,
-            f.pitch_deg - f.v_fov_deg / 2.0,
-        ];
-        if bounds_z.iter().any(|&b| near(p.z_deg, b)) || bounds_e.iter().any(|&b| near(p.e_deg, b))
-        {
+        let bounds_e = [f.pitch_deg + f.v_fov_deg / 2.0, f.pitch_deg - f.v_fov_deg / 2.0];
+        if bounds_z.iter().any(|&b| near(p.z_deg, b)) || bounds_e.iter().any(|&b| near(p.e_deg, b)) {
             return None;
         }
     }
@@ -290,10 +280,7 @@ mod tests {
             (100.0, 5.0, 1.0),
             (0.1, 0.05, 0.05),
         ];
-        let new: Vec<_> = offs
-            .iter()
-            .map(|&(x, y, z)| position + Vector3::new(x, y, z))
-            .collect();
+        let new: Vec<_> = offs.iter().map(|&(x, y, z)| position + Vector3::new(x, y, z)).collect();
         let fov_zero = vec![Fov {
             yaw_deg: 1.0,
             pitch_deg: 1.0,
@@ -454,11 +441,7 @@ mod tests {
             p.e_deg -= pose.pitch_deg;
             p.z_deg -= pose.yaw_enu_deg;
             let exact = point_inside_fov(fovs, &wrap_polar(p));
-            assert_eq!(
-                inside_fov_body(fovs, x, y, z, &pose),
-                exact,
-                "{x} {y} {z} {pose:?}"
-            );
+            assert_eq!(inside_fov_body(fovs, x, y, z, &pose), exact, "{x} {y} {z} {pose:?}");
         }
     }
 

@@ -11,8 +11,8 @@ use nalgebra::Vector3;
 use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
-    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference,
-    cartesian_to_polar_histogram, index_to_polar, polar_histogram_to_cartesian, polar_to_index,
+    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference, cartesian_to_polar_histogram,
+    index_to_polar, polar_histogram_to_cartesian, polar_to_index,
 };
 use super::smoothing::{SmoothScratch, smooth_fast};
 
@@ -43,10 +43,7 @@ fn tables() -> &'static CellTables {
         let mut unit = Vec::with_capacity(GRID_CELLS);
         for e in 0..GRID_E {
             for z in 0..GRID_Z {
-                let v = polar_histogram_to_cartesian(
-                    &index_to_polar(e, z, ALPHA_RES, 1.0),
-                    &Vector3::zeros(),
-                );
+                let v = polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &Vector3::zeros());
                 unit.push(v.normalize());
             }
         }
@@ -76,11 +73,7 @@ pub fn obstacle_facing_goal(
     let g = cartesian_to_polar_histogram(goal, origin);
     for j in -2..=2 {
         for i in -5..=5 {
-            let p = PolarDeg::new(
-                g.e_deg + (j * ALPHA_RES) as f32,
-                g.z_deg + (i * ALPHA_RES) as f32,
-                0.0,
-            );
+            let p = PolarDeg::new(g.e_deg + (j * ALPHA_RES) as f32, g.z_deg + (i * ALPHA_RES) as f32, 0.0);
             let d = hist.at(polar_to_index(p, ALPHA_RES));
             if d > min_m && d < max_m {
                 return true;
@@ -152,12 +145,7 @@ pub fn distance_cost(d_m: f32, k: &CostParams) -> f32 {
 }
 
 /// Cost of one candidate direction (cell centre, r = 1): `(distance_cost, velocity + yaw + yaw_to_line + pitch)`.
-pub fn cost_function(
-    candidate: &PolarDeg,
-    obstacle_distance_m: f32,
-    ctx: &CostContext,
-    k: &CostParams,
-) -> (f32, f32) {
+pub fn cost_function(candidate: &PolarDeg, obstacle_distance_m: f32, ctx: &CostContext, k: &CostParams) -> (f32, f32) {
     let unit = polar_histogram_to_cartesian(candidate, &Vector3::zeros()).normalize();
     let (yaw, line) = ctx.yaw_terms(candidate.z_deg, k);
     let other = ctx.velocity_term(&unit, k) + yaw + line + ctx.pitch_term(candidate.e_deg, k);

@@ -23,12 +23,7 @@ fn ctx(goal: Vector3<f32>, velocity: Vector3<f32>, facing: bool) -> CostContext 
     CostContext::new(&inputs, facing)
 }
 
-fn matrix(
-    hist: &Histogram,
-    inputs: &CostInputs,
-    k: &CostParams,
-    radius: usize,
-) -> Box<[f32; GRID_CELLS]> {
+fn matrix(hist: &Histogram, inputs: &CostInputs, k: &CostParams, radius: usize) -> Box<[f32; GRID_CELLS]> {
     let mut total = Box::new([0.0f32; GRID_CELLS]);
     cost_matrix(
         hist,
@@ -104,20 +99,8 @@ fn known_answer_goal_and_velocity_costs() {
     .1;
     assert!(toward < diagonal);
     let goal = Vector3::new(0.0, 5.0, 0.0);
-    let along = cost_function(
-        &cand,
-        0.0,
-        &ctx(goal, Vector3::new(0.0, 1.0, 0.0), true),
-        &k,
-    )
-    .1;
-    let across = cost_function(
-        &cand,
-        0.0,
-        &ctx(goal, Vector3::new(1.0, 0.0, 0.0), true),
-        &k,
-    )
-    .1;
+    let along = cost_function(&cand, 0.0, &ctx(goal, Vector3::new(0.0, 1.0, 0.0), true), &k).1;
+    let across = cost_function(&cand, 0.0, &ctx(goal, Vector3::new(1.0, 0.0, 0.0), true), &k).1;
     assert!(along < across);
     // Velocity cost: 0 when aligned, 2 k_v |V| when opposite.
     let c = ctx(goal, Vector3::new(0.0, 3.0, 0.0), true);
@@ -180,15 +163,12 @@ fn known_answer_empty_histogram_minimum_at_goal_and_growing_away() {
         closest_pt: Vector3::new(0.0, 5.0, 0.0),
     };
     let m = matrix(&Histogram::new(), &inputs, &av_params(), 5);
-    let (imin, _) = m.iter().enumerate().fold(
-        (0, f32::INFINITY),
-        |a, (i, &c)| if c < a.1 { (i, c) } else { a },
-    );
+    let (imin, _) = m
+        .iter()
+        .enumerate()
+        .fold((0, f32::INFINITY), |a, (i, &c)| if c < a.1 { (i, c) } else { a });
     let (min_e, min_z) = (imin / GRID_Z, imin % GRID_Z);
-    let best = polar_to_index(
-        cartesian_to_polar_histogram(&inputs.goal, &inputs.origin),
-        ALPHA_RES,
-    );
+    let best = polar_to_index(cartesian_to_polar_histogram(&inputs.goal, &inputs.origin), ALPHA_RES);
     assert!(
         min_e.abs_diff(best.e) <= 1 && min_z.abs_diff(best.z) <= 1,
         "min at {min_e},{min_z}, goal {best:?}"
@@ -222,14 +202,10 @@ fn stepped_rows_are_linear_between_evaluated_columns() {
     };
     let m = matrix(&Histogram::new(), &inputs, &k, 7);
     let c = CostContext::new(&inputs, false);
-    let direct =
-        |e: usize, z: usize| cost_function(&index_to_polar(e, z, ALPHA_RES, 1.0), 0.0, &c, &k).1;
+    let direct = |e: usize, z: usize| cost_function(&index_to_polar(e, z, ALPHA_RES, 1.0), 0.0, &c, &k).1;
     // Row 0 (step 19): columns 0, 19, 38, 57 are evaluated; 10 lies between 0 and 19; 58-59 wrap to 0.
     for z in [0, 19, 38, 57] {
-        assert!(
-            (m[z] - direct(0, z)).abs() <= 1e-3 * direct(0, z).abs(),
-            "col {z}"
-        );
+        assert!((m[z] - direct(0, z)).abs() <= 1e-3 * direct(0, z).abs(), "col {z}");
     }
     let lin = direct(0, 0) + (direct(0, 19) - direct(0, 0)) / 19.0 * 10.0;
     assert!((m[10] - lin).abs() <= 1e-3 * lin.abs());

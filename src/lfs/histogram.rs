@@ -8,8 +8,8 @@
 use nalgebra::Vector3;
 
 use super::polar::{
-    ALPHA_RES, CellIndex, FAST_ATAN2_MAX_ERR_DEG, GRID_CELLS, GRID_E, GRID_Z,
-    cartesian_to_polar_histogram, fast_atan2_deg, polar_to_index,
+    ALPHA_RES, CellIndex, FAST_ATAN2_MAX_ERR_DEG, GRID_CELLS, GRID_E, GRID_Z, cartesian_to_polar_histogram,
+    fast_atan2_deg, polar_to_index,
 };
 
 /// Fast-path cells closer than this to a boundary (degrees) are recomputed exactly; 5x the fast error bound.
@@ -164,10 +164,7 @@ impl Histogram {
         let (ox, oy, oz) = (origin.x, origin.y, origin.z);
         for ((cx, cy), cz) in xs.chunks(CHUNK).zip(ys.chunks(CHUNK)).zip(zs.chunks(CHUNK)) {
             // Vectorisable pass (iterators, no bounds checks): fast cell guesses for the chunk.
-            let out = cell
-                .iter_mut()
-                .zip(range.iter_mut())
-                .zip(reliable.iter_mut());
+            let out = cell.iter_mut().zip(range.iter_mut()).zip(reliable.iter_mut());
             for (((x, y), z), ((c, r), ok)) in cx.iter().zip(cy).zip(cz).zip(out) {
                 let (e, zc, rr, good) = fast_cell(x - ox, y - oy, z - oz, res);
                 *c = e.wrapping_mul(GRID_Z as u32).wrapping_add(zc);
@@ -239,9 +236,7 @@ mod tests {
         let cells = [(0, 0), (3, 17), (15, 30), (29, 59), (20, 45)];
         let pts: Vec<_> = cells
             .iter()
-            .map(|&(e, z)| {
-                polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &origin)
-            })
+            .map(|&(e, z)| polar_histogram_to_cartesian(&index_to_polar(e, z, ALPHA_RES, 1.0), &origin))
             .collect();
         let h = Histogram::from_points(&pts, &origin);
         for e in 0..GRID_E {
@@ -289,11 +284,7 @@ mod tests {
                 cartesian_to_polar_histogram(&Vector3::new(dx, dy, dz), &Vector3::zeros()),
                 ALPHA_RES,
             );
-            assert_eq!(
-                cell_and_range(dx, dy, dz, ALPHA_RES).0,
-                exact,
-                "{dx},{dy},{dz}"
-            );
+            assert_eq!(cell_and_range(dx, dy, dz, ALPHA_RES).0, exact, "{dx},{dy},{dz}");
         }
     }
 
@@ -315,11 +306,7 @@ mod tests {
                     cartesian_to_polar_histogram(&Vector3::new(dx, dy, dz), &Vector3::zeros()),
                     res,
                 );
-                assert_eq!(
-                    cell_and_range(dx, dy, dz, res).0,
-                    exact,
-                    "{dx},{dy},{dz} res {res}"
-                );
+                assert_eq!(cell_and_range(dx, dy, dz, res).0, exact, "{dx},{dy},{dz} res {res}");
             }
         }
     }

@@ -145,10 +145,7 @@ impl PlannerParams {
             return bad("mission_item_speed_m_s", s);
         }
         for f in &self.fovs {
-            for (name, v) in [
-                ("fov.h_fov_deg", f.h_fov_deg),
-                ("fov.v_fov_deg", f.v_fov_deg),
-            ] {
+            for (name, v) in [("fov.h_fov_deg", f.h_fov_deg), ("fov.v_fov_deg", f.v_fov_deg)] {
                 if !v.is_finite() || !(0.0..=360.0).contains(&v) {
                     return bad(name, v);
                 }
@@ -197,18 +194,10 @@ mod tests {
             mpc_jerk_max_m_s3: 20.0,
             ..Default::default()
         };
-        assert!(
-            (p.cruise_speed_m_s() - 11.1).abs() < 0.05,
-            "{}",
-            p.cruise_speed_m_s()
-        );
+        assert!((p.cruise_speed_m_s() - 11.1).abs() < 0.05, "{}", p.cruise_speed_m_s());
         p.mpc_acc_hor_m_s2 = 3.0;
         p.mpc_jerk_max_m_s3 = 8.0;
-        assert!(
-            (p.cruise_speed_m_s() - 8.4).abs() < 0.05,
-            "{}",
-            p.cruise_speed_m_s()
-        );
+        assert!((p.cruise_speed_m_s() - 8.4).abs() < 0.05, "{}", p.cruise_speed_m_s());
         p.mission_item_speed_m_s = Some(3.0);
         assert_eq!(p.cruise_speed_m_s(), 3.0);
     }

@@ -127,8 +127,7 @@ impl Planner {
             yaw_enu_deg: state.yaw_enu_rad * RAD_TO_DEG,
             pitch_deg: state.pitch_rad * RAD_TO_DEG,
         };
-        self.memory
-            .process(points_enu, &pose, &self.params, elapsed_s);
+        self.memory.process(points_enu, &pose, &self.params, elapsed_s);
         Ok(())
     }
 
@@ -213,11 +212,7 @@ pub fn closest_point_on_line(
 ) -> Vector3<f32> {
     let d = Vector2::new(goal.x - prev_goal.x, goal.y - prev_goal.y);
     // Eigen's normalized() leaves a zero vector unchanged.
-    let u = if d.norm_squared() > 0.0 {
-        d / d.norm()
-    } else {
-        d
-    };
+    let u = if d.norm_squared() > 0.0 { d / d.norm() } else { d };
     let prev_to_pos = Vector2::new(pos.x - prev_goal.x, pos.y - prev_goal.y);
     let xy = Vector2::new(prev_goal.x, prev_goal.y) + u * u.dot(&prev_to_pos);
     let c = Vector3::new(xy.x, xy.y, goal.z);
@@ -274,17 +269,9 @@ mod tests {
         let plan = p.plan(&input).unwrap();
         assert!(!plan.replanned && plan.path_enu.is_empty() && plan.path_time_s.is_none());
         // Something seen: a tree is built.
-        let wall: Vec<_> = (-20..=20)
-            .map(|i| Vector3::new(i as f32 * 0.1, 6.0, 5.0))
-            .collect();
+        let wall: Vec<_> = (-20..=20).map(|i| Vector3::new(i as f32 * 0.1, 6.0, 5.0)).collect();
         p.update_cloud(&wall, &input.state, 0.1).unwrap();
-        let plan = p
-            .plan(&PlanInput {
-                now_s: 1.1,
-                ..input
-            })
-            .unwrap()
-            .clone();
+        let plan = p.plan(&PlanInput { now_s: 1.1, ..input }).unwrap().clone();
         assert!(plan.replanned && plan.path_enu.len() >= 2);
         assert_eq!(plan.path_time_s, Some(1.1));
         assert_eq!(
@@ -293,12 +280,7 @@ mod tests {
         );
         // The wall is in view (yaw North) and no longer seen: forgotten; the old path and time remain.
         p.update_cloud(&[], &input.state, 0.1).unwrap();
-        let again = p
-            .plan(&PlanInput {
-                now_s: 1.2,
-                ..input
-            })
-            .unwrap();
+        let again = p.plan(&PlanInput { now_s: 1.2, ..input }).unwrap();
         assert!(!again.replanned);
         assert_eq!(again.path_enu, plan.path_enu);
         assert_eq!(again.path_time_s, Some(1.1));

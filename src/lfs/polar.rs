@@ -181,14 +181,8 @@ pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     let mn = ax.min(ay);
     let t = mn / mx;
     let t2 = t * t;
-    let mut a = t
-        * (0.999_866
-            + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
-    a = if ay > ax {
-        std::f32::consts::FRAC_PI_2 - a
-    } else {
-        a
-    };
+    let mut a = t * (0.999_866 + t2 * (-0.330_299_5 + t2 * (0.180_141 + t2 * (-0.085_133 + t2 * 0.020_835_1))));
+    a = if ay > ax { std::f32::consts::FRAC_PI_2 - a } else { a };
     a = if x < 0.0 { std::f32::consts::PI - a } else { a };
     a = if y < 0.0 { -a } else { a };
     a * RAD_TO_DEG
@@ -233,14 +227,8 @@ mod tests {
 
     #[test]
     fn cell_centres_and_layout() {
-        assert_eq!(
-            index_to_polar(0, 0, ALPHA_RES, 1.0),
-            PolarDeg::new(-87.0, -177.0, 1.0)
-        );
-        assert_eq!(
-            index_to_polar(29, 59, ALPHA_RES, 1.0),
-            PolarDeg::new(87.0, 177.0, 1.0)
-        );
+        assert_eq!(index_to_polar(0, 0, ALPHA_RES, 1.0), PolarDeg::new(-87.0, -177.0, 1.0));
+        assert_eq!(index_to_polar(29, 59, ALPHA_RES, 1.0), PolarDeg::new(87.0, 177.0, 1.0));
         // South at column 0, West at 15, North at 30, East at 45 (checklist item 2).
         assert_eq!(idx(0.0, -180.0, ALPHA_RES).1, 0);
         assert_eq!(idx(0.0, -90.0, ALPHA_RES).1, 15);

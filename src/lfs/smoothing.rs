@@ -50,9 +50,7 @@ pub fn pad_polar_matrix_into(m: &[f32], rows: usize, cols: usize, n: usize, p: &
 /// The conic kernel `max(0, 1 + R - |k - R|)` scaled by `1 / max` (multiplication by the reciprocal, in f32).
 pub fn conic_kernel(radius: usize) -> Vec<f32> {
     let r = radius as i32;
-    let mut k: Vec<f32> = (0..2 * r + 1)
-        .map(|i| (1 + r - (i - r).abs()).max(0) as f32)
-        .collect();
+    let mut k: Vec<f32> = (0..2 * r + 1).map(|i| (1 + r - (i - r).abs()).max(0) as f32).collect();
     let scale = 1.0 / (r + 1) as f32;
     k.iter_mut().for_each(|v| *v *= scale);
     k
@@ -70,21 +68,13 @@ pub fn smooth_reference(m: &mut [f32], rows: usize, cols: usize, radius: usize) 
             *v = p[r * pc + c];
         }
         for r in 0..rows {
-            p[(r + n) * pc + c] = col[r..r + 2 * n + 1]
-                .iter()
-                .zip(&kernel)
-                .map(|(a, b)| a * b)
-                .sum();
+            p[(r + n) * pc + c] = col[r..r + 2 * n + 1].iter().zip(&kernel).map(|(a, b)| a * b).sum();
         }
     }
     for r in 0..rows {
         let row = &p[(r + n) * pc..(r + n + 1) * pc];
         for c in 0..cols {
-            m[r * cols + c] = row[c..c + 2 * n + 1]
-                .iter()
-                .zip(&kernel)
-                .map(|(a, b)| a * b)
-                .sum();
+            m[r * cols + c] = row[c..c + 2 * n + 1].iter().zip(&kernel).map(|(a, b)| a * b).sum();
         }
     }
 }
@@ -129,10 +119,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
     let p = &s.padded;
     let (pr, pc) = (rows + 2 * n, cols + 2 * n);
     let nonzero = |r: usize| p[r * pc..(r + 1) * pc].iter().any(|&v| v != 0.0);
-    let (Some(lo), Some(hi)) = (
-        (0..pr).find(|&r| nonzero(r)),
-        (0..pr).rev().find(|&r| nonzero(r)),
-    ) else {
+    let (Some(lo), Some(hi)) = ((0..pr).find(|&r| nonzero(r)), (0..pr).rev().find(|&r| nonzero(r))) else {
         m.iter_mut().for_each(|v| *v = 0.0);
         return;
     };
@@ -153,11 +140,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
     s.box_sums[..pc].copy_from_slice(&s.acc);
     for j in 1..nb {
         let g = r_lo + j;
-        running_step(
-            &mut s.acc,
-            &p[(g + n) * pc..(g + n + 1) * pc],
-            &p[(g - 1) * pc..g * pc],
-        );
+        running_step(&mut s.acc, &p[(g + n) * pc..(g + n + 1) * pc], &p[(g - 1) * pc..g * pc]);
         s.box_sums[j * pc..(j + 1) * pc].copy_from_slice(&s.acc);
     }
     // T[r] = sum of B[r..=r+n]; pass-1 output stored transposed (pc x wr) for a vectorisable pass 2.
@@ -171,11 +154,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
         if r > 0 {
             let add = &s.box_sums[(r + n) * pc..(r + n + 1) * pc];
             let sub = &s.box_sums[(r - 1) * pc..r * pc];
-            s.acc
-                .iter_mut()
-                .zip(add)
-                .zip(sub)
-                .for_each(|((a, x), y)| *a += x - y);
+            s.acc.iter_mut().zip(add).zip(sub).for_each(|((a, x), y)| *a += x - y);
         }
         for (c, a) in s.acc.iter().enumerate() {
             s.pass1_t[c * wr + r] = (a * inv) as f32;
@@ -192,11 +171,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
     }
     s.col_box[..wr].copy_from_slice(&s.acc);
     for j in 1..cols + n {
-        running_step(
-            &mut s.acc,
-            &q[(j + n) * wr..(j + n + 1) * wr],
-            &q[(j - 1) * wr..j * wr],
-        );
+        running_step(&mut s.acc, &q[(j + n) * wr..(j + n + 1) * wr], &q[(j - 1) * wr..j * wr]);
         s.col_box[j * wr..(j + 1) * wr].copy_from_slice(&s.acc);
     }
     m.iter_mut().for_each(|v| *v = 0.0);
@@ -209,11 +184,7 @@ fn smooth_body(m: &mut [f32], rows: usize, cols: usize, radius: usize, s: &mut S
         if c > 0 {
             let add = &s.col_box[(c + n) * wr..(c + n + 1) * wr];
             let sub = &s.col_box[(c - 1) * wr..c * wr];
-            s.acc
-                .iter_mut()
-                .zip(add)
-                .zip(sub)
-                .for_each(|((a, x), y)| *a += x - y);
+            s.acc.iter_mut().zip(add).zip(sub).for_each(|((a, x), y)| *a += x - y);
         }
         for (r, a) in s.acc.iter().enumerate() {
             m[(r_lo + r) * cols + c] = (a * inv) as f32;
@@ -239,9 +210,7 @@ fn running_step(acc: &mut [f64], add: &[f32], sub: &[f32]) {
 
 #[inline]
 fn add_row(acc: &mut [f64], row: &[f32], sign: f64) {
-    acc.iter_mut()
-        .zip(row)
-        .for_each(|(a, &v)| *a += sign * v as f64);
+    acc.iter_mut().zip(row).for_each(|(a, &v)| *a += sign * v as f64);
 }
 
 #[cfg(test)]
@@ -322,10 +291,7 @@ mod tests {
                 // Beyond -90: row n-1-k turned by 180 deg (30 columns).
                 assert_eq!(at(k, c + n), orig(n - 1 - k, (c + cols / 2) % cols));
                 // Beyond +90: row rows-1-k turned by 180 deg.
-                assert_eq!(
-                    at(rows + n + k, c + n),
-                    orig(rows - 1 - k, (c + cols / 2) % cols)
-                );
+                assert_eq!(at(rows + n + k, c + n), orig(rows - 1 - k, (c + cols / 2) % cols));
             }
         }
         // Corners wrap too.
@@ -372,11 +338,7 @@ mod tests {
         let mut b = a.clone();
         smooth_reference(&mut b, rows, cols, 7);
         smooth_fast(&mut a, rows, cols, 7, &mut SmoothScratch::default());
-        assert!(
-            a.iter()
-                .zip(&b)
-                .all(|(x, y)| (x - y).abs() <= 1e-5 * y.abs().max(1.0))
-        );
+        assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-5 * y.abs().max(1.0)));
     }
 
     #[test]
@@ -407,10 +369,7 @@ mod tests {
             smooth_reference(&mut r, GRID_E, GRID_Z, radius);
             smooth_fast(&mut m, GRID_E, GRID_Z, radius, &mut scratch);
             for (a, b) in m.iter().zip(&r) {
-                assert!(
-                    (a - b).abs() <= 2e-6 * b.abs().max(1.0),
-                    "radius {radius}: {a} vs {b}"
-                );
+                assert!((a - b).abs() <= 2e-6 * b.abs().max(1.0), "radius {radius}: {a} vs {b}");
             }
         }
     }

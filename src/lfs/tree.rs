@@ -150,12 +150,7 @@ impl StarPlanner {
     }
 
     /// Rebuilds the tree from the processed cloud and returns the path (deepest node first, root last).
-    pub fn build(
-        &mut self,
-        cloud: &PointMemory,
-        inputs: &TreeInputs,
-        params: &PlannerParams,
-    ) -> &[Vector3<f32>] {
+    pub fn build(&mut self, cloud: &PointMemory, inputs: &TreeInputs, params: &PlannerParams) -> &[Vector3<f32>] {
         self.nodes.clear();
         self.nx.clear();
         self.ny.clear();

@@ -53,10 +53,7 @@ fn known_answer_av_build_tree_around_bar() {
                 );
             }
             let d = (goal - position).norm();
-            assert!(
-                d < min_dist * 1.1,
-                "distance to goal grew: {d} vs {min_dist}"
-            );
+            assert!(d < min_dist * 1.1, "distance to goal grew: {d} vs {min_dist}");
             min_dist = min_dist.min(d);
             position = sp.nodes()[1].position_enu;
         }
@@ -83,18 +80,10 @@ fn path_is_deepest_first_root_last_with_two_metre_edges() {
         assert!(((w[0] - w[1]).norm() - 2.0).abs() < 1e-4);
     }
     let nodes = sp.nodes();
-    let deepest = nodes
-        .iter()
-        .filter(|n| !n.closed)
-        .map(|n| n.depth)
-        .max()
-        .unwrap_or(0);
+    let deepest = nodes.iter().filter(|n| !n.closed).map(|n| n.depth).max().unwrap_or(0);
     assert_eq!(path.len() as u32, deepest + 1);
     // First open node of maximal depth.
-    let end = nodes
-        .iter()
-        .position(|n| !n.closed && n.depth == deepest)
-        .unwrap_or(0);
+    let end = nodes.iter().position(|n| !n.closed && n.depth == deepest).unwrap_or(0);
     assert_eq!(path[0], nodes[end].position_enu);
     assert_eq!(sp.expanded(), 40);
     assert!(nodes.len() <= 1 + 40 * 8);
@@ -146,11 +135,7 @@ fn tree_never_enters_a_box_in_front() {
             pts.push(Vector3::new(x, 9.0, z));
         }
         for j in 0..=40 {
-            pts.push(Vector3::new(
-                -3.0 + i as f32 * 0.1,
-                5.0 + j as f32 * 0.1,
-                8.0,
-            ));
+            pts.push(Vector3::new(-3.0 + i as f32 * 0.1, 5.0 + j as f32 * 0.1, 8.0));
         }
     }
     for j in 0..=40 {

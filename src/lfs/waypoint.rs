@@ -284,12 +284,7 @@ impl WaypointGenerator {
 
     fn path_setpoint(&self, t: &Tick<'_>) -> (Option<Vector3<f32>>, bool) {
         let plan = t.inp.plan;
-        setpoint_from_path(
-            &plan.path_enu,
-            plan.path_time_s,
-            plan.cruise_speed_m_s,
-            t.now_s,
-        )
+        setpoint_from_path(&plan.path_enu, plan.path_time_s, plan.cruise_speed_m_s, t.now_s)
     }
 
     fn run_try_path(&mut self, t: &mut Tick<'_>) -> Transition {
@@ -442,11 +437,7 @@ impl WaypointGenerator {
             t.smoothed_out = t.adapted;
             return;
         }
-        let p_gain = Vector3::new(
-            self.smoothing_speed_xy,
-            self.smoothing_speed_xy,
-            self.smoothing_speed_z,
-        );
+        let p_gain = Vector3::new(self.smoothing_speed_xy, self.smoothing_speed_xy, self.smoothing_speed_z);
         let d_gain = p_gain.map(|p| 2.0 * p.sqrt());
         let target_vel = if (t.adapted - t.goal).norm() < 0.1 {
             Vector3::zeros()

@@ -30,10 +30,7 @@ fn known_answer_setpoint_from_path() {
     assert!(ok && between(&sp.unwrap_or_default(), &n2, &n3), "{sp:?}");
     assert_eq!(setpoint_from_path(&[], Some(now), 1.0, now), (None, false));
     // Two entries: the non-root node; running off the end: invalid.
-    assert_eq!(
-        setpoint_from_path(&path[3..], Some(now), 1.0, now),
-        (Some(n1), true)
-    );
+    assert_eq!(setpoint_from_path(&path[3..], Some(now), 1.0, now), (Some(n1), true));
     assert!(!setpoint_from_path(&path, Some(now - 3.5), 1.0, now).1);
     assert!(setpoint_from_path(&path, Some(now - 2.5), 1.0, now).1);
 }
@@ -68,10 +65,7 @@ fn generator() -> WaypointGenerator {
 
 fn plan_north(t: f64) -> Plan {
     // A straight path North from (0, 0, 5), 2 m edges.
-    let path = (0..6)
-        .rev()
-        .map(|k| Vector3::new(0.0, 2.0 * k as f32, 5.0))
-        .collect();
+    let path = (0..6).rev().map(|k| Vector3::new(0.0, 2.0 * k as f32, 5.0)).collect();
     Plan {
         path_enu: path,
         path_time_s: Some(t),
@@ -107,10 +101,7 @@ fn loiter_then_direct_without_path_then_try_path_with_one() {
     let goal = Vector3::new(0.0, 50.0, 5.0);
     assert_eq!(g.state(), WaypointState::Loiter);
     let out = g.step(&input(&empty, s, goal), 0.0);
-    assert_eq!(
-        out.goto_enu, s.position_enu,
-        "loiter holds the entry position"
-    );
+    assert_eq!(out.goto_enu, s.position_enu, "loiter holds the entry position");
     assert_eq!(g.state(), WaypointState::TryPath);
     g.step(&input(&empty, s, goal), 0.1);
     assert_eq!(g.state(), WaypointState::Direct);
@@ -163,11 +154,7 @@ fn speed_is_zero_outside_the_fov_and_tapers_inside() {
             out = g.step(&input(&plan, s, goal), k as f64 * 0.1);
         }
         let adapted = (out.adapted_goto_enu - pos).norm();
-        assert_eq!(
-            adapted > 0.5,
-            expect_moving,
-            "yaw {yaw_deg}: adapted step {adapted}"
-        );
+        assert_eq!(adapted > 0.5, expect_moving, "yaw {yaw_deg}: adapted step {adapted}");
         if !expect_moving {
             assert_eq!(adapted, 0.0);
         }
@@ -213,10 +200,7 @@ fn near_goal_goto_is_goal_and_heading_is_frozen() {
     assert_eq!(out.yaw_enu_rad, yaw);
     let s2 = state(Vector3::new(0.1, 0.0, 5.0), Vector3::zeros(), 1.0);
     let out = g.step(&input(&plan, s2, goal), 0.2);
-    assert_eq!(
-        out.yaw_enu_rad, yaw,
-        "heading stays at the first value inside 1 m"
-    );
+    assert_eq!(out.yaw_enu_rad, yaw, "heading stays at the first value inside 1 m");
 }
 
 #[test]
@@ -228,9 +212,7 @@ fn yaw_smoothing_is_critically_damped_towards_the_goto() {
     let mut last = 0.0;
     for k in 0..60 {
         let out = g.step(&input(&empty, s, goal), k as f64 * 0.1);
-        assert!(
-            out.yaw_enu_rad >= last - 1e-6 && out.yaw_enu_rad <= std::f32::consts::FRAC_PI_2 + 1e-3
-        );
+        assert!(out.yaw_enu_rad >= last - 1e-6 && out.yaw_enu_rad <= std::f32::consts::FRAC_PI_2 + 1e-3);
         last = out.yaw_enu_rad;
     }
     assert!((last - std::f32::consts::FRAC_PI_2).abs() < 0.01);
@@ -241,11 +223,7 @@ fn offboard_climbs_first_then_tries_the_path() {
     let mut g = generator();
     let empty = Plan::default();
     let goal = Vector3::new(0.0, 50.0, 5.0);
-    let mut inp = input(
-        &empty,
-        state(Vector3::new(0.0, 0.0, 1.0), Vector3::zeros(), 0.0),
-        goal,
-    );
+    let mut inp = input(&empty, state(Vector3::new(0.0, 0.0, 1.0), Vector3::zeros(), 0.0), goal);
     inp.nav_state = NavState::Offboard;
     g.step(&inp, 0.0); // Loiter -> TryPath
     g.step(&inp, 0.1); // TryPath -> AltitudeChange
@@ -263,11 +241,7 @@ fn mission_takeoff_and_land_items_change_altitude() {
     let goal = Vector3::new(0.0, 0.0, 5.0);
     for (takeoff, land) in [(true, false), (false, true)] {
         let mut g = generator();
-        let mut inp = input(
-            &empty,
-            state(Vector3::new(0.0, 0.0, 1.0), Vector3::zeros(), 0.0),
-            goal,
-        );
+        let mut inp = input(&empty, state(Vector3::new(0.0, 0.0, 1.0), Vector3::zeros(), 0.0), goal);
         inp.is_takeoff_waypoint = takeoff;
         inp.is_land_waypoint = land;
         inp.desired_vel_enu = Some(Vector3::new(0.0, 0.0, 1.0));
@@ -282,11 +256,7 @@ fn mission_takeoff_and_land_items_change_altitude() {
     let mut g = generator();
     let mut inp = input(
         &empty,
-        state(
-            Vector3::new(0.0, 0.0, 1.0),
-            Vector3::new(2.0, 0.0, 0.0),
-            0.0,
-        ),
+        state(Vector3::new(0.0, 0.0, 1.0), Vector3::new(2.0, 0.0, 0.0), 0.0),
         goal,
     );
     inp.is_takeoff_waypoint = true;
@@ -310,9 +280,5 @@ fn smoothing_converges_to_a_fixed_target() {
     for k in 1..100 {
         out = g.step(&input(&plan, s, goal), k as f64 * 0.1);
     }
-    assert!(
-        (out.position_enu - goal).norm() < 0.02,
-        "{:?}",
-        out.position_enu
-    );
+    assert!((out.position_enu - goal).norm() < 0.02, "{:?}", out.position_enu);
 }

@@ -10,6 +10,7 @@ mod obstacle;
 mod tables;
 mod test_case;
 mod trajectory;
+mod ulog;
 
 pub use arena::{Arena, Range};
 pub use error::{ModelError, Result};
@@ -19,3 +20,4 @@ pub use obstacle::{Obstacle, Position, Size};
 pub use tables::{Command, Param, parse_commands_csv, parse_params_csv};
 pub use test_case::{Spelling, TestCase};
 pub use trajectory::{AERIALIST_BIN_S, Sample, Trajectory};
+pub use ulog::{load_flight, load_ulog_trajectory};

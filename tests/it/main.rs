@@ -1,10 +1,15 @@
 //! Integration tests: one binary, one module per area, shared helpers here.
 
+mod bridge;
 mod cli_errors;
+mod generator;
 mod geometry_props;
 mod lfs;
 mod missions;
+mod pty;
 mod rules;
+mod score;
+mod ulog;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,313 @@
+//! Multirotor kinematics with PX4's speed, acceleration, jerk and yaw-rate limits.
+//!
+//! A point mass tracks a position or velocity setpoint; the step is fixed and takes `dt` as a
+//! parameter, so runs are repeatable. Frame: local NED (x North, y East, z Down), metres.
+
+use nalgebra::Vector3;
+
+use crate::params::ParamTable;
+
+/// A local NED vector (x North, y East, z Down): metres, m/s or m/s² by context.
+pub type Ned = Vector3<f64>;
+
+/// Standard gravity, m/s².
+pub const GRAVITY_M_S2: f64 = 9.80665;
+
+/// Final-approach gain (1/s): speed = gain × distance near the target.
+const POS_GAIN: f64 = 1.5;
+/// Velocity-loop gain (1/s).
+const VEL_GAIN: f64 = 2.5;
+
+/// Motion limits from PX4 parameters (all positive).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// MPC_XY_VEL_MAX, m/s.
+    pub max_h_speed_m_s: f64,
+    /// MPC_ACC_HOR, m/s².
+    pub acc_hor_m_s2: f64,
+    /// MPC_ACC_UP_MAX, m/s².
+    pub acc_up_m_s2: f64,
+    /// MPC_ACC_DOWN_MAX, m/s².
+    pub acc_down_m_s2: f64,
+    /// MPC_JERK_AUTO, m/s³.
+    pub jerk_m_s3: f64,
+    /// MPC_YAWRAUTO_MAX, rad/s.
+    pub yaw_rate_rad_s: f64,
+}
+
+impl Limits {
+    /// Limits from the parameter table (non-positive values fall back to small positives).
+    pub fn from_params(p: &ParamTable) -> Self {
+        let pos = |name: &str, min: f64| p.f64(name).max(min);
+        Self {
+            max_h_speed_m_s: pos("MPC_XY_VEL_MAX", 0.1),
+            acc_hor_m_s2: pos("MPC_ACC_HOR", 0.1),
+            acc_up_m_s2: pos("MPC_ACC_UP_MAX", 0.1),
+            acc_down_m_s2: pos("MPC_ACC_DOWN_MAX", 0.1),
+            jerk_m_s3: pos("MPC_JERK_AUTO", 0.1),
+            yaw_rate_rad_s: pos("MPC_YAWRAUTO_MAX", 1.0).to_radians(),
+        }
+    }
+}
+
+/// What the controller tracks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Setpoint {
+    /// Motors off / stay on the ground.
+    Idle,
+    /// Fly to `target_ned` with speed caps (m/s, positive).
+    Position {
+        /// Target, local NED metres.
+        target_ned: Ned,
+        /// Horizontal speed cap.
+        h_speed_m_s: f64,
+        /// Climb speed cap.
+        up_speed_m_s: f64,
+        /// Descent speed cap.
+        down_speed_m_s: f64,
+        /// Heading to turn to (rad, 0 = North, clockwise), None to keep.
+        yaw_rad: Option<f64>,
+    },
+    /// Track a velocity (local NED, m/s).
+    Velocity {
+        /// Velocity, local NED m/s.
+        vel_ned: Ned,
+        /// Heading to turn to, None to keep.
+        yaw_rad: Option<f64>,
+    },
+}
+
+/// The vehicle's kinematic state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// Position, local NED metres (ground at z = 0).
+    pub pos_ned: Ned,
+    /// Velocity, local NED m/s.
+    pub vel_ned: Ned,
+    /// Commanded acceleration, local NED m/s² (without gravity).
+    pub acc_ned: Ned,
+    /// Heading, rad (0 = North, clockwise positive), in (-π, π].
+    pub yaw_rad: f64,
+    /// Yaw rate, rad/s.
+    pub yaw_rate_rad_s: f64,
+}
+
+impl Default for Body {
+    fn default() -> Self {
+        Self {
+            pos_ned: Ned::zeros(),
+            vel_ned: Ned::zeros(),
+            acc_ned: Ned::zeros(),
+            yaw_rad: 0.0,
+            yaw_rate_rad_s: 0.0,
+        }
+    }
+}
+
+/// Wrap an angle to (-π, π].
+pub fn wrap_pi(a: f64) -> f64 {
+    let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    if w <= -std::f64::consts::PI {
+        w + std::f64::consts::TAU
+    } else {
+        w
+    }
+}
+
+fn approach_speed(dist: f64, cap: f64, brake_acc: f64) -> f64 {
+    cap.min((2.0 * brake_acc * dist).sqrt()).min(POS_GAIN * dist)
+}
+
+impl Body {
+    /// True when resting on the ground (z = 0, not climbing).
+    pub fn on_ground(&self) -> bool {
+        self.pos_ned.z >= 0.0 && self.vel_ned.z >= 0.0
+    }
+
+    /// Roll and pitch (rad) a multirotor needs for the current acceleration.
+    pub fn roll_pitch_rad(&self) -> (f64, f64) {
+        let (s, c) = self.yaw_rad.sin_cos();
+        let fwd = self.acc_ned.x * c + self.acc_ned.y * s;
+        let right = -self.acc_ned.x * s + self.acc_ned.y * c;
+        let up = GRAVITY_M_S2 - self.acc_ned.z;
+        (right.atan2(up), -fwd.atan2(up))
+    }
+
+    /// Advance by `dt_s` seconds towards `sp` within `lim`.
+    pub fn step(&mut self, sp: &Setpoint, lim: &Limits, dt_s: f64) {
+        let (vel_des, yaw_des) = match *sp {
+            Setpoint::Idle => {
+                self.vel_ned = Ned::zeros();
+                self.acc_ned = Ned::zeros();
+                self.yaw_rate_rad_s = 0.0;
+                self.pos_ned.z = 0.0_f64.max(self.pos_ned.z);
+                return;
+            }
+            Setpoint::Position {
+                target_ned,
+                h_speed_m_s,
+                up_speed_m_s,
+                down_speed_m_s,
+                yaw_rad,
+            } => {
+                let err = target_ned - self.pos_ned;
+                let err_h = Ned::new(err.x, err.y, 0.0);
+                let d_h = err_h.norm();
+                let v_h = if d_h > 1e-9 {
+                    err_h * (approach_speed(d_h, h_speed_m_s.min(lim.max_h_speed_m_s), 0.5 * lim.acc_hor_m_s2) / d_h)
+                } else {
+                    Ned::zeros()
+                };
+                let v_z = if err.z < 0.0 {
+                    -approach_speed(-err.z, up_speed_m_s, 0.5 * lim.acc_down_m_s2)
+                } else {
+                    approach_speed(err.z, down_speed_m_s, 0.5 * lim.acc_up_m_s2)
+                };
+                (Ned::new(v_h.x, v_h.y, v_z), yaw_rad)
+            }
+            Setpoint::Velocity { vel_ned, yaw_rad } => {
+                let mut v = vel_ned;
+                let h = v.xy().norm();
+                if h > lim.max_h_speed_m_s {
+                    v.x *= lim.max_h_speed_m_s / h;
+                    v.y *= lim.max_h_speed_m_s / h;
+                }
+                (v, yaw_rad)
+            }
+        };
+        let mut acc_des = (vel_des - self.vel_ned) * VEL_GAIN;
+        let h = acc_des.xy().norm();
+        if h > lim.acc_hor_m_s2 {
+            acc_des.x *= lim.acc_hor_m_s2 / h;
+            acc_des.y *= lim.acc_hor_m_s2 / h;
+        }
+        acc_des.z = acc_des.z.clamp(-lim.acc_up_m_s2, lim.acc_down_m_s2);
+        let delta = acc_des - self.acc_ned;
+        let max_delta = lim.jerk_m_s3 * dt_s;
+        let delta_norm = delta.norm();
+        self.acc_ned += if delta_norm > max_delta {
+            delta * (max_delta / delta_norm)
+        } else {
+            delta
+        };
+        self.vel_ned += self.acc_ned * dt_s;
+        self.pos_ned += self.vel_ned * dt_s;
+        if self.pos_ned.z >= 0.0 && self.vel_ned.z >= 0.0 {
+            // Ground contact: no sliding, no sinking.
+            self.pos_ned.z = 0.0;
+            self.vel_ned = Ned::zeros();
+            self.acc_ned = Ned::zeros();
+        }
+        self.turn(yaw_des, lim, dt_s);
+    }
+
+    fn turn(&mut self, yaw_des: Option<f64>, lim: &Limits, dt_s: f64) {
+        let Some(yaw_des) = yaw_des.filter(|y| y.is_finite()) else {
+            self.yaw_rate_rad_s = 0.0;
+            return;
+        };
+        let err = wrap_pi(yaw_des - self.yaw_rad);
+        let max = lim.yaw_rate_rad_s * dt_s;
+        let d = err.clamp(-max, max);
+        self.yaw_rad = wrap_pi(self.yaw_rad + d);
+        self.yaw_rate_rad_s = d / dt_s;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits() -> Limits {
+        Limits::from_params(&ParamTable::default())
+    }
+
+    fn goto(target: Ned) -> Setpoint {
+        Setpoint::Position {
+            target_ned: target,
+            h_speed_m_s: 5.0,
+            up_speed_m_s: 1.5,
+            down_speed_m_s: 1.5,
+            yaw_rad: Some(1.0),
+        }
+    }
+
+    #[test]
+    fn climbs_and_flies_within_limits_without_overshoot() {
+        let lim = limits();
+        let mut b = Body::default();
+        let dt = 0.004;
+        let sp = goto(Ned::new(0.0, 0.0, -10.0));
+        let mut max_up = 0.0f64;
+        for _ in 0..5000 {
+            b.step(&sp, &lim, dt);
+            max_up = max_up.max(-b.vel_ned.z);
+        }
+        assert!((b.pos_ned.z + 10.0).abs() < 0.05, "z {}", b.pos_ned.z);
+        assert!(max_up <= 1.5 + 1e-6);
+        let sp = goto(Ned::new(-6.84, 53.97, -10.0));
+        let target = Ned::new(-6.84, 53.97, -10.0);
+        let mut max_h = 0.0f64;
+        let mut max_acc = 0.0f64;
+        let mut overshoot = 0.0f64;
+        let dir = target.xy().normalize();
+        for _ in 0..10_000 {
+            b.step(&sp, &lim, dt);
+            max_h = max_h.max(b.vel_ned.xy().norm());
+            max_acc = max_acc.max(b.acc_ned.xy().norm());
+            overshoot = overshoot.max(b.pos_ned.xy().dot(&dir) - target.xy().norm());
+        }
+        assert!((b.pos_ned - target).norm() < 0.05);
+        assert!(max_h <= 5.0 + 1e-6, "speed {max_h}");
+        assert!(max_acc <= 3.0 + 1e-6);
+        assert!(overshoot < 0.3, "overshoot {overshoot}");
+        assert!((b.yaw_rad - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn ground_stops_descent_and_idle_stays_put() {
+        let lim = limits();
+        let mut b = Body {
+            pos_ned: Ned::new(0.0, 0.0, -2.0),
+            ..Default::default()
+        };
+        for _ in 0..5000 {
+            b.step(&goto(Ned::new(0.0, 0.0, 1.0)), &lim, 0.004);
+        }
+        assert_eq!(b.pos_ned.z, 0.0);
+        assert!(b.on_ground());
+        b.step(&Setpoint::Idle, &lim, 0.004);
+        assert_eq!(b.vel_ned, Ned::zeros());
+    }
+
+    #[test]
+    fn yaw_rate_is_limited_and_wraps() {
+        let lim = limits();
+        let mut b = Body {
+            yaw_rad: 3.0,
+            ..Default::default()
+        };
+        b.step(
+            &Setpoint::Velocity {
+                vel_ned: Ned::zeros(),
+                yaw_rad: Some(-3.0),
+            },
+            &lim,
+            0.1,
+        );
+        // Shortest way is through ±π, at most 45°/s × 0.1 s.
+        assert!((b.yaw_rate_rad_s - 45f64.to_radians()).abs() < 1e-9);
+        assert!(b.yaw_rad > 3.0 || b.yaw_rad < -3.0);
+        assert!((wrap_pi(4.0) - (4.0 - std::f64::consts::TAU)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tilt_follows_acceleration() {
+        let b = Body {
+            acc_ned: Ned::new(1.0, 0.0, 0.0),
+            ..Default::default()
+        };
+        let (roll, pitch) = b.roll_pitch_rad();
+        assert!(roll.abs() < 1e-12 && pitch < 0.0, "nose down to accelerate north");
+    }
+}

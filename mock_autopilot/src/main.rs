@@ -1,0 +1,145 @@
+//! `mock-autopilot`: run the PX4-like mock vehicle on a MAVLink link until Ctrl-C.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+use mavlink::dialects::common::MavMissionResult;
+use mock_autopilot::obstacles::ObstacleWorld;
+use mock_autopilot::{Faults, LinkSpec, MockAutopilot, SpeedFactor};
+
+/// A PX4-like MAVLink vehicle (quadrotor, sysid 1) for tests without hardware.
+#[derive(Debug, Parser)]
+#[command(name = "mock-autopilot", version)]
+struct Args {
+    /// PX4 SITL instance N: bind 127.0.0.1:14580+N, send to 127.0.0.1:14540+N.
+    #[arg(long, default_value_t = 0)]
+    instance: u16,
+    /// Any rust-mavlink address instead (udpin:HOST:PORT, udpout:HOST:PORT, tcpin:..., serial:DEV:BAUD).
+    #[arg(long)]
+    link: Option<String>,
+    /// Simulated time runs K times faster than wall time ("max": unpaced).
+    #[arg(long, default_value = "1", value_parser = SpeedFactor::parse)]
+    speed_factor: SpeedFactor,
+    /// Fixed physics step, milliseconds.
+    #[arg(long, default_value_t = 4.0)]
+    step_ms: f64,
+    /// Seed of every random fault.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Probability of dropping each message (both directions).
+    #[arg(long, default_value_t = 0.0)]
+    loss: f64,
+    /// Probability of duplicating each message (both directions).
+    #[arg(long, default_value_t = 0.0)]
+    duplicate: f64,
+    /// One-way latency in simulated milliseconds.
+    #[arg(long, default_value_t = 0.0)]
+    latency: f64,
+    /// Answer every mission upload with this MAV_MISSION_RESULT code (1..=15).
+    #[arg(long)]
+    reject_mission: Option<u32>,
+    /// Refuse every arming attempt.
+    #[arg(long)]
+    fail_arm: bool,
+    /// Reboot once after S simulated seconds.
+    #[arg(long)]
+    reboot_after: Option<f64>,
+    /// Stop talking and listening after S simulated seconds.
+    #[arg(long)]
+    silence_after: Option<f64>,
+    /// Test case YAML whose obstacles the vehicle can hit.
+    #[arg(long)]
+    obstacles: Option<PathBuf>,
+    /// Entering an obstacle is a crash (disarm, STATUSTEXT, on ground). Needs --obstacles.
+    #[arg(long, requires = "obstacles")]
+    crash_on_collision: bool,
+}
+
+fn secs(name: &str, v: f64) -> Result<Duration> {
+    if !(v.is_finite() && v >= 0.0) {
+        bail!("--{name} {v}: expected a non-negative number of seconds");
+    }
+    Ok(Duration::from_secs_f64(v))
+}
+
+fn link_spec(args: &Args) -> Result<LinkSpec> {
+    let Some(link) = &args.link else {
+        return Ok(LinkSpec::Px4Sitl {
+            instance: args.instance,
+        });
+    };
+    // Our own UDP handling gives port discovery (port 0) and PX4's reply-to-sender behaviour.
+    if let Some(a) = link.strip_prefix("udpin:") {
+        let addr: SocketAddr = a.parse().with_context(|| format!("--link {link:?}: bad address"))?;
+        return Ok(LinkSpec::UdpIn(addr));
+    }
+    if let Some(a) = link.strip_prefix("udpout:") {
+        let remote: SocketAddr = a.parse().with_context(|| format!("--link {link:?}: bad address"))?;
+        let bind = if remote.is_ipv4() { "0.0.0.0:0" } else { "[::]:0" };
+        return Ok(LinkSpec::UdpOut {
+            bind: bind.parse()?,
+            remote,
+        });
+    }
+    Ok(LinkSpec::Address(link.clone()))
+}
+
+async fn run(args: Args) -> Result<()> {
+    let reject = match args.reject_mission {
+        None => None,
+        Some(c) => match <MavMissionResult as num_traits::FromPrimitive>::from_u32(c) {
+            Some(r) if c != 0 => Some(r),
+            _ => bail!("--reject-mission {c}: expected a MAV_MISSION_RESULT error code 1..=15"),
+        },
+    };
+    let faults = Faults {
+        seed: args.seed,
+        loss: args.loss,
+        duplicate: args.duplicate,
+        latency: secs("latency", args.latency / 1000.0)?,
+        silence_after: args.silence_after.map(|v| secs("silence-after", v)).transpose()?,
+        reboot_after: args.reboot_after.map(|v| secs("reboot-after", v)).transpose()?,
+    };
+    if !(args.step_ms.is_finite() && args.step_ms > 0.0 && args.step_ms <= 100.0) {
+        bail!("--step-ms {}: expected 0 < step <= 100", args.step_ms);
+    }
+    let mut builder = MockAutopilot::builder()
+        .link(link_spec(&args)?)
+        .speed_factor(args.speed_factor)
+        .step(Duration::from_secs_f64(args.step_ms / 1000.0))
+        .faults(faults)
+        .reject_mission(reject)
+        .fail_arm(args.fail_arm);
+    if let (Some(path), true) = (&args.obstacles, args.crash_on_collision) {
+        let world = ObstacleWorld::from_test_file(path).with_context(|| format!("--obstacles {}", path.display()))?;
+        eprintln!("mock-autopilot: {} obstacles loaded", world.len());
+        builder = builder.collision(Box::new(world));
+    } else if let Some(path) = &args.obstacles {
+        // Validate the file even when collisions are off, so typos surface early.
+        ObstacleWorld::from_test_file(path).with_context(|| format!("--obstacles {}", path.display()))?;
+    }
+    let mock = builder.spawn().await?;
+    match mock.local_addr() {
+        Some(a) => println!("mock-autopilot listening on {a}"),
+        None => println!("mock-autopilot connected on {}", args.link.as_deref().unwrap_or("?")),
+    }
+    tokio::signal::ctrl_c().await.context("waiting for Ctrl-C")?;
+    mock.shutdown().await?;
+    Ok(())
+}
+
+#[tokio::main]
+async fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(args).await {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("mock-autopilot: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

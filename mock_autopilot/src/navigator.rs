@@ -1,0 +1,599 @@
+//! What the vehicle should fly in each mode: mission items, takeoff, land, RTL, hold.
+//!
+//! Pure logic: `update(ctx)` turns the mode, the mission and the body state into a dynamics
+//! setpoint plus events (item reached, mode change, texts). Positions are local NED metres.
+
+use std::time::Duration;
+
+use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavSeverity};
+
+use crate::dynamics::{Body, Ned, Setpoint};
+use crate::geo::LocalProjection;
+use crate::mission_items::{is_global_frame, is_relative_alt};
+use crate::modes::FlightMode;
+use crate::params::ParamTable;
+
+/// A mission item reduced to what the navigator flies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NavKind {
+    /// Climb to `target.z`, then go to its x/y when `xy_set`.
+    Takeoff {
+        /// Target, local NED metres.
+        target: Ned,
+        /// False when the item had no position (climb in place).
+        xy_set: bool,
+    },
+    /// Fly to `target` and wait.
+    Waypoint {
+        /// Target, local NED metres.
+        target: Ned,
+        /// Hold time at the waypoint, seconds.
+        hold_s: f64,
+        /// Acceptance radius overriding NAV_ACC_RAD, metres.
+        acc_rad_m: Option<f64>,
+        /// Loiter forever (LOITER_UNLIM).
+        forever: bool,
+    },
+    /// Land.
+    Land {
+        /// (north_m, east_m) to land at; None: where the vehicle is.
+        xy: Option<(f64, f64)>,
+    },
+    /// Return to launch.
+    Rtl,
+    /// DO_JUMP.
+    Jump {
+        /// Item index to jump to.
+        to: usize,
+        /// Repeat count (-1 = forever).
+        repeat: i32,
+    },
+    /// DO_CHANGE_SPEED.
+    Speed {
+        /// New cruise speed, m/s.
+        m_s: f64,
+    },
+    /// Anything done instantly (camera, servo, ...).
+    Instant,
+}
+
+/// Convert stored items to navigator items (x,y as degrees × 1e7, z relative or AMSL).
+pub fn nav_items(items: &[MISSION_ITEM_INT_DATA], proj: &LocalProjection, origin_alt_m: f64) -> Vec<(MavCmd, NavKind)> {
+    items
+        .iter()
+        .map(|it| {
+            let xy_set = it.x != 0 || it.y != 0;
+            let (n, e) = proj.project(f64::from(it.x) * 1e-7, f64::from(it.y) * 1e-7);
+            let alt = if is_relative_alt(it.frame) {
+                f64::from(it.z)
+            } else {
+                f64::from(it.z) - origin_alt_m
+            };
+            let target = Ned::new(n, e, -alt);
+            let global = is_global_frame(it.frame);
+            let kind = match it.command {
+                MavCmd::MAV_CMD_NAV_TAKEOFF | MavCmd::MAV_CMD_NAV_VTOL_TAKEOFF => NavKind::Takeoff {
+                    target,
+                    xy_set: xy_set && global,
+                },
+                MavCmd::MAV_CMD_NAV_WAYPOINT | MavCmd::MAV_CMD_NAV_LOITER_TO_ALT | MavCmd::MAV_CMD_NAV_LOITER_TURNS => {
+                    NavKind::Waypoint {
+                        target,
+                        hold_s: if it.command == MavCmd::MAV_CMD_NAV_WAYPOINT {
+                            f64::from(it.param1.max(0.0))
+                        } else {
+                            0.0
+                        },
+                        acc_rad_m: (it.command == MavCmd::MAV_CMD_NAV_WAYPOINT && it.param2 > 0.0)
+                            .then_some(f64::from(it.param2)),
+                        forever: false,
+                    }
+                }
+                MavCmd::MAV_CMD_NAV_LOITER_TIME => NavKind::Waypoint {
+                    target,
+                    hold_s: f64::from(it.param1.max(0.0)),
+                    acc_rad_m: None,
+                    forever: false,
+                },
+                MavCmd::MAV_CMD_NAV_LOITER_UNLIM => NavKind::Waypoint {
+                    target,
+                    hold_s: 0.0,
+                    acc_rad_m: None,
+                    forever: true,
+                },
+                MavCmd::MAV_CMD_NAV_LAND | MavCmd::MAV_CMD_NAV_VTOL_LAND => NavKind::Land {
+                    xy: (xy_set && global).then_some((n, e)),
+                },
+                MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH => NavKind::Rtl,
+                MavCmd::MAV_CMD_DO_JUMP => NavKind::Jump {
+                    to: it.param1.max(0.0) as usize,
+                    repeat: it.param2 as i32,
+                },
+                MavCmd::MAV_CMD_DO_CHANGE_SPEED if it.param2 > 0.0 => NavKind::Speed {
+                    m_s: f64::from(it.param2),
+                },
+                _ => NavKind::Instant,
+            };
+            (it.command, kind)
+        })
+        .collect()
+}
+
+/// Parameters the navigator reads (cached from the table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavParams {
+    /// MPC_XY_CRUISE, m/s.
+    pub cruise_m_s: f64,
+    /// MPC_TKO_SPEED, m/s.
+    pub takeoff_speed_m_s: f64,
+    /// MPC_Z_VEL_MAX_UP, m/s.
+    pub up_m_s: f64,
+    /// MPC_Z_VEL_MAX_DN, m/s.
+    pub down_m_s: f64,
+    /// MPC_LAND_SPEED, m/s.
+    pub land_speed_m_s: f64,
+    /// MPC_LAND_ALT1 / ALT2, m above ground.
+    pub land_alt1_m: f64,
+    /// MPC_LAND_ALT2, m.
+    pub land_alt2_m: f64,
+    /// NAV_ACC_RAD, m.
+    pub acc_rad_m: f64,
+    /// NAV_MC_ALT_RAD, m.
+    pub alt_rad_m: f64,
+    /// MIS_TAKEOFF_ALT, m.
+    pub takeoff_alt_m: f64,
+    /// RTL_RETURN_ALT, m.
+    pub rtl_alt_m: f64,
+}
+
+impl NavParams {
+    /// Read from the parameter table.
+    pub fn from_params(p: &ParamTable) -> Self {
+        Self {
+            cruise_m_s: p.f64("MPC_XY_CRUISE").max(0.1),
+            takeoff_speed_m_s: p.f64("MPC_TKO_SPEED").max(0.1),
+            up_m_s: p.f64("MPC_Z_VEL_MAX_UP").max(0.1),
+            down_m_s: p.f64("MPC_Z_VEL_MAX_DN").max(0.1),
+            land_speed_m_s: p.f64("MPC_LAND_SPEED").max(0.1),
+            land_alt1_m: p.f64("MPC_LAND_ALT1"),
+            land_alt2_m: p.f64("MPC_LAND_ALT2"),
+            acc_rad_m: p.f64("NAV_ACC_RAD").max(0.05),
+            alt_rad_m: p.f64("NAV_MC_ALT_RAD").max(0.05),
+            takeoff_alt_m: p.f64("MIS_TAKEOFF_ALT"),
+            rtl_alt_m: p.f64("RTL_RETURN_ALT"),
+        }
+    }
+
+    /// PX4's landing descent speed at `alt_m` above ground.
+    pub fn land_speed_at(&self, alt_m: f64) -> f64 {
+        let (hi, lo) = (
+            self.land_alt1_m.max(self.land_alt2_m),
+            self.land_alt2_m.min(self.land_alt1_m),
+        );
+        if alt_m >= hi {
+            self.down_m_s
+        } else if alt_m <= lo || hi - lo < 1e-6 {
+            self.land_speed_m_s
+        } else {
+            self.land_speed_m_s + (self.down_m_s - self.land_speed_m_s) * (alt_m - lo) / (hi - lo)
+        }
+    }
+}
+
+/// What happened during a navigator update.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NavEvent {
+    /// Mission item reached (MISSION_ITEM_REACHED).
+    Reached(u16),
+    /// The current mission item changed.
+    Current(u16),
+    /// Switch to this mode.
+    Mode(FlightMode),
+    /// STATUSTEXT.
+    Text(MavSeverity, String),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    Start,
+    Climb { xy: (f64, f64), z: f64 },
+    Approach,
+    Hold { until: Option<Duration> },
+    LandApproach { z: f64 },
+    Descend { xy: (f64, f64) },
+    RtlReturn { z: f64 },
+    Finished,
+}
+
+/// Mode and mission progress.
+#[derive(Debug, Clone)]
+pub struct Navigator {
+    mode: FlightMode,
+    items: Vec<(MavCmd, NavKind)>,
+    current: usize,
+    phase: Phase,
+    hold: Ned,
+    jumps: Vec<i32>,
+    speed_m_s: Option<f64>,
+    takeoff_z: f64,
+    mission_finished: bool,
+}
+
+/// Inputs of one navigator update.
+#[derive(Debug, Clone, Copy)]
+pub struct NavCtx<'a> {
+    /// Simulated time since boot.
+    pub now: Duration,
+    /// Vehicle state.
+    pub body: &'a Body,
+    /// Armed?
+    pub armed: bool,
+    /// Parameters.
+    pub p: &'a NavParams,
+    /// Home, local NED.
+    pub home: Ned,
+}
+
+fn heading_to(from: &Ned, to: &Ned) -> Option<f64> {
+    let d = to - from;
+    (d.xy().norm() > 1.0).then(|| d.y.atan2(d.x))
+}
+
+impl Navigator {
+    /// Boots in AUTO.LOITER (Hold), like PX4 without RC.
+    pub fn new() -> Self {
+        Self {
+            mode: FlightMode::Loiter,
+            items: Vec::new(),
+            current: 0,
+            phase: Phase::Start,
+            hold: Ned::zeros(),
+            jumps: Vec::new(),
+            speed_m_s: None,
+            takeoff_z: -2.5,
+            mission_finished: false,
+        }
+    }
+
+    /// Current flight mode.
+    pub fn mode(&self) -> FlightMode {
+        self.mode
+    }
+
+    /// Index of the current mission item.
+    pub fn current(&self) -> usize {
+        self.current
+    }
+
+    /// Number of mission items.
+    pub fn count(&self) -> usize {
+        self.items.len()
+    }
+
+    /// True once the last mission item was completed.
+    pub fn mission_finished(&self) -> bool {
+        self.mission_finished
+    }
+
+    /// True while descending to land (landed state LANDING).
+    pub fn is_landing(&self) -> bool {
+        matches!(self.phase, Phase::Descend { .. })
+    }
+
+    /// Replace the mission (keeps the mode; restarts at item 0).
+    pub fn set_mission(&mut self, items: Vec<(MavCmd, NavKind)>) {
+        self.jumps = vec![0; items.len()];
+        self.items = items;
+        self.current = 0;
+        self.mission_finished = false;
+        self.speed_m_s = None;
+        if self.mode == FlightMode::Mission {
+            self.phase = Phase::Start;
+        }
+    }
+
+    /// Make `seq` the current item (MISSION_SET_CURRENT / MISSION_START param1).
+    pub fn set_current(&mut self, seq: usize) -> bool {
+        if seq >= self.items.len() {
+            return false;
+        }
+        self.current = seq;
+        self.mission_finished = false;
+        self.phase = Phase::Start;
+        true
+    }
+
+    /// Enter `mode` from state `body`; `takeoff_alt_m` for AUTO.TAKEOFF.
+    pub fn set_mode(&mut self, mode: FlightMode, body: &Body, takeoff_alt_m: f64) {
+        self.mode = mode;
+        self.hold = body.pos_ned;
+        self.takeoff_z = -takeoff_alt_m;
+        self.phase = match mode {
+            FlightMode::Takeoff => Phase::Climb {
+                xy: (body.pos_ned.x, body.pos_ned.y),
+                z: -takeoff_alt_m,
+            },
+            FlightMode::Land => Phase::Descend {
+                xy: (body.pos_ned.x, body.pos_ned.y),
+            },
+            _ => Phase::Start,
+        };
+        if mode == FlightMode::Mission && self.mission_finished {
+            self.current = 0;
+            self.mission_finished = false;
+        }
+    }
+
+    /// Current and next mission waypoint (position, command) for the avoidance interface.
+    pub fn waypoints(&self) -> [Option<(Ned, u16)>; 2] {
+        let mut out = [None, None];
+        let mut k = 0;
+        for (cmd, kind) in self.items.iter().skip(self.current) {
+            let pos = match kind {
+                NavKind::Takeoff { target, .. } | NavKind::Waypoint { target, .. } => *target,
+                NavKind::Land { xy: Some((n, e)) } => Ned::new(*n, *e, 0.0),
+                _ => continue,
+            };
+            out[k] = Some((pos, *cmd as u16));
+            k += 1;
+            if k == 2 {
+                break;
+            }
+        }
+        out
+    }
+
+    fn goto(&self, target: Ned, h: f64, up: f64, down: f64, yaw: Option<f64>) -> Setpoint {
+        Setpoint::Position {
+            target_ned: target,
+            h_speed_m_s: h,
+            up_speed_m_s: up,
+            down_speed_m_s: down,
+            yaw_rad: yaw,
+        }
+    }
+
+    fn hold_sp(&self, ctx: &NavCtx) -> Setpoint {
+        if self.hold.z >= -0.05 && ctx.body.on_ground() {
+            return Setpoint::Idle;
+        }
+        self.goto(self.hold, ctx.p.cruise_m_s, ctx.p.up_m_s, ctx.p.down_m_s, None)
+    }
+
+    fn descend(&self, ctx: &NavCtx, xy: (f64, f64)) -> Setpoint {
+        let alt = -ctx.body.pos_ned.z;
+        let v = ctx.p.land_speed_at(alt);
+        // Aim below the ground so the descent never stops short of touchdown.
+        self.goto(Ned::new(xy.0, xy.1, 1.0), ctx.p.cruise_m_s, ctx.p.up_m_s, v, None)
+    }
+
+    /// One update: the setpoint to fly and what happened.
+    pub fn update(&mut self, ctx: &NavCtx, ev: &mut Vec<NavEvent>) -> Setpoint {
+        if !ctx.armed {
+            return Setpoint::Idle;
+        }
+        match self.mode {
+            FlightMode::Loiter | FlightMode::Posctl => self.hold_sp(ctx),
+            FlightMode::Offboard => self.hold_sp(ctx), // the vehicle overrides with offboard setpoints
+            FlightMode::Takeoff => self.takeoff_mode(ctx, ev),
+            FlightMode::Land => match self.phase {
+                Phase::Descend { xy } => self.descend(ctx, xy),
+                _ => self.hold_sp(ctx),
+            },
+            FlightMode::Rtl => self.rtl(ctx),
+            FlightMode::Mission => self.mission(ctx, ev),
+        }
+    }
+
+    fn takeoff_mode(&mut self, ctx: &NavCtx, ev: &mut Vec<NavEvent>) -> Setpoint {
+        let Phase::Climb { xy, z } = self.phase else {
+            return self.hold_sp(ctx);
+        };
+        if (ctx.body.pos_ned.z - z).abs() <= ctx.p.alt_rad_m {
+            self.mode = FlightMode::Loiter;
+            self.hold = Ned::new(xy.0, xy.1, z);
+            ev.push(NavEvent::Mode(FlightMode::Loiter));
+        }
+        self.goto(
+            Ned::new(xy.0, xy.1, z),
+            ctx.p.cruise_m_s,
+            ctx.p.takeoff_speed_m_s,
+            ctx.p.down_m_s,
+            None,
+        )
+    }
+
+    fn rtl(&mut self, ctx: &NavCtx) -> Setpoint {
+        let pos = ctx.body.pos_ned;
+        if self.phase == Phase::Start {
+            self.phase = Phase::Climb {
+                xy: (pos.x, pos.y),
+                z: pos.z.min(-ctx.p.rtl_alt_m),
+            };
+        }
+        match self.phase {
+            Phase::Climb { xy, z } => {
+                if (pos.z - z).abs() <= ctx.p.alt_rad_m {
+                    self.phase = Phase::RtlReturn { z };
+                }
+                self.goto(
+                    Ned::new(xy.0, xy.1, z),
+                    ctx.p.cruise_m_s,
+                    ctx.p.up_m_s,
+                    ctx.p.down_m_s,
+                    None,
+                )
+            }
+            Phase::RtlReturn { z } => {
+                let target = Ned::new(ctx.home.x, ctx.home.y, z);
+                if (target - pos).xy().norm() <= ctx.p.acc_rad_m.min(1.0) {
+                    self.phase = Phase::Descend {
+                        xy: (ctx.home.x, ctx.home.y),
+                    };
+                }
+                self.goto(
+                    target,
+                    ctx.p.cruise_m_s,
+                    ctx.p.up_m_s,
+                    ctx.p.down_m_s,
+                    heading_to(&pos, &target),
+                )
+            }
+            Phase::Descend { xy } => self.descend(ctx, xy),
+            _ => self.hold_sp(ctx),
+        }
+    }
+
+    fn advance(&mut self, ev: &mut Vec<NavEvent>) {
+        ev.push(NavEvent::Reached(self.current as u16));
+        self.current += 1;
+        self.phase = Phase::Start;
+        if self.current < self.items.len() {
+            ev.push(NavEvent::Current(self.current as u16));
+        }
+    }
+
+    fn mission(&mut self, ctx: &NavCtx, ev: &mut Vec<NavEvent>) -> Setpoint {
+        let pos = ctx.body.pos_ned;
+        let p = ctx.p;
+        let cruise = self.speed_m_s.unwrap_or(p.cruise_m_s);
+        // Instant items are consumed in one update; the bound stops DO_JUMP loops.
+        for _ in 0..=self.items.len() {
+            if self.mission_finished || self.current >= self.items.len() {
+                if !self.mission_finished {
+                    self.mission_finished = true;
+                    self.phase = Phase::Finished;
+                    self.hold = pos;
+                    ev.push(NavEvent::Text(
+                        MavSeverity::MAV_SEVERITY_INFO,
+                        "Mission finished, loitering".into(),
+                    ));
+                }
+                return self.hold_sp(ctx);
+            }
+            let kind = self.items[self.current].1;
+            match kind {
+                NavKind::Instant => self.advance(ev),
+                NavKind::Speed { m_s } => {
+                    self.speed_m_s = Some(m_s);
+                    self.advance(ev);
+                }
+                NavKind::Jump { to, repeat } => {
+                    let done = &mut self.jumps[self.current];
+                    if to < self.items.len() && (repeat < 0 || *done < repeat) {
+                        *done += 1;
+                        self.current = to;
+                        self.phase = Phase::Start;
+                        ev.push(NavEvent::Current(to as u16));
+                    } else {
+                        self.advance(ev);
+                    }
+                }
+                NavKind::Rtl => {
+                    self.advance(ev);
+                    self.mode = FlightMode::Rtl;
+                    self.phase = Phase::Start;
+                    ev.push(NavEvent::Mode(FlightMode::Rtl));
+                    return self.rtl(ctx);
+                }
+                NavKind::Takeoff { target, xy_set } => {
+                    let z = target.z.min(-p.takeoff_alt_m);
+                    if self.phase == Phase::Start {
+                        self.phase = if pos.z <= z + p.alt_rad_m {
+                            Phase::Approach
+                        } else {
+                            Phase::Climb { xy: (pos.x, pos.y), z }
+                        };
+                    }
+                    if let Phase::Climb { xy, z } = self.phase {
+                        if (pos.z - z).abs() <= p.alt_rad_m {
+                            self.phase = Phase::Approach;
+                        } else {
+                            return self.goto(Ned::new(xy.0, xy.1, z), cruise, p.takeoff_speed_m_s, p.down_m_s, None);
+                        }
+                    }
+                    let goal = if xy_set {
+                        Ned::new(target.x, target.y, z)
+                    } else {
+                        Ned::new(pos.x, pos.y, z)
+                    };
+                    if (goal - pos).xy().norm() <= p.acc_rad_m {
+                        self.advance(ev);
+                        continue;
+                    }
+                    return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
+                }
+                NavKind::Waypoint {
+                    target,
+                    hold_s,
+                    acc_rad_m,
+                    forever,
+                } => {
+                    if self.phase == Phase::Start {
+                        self.phase = Phase::Approach;
+                    }
+                    let sp = self.goto(target, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &target));
+                    match self.phase {
+                        Phase::Approach => {
+                            let acc = acc_rad_m.unwrap_or(p.acc_rad_m);
+                            if (target - pos).xy().norm() <= acc && (target.z - pos.z).abs() <= p.alt_rad_m {
+                                self.phase = Phase::Hold {
+                                    until: (!forever).then(|| ctx.now + Duration::from_secs_f64(hold_s)),
+                                };
+                                if forever {
+                                    ev.push(NavEvent::Reached(self.current as u16));
+                                }
+                                continue;
+                            }
+                            return sp;
+                        }
+                        Phase::Hold { until: Some(t) } if ctx.now >= t => {
+                            self.advance(ev);
+                            continue;
+                        }
+                        _ => return sp,
+                    }
+                }
+                NavKind::Land { xy } => {
+                    if self.phase == Phase::Start {
+                        self.phase = match xy {
+                            Some(_) => Phase::LandApproach { z: pos.z },
+                            None => Phase::Descend { xy: (pos.x, pos.y) },
+                        };
+                    }
+                    match self.phase {
+                        Phase::LandApproach { z } => {
+                            let (n, e) = xy.unwrap_or((pos.x, pos.y));
+                            let goal = Ned::new(n, e, z);
+                            if (goal - pos).xy().norm() <= p.acc_rad_m.min(1.0) {
+                                self.phase = Phase::Descend { xy: (n, e) };
+                                continue;
+                            }
+                            return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
+                        }
+                        Phase::Descend { xy } => {
+                            if ctx.body.on_ground() {
+                                self.advance(ev);
+                                self.hold = pos;
+                                continue;
+                            }
+                            return self.descend(ctx, xy);
+                        }
+                        _ => return self.hold_sp(ctx),
+                    }
+                }
+            }
+        }
+        self.hold_sp(ctx)
+    }
+}
+
+impl Default for Navigator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+#[path = "navigator_tests.rs"]
+mod tests;

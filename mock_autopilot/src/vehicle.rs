@@ -1,0 +1,558 @@
+//! The simulated PX4 vehicle: protocols, navigator, dynamics and telemetry tied together.
+//!
+//! Sans-IO: `handle(header, msg)` takes input, `step(dt)` advances simulated time by one fixed
+//! physics step, and `drain_outbox()` yields the messages to send (as sysid 1 / compid 1).
+#![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
+
+use std::time::Duration;
+
+use mavlink::MavHeader;
+use mavlink::dialects::common::{
+    MavLandedState, MavMessage, MavMissionResult, MavMissionType, MavSeverity, MavState, STATUSTEXT_DATA,
+};
+
+use crate::avoidance::Avoidance;
+use crate::dynamics::{Body, Limits, Ned, Setpoint};
+use crate::fence::Fence;
+use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
+use crate::mission_server::{MissionAction, MissionServer};
+use crate::modes::FlightMode;
+use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
+use crate::params::{ParamReply, ParamTable, ParamValue};
+use crate::telemetry::Streams;
+
+/// Our MAVLink system id.
+pub const SYSTEM_ID: u8 = 1;
+/// Our MAVLink component id (autopilot).
+pub const COMPONENT_ID: u8 = 1;
+/// Component id of the obstacle-avoidance companion.
+pub const AVOIDANCE_COMPONENT_ID: u8 = 196;
+
+/// Tells whether a position is inside an obstacle (for `--crash-on-collision`).
+pub trait CollisionWorld: Send {
+    /// A description of the obstacle hit at `pos_ned` (local NED metres), if any.
+    fn collision(&self, pos_ned: &Ned) -> Option<String>;
+}
+
+/// Static configuration of a vehicle.
+pub struct VehicleConfig {
+    /// Home / local origin (the vehicle boots on the ground here).
+    pub home: GeoPoint,
+    /// Every mission upload fails with this code (fault injection).
+    pub reject_mission: Option<MavMissionResult>,
+    /// Every arming attempt is refused (fault injection).
+    pub fail_arm: bool,
+    /// Obstacles that crash the vehicle on contact.
+    pub collision: Option<Box<dyn CollisionWorld>>,
+    /// Parameter overrides applied at boot.
+    pub params: Vec<(String, ParamValue)>,
+}
+
+impl Default for VehicleConfig {
+    fn default() -> Self {
+        Self {
+            home: SIM_HOME,
+            reject_mission: None,
+            fail_arm: false,
+            collision: None,
+            params: Vec::new(),
+        }
+    }
+}
+
+impl std::fmt::Debug for VehicleConfig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VehicleConfig")
+            .field("home", &self.home)
+            .field("reject_mission", &self.reject_mission)
+            .field("fail_arm", &self.fail_arm)
+            .field("collision", &self.collision.is_some())
+            .finish()
+    }
+}
+
+/// A snapshot for tests and benches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VehicleState {
+    /// Simulated time since the simulation started.
+    pub sim_time: Duration,
+    /// Position, local NED metres.
+    pub pos_ned: Ned,
+    /// Velocity, local NED m/s.
+    pub vel_ned: Ned,
+    /// Armed?
+    pub armed: bool,
+    /// Flight mode.
+    pub mode: FlightMode,
+    /// Landed state as in EXTENDED_SYS_STATE.
+    pub landed_state: MavLandedState,
+    /// Index of the current mission item.
+    pub mission_current: usize,
+    /// True after the last mission item completed.
+    pub mission_finished: bool,
+    /// True after a crash (collision).
+    pub crashed: bool,
+}
+
+/// The simulated vehicle.
+pub struct Vehicle {
+    pub(crate) now: Duration,
+    pub(crate) boot_at: Duration,
+    pub(crate) params: ParamTable,
+    params_seen: u64,
+    pub(crate) limits: Limits,
+    pub(crate) nav_params: NavParams,
+    pub(crate) missions: MissionServer,
+    pub(crate) nav: Navigator,
+    pub(crate) body: Body,
+    pub(crate) armed: bool,
+    pub(crate) landed: bool,
+    pub(crate) landed_since: Duration,
+    took_off: bool,
+    pub(crate) home_ned: Ned,
+    pub(crate) origin: GeoPoint,
+    pub(crate) proj: LocalProjection,
+    fence: Fence,
+    fence_breached: bool,
+    pub(crate) avoidance: Avoidance,
+    pub(crate) offboard: Option<(Setpoint, Duration)>,
+    pub(crate) streams: Streams,
+    reached: Option<(u16, u8, Duration)>,
+    pub(crate) outbox: Vec<MavMessage>,
+    pub(crate) crashed: bool,
+    pub(crate) failsafe: bool,
+    pub(crate) fail_arm: bool,
+    collision: Option<Box<dyn CollisionWorld>>,
+    due: Vec<u32>,
+}
+
+impl Vehicle {
+    /// A vehicle on the ground at `cfg.home`, disarmed, in AUTO.LOITER.
+    pub fn new(cfg: VehicleConfig) -> Self {
+        let mut params = ParamTable::default();
+        for (name, v) in &cfg.params {
+            params.set(name, *v);
+        }
+        let proj = LocalProjection::new(cfg.home);
+        Self {
+            now: Duration::ZERO,
+            boot_at: Duration::ZERO,
+            limits: Limits::from_params(&params),
+            nav_params: NavParams::from_params(&params),
+            params_seen: params.version(),
+            params,
+            missions: MissionServer::new(cfg.reject_mission),
+            nav: Navigator::new(),
+            body: Body::default(),
+            armed: false,
+            landed: true,
+            landed_since: Duration::ZERO,
+            took_off: false,
+            home_ned: Ned::zeros(),
+            origin: cfg.home,
+            proj,
+            fence: Fence::default(),
+            fence_breached: false,
+            avoidance: Avoidance::default(),
+            offboard: None,
+            streams: Streams::default(),
+            reached: None,
+            outbox: Vec::new(),
+            crashed: false,
+            failsafe: false,
+            fail_arm: cfg.fail_arm,
+            collision: cfg.collision,
+            due: Vec::new(),
+        }
+    }
+
+    /// Simulated time since the simulation started.
+    pub fn now(&self) -> Duration {
+        self.now
+    }
+
+    /// Milliseconds since the (last) boot, as `time_boot_ms`.
+    pub fn time_boot_ms(&self) -> u32 {
+        self.now.saturating_sub(self.boot_at).as_millis() as u32
+    }
+
+    /// Read-only parameter table.
+    pub fn params(&self) -> &ParamTable {
+        &self.params
+    }
+
+    /// A snapshot of the vehicle state.
+    pub fn state(&self) -> VehicleState {
+        VehicleState {
+            sim_time: self.now,
+            pos_ned: self.body.pos_ned,
+            vel_ned: self.body.vel_ned,
+            armed: self.armed,
+            mode: self.nav.mode(),
+            landed_state: self.landed_state(),
+            mission_current: self.nav.current(),
+            mission_finished: self.nav.mission_finished(),
+            crashed: self.crashed,
+        }
+    }
+
+    /// The messages produced since the last drain.
+    pub fn drain_outbox(&mut self) -> std::vec::Drain<'_, MavMessage> {
+        self.outbox.drain(..)
+    }
+
+    /// Simulate a reboot: disarmed on the ground at home; parameters and stored plans survive.
+    pub fn reboot(&mut self) {
+        self.boot_at = self.now;
+        self.body = Body::default();
+        self.armed = false;
+        self.landed = true;
+        self.landed_since = self.now;
+        self.took_off = false;
+        self.crashed = false;
+        self.failsafe = false;
+        self.offboard = None;
+        self.reached = None;
+        self.avoidance = Avoidance::default();
+        self.streams = Streams::default();
+        self.home_ned = Ned::zeros();
+        self.nav = Navigator::new();
+        self.reload_mission();
+        self.outbox.clear();
+    }
+
+    pub(crate) fn text(&mut self, severity: MavSeverity, text: &str) {
+        let mut end = text.len().min(50);
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        self.outbox.push(MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+            severity,
+            text: text[..end].into(),
+            id: 0,
+            chunk_seq: 0,
+        }));
+    }
+
+    /// EXTENDED_SYS_STATE landed state.
+    pub fn landed_state(&self) -> MavLandedState {
+        if self.landed {
+            MavLandedState::MAV_LANDED_STATE_ON_GROUND
+        } else if self.nav.is_landing() {
+            MavLandedState::MAV_LANDED_STATE_LANDING
+        } else if self.armed
+            && self.body.pos_ned.z > -self.nav_params.takeoff_alt_m.max(1.0)
+            && self.body.vel_ned.z < -0.1
+        {
+            MavLandedState::MAV_LANDED_STATE_TAKEOFF
+        } else {
+            MavLandedState::MAV_LANDED_STATE_IN_AIR
+        }
+    }
+
+    /// Handle one incoming message from `header`.
+    pub fn handle(&mut self, header: &MavHeader, msg: &MavMessage) {
+        let from = (header.system_id.min(255) as u8, header.component_id);
+        if let Some((sys, _)) = target_of(msg)
+            && sys != 0
+            && sys != SYSTEM_ID
+        {
+            return;
+        }
+        match msg {
+            MavMessage::HEARTBEAT(hb) if header.component_id == AVOIDANCE_COMPONENT_ID => {
+                self.avoidance.on_heartbeat(self.now, hb.system_status);
+            }
+            MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) if header.component_id == AVOIDANCE_COMPONENT_ID => {
+                self.avoidance.on_trajectory(self.now, t);
+            }
+            MavMessage::PARAM_REQUEST_LIST(_) => self.param_reply(self.params.on_request_list()),
+            MavMessage::PARAM_REQUEST_READ(r) => self.param_reply(self.params.on_request_read(r)),
+            MavMessage::PARAM_SET(s) => {
+                let r = self.params.on_set(s);
+                self.param_reply(r);
+            }
+            MavMessage::COMMAND_LONG(c) => {
+                let p = [c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7];
+                self.on_command(from, c.command, p, false);
+            }
+            MavMessage::COMMAND_INT(c) => {
+                let p = [c.param1, c.param2, c.param3, c.param4, c.x as f32, c.y as f32, c.z];
+                self.on_command(from, c.command, p, true);
+            }
+            MavMessage::SET_POSITION_TARGET_LOCAL_NED(s) => self.on_offboard_setpoint(s),
+            MavMessage::MISSION_SET_CURRENT(s) => {
+                if self.nav.set_current(usize::from(s.seq)) {
+                    self.send_mission_current();
+                }
+            }
+            _ => {
+                let actions = self.missions.on_message(msg, from, self.now);
+                self.apply_mission_actions(actions);
+            }
+        }
+    }
+
+    fn param_reply(&mut self, r: ParamReply) {
+        match r {
+            ParamReply::Values(v) => self.outbox.extend(v),
+            ParamReply::Text(sev, t) => self.text(sev, &t),
+        }
+    }
+
+    fn apply_mission_actions(&mut self, actions: Vec<MissionAction>) {
+        for a in actions {
+            match a {
+                MissionAction::Send(m) => self.outbox.push(*m),
+                MissionAction::Text(sev, t) => self.text(sev, &t),
+                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_MISSION) => self.reload_mission(),
+                MissionAction::Updated(MavMissionType::MAV_MISSION_TYPE_FENCE) => self.reload_fence(),
+                MissionAction::Updated(_) => {}
+            }
+        }
+    }
+
+    fn reload_mission(&mut self) {
+        let items = &self.missions.plan(MavMissionType::MAV_MISSION_TYPE_MISSION).items;
+        self.nav.set_mission(nav_items(items, &self.proj, self.origin.alt_m));
+        self.reload_fence();
+    }
+
+    fn reload_fence(&mut self) {
+        let items = &self.missions.plan(MavMissionType::MAV_MISSION_TYPE_FENCE).items;
+        // Validated on upload, so this only fails if storage was bypassed.
+        self.fence = Fence::from_items(items, &self.proj).unwrap_or_default();
+        self.fence_breached = false;
+    }
+
+    /// Switch mode (no checks: commands check before calling).
+    pub(crate) fn set_mode(&mut self, mode: FlightMode, takeoff_alt_m: f64) {
+        self.nav.set_mode(mode, &self.body, takeoff_alt_m);
+        self.avoidance.reset();
+        self.send_mission_current();
+    }
+
+    pub(crate) fn arm(&mut self) {
+        if !self.armed {
+            self.armed = true;
+            self.took_off = false;
+            self.landed_since = self.now;
+            self.failsafe = false;
+            self.crashed = false;
+            self.home_ned = self.body.pos_ned;
+            self.text(MavSeverity::MAV_SEVERITY_INFO, "Armed by external command");
+            self.outbox.push(self.home_position());
+        }
+    }
+
+    pub(crate) fn disarm(&mut self, why: &str) {
+        if self.armed {
+            self.armed = false;
+            self.avoidance.reset();
+            self.text(MavSeverity::MAV_SEVERITY_INFO, &format!("Disarmed by {why}"));
+        }
+    }
+
+    /// Advance the simulation by one fixed step `dt`.
+    pub fn step(&mut self, dt: Duration) {
+        self.now += dt;
+        if self.params.version() != self.params_seen {
+            self.params_seen = self.params.version();
+            self.limits = Limits::from_params(&self.params);
+            self.nav_params = NavParams::from_params(&self.params);
+        }
+        let actions = self.missions.on_tick(self.now);
+        self.apply_mission_actions(actions);
+        self.offboard_failsafe();
+        let sp = self.navigate();
+        if !self.crashed {
+            self.body.step(&sp, &self.limits, dt.as_secs_f64());
+        }
+        self.detect_land_and_takeoff();
+        self.check_fence();
+        self.check_collision();
+        self.send_streams();
+    }
+
+    fn navigate(&mut self) -> Setpoint {
+        let mut events = Vec::new();
+        let ctx = NavCtx {
+            now: self.now,
+            body: &self.body,
+            armed: self.armed,
+            p: &self.nav_params,
+            home: self.home_ned,
+        };
+        let mut sp = self.nav.update(&ctx, &mut events);
+        for e in events {
+            match e {
+                NavEvent::Reached(seq) => {
+                    self.reached = Some((seq, 10, self.now));
+                }
+                NavEvent::Current(_) | NavEvent::Mode(_) => self.send_mission_current(),
+                NavEvent::Text(sev, t) => self.text(sev, &t),
+            }
+        }
+        if self.nav.mode() == FlightMode::Offboard && self.armed {
+            sp = match self.offboard {
+                Some((s, _)) => s,
+                None => sp,
+            };
+        }
+        if self.params.f64("COM_OBS_AVOID") >= 1.0 && self.nav.mode().is_auto() && self.armed {
+            let mut texts = Vec::new();
+            let time_usec = u64::from(self.time_boot_ms()) * 1000;
+            let (s, msg) = self.avoidance.apply(
+                self.now,
+                sp,
+                self.body.pos_ned,
+                self.nav.waypoints(),
+                time_usec,
+                &mut texts,
+            );
+            sp = s;
+            self.outbox.extend(msg);
+            for (sev, t) in texts {
+                self.text(sev, &t);
+            }
+        }
+        sp
+    }
+
+    fn detect_land_and_takeoff(&mut self) {
+        let on_ground = self.body.on_ground();
+        if self.landed && self.armed && !on_ground && self.body.pos_ned.z < -0.1 {
+            self.landed = false;
+            self.took_off = true;
+            self.text(MavSeverity::MAV_SEVERITY_INFO, "Takeoff detected");
+        } else if !self.landed && on_ground {
+            self.landed = true;
+            self.landed_since = self.now;
+            self.text(MavSeverity::MAV_SEVERITY_INFO, "Landing detected");
+        }
+        if self.armed && self.landed {
+            let secs = |name: &str| self.params.f64(name);
+            let on_ground_for = self.now.saturating_sub(self.landed_since).as_secs_f64();
+            if self.took_off && secs("COM_DISARM_LAND") >= 0.0 && on_ground_for >= secs("COM_DISARM_LAND") {
+                self.disarm("landing");
+            } else if !self.took_off && secs("COM_DISARM_PRFLT") > 0.0 && on_ground_for >= secs("COM_DISARM_PRFLT") {
+                self.disarm("auto preflight disarming");
+            }
+        }
+    }
+
+    fn check_fence(&mut self) {
+        if self.fence.is_empty() || !self.armed || self.landed {
+            self.fence_breached = false;
+            return;
+        }
+        let p = self.body.pos_ned;
+        let breach = self.fence.check(p.x, p.y).is_some();
+        if breach && !self.fence_breached {
+            let action = self.params.f64("GF_ACTION") as i32;
+            let (mode, what) = match action {
+                0 => (None, "no action"),
+                1 => (None, "warning only"),
+                3 => (Some(FlightMode::Rtl), "Return"),
+                5 => (Some(FlightMode::Land), "Land"),
+                4 => (None, "Terminate"),
+                _ => (Some(FlightMode::Loiter), "Hold"),
+            };
+            if action != 0 {
+                self.text(
+                    MavSeverity::MAV_SEVERITY_CRITICAL,
+                    &format!("Geofence violated, {what} activated"),
+                );
+            }
+            if action == 4 {
+                self.crash_to_ground();
+                self.disarm("geofence termination");
+            } else if let Some(m) = mode {
+                self.failsafe = true;
+                let alt = self.nav_params.takeoff_alt_m;
+                self.set_mode(m, alt);
+            }
+        }
+        self.fence_breached = breach;
+    }
+
+    fn crash_to_ground(&mut self) {
+        self.body.pos_ned.z = 0.0;
+        self.body.vel_ned = Ned::zeros();
+        self.body.acc_ned = Ned::zeros();
+        self.landed = true;
+        self.landed_since = self.now;
+    }
+
+    fn check_collision(&mut self) {
+        if self.crashed || !self.armed {
+            return;
+        }
+        let hit = self.collision.as_ref().and_then(|c| c.collision(&self.body.pos_ned));
+        if let Some(what) = hit {
+            self.crashed = true;
+            self.crash_to_ground();
+            self.text(MavSeverity::MAV_SEVERITY_EMERGENCY, &format!("Crash detected: {what}"));
+            self.disarm("crash");
+        }
+    }
+
+    fn send_streams(&mut self) {
+        let mut due = std::mem::take(&mut self.due);
+        due.clear();
+        self.streams.due(self.now, &mut due);
+        for &id in &due {
+            if let Some(m) = self.build_message(id) {
+                self.outbox.push(m);
+            }
+        }
+        self.due = due;
+        // PX4 repeats the last MISSION_ITEM_REACHED up to 10 times at 10 Hz.
+        if let Some((seq, left, at)) = self.reached
+            && self.now >= at
+        {
+            self.outbox.push(MavMessage::MISSION_ITEM_REACHED(
+                mavlink::dialects::common::MISSION_ITEM_REACHED_DATA { seq },
+            ));
+            self.reached = (left > 1).then_some((seq, left - 1, at + Duration::from_millis(100)));
+        }
+    }
+
+    /// The system status for HEARTBEAT.
+    pub(crate) fn system_status(&self) -> MavState {
+        if self.crashed || self.failsafe {
+            MavState::MAV_STATE_CRITICAL
+        } else if self.armed {
+            MavState::MAV_STATE_ACTIVE
+        } else {
+            MavState::MAV_STATE_STANDBY
+        }
+    }
+}
+
+/// (target_system, target_component) of messages that carry one.
+fn target_of(msg: &MavMessage) -> Option<(u8, u8)> {
+    use MavMessage as M;
+    Some(match msg {
+        M::COMMAND_LONG(m) => (m.target_system, m.target_component),
+        M::COMMAND_INT(m) => (m.target_system, m.target_component),
+        M::PARAM_SET(m) => (m.target_system, m.target_component),
+        M::PARAM_REQUEST_READ(m) => (m.target_system, m.target_component),
+        M::PARAM_REQUEST_LIST(m) => (m.target_system, m.target_component),
+        M::MISSION_COUNT(m) => (m.target_system, m.target_component),
+        M::MISSION_ITEM_INT(m) => (m.target_system, m.target_component),
+        M::MISSION_ITEM(m) => (m.target_system, m.target_component),
+        M::MISSION_REQUEST_LIST(m) => (m.target_system, m.target_component),
+        M::MISSION_REQUEST_INT(m) => (m.target_system, m.target_component),
+        M::MISSION_REQUEST(m) => (m.target_system, m.target_component),
+        M::MISSION_CLEAR_ALL(m) => (m.target_system, m.target_component),
+        M::MISSION_ACK(m) => (m.target_system, m.target_component),
+        M::MISSION_SET_CURRENT(m) => (m.target_system, m.target_component),
+        M::SET_POSITION_TARGET_LOCAL_NED(m) => (m.target_system, m.target_component),
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+#[path = "vehicle_tests.rs"]
+mod tests;

@@ -1,0 +1,337 @@
+//! The obstacle-avoidance companion of PX4 <= 1.14 (COM_OBS_AVOID = 1): heartbeats as component 196 with the
+//! vehicle's system id (MAV_TYPE_ONBOARD_CONTROLLER, MAV_STATE_ACTIVE), reads PX4's desired trajectory
+//! (TRAJECTORY_REPRESENTATION_WAYPOINTS: point 0 PX4's setpoint, 1 the current waypoint, 2 the next) and
+//! answers at 10 Hz with point 0 = the planner's setpoint, or PX4's own setpoint mirrored when it cannot plan.
+#![allow(deprecated)] // TRAJECTORY_REPRESENTATION_WAYPOINTS: deprecated upstream since PX4 1.15 removed it.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use mavlink::dialects::common::{
+    HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA,
+};
+use tokio::sync::broadcast;
+use tokio::task::JoinHandle;
+
+use super::exchange::Target;
+use super::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
+use super::steer::{Nav, Steer, SteerInput, SteerOutput};
+use super::steer_worker::SteerWorker;
+use super::vehicle::VehicleView;
+
+/// Answer period (10 Hz, as PX4-Avoidance's waypoint generator).
+pub const ANSWER_PERIOD: Duration = Duration::from_millis(100);
+/// Companion heartbeat period (PX4 declares the companion lost after 5 s without one).
+pub const HEARTBEAT_PERIOD: Duration = Duration::from_millis(500);
+/// A planner result computed from inputs older than this is not sent (PX4 itself gives up after 0.5 s).
+pub const STALE_PLAN: Duration = Duration::from_millis(500);
+/// A request older than this means PX4 left the auto modes: stop answering.
+pub const REQUEST_STALE: Duration = Duration::from_secs(1);
+
+const MAV_CMD_NAV_LAND: u16 = 21;
+const MAV_CMD_NAV_TAKEOFF: u16 = 22;
+
+fn point(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
+    let p = [t.pos_x[i], t.pos_y[i], t.pos_z[i]];
+    p.iter().all(|v| v.is_finite()).then(|| p.map(f64::from))
+}
+
+fn velocity(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
+    let v = [t.vel_x[i], t.vel_y[i], t.vel_z[i]];
+    v.iter().all(|v| v.is_finite()).then(|| v.map(f64::from))
+}
+
+/// The companion's memory: PX4's latest request and the goals it implies.
+#[derive(Debug, Clone, Default)]
+pub struct Companion {
+    request: Option<(TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, Duration)>,
+    goal: Option<[f64; 3]>,
+    prev_goal: Option<[f64; 3]>,
+    nav: Option<Nav>,
+    /// Answers sent that mirrored PX4's setpoint.
+    pub mirrored: u64,
+    /// Answers sent from the planner.
+    pub planned: u64,
+}
+
+impl Companion {
+    /// A request from PX4 at vehicle time `now`.
+    pub fn on_request(&mut self, t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, now: Duration) {
+        // The current waypoint is point 1; without it, PX4's own (type-adapted) setpoint is the goal.
+        let goal = if t.valid_points >= 2 { point(t, 1) } else { None }.or_else(|| point(t, 0));
+        if let Some(g) = goal
+            && self.goal.is_none_or(|old| dist(&old, &g) > 0.01)
+        {
+            self.prev_goal = self.goal.or(Some(g));
+            self.goal = Some(g);
+        }
+        self.nav = Some(match t.command[1] {
+            MAV_CMD_NAV_TAKEOFF => Nav::Takeoff,
+            MAV_CMD_NAV_LAND => Nav::Land,
+            _ => Nav::Mission,
+        });
+        self.request = Some((t.clone(), now));
+    }
+
+    /// The steering question at vehicle time `now`, if PX4 is asking and the pose is known.
+    pub fn steer_input(&self, view: &VehicleView, now: Duration) -> Option<SteerInput> {
+        let (req, at) = self.request.as_ref()?;
+        if now.saturating_sub(*at) > REQUEST_STALE {
+            return None;
+        }
+        let (pose, goal) = (view.pose?, self.goal?);
+        let (nav, goal) = approach_land(self.nav.unwrap_or(Nav::Mission), goal, pose.pos_ned);
+        Some(SteerInput {
+            now_s: now.as_secs_f64(),
+            pos_ned: pose.pos_ned,
+            vel_ned: pose.vel_ned,
+            yaw_rad: pose.yaw_rad.unwrap_or(0.0),
+            goal_ned: goal,
+            prev_goal_ned: self.prev_goal.unwrap_or(goal),
+            desired_vel_ned: velocity(req, 0),
+            nav,
+            airborne: view.armed,
+        })
+    }
+
+    /// Steers and answers in one go (see [`Companion::answer_with`]).
+    pub fn answer(
+        &mut self,
+        view: &VehicleView,
+        steer: &mut dyn Steer,
+        now: Duration,
+        time_usec: u64,
+    ) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {
+        let planned = self.steer_input(view, now).and_then(|i| steer.steer(&i));
+        self.answer_with(planned, now, time_usec)
+    }
+
+    /// The answer with `planned` as point 0, or PX4's own point 0 mirrored when `None`; `None` when PX4 is not
+    /// asking (no fresh request).
+    pub fn answer_with(
+        &mut self,
+        planned: Option<SteerOutput>,
+        now: Duration,
+        time_usec: u64,
+    ) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {
+        let (req, at) = self.request.clone()?;
+        if now.saturating_sub(at) > REQUEST_STALE {
+            return None;
+        }
+        let nan = [f32::NAN; 5];
+        let mut out = TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+            time_usec,
+            pos_x: nan,
+            pos_y: nan,
+            pos_z: nan,
+            vel_x: nan,
+            vel_y: nan,
+            vel_z: nan,
+            acc_x: nan,
+            acc_y: nan,
+            acc_z: nan,
+            pos_yaw: nan,
+            vel_yaw: nan,
+            command: [u16::MAX; 5],
+            valid_points: 1,
+        };
+        match planned {
+            Some(sp) => {
+                self.planned += 1;
+                out.pos_x[0] = sp.pos_ned[0] as f32;
+                out.pos_y[0] = sp.pos_ned[1] as f32;
+                out.pos_z[0] = sp.pos_ned[2] as f32;
+                out.pos_yaw[0] = sp.yaw_rad.map_or(f32::NAN, |y| y as f32);
+            }
+            None => {
+                // Mirror PX4's point 0 (position and/or velocity): the interface's "cannot plan" answer.
+                self.mirrored += 1;
+                for (dst, src) in [
+                    (&mut out.pos_x, &req.pos_x),
+                    (&mut out.pos_y, &req.pos_y),
+                    (&mut out.pos_z, &req.pos_z),
+                    (&mut out.vel_x, &req.vel_x),
+                    (&mut out.vel_y, &req.vel_y),
+                    (&mut out.vel_z, &req.vel_z),
+                    (&mut out.pos_yaw, &req.pos_yaw),
+                ] {
+                    dst[0] = src[0];
+                }
+            }
+        }
+        Some(out)
+    }
+}
+
+/// Horizontal distance to a land point beyond which the vehicle still has to fly there.
+pub const LAND_APPROACH_M: f64 = 1.0;
+
+/// PX4 flies a land item in two parts: first to the land point at the current altitude (a plain position
+/// setpoint), then down. A vehicle that reports the land item for both parts gets the same treatment here.
+pub fn approach_land(nav: Nav, goal: [f64; 3], pos_ned: [f64; 3]) -> (Nav, [f64; 3]) {
+    let far = (goal[0] - pos_ned[0]).hypot(goal[1] - pos_ned[1]) > LAND_APPROACH_M;
+    if nav == Nav::Land && far {
+        (Nav::Mission, [goal[0], goal[1], pos_ned[2]])
+    } else {
+        (nav, goal)
+    }
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The companion's heartbeat.
+pub fn heartbeat() -> MavMessage {
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        base_mode: MavModeFlag::empty(),
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers at 10 Hz
+/// (vehicle time) with the latest planner result.
+pub fn spawn(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) -> [JoinHandle<()>; 2] {
+    [tokio::spawn(beat(link.clone())), tokio::spawn(run(link, target, steer))]
+}
+
+async fn beat(link: Arc<Link>) {
+    loop {
+        let _ = link.send(Sender::Companion, &heartbeat()).await;
+        tokio::time::sleep(link.clock().wall(HEARTBEAT_PERIOD)).await;
+    }
+}
+
+async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) {
+    let clock = link.clock();
+    let mut rx = link.subscribe();
+    let mut view = VehicleView::default();
+    let mut companion = Companion::default();
+    let mut worker = SteerWorker::new(steer);
+    let mut next_answer = clock.now();
+    loop {
+        let now = clock.now();
+        if now >= next_answer {
+            next_answer = now + ANSWER_PERIOD;
+            if !worker.poll(companion.steer_input(&view, now), now).await {
+                return;
+            }
+            // A plan older than PX4's own patience (0.5 s) is not used: mirror instead.
+            let planned = worker.latest(now, STALE_PLAN).flatten();
+            let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
+            if let Some(a) = companion.answer_with(planned, now, usec) {
+                let _ = link
+                    .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
+                    .await;
+            }
+        }
+        let wake = clock.wall_until(next_answer);
+        tokio::select! {
+            r = rx.recv() => match r {
+                Ok(inb) => {
+                    let now = clock.now();
+                    match &inb.msg {
+                        MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t)
+                            if inb.header.component_id != AVOIDANCE_COMPONENT_ID
+                                && inb.header.system_id == u32::from(target.system) =>
+                        {
+                            companion.on_request(t, now)
+                        }
+                        m => view.update(m, now),
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wake).await,
+            },
+            _ = tokio::time::sleep(wake) => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bridge::steer::{Mirror, Straight};
+    use crate::bridge::vehicle::PoseNed;
+
+    fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+        let nan = [f32::NAN; 5];
+        let mut t = TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+            time_usec: 0,
+            pos_x: nan,
+            pos_y: nan,
+            pos_z: nan,
+            vel_x: nan,
+            vel_y: nan,
+            vel_z: nan,
+            acc_x: nan,
+            acc_y: nan,
+            acc_z: nan,
+            pos_yaw: nan,
+            vel_yaw: nan,
+            command: [u16::MAX; 5],
+            valid_points: 3,
+        };
+        (t.pos_x[0], t.pos_y[0], t.pos_z[0]) = (p0[0], p0[1], p0[2]);
+        (t.pos_x[1], t.pos_y[1], t.pos_z[1]) = (p1[0], p1[1], p1[2]);
+        t.command[1] = cmd1;
+        t
+    }
+
+    fn flying() -> VehicleView {
+        let mut v = VehicleView::default();
+        v.armed = true;
+        v.pose = Some(PoseNed {
+            time_boot_ms: 1,
+            pos_ned: [0.0, 0.0, -5.0],
+            vel_ned: [0.0; 3],
+            yaw_rad: Some(0.0),
+        });
+        v
+    }
+
+    #[test]
+    fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
+        let mut c = Companion::default();
+        let t0 = Duration::ZERO;
+        assert!(c.answer(&flying(), &mut Mirror, t0, 0).is_none(), "nobody asked");
+        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], 16), t0);
+        let a = c.answer(&flying(), &mut Mirror, t0, 7).unwrap();
+        assert_eq!(
+            (a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points),
+            (1.0, 2.0, -3.0, 1)
+        );
+        assert_eq!(a.time_usec, 7);
+        assert!(a.pos_x[1].is_nan());
+        assert_eq!(c.mirrored, 1);
+        assert!(
+            c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(),
+            "stale request"
+        );
+    }
+
+    #[test]
+    fn plans_towards_the_current_waypoint() {
+        let mut c = Companion::default();
+        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], 16), Duration::ZERO);
+        let a = c.answer(&flying(), &mut Straight, Duration::ZERO, 0).unwrap();
+        assert_eq!((a.pos_x[0], a.pos_z[0]), (10.0, -5.0));
+        assert_eq!(c.planned, 1);
+        c.on_request(&request([1.0, 2.0, -3.0], [20.0, 0.0, -5.0], 21), Duration::ZERO);
+        assert_eq!(c.nav, Some(Nav::Land));
+        assert_eq!(c.prev_goal, Some([10.0, 0.0, -5.0]));
+        // Far from the land point: fly there at altitude first; above it: land.
+        assert_eq!(
+            approach_land(Nav::Land, [20.0, 0.0, 0.0], [0.0, 0.0, -5.0]),
+            (Nav::Mission, [20.0, 0.0, -5.0])
+        );
+        assert_eq!(
+            approach_land(Nav::Land, [20.0, 0.0, 0.0], [19.5, 0.0, -5.0]),
+            (Nav::Land, [20.0, 0.0, 0.0])
+        );
+    }
+}

@@ -1,0 +1,299 @@
+//! Following the flight: run the test's commands at their times (mode 3 = arm and start), record every
+//! position, and end on landing, timeout, Ctrl-C, silence or reboot; on an abnormal end command LAND (RTL if
+//! LAND is refused), keeping the recording.
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use mavlink::dialects::common::{MavCmd, MavMessage};
+use tokio::sync::{broadcast, watch};
+
+use super::FlyMode;
+use super::cancel::CancelToken;
+use super::clock::secs;
+use super::command::Command;
+use super::exchange::Retry;
+use super::offboard::{self, Pilot, Progress};
+use super::planner_steer::PlannerSteer;
+use super::recorder::Recorder;
+use super::report::Status;
+use super::session::{Session, Stop, stop_for};
+use super::steer::{Mirror, Steer, Straight};
+use super::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
+use super::{FlyMode as Mode, FlyOptions};
+use crate::lfs::camera::Camera;
+use crate::model::{Command as TestCommand, TestCase};
+
+/// How often the end conditions are checked when nothing arrives (vehicle time).
+const TICK: Duration = Duration::from_millis(100);
+
+/// What a row of the commands table asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Action {
+    /// Mode 3: arm and start the mission (offboard: switch to OFFBOARD and arm).
+    Start,
+    /// Mode 10: AUTO.TAKEOFF.
+    Takeoff,
+    /// Mode 11: AUTO.LAND.
+    Land,
+    /// Mode 20: arm.
+    Arm,
+    /// Mode 21: disarm.
+    Disarm,
+}
+
+/// The commands table as timed actions (vehicle time after the flight starts); unsupported modes are warnings.
+/// Without any command the mission starts at once.
+pub fn schedule(commands: &[TestCommand], warnings: &mut Vec<String>) -> VecDeque<(Duration, Action)> {
+    let mut out: Vec<(Duration, Action)> = Vec::new();
+    for c in commands {
+        let action = match c.mode {
+            3 => Action::Start,
+            10 => Action::Takeoff,
+            11 => Action::Land,
+            20 => Action::Arm,
+            21 => Action::Disarm,
+            m => {
+                warnings.push(format!(
+                    "command mode {m} at {} us is not supported by the bridge; skipped",
+                    c.timestamp_us
+                ));
+                continue;
+            }
+        };
+        out.push((secs(c.timestamp_us / 1e6), action));
+    }
+    if out.is_empty() {
+        out.push((Duration::ZERO, Action::Start));
+    }
+    out.sort_by_key(|(t, _)| *t);
+    out.into()
+}
+
+/// The steering for `opts.mode`: the LFS planner over the test's boxes; if it cannot be built, the
+/// interface's fallbacks (mirror PX4's setpoint; fly straight in offboard).
+pub fn steer_for(test: &TestCase, opts: &FlyOptions) -> Box<dyn Steer> {
+    match (PlannerSteer::new(&test.obstacles, Camera::hfs()), opts.mode) {
+        (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
+        (_, Mode::Avoidance) => Box::new(Mirror),
+        _ => Box::new(Straight),
+    }
+}
+
+/// Follows the flight to its end.
+pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
+    let clock = s.link.clock();
+    s.drain();
+    let start = clock.now();
+    // Setup took its time; silence is measured from here.
+    s.view.last_heard = Some(start);
+    let timeout = secs(s.opts.timeout_s);
+    let loss = secs(s.opts.link_loss_s);
+    let mut plan = schedule(&s.test.commands, &mut s.warnings);
+    let mut progress = if s.opts.mode == FlyMode::Offboard {
+        let acc = s
+            .test
+            .params
+            .iter()
+            .find(|p| p.name == "NAV_ACC_RAD")
+            .map_or(1.0, |p| p.value.clamp(0.5, 1.0));
+        let pilot = Pilot::new(offboard::goals(&s.test.mission), acc);
+        let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer_for(s.test, s.opts));
+        s.tasks.push(task);
+        Some(rx)
+    } else {
+        None
+    };
+    let mut landing_sent = false;
+    let mut was_armed = false;
+    loop {
+        let now = clock.now();
+        while plan.front().is_some_and(|(at, _)| start + *at <= now) {
+            let Some((_, action)) = plan.pop_front() else { break };
+            if let Err(stop) = execute(s, action, progress.as_mut()).await {
+                return end(s, stop).await;
+            }
+        }
+        was_armed |= s.view.armed;
+        if s.view.rebooted {
+            return end(s, Stop::new(Status::LinkLost, "the autopilot rebooted mid-flight")).await;
+        }
+        if s.view.silent_for(now).is_some_and(|d| d > loss) {
+            let why = format!("no message from the vehicle for {:.1} s", loss.as_secs_f64());
+            return end(s, Stop::new(Status::LinkLost, why)).await;
+        }
+        if s.view.landed_after_flight() {
+            return Stop::new(Status::Landed, "landed and disarmed");
+        }
+        if was_armed && !s.view.armed && !s.view.took_off {
+            let why = s
+                .view
+                .warnings
+                .last()
+                .cloned()
+                .unwrap_or_else(|| "no reason given".into());
+            return Stop::new(
+                Status::Rejected,
+                format!("the vehicle disarmed before taking off: {why}"),
+            );
+        }
+        if now.saturating_sub(start) > timeout {
+            let why = format!("still flying after {} s", s.opts.timeout_s);
+            return end(s, Stop::new(Status::Timeout, why)).await;
+        }
+        if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
+            landing_sent = true;
+            if let Err(e) = s
+                .command(
+                    MavCmd::MAV_CMD_NAV_LAND,
+                    [0.0, 0.0, 0.0, f32::NAN, f32::NAN, f32::NAN, f32::NAN],
+                )
+                .await
+            {
+                return end(s, stop_for("landing after the last waypoint", e)).await;
+            }
+        }
+        tokio::select! {
+            biased;
+            _ = s.cancel.cancelled() => return end(s, Stop::new(Status::Aborted, "cancelled (Ctrl-C)")).await,
+            r = s.rx.recv() => match r {
+                Ok(inb) => {
+                    s.view.update(&inb.msg, clock.now());
+                    if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (&inb.msg, s.view.pose)
+                        && !s.view.rebooted
+                    {
+                        rec.push(&p);
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => s.warnings.push(format!("{n} messages lost (slow consumer)")),
+                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(clock.wall(TICK)).await,
+            },
+            _ = tokio::time::sleep(clock.wall(TICK)) => {}
+        }
+    }
+}
+
+async fn execute(
+    s: &mut Session<'_>,
+    action: Action,
+    progress: Option<&mut watch::Receiver<Progress>>,
+) -> Result<(), Stop> {
+    let nan = f32::NAN;
+    let arm = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    match (action, s.opts.mode) {
+        (Action::Start, FlyMode::Offboard) => {
+            if let Some(p) = progress {
+                let wait = s.link.clock().wall(Duration::from_secs(5));
+                if tokio::time::timeout(wait, p.wait_for(|p| p.streaming)).await.is_err() {
+                    return Err(Stop::new(
+                        Status::LinkLost,
+                        "no position from the vehicle to start offboard from",
+                    ));
+                }
+            }
+            let mode = [1.0, f32::from(PX4_MAIN_OFFBOARD), 0.0, 0.0, 0.0, 0.0, 0.0];
+            s.command(MavCmd::MAV_CMD_DO_SET_MODE, mode)
+                .await
+                .map_err(|e| stop_for("switching to OFFBOARD", e))?;
+            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
+                .await
+                .map_err(|e| stop_for("arming", e))
+        }
+        (Action::Start, _) => {
+            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
+                .await
+                .map_err(|e| stop_for("arming", e))?;
+            let last = s.test.mission.items.len().saturating_sub(1) as f32;
+            s.command(MavCmd::MAV_CMD_MISSION_START, [0.0, last, 0.0, 0.0, 0.0, 0.0, 0.0])
+                .await
+                .map_err(|e| stop_for("starting the mission", e))
+        }
+        (Action::Takeoff, _) => s
+            .command(MavCmd::MAV_CMD_NAV_TAKEOFF, [nan, 0.0, 0.0, nan, nan, nan, nan])
+            .await
+            .map_err(|e| stop_for("takeoff", e)),
+        (Action::Land, _) => s
+            .command(MavCmd::MAV_CMD_NAV_LAND, [0.0, 0.0, 0.0, nan, nan, nan, nan])
+            .await
+            .map_err(|e| stop_for("land", e)),
+        (Action::Arm, _) => s
+            .command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
+            .await
+            .map_err(|e| stop_for("arming", e)),
+        (Action::Disarm, _) => s
+            .command(
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            )
+            .await
+            .map_err(|e| stop_for("disarming", e)),
+    }
+}
+
+/// Ends an abnormal flight: LAND (then RTL if LAND is refused) unless the vehicle is on the ground, bounded
+/// and not cancellable (the user's Ctrl-C is what brought us here).
+async fn end(s: &mut Session<'_>, stop: Stop) -> Stop {
+    s.drain();
+    if !needs_landing(&s.view, stop.status) {
+        return stop;
+    }
+    let quick = Retry {
+        timeout: Duration::from_millis(1000),
+        max_retries: 2,
+    };
+    let uncancellable = CancelToken::new();
+    let nan = f32::NAN;
+    for cmd in [MavCmd::MAV_CMD_NAV_LAND, MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH] {
+        let c = Command::new(s.target, cmd, [0.0, 0.0, 0.0, nan, nan, nan, nan], quick);
+        match s.link.exchange(c, &uncancellable).await {
+            Ok(()) => {
+                s.warnings.push(format!("{cmd:?} sent after {}", stop.status.as_str()));
+                return stop;
+            }
+            Err(e) => s.warnings.push(format!("{cmd:?} failed: {e}")),
+        }
+    }
+    stop
+}
+
+fn needs_landing(view: &VehicleView, status: Status) -> bool {
+    match status {
+        Status::Timeout | Status::Aborted | Status::LinkLost => view.armed || view.took_off,
+        _ => view.armed,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cmd(t_us: f64, mode: i64) -> TestCommand {
+        TestCommand {
+            timestamp_us: t_us,
+            mode,
+            x: 0.0,
+            y: 0.0,
+            z: 0.5,
+            r: 0.0,
+        }
+    }
+
+    #[test]
+    fn commands_table_schedule() {
+        let mut w = Vec::new();
+        let s = schedule(&[cmd(2e6, 11), cmd(1.0, 3), cmd(5.0, 7)], &mut w);
+        assert_eq!(
+            s,
+            VecDeque::from(vec![
+                (Duration::from_micros(1), Action::Start),
+                (Duration::from_secs(2), Action::Land)
+            ])
+        );
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("mode 7"));
+        assert_eq!(
+            schedule(&[], &mut w),
+            VecDeque::from(vec![(Duration::ZERO, Action::Start)])
+        );
+    }
+}

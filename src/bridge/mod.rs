@@ -1,0 +1,192 @@
+//! The MAVLink bridge: flies a test on PX4 (SITL or hardware) or the mock autopilot with the obstacles kept
+//! virtual, and measures the true minimum distance from the vehicle's own position stream.
+//!
+//! Layers, bottom up: [`url`] (addresses), [`link`] (one transport, a receive task fanning out, counters),
+//! socket-free protocol state machines ([`mission_upload`], [`mission_download`], [`params`], [`command`]) run
+//! by [`link::Link::exchange`], then [`session`] (setup) and [`flight`] (following the flight) with the
+//! [`recorder`], the [`avoidance`] companion and the [`offboard`] pilot. Every timeout is in vehicle time
+//! ([`clock`]), so a sped-up simulator keeps every timer in proportion.
+//!
+//! ```no_run
+//! # async fn demo(test: &prgenuav::model::TestCase) -> Result<(), prgenuav::bridge::BridgeError> {
+//! use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+//! let opts = FlyOptions { connect: "udpin:0.0.0.0:14541".into(), mode: FlyMode::Mission, ..FlyOptions::default() };
+//! let report = fly(test, &opts, CancelToken::new()).await?;
+//! println!("{:?} {:?}", report.status, report.min_distance);
+//! # Ok(()) }
+//! ```
+
+pub mod avoidance;
+pub mod cancel;
+pub mod clock;
+pub mod command;
+pub mod exchange;
+pub mod flight;
+pub mod gazebo;
+pub mod link;
+pub mod mission_download;
+pub mod mission_upload;
+pub mod offboard;
+pub mod params;
+pub mod plan_items;
+pub mod planner_steer;
+pub mod predict;
+pub mod recorder;
+pub mod report;
+pub mod session;
+pub mod steer;
+pub mod steer_worker;
+pub mod url;
+pub mod vehicle;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+pub use cancel::CancelToken;
+pub use link::{LinkStats, Transport};
+pub use predict::{Prediction, predict};
+pub use report::{FlightReport, Status};
+pub use url::{DEFAULT_URL, LinkAddress, UrlError};
+
+use crate::model::TestCase;
+
+/// How the virtual obstacles are flown around.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FlyMode {
+    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; the bridge is the avoidance companion.
+    #[default]
+    Avoidance,
+    /// The bridge flies the mission's waypoints in OFFBOARD mode with setpoints from the planner (any PX4).
+    Offboard,
+    /// PX4 flies the plain mission, no avoidance (the baseline).
+    Mission,
+}
+
+/// Options of one flight. Times are in the vehicle's seconds (see [`FlyOptions::time_scale`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlyOptions {
+    /// Connection address ([`LinkAddress`] syntax).
+    pub connect: String,
+    /// Obstacle mode.
+    pub mode: FlyMode,
+    /// Give up (LAND, status `timeout`) after this long in flight, seconds.
+    pub timeout_s: f64,
+    /// Append the trajectory to this CSV as it arrives.
+    pub trajectory_csv: Option<PathBuf>,
+    /// Upload the obstacles as geofence exclusion polygons.
+    pub fence: bool,
+    /// The vehicle's time runs this many times faster than wall time (mock `--speed-factor`,
+    /// `PX4_SIM_SPEED_FACTOR`); 1 for real vehicles.
+    pub time_scale: f64,
+    /// Wait this long for the first autopilot heartbeat, seconds.
+    pub heartbeat_wait_s: f64,
+    /// Silence longer than this during the flight is a lost link, seconds.
+    pub link_loss_s: f64,
+    /// Only fly the vehicle with this system id (default: the first autopilot heard).
+    pub target_system: Option<u8>,
+    /// The LFS prediction to report beside the flown distance, if the caller computed it.
+    pub lfs_min_distance: Option<f64>,
+}
+
+impl Default for FlyOptions {
+    fn default() -> Self {
+        Self {
+            connect: DEFAULT_URL.into(),
+            mode: FlyMode::default(),
+            timeout_s: 500.0,
+            trajectory_csv: None,
+            fence: true,
+            time_scale: 1.0,
+            heartbeat_wait_s: 30.0,
+            link_loss_s: 5.0,
+            target_system: None,
+            lfs_min_distance: None,
+        }
+    }
+}
+
+/// Why a flight could not even start (no vehicle to report on). Vehicle refusals are reports, not errors.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    /// The address is malformed.
+    #[error(transparent)]
+    Url(#[from] UrlError),
+    /// The link could not be opened.
+    #[error("cannot open {url}: {source}")]
+    Open {
+        /// The address.
+        url: String,
+        /// The IO error.
+        source: std::io::Error,
+    },
+    /// No autopilot heartbeat within the wait.
+    #[error(
+        "no autopilot heartbeat on {url} within {waited_s} s (is PX4 running and sending to this address? \
+         PX4 SITL instance i sends its API link to udp port 14540+i)"
+    )]
+    NoHeartbeat {
+        /// The address.
+        url: String,
+        /// Seconds waited (vehicle time).
+        waited_s: f64,
+    },
+    /// The trajectory file cannot be created.
+    #[error("cannot write the trajectory to {path}: {source}")]
+    Trajectory {
+        /// The file.
+        path: PathBuf,
+        /// The IO error.
+        source: std::io::Error,
+    },
+    /// The test cannot be turned into a plan, or an option is out of range.
+    #[error("{0}")]
+    Invalid(String),
+    /// Cancelled before a vehicle was found.
+    #[error("cancelled before the vehicle was found")]
+    Cancelled,
+}
+
+impl FlyOptions {
+    /// Checks the numbers.
+    pub fn validate(&self) -> Result<(), BridgeError> {
+        for (name, v) in [
+            ("timeout", self.timeout_s),
+            ("time scale", self.time_scale),
+            ("heartbeat wait", self.heartbeat_wait_s),
+            ("link-loss time", self.link_loss_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(BridgeError::Invalid(format!("{name} {v} is not a positive number")));
+            }
+        }
+        LinkAddress::parse(&self.connect)?;
+        Ok(())
+    }
+}
+
+/// Flies `test` on the vehicle at `opts.connect` and reports; `cancel` lands it early (`aborted`).
+///
+/// Safe to call many times in parallel, each with its own address (one vehicle per link).
+pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Result<FlightReport, BridgeError> {
+    opts.validate()?;
+    let address = LinkAddress::parse(&opts.connect)?.to_mavlink();
+    let transport = link::MavTransport::open(&address)
+        .await
+        .map_err(|source| BridgeError::Open {
+            url: address.clone(),
+            source,
+        })?;
+    fly_on(test, opts, Arc::new(transport), cancel).await
+}
+
+/// As [`fly`] on an already open transport (`opts.connect` only names it in messages).
+pub async fn fly_on(
+    test: &TestCase,
+    opts: &FlyOptions,
+    transport: Arc<dyn Transport>,
+    cancel: CancelToken,
+) -> Result<FlightReport, BridgeError> {
+    opts.validate()?;
+    session::run(test, opts, transport, cancel).await
+}

@@ -1,0 +1,182 @@
+//! The LFS planner as the bridge's steering: render the test's virtual boxes from the vehicle's streamed pose
+//! with the simulator's depth camera, feed the 3DVFH* planner, and turn its path into a setpoint with the
+//! PX4-Avoidance waypoint generator, exactly as the companion computer would with a real camera.
+
+use nalgebra::Vector3;
+
+use super::steer::{Nav, Steer, SteerInput, SteerOutput};
+use crate::lfs::LfsError;
+use crate::lfs::camera::Camera;
+use crate::lfs::frames::{enu_to_ned, ned_to_enu, yaw_enu_to_ned_rad, yaw_ned_to_enu_rad};
+use crate::lfs::params::PlannerParams;
+use crate::lfs::planner::{PlanInput, Planner, VehicleState};
+use crate::lfs::render::{CameraPose, Scene};
+use crate::lfs::render_fast::{FastRenderScratch, KeepRange, render_cloud};
+use crate::lfs::waypoint::{NavState, WaypointGenerator, WaypointInput};
+use crate::model::Obstacle;
+
+/// Planner period assumed for the first step, seconds.
+const FIRST_DT_S: f64 = 0.1;
+
+/// Planner + camera + waypoint generator over a fixed set of virtual boxes.
+pub struct PlannerSteer {
+    scene: Scene,
+    camera: Camera,
+    keep: KeepRange,
+    scratch: FastRenderScratch,
+    frame: Vec<Vector3<f32>>,
+    planner: Planner,
+    generator: WaypointGenerator,
+    last_s: Option<f64>,
+}
+
+impl std::fmt::Debug for PlannerSteer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PlannerSteer")
+            .field("boxes", &self.scene.box_count())
+            .finish()
+    }
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f32> {
+    Vector3::new(a[0] as f32, a[1] as f32, a[2] as f32)
+}
+
+impl PlannerSteer {
+    /// A planner seeing `obstacles` through `camera`, with default planner parameters.
+    pub fn new(obstacles: &[Obstacle], camera: Camera) -> Result<Self, LfsError> {
+        let params = PlannerParams {
+            fovs: vec![camera.fov()],
+            ..PlannerParams::default()
+        };
+        Ok(Self {
+            scene: Scene::new(obstacles),
+            keep: KeepRange {
+                min_m: params.min_sensor_range_m,
+                max_m: params.max_sensor_range_m,
+            },
+            camera,
+            scratch: FastRenderScratch::default(),
+            frame: Vec::new(),
+            generator: WaypointGenerator::with_fovs(params.fovs.clone()),
+            planner: Planner::new(params)?,
+            last_s: None,
+        })
+    }
+}
+
+impl Steer for PlannerSteer {
+    fn steer(&mut self, input: &SteerInput) -> Option<SteerOutput> {
+        let pos = ned_to_enu(&Vector3::from(input.pos_ned));
+        let state = VehicleState {
+            position_enu: pos.map(|v| v as f32),
+            velocity_enu: ned_to_enu(&v3(input.vel_ned)),
+            yaw_enu_rad: yaw_ned_to_enu_rad(input.yaw_rad) as f32,
+            pitch_rad: 0.0,
+        };
+        let dt = self.last_s.map_or(FIRST_DT_S, |t| input.now_s - t).max(0.0);
+        self.last_s = Some(input.now_s);
+        self.frame.clear();
+        if pos.z > 0.05 {
+            let pose = CameraPose::level(pos, f64::from(state.yaw_enu_rad));
+            // Fails only with the camera inside a box: nothing sensible to plan.
+            render_cloud(
+                &self.scene,
+                &self.camera,
+                &pose,
+                self.keep,
+                &mut self.scratch,
+                &mut self.frame,
+            )
+            .ok()?;
+        }
+        self.planner.update_cloud(&self.frame, &state, dt as f32).ok()?;
+        let goal = ned_to_enu(&v3(input.goal_ned));
+        let prev_goal = ned_to_enu(&v3(input.prev_goal_ned));
+        let cruising = input.airborne && matches!(input.nav, Nav::Mission | Nav::Offboard);
+        if cruising {
+            let plan_input = PlanInput {
+                state,
+                goal_enu: goal,
+                prev_goal_enu: prev_goal,
+                now_s: input.now_s,
+            };
+            self.planner.plan(&plan_input).ok()?;
+        }
+        let nav_state = match input.nav {
+            Nav::Mission => NavState::Mission,
+            Nav::Takeoff => NavState::AutoTakeoff,
+            Nav::Land => NavState::AutoLand,
+            Nav::Offboard => NavState::Offboard,
+            Nav::Other => NavState::AutoLoiter,
+        };
+        let out = self.generator.step(
+            &WaypointInput {
+                state,
+                goal_enu: goal,
+                prev_goal_enu: prev_goal,
+                stay: false,
+                is_airborne: input.airborne,
+                nav_state,
+                is_land_waypoint: input.nav == Nav::Land,
+                is_takeoff_waypoint: input.nav == Nav::Takeoff,
+                desired_vel_enu: input.desired_vel_ned.map(|v| ned_to_enu(&v3(v))),
+                plan: self.planner.last_plan(),
+            },
+            input.now_s,
+        );
+        let sp = enu_to_ned(&out.position_enu);
+        if !sp.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        Some(SteerOutput {
+            pos_ned: [f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)],
+            yaw_rad: Some(yaw_enu_to_ned_rad(f64::from(out.yaw_enu_rad))),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(now_s: f64, pos_ned: [f64; 3], goal_ned: [f64; 3]) -> SteerInput {
+        SteerInput {
+            now_s,
+            pos_ned,
+            vel_ned: [0.0; 3],
+            yaw_rad: 0.0,
+            goal_ned,
+            prev_goal_ned: [0.0, 0.0, pos_ned[2]],
+            desired_vel_ned: None,
+            nav: Nav::Mission,
+            airborne: true,
+        }
+    }
+
+    #[test]
+    fn free_space_heads_for_the_goal_and_a_wall_deflects() {
+        let mut free = PlannerSteer::new(&[], Camera::hfs()).unwrap();
+        let mut last = None;
+        for k in 0..20 {
+            last = free.steer(&input(f64::from(k) * 0.1, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0]));
+        }
+        let sp = last.unwrap();
+        assert!(
+            sp.pos_ned[0] > 1.0 && sp.pos_ned[1].abs() < 0.5,
+            "about straight North: {sp:?}"
+        );
+        let free_sp = sp;
+        // A wide wall 6 m ahead across the path: the setpoint leaves the straight line.
+        let wall = Obstacle::new(2.0, 16.0, 20.0, 6.0, 0.0, 0.0);
+        let mut blocked = PlannerSteer::new(&[wall], Camera::hfs()).unwrap();
+        let mut sp = None;
+        for k in 0..20 {
+            sp = blocked.steer(&input(f64::from(k) * 0.1, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0]));
+        }
+        let sp = sp.unwrap();
+        let deflected = (sp.pos_ned[1] - free_sp.pos_ned[1]).abs() > 0.5;
+        let braking = sp.pos_ned[0] < free_sp.pos_ned[0] - 0.5;
+        assert!(deflected || braking, "blocked {sp:?} vs free {free_sp:?}");
+    }
+}

@@ -1,0 +1,246 @@
+//! The outcome of one flight: status, the true minimum distance judged from the recorded positions (the
+//! competition's binned value, the raw one, per obstacle, the closest approach), the LFS prediction beside it,
+//! and link statistics. Serialises to the CLI's JSON.
+
+use serde::Serialize;
+
+use crate::judge::{ClosestApproach, ObstacleDistance, judge_flight};
+use crate::model::{Obstacle, Trajectory};
+
+use super::FlyMode;
+use super::link::LinkStats;
+
+/// How a flight ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Flown to the end, landed and disarmed.
+    Landed,
+    /// The vehicle entered an obstacle.
+    Collision,
+    /// Still flying at the timeout (LAND commanded).
+    Timeout,
+    /// The vehicle went silent or rebooted.
+    LinkLost,
+    /// Cancelled (Ctrl-C) mid-flight (LAND commanded).
+    Aborted,
+    /// The vehicle refused the mission, a parameter, a mode or arming.
+    Rejected,
+}
+
+impl Status {
+    /// The JSON spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Landed => "landed",
+            Status::Collision => "collision",
+            Status::Timeout => "timeout",
+            Status::LinkLost => "link_lost",
+            Status::Aborted => "aborted",
+            Status::Rejected => "rejected",
+        }
+    }
+
+    /// True when the flight ran to its end (a measurement exists).
+    pub fn completed(self) -> bool {
+        matches!(self, Status::Landed | Status::Collision)
+    }
+}
+
+/// Link numbers as reported.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct LinkReport {
+    /// Messages received from the vehicle.
+    pub packets_received: u64,
+    /// Protocol retries.
+    pub retries: u64,
+    /// Messages from other systems, ignored.
+    pub packets_ignored: u64,
+}
+
+impl From<LinkStats> for LinkReport {
+    fn from(s: LinkStats) -> Self {
+        Self {
+            packets_received: s.packets_received,
+            retries: s.retries,
+            packets_ignored: s.packets_ignored,
+        }
+    }
+}
+
+/// One flight's report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FlightReport {
+    /// The competition's minimum distance (0.5 s bins), metres; `null` without obstacles or positions.
+    pub min_distance: Option<f64>,
+    /// The continuous minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// Per obstacle.
+    pub per_obstacle: Vec<ObstacleDistance>,
+    /// Where the raw path came closest (origin-aligned frame, x North, y East, z up).
+    pub closest_approach: Option<ClosestApproach>,
+    /// How the flight ended.
+    pub status: Status,
+    /// Why, in words, when not `landed`.
+    pub reason: Option<String>,
+    /// Seconds of recorded flight (vehicle time).
+    pub flight_time_s: f64,
+    /// The low-fidelity simulator's prediction for the same test, metres.
+    pub lfs_min_distance: Option<f64>,
+    /// Link statistics.
+    pub link: LinkReport,
+    /// The mode flown.
+    pub mode: FlyMode,
+    /// Whether the obstacles were on the vehicle as a geofence.
+    pub fence_uploaded: bool,
+    /// The vehicle's warnings (STATUSTEXT) and the bridge's own.
+    pub warnings: Vec<String>,
+    /// Positions recorded.
+    pub samples: usize,
+    /// The recorded trajectory (not in the JSON; see the CSV).
+    #[serde(skip)]
+    pub trajectory: Trajectory,
+}
+
+/// Inputs of [`FlightReport::judge`] besides the trajectory.
+#[derive(Debug, Clone)]
+pub struct Ending {
+    /// Status before judging (collision may override landed or timeout).
+    pub status: Status,
+    /// Why.
+    pub reason: Option<String>,
+    /// Mode flown.
+    pub mode: FlyMode,
+    /// Fence on the vehicle.
+    pub fence_uploaded: bool,
+    /// Warnings.
+    pub warnings: Vec<String>,
+    /// Link counters.
+    pub link: LinkStats,
+    /// LFS prediction.
+    pub lfs_min_distance: Option<f64>,
+}
+
+impl FlightReport {
+    /// Judges `trajectory` against `obstacles` and assembles the report.
+    pub fn judge(trajectory: Trajectory, obstacles: &[Obstacle], end: Ending) -> Self {
+        let judged = judge_flight(&trajectory, obstacles);
+        let mut status = end.status;
+        let mut reason = end.reason;
+        if let Some(j) = &judged
+            && j.collision
+            && matches!(status, Status::Landed | Status::Timeout)
+        {
+            status = Status::Collision;
+            let c = j.closest;
+            reason = Some(format!(
+                "entered obstacle {} at t = {:.1} s, ({:.2}, {:.2}, {:.2}) m",
+                c.obstacle, c.t_s, c.x, c.y, c.z
+            ));
+        }
+        Self {
+            min_distance: judged.as_ref().map(|j| j.min_distance),
+            min_distance_raw: judged.as_ref().map(|j| j.min_distance_raw),
+            per_obstacle: judged.as_ref().map(|j| j.per_obstacle.clone()).unwrap_or_default(),
+            closest_approach: judged.as_ref().map(|j| j.closest),
+            status,
+            reason,
+            flight_time_s: trajectory.duration_s(),
+            lfs_min_distance: end.lfs_min_distance,
+            link: end.link.into(),
+            mode: end.mode,
+            fence_uploaded: end.fence_uploaded,
+            warnings: collapse(end.warnings),
+            samples: trajectory.samples.len(),
+            trajectory,
+        }
+    }
+}
+
+/// Each distinct warning once, in order of first appearance, with a count when repeated.
+pub fn collapse(warnings: Vec<String>) -> Vec<String> {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    for w in warnings {
+        match seen.iter_mut().find(|(s, _)| *s == w) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((w, 1)),
+        }
+    }
+    seen.into_iter()
+        .map(|(w, n)| if n == 1 { w } else { format!("{w} (x{n})") })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Sample;
+
+    fn ending(status: Status) -> Ending {
+        Ending {
+            status,
+            reason: None,
+            mode: FlyMode::Mission,
+            fence_uploaded: false,
+            warnings: vec![],
+            link: LinkStats::default(),
+            lfs_min_distance: Some(1.0),
+        }
+    }
+
+    fn line(y: f64) -> Trajectory {
+        Trajectory::new(
+            (0..=20)
+                .map(|i| Sample {
+                    t_s: f64::from(i) * 0.1,
+                    x: f64::from(i),
+                    y,
+                    z: 5.0,
+                    r: None,
+                })
+                .collect(),
+        )
+    }
+
+    #[test]
+    fn judged_and_serialised() {
+        let o = Obstacle::new(2.0, 2.0, 10.0, 10.0, 3.0, 0.0);
+        let r = FlightReport::judge(line(0.0), &[o], ending(Status::Landed));
+        assert_eq!(r.status, Status::Landed);
+        assert!((r.min_distance.unwrap() - 2.0).abs() < 1e-9);
+        assert!((r.flight_time_s - 2.0).abs() < 1e-9);
+        let json = serde_json::to_value(&r).unwrap();
+        for key in [
+            "min_distance",
+            "min_distance_raw",
+            "per_obstacle",
+            "status",
+            "flight_time_s",
+            "lfs_min_distance",
+            "link",
+            "closest_approach",
+        ] {
+            assert!(json.get(key).is_some(), "{key} missing in {json}");
+        }
+        assert_eq!(json["status"], "landed");
+        assert!(json["link"].get("packets_received").is_some() && json["link"].get("retries").is_some());
+        assert!(json.get("trajectory").is_none());
+    }
+
+    #[test]
+    fn collision_overrides_landed_but_not_aborted() {
+        let o = Obstacle::new(2.0, 2.0, 10.0, 10.0, 0.0, 0.0);
+        let r = FlightReport::judge(line(0.0), &[o], ending(Status::Landed));
+        assert_eq!(r.status, Status::Collision);
+        assert!(r.reason.unwrap().contains("entered obstacle 0"));
+        let r = FlightReport::judge(line(0.0), &[o], ending(Status::Aborted));
+        assert_eq!(r.status, Status::Aborted);
+        assert_eq!(serde_json::to_value(Status::LinkLost).unwrap(), "link_lost");
+        assert_eq!(
+            collapse(vec!["a".into(), "b".into(), "a".into()]),
+            vec!["a (x2)".to_string(), "b".into()]
+        );
+        let empty = FlightReport::judge(Trajectory::default(), &[o], ending(Status::Rejected));
+        assert_eq!(empty.min_distance, None);
+    }
+}

@@ -1,0 +1,121 @@
+//! Runs the steering (CPU work: render + plan) off the async threads, one computation at a time, so the
+//! 10-20 Hz message streams keep their rate even when the planner is slower than that (a debug build, a fast
+//! time scale): senders always use the latest finished result.
+
+use std::time::Duration;
+
+use tokio::task::JoinHandle;
+
+use super::steer::{Steer, SteerInput, SteerOutput};
+
+type Job = JoinHandle<(Box<dyn Steer>, Option<SteerOutput>)>;
+
+/// The steering and its one computation in flight.
+pub struct SteerWorker {
+    idle: Option<Box<dyn Steer>>,
+    running: Option<(Job, Duration)>,
+    latest: Option<(Option<SteerOutput>, Duration)>,
+    /// Computations finished.
+    pub finished: u64,
+}
+
+impl SteerWorker {
+    /// A worker for `steer`.
+    pub fn new(steer: Box<dyn Steer>) -> Self {
+        Self {
+            idle: Some(steer),
+            running: None,
+            latest: None,
+            finished: 0,
+        }
+    }
+
+    /// Collects a finished computation and, when idle, starts one on `input` (vehicle time `now`).
+    /// Returns false if the steering was lost (its task panicked or the runtime is stopping).
+    pub async fn poll(&mut self, input: Option<SteerInput>, now: Duration) -> bool {
+        if let Some((job, at)) = self.running.take() {
+            if !job.is_finished() {
+                self.running = Some((job, at));
+                return true;
+            }
+            match job.await {
+                Ok((steer, out)) => {
+                    self.idle = Some(steer);
+                    self.latest = Some((out, at));
+                    self.finished += 1;
+                }
+                Err(_) => return false,
+            }
+        }
+        let Some(input) = input else { return true };
+        if let Some(mut steer) = self.idle.take() {
+            let job = tokio::task::spawn_blocking(move || {
+                let out = steer.steer(&input);
+                (steer, out)
+            });
+            self.running = Some((job, now));
+        }
+        true
+    }
+
+    /// The latest result whose input is at most `max_age` old: `Some(None)` means "cannot plan".
+    pub fn latest(&self, now: Duration, max_age: Duration) -> Option<Option<SteerOutput>> {
+        self.latest
+            .filter(|(_, at)| now.saturating_sub(*at) <= max_age)
+            .map(|(out, _)| out)
+    }
+}
+
+impl Drop for SteerWorker {
+    fn drop(&mut self) {
+        if let Some((job, _)) = &self.running {
+            job.abort();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bridge::steer::{Nav, Straight};
+
+    #[tokio::test]
+    async fn results_arrive_without_blocking() {
+        let mut w = SteerWorker::new(Box::new(Straight));
+        let input = SteerInput {
+            now_s: 0.0,
+            pos_ned: [0.0; 3],
+            vel_ned: [0.0; 3],
+            yaw_rad: 0.0,
+            goal_ned: [5.0, 0.0, -2.0],
+            prev_goal_ned: [0.0; 3],
+            desired_vel_ned: None,
+            nav: Nav::Mission,
+            airborne: true,
+        };
+        let t = Duration::from_secs(1);
+        assert!(
+            w.poll(None, t).await,
+            "no question: nothing to do, the steering is kept"
+        );
+        assert!(w.poll(Some(input), t).await);
+        assert_eq!(w.latest(t, Duration::from_secs(1)), None, "nothing finished yet");
+        for _ in 0..1000 {
+            assert!(w.poll(Some(input), t).await);
+            if w.finished > 0 {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(1)).await;
+        }
+        let got = w
+            .latest(t, Duration::from_millis(500))
+            .expect("finished")
+            .expect("planned");
+        assert_eq!(got.pos_ned, [5.0, 0.0, -2.0]);
+        assert_eq!(
+            w.latest(t + Duration::from_secs(2), Duration::from_millis(500)),
+            None,
+            "too old"
+        );
+    }
+}

@@ -1,0 +1,164 @@
+//! The campaign's journal: one JSON line per finished flight, synced to disk before anything else happens,
+//! so a killed campaign can resume without flying a test twice.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::{ModelError, Obstacle};
+
+/// One finished flight.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlightRecord {
+    /// The candidate's index (its generator index for the campaign's seed).
+    pub candidate: u64,
+    /// Its obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// The LFS's predicted minimum distance, metres.
+    pub predicted_min_distance: f64,
+    /// The LFS's predicted flight time, seconds.
+    pub predicted_flight_time_s: f64,
+    /// The flown minimum distance (competition definition), metres; `None` if nothing usable was recorded.
+    pub min_distance: Option<f64>,
+    /// The flown un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// How the flight ended (`landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...).
+    pub status: String,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+    /// The vehicle (MAVLink URL or `mock`) that flew it.
+    pub vehicle: String,
+    /// The trajectory CSV, relative to the campaign folder.
+    pub trajectory: PathBuf,
+    /// Wall-clock seconds the flight took.
+    pub wall_s: f64,
+}
+
+/// An append-only JSONL journal.
+#[derive(Debug)]
+pub struct Journal {
+    path: PathBuf,
+    file: File,
+}
+
+impl Journal {
+    /// Opens (creating if needed) the journal at `path` for appending.
+    pub fn open(path: &Path) -> Result<Self, ModelError> {
+        let file = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|source| ModelError::Io {
+                path: path.to_path_buf(),
+                action: "cannot open for appending",
+                source,
+            })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// Appends one record and syncs it to disk before returning.
+    pub fn append(&mut self, record: &FlightRecord) -> Result<(), ModelError> {
+        let io = |source| ModelError::Io {
+            path: self.path.clone(),
+            action: "cannot append to",
+            source,
+        };
+        let mut line = serde_json::to_string(record).map_err(|e| io(std::io::Error::other(e)))?;
+        line.push('\n');
+        self.file.write_all(line.as_bytes()).map_err(io)?;
+        self.file.sync_data().map_err(io)
+    }
+
+    /// Reads every complete record; a torn last line (the process died mid-write) is ignored.
+    pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        let file = match File::open(path) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+            Err(source) => {
+                return Err(ModelError::Io {
+                    path: path.to_path_buf(),
+                    action: "cannot read",
+                    source,
+                });
+            }
+        };
+        let lines: Vec<String> = BufReader::new(file)
+            .lines()
+            .collect::<Result<_, _>>()
+            .map_err(|source| ModelError::Io {
+                path: path.to_path_buf(),
+                action: "cannot read",
+                source,
+            })?;
+        let mut out = Vec::new();
+        for (i, line) in lines.iter().enumerate() {
+            if line.trim().is_empty() {
+                continue;
+            }
+            match serde_json::from_str::<FlightRecord>(line) {
+                Ok(r) => out.push(r),
+                Err(_) if i + 1 == lines.len() => break, // torn final write
+                Err(e) => {
+                    return Err(ModelError::Syntax {
+                        path: path.to_path_buf(),
+                        line: Some(i + 1),
+                        column: None,
+                        message: format!("not a journal record: {e}"),
+                    });
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(candidate: u64) -> FlightRecord {
+        FlightRecord {
+            candidate,
+            obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
+            predicted_min_distance: 0.5,
+            predicted_flight_time_s: 40.0,
+            min_distance: Some(1.0),
+            min_distance_raw: Some(0.9),
+            status: "landed".into(),
+            flight_time_s: 41.0,
+            vehicle: "mock".into(),
+            trajectory: "flights/candidate_1.csv".into(),
+            wall_s: 0.3,
+        }
+    }
+
+    #[test]
+    fn append_and_read_back_ignoring_a_torn_last_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let mut j = Journal::open(&path).unwrap();
+        j.append(&record(1)).unwrap();
+        j.append(&record(7)).unwrap();
+        drop(j);
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(b"{\"candidate\": 9, \"obst").unwrap();
+        let back = Journal::read(&path).unwrap();
+        assert_eq!(back, vec![record(1), record(7)]);
+        assert!(Journal::read(&dir.path().join("none.jsonl")).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_corrupt_middle_line_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let good = serde_json::to_string(&record(1)).unwrap();
+        std::fs::write(&path, format!("{good}\nnot json\n{good}\n")).unwrap();
+        let e = Journal::read(&path).unwrap_err().to_string();
+        assert!(e.contains("journal.jsonl:2"), "{e}");
+    }
+}

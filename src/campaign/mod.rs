@@ -1,0 +1,10 @@
+//! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
+
+pub mod journal;
+pub mod parallel;
+pub mod pool;
+pub mod rank;
+pub mod report;
+pub mod run;
+pub mod score;
+pub mod screen;

@@ -1,0 +1,268 @@
+//! The high-fidelity flight pool: one flight per vehicle at a time, within the budget, each finished flight
+//! journaled before the vehicle takes the next one.
+
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use super::journal::{FlightRecord, Journal};
+use super::rank::Screened;
+use crate::model::TestCase;
+
+/// How one flight ended, as the vehicle's side reports it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Flown {
+    /// `landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...
+    pub status: String,
+    /// The competition's minimum distance, metres, if anything was recorded.
+    pub min_distance: Option<f64>,
+    /// The un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+}
+
+/// Why a vehicle could not fly.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VehicleError {
+    /// The vehicle cannot be reached or used: the pool drops it and gives its test to another.
+    #[error("vehicle {vehicle} unreachable: {reason}")]
+    Unreachable {
+        /// The vehicle.
+        vehicle: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// A high-fidelity vehicle: the embedded mock, a PX4 SITL instance or a real flight controller.
+pub trait Vehicle: Send {
+    /// A name for logs and the journal (a MAVLink URL or `mock`).
+    fn name(&self) -> String;
+    /// Flies `test`, appending the trajectory to `trajectory_csv`; returns when landed or given up.
+    fn fly(&mut self, test: &TestCase, trajectory_csv: &Path, cancel: &AtomicBool) -> Result<Flown, VehicleError>;
+}
+
+/// One flight to make.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The candidate as screened.
+    pub screened: Screened,
+    /// The test to fly.
+    pub test: TestCase,
+}
+
+/// What the pool did.
+#[derive(Debug, Default)]
+pub struct PoolOutcome {
+    /// Flights finished (journaled) in this run.
+    pub flown: usize,
+    /// Vehicles dropped as unreachable, with the reason.
+    pub dropped: Vec<String>,
+    /// Journal errors (the flight happened but could not be recorded): the campaign stops on the first.
+    pub errors: Vec<String>,
+}
+
+/// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
+/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
+pub fn fly_all(
+    vehicles: Vec<Box<dyn Vehicle>>,
+    jobs: Vec<Job>,
+    budget: usize,
+    folder: &Path,
+    journal: Journal,
+    cancel: &AtomicBool,
+    on_flight: &(dyn Fn(&FlightRecord) + Sync),
+) -> PoolOutcome {
+    let queue = Mutex::new(jobs.into_iter().collect::<VecDeque<_>>());
+    let started = AtomicUsize::new(0);
+    let journal = Mutex::new(journal);
+    let outcome = Arc::new(Mutex::new(PoolOutcome::default()));
+    let stop = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        for mut vehicle in vehicles {
+            let (queue, started, journal, outcome, stop) = (&queue, &started, &journal, outcome.clone(), &stop);
+            scope.spawn(move || {
+                loop {
+                    if cancel.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    // Reserve a flight of the budget before taking a job.
+                    if started.fetch_add(1, Ordering::SeqCst) >= budget {
+                        return;
+                    }
+                    let Some(job) = queue.lock().ok().and_then(|mut q| q.pop_front()) else {
+                        return;
+                    };
+                    let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
+                    let t0 = Instant::now();
+                    match vehicle.fly(&job.test, &folder.join(&rel), cancel) {
+                        Ok(flown) => {
+                            let record = FlightRecord {
+                                candidate: job.screened.candidate,
+                                obstacles: job.test.obstacles.clone(),
+                                predicted_min_distance: job.screened.min_distance,
+                                predicted_flight_time_s: job.screened.flight_time_s,
+                                min_distance: flown.min_distance,
+                                min_distance_raw: flown.min_distance_raw,
+                                status: flown.status,
+                                flight_time_s: flown.flight_time_s,
+                                vehicle: vehicle.name(),
+                                trajectory: rel,
+                                wall_s: t0.elapsed().as_secs_f64(),
+                            };
+                            let written = journal
+                                .lock()
+                                .map_err(|_| "journal lock poisoned".to_string())
+                                .and_then(|mut j| j.append(&record).map_err(|e| e.to_string()));
+                            let mut o = outcome.lock().unwrap_or_else(|p| p.into_inner());
+                            match written {
+                                Ok(()) => {
+                                    o.flown += 1;
+                                    drop(o);
+                                    on_flight(&record);
+                                }
+                                Err(e) => {
+                                    o.errors.push(e);
+                                    stop.store(true, Ordering::Relaxed);
+                                    return;
+                                }
+                            }
+                        }
+                        Err(e) => {
+                            // Give the job and the reserved flight back; this vehicle is out.
+                            started.fetch_sub(1, Ordering::SeqCst);
+                            if let Ok(mut q) = queue.lock() {
+                                q.push_front(job);
+                            }
+                            outcome
+                                .lock()
+                                .unwrap_or_else(|p| p.into_inner())
+                                .dropped
+                                .push(e.to_string());
+                            return;
+                        }
+                    }
+                }
+            });
+        }
+    });
+    Arc::try_unwrap(outcome)
+        .map(|m| m.into_inner().unwrap_or_else(|p| p.into_inner()))
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Obstacle, SIM_HOME};
+
+    struct Fake {
+        name: &'static str,
+        reachable: bool,
+        log: Arc<Mutex<Vec<(String, u64)>>>,
+    }
+
+    impl Vehicle for Fake {
+        fn name(&self) -> String {
+            self.name.into()
+        }
+        fn fly(&mut self, test: &TestCase, _csv: &Path, _c: &AtomicBool) -> Result<Flown, VehicleError> {
+            if !self.reachable {
+                return Err(VehicleError::Unreachable {
+                    vehicle: self.name.into(),
+                    reason: "no heartbeat".into(),
+                });
+            }
+            let id = test.obstacles[0].position.x as u64;
+            self.log.lock().unwrap().push((self.name.into(), id));
+            Ok(Flown {
+                status: "landed".into(),
+                min_distance: Some(1.0),
+                min_distance_raw: Some(0.9),
+                flight_time_s: 40.0,
+            })
+        }
+    }
+
+    fn test_case() -> TestCase {
+        let yaml = "drone:\n  mission_file: missions/mission2.plan\n";
+        TestCase::parse(
+            yaml,
+            &std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("t.yaml"),
+        )
+        .unwrap()
+    }
+
+    fn jobs(n: u64) -> Vec<Job> {
+        let base = test_case();
+        (0..n)
+            .map(|i| Job {
+                screened: Screened {
+                    candidate: i,
+                    min_distance: 0.5,
+                    flight_time_s: 40.0,
+                    status: "landed".into(),
+                },
+                test: base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
+            })
+            .collect()
+    }
+
+    fn run(vehicles: Vec<(&'static str, bool)>, n: u64, budget: usize) -> (PoolOutcome, Vec<(String, u64)>, usize) {
+        let dir = tempfile::tempdir().unwrap();
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let v: Vec<Box<dyn Vehicle>> = vehicles
+            .into_iter()
+            .map(|(name, reachable)| {
+                Box::new(Fake {
+                    name,
+                    reachable,
+                    log: log.clone(),
+                }) as Box<dyn Vehicle>
+            })
+            .collect();
+        let journal = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
+        let out = fly_all(
+            v,
+            jobs(n),
+            budget,
+            dir.path(),
+            journal,
+            &AtomicBool::new(false),
+            &|_| {},
+        );
+        let records = Journal::read(&dir.path().join("journal.jsonl")).unwrap().len();
+        let flown = log.lock().unwrap().clone();
+        (out, flown, records)
+    }
+
+    #[test]
+    fn budget_is_respected_across_vehicles() {
+        let (out, flown, records) = run(vec![("a", true), ("b", true), ("c", true)], 20, 7);
+        assert_eq!((out.flown, flown.len(), records), (7, 7, 7));
+        let mut ids: Vec<u64> = flown.iter().map(|f| f.1).collect();
+        ids.sort();
+        assert_eq!(ids, (0..7).collect::<Vec<_>>(), "the best-ranked jobs, each once");
+        let _ = SIM_HOME;
+    }
+
+    #[test]
+    fn an_unreachable_vehicle_is_dropped_and_its_job_flown_elsewhere() {
+        let (out, flown, _) = run(vec![("dead", false), ("ok", true)], 5, 5);
+        assert_eq!(out.flown, 5);
+        assert_eq!(out.dropped.len(), 1);
+        assert!(flown.iter().all(|f| f.0 == "ok"));
+        let mut ids: Vec<u64> = flown.iter().map(|f| f.1).collect();
+        ids.sort();
+        assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn no_reachable_vehicle_flies_nothing() {
+        let (out, flown, records) = run(vec![("x", false), ("y", false)], 5, 5);
+        assert_eq!((out.flown, flown.len(), records, out.dropped.len()), (0, 0, 0, 2));
+    }
+}

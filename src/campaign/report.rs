@@ -1,0 +1,300 @@
+//! The campaign's outputs: the failing tests best first, with their flights, and report.json / report.md.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::journal::FlightRecord;
+use crate::io::write_atomic;
+use crate::judge::{diversity, points, test_score};
+use crate::model::{ModelError, Spelling, TestCase};
+
+/// The competition's failure distance, metres.
+pub const FAIL_DISTANCE_M: f64 = 1.5;
+
+/// Wall time of each stage, seconds.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// Drawing the candidates.
+    pub sample_s: f64,
+    /// Low-fidelity screening.
+    pub screen_s: f64,
+    /// High-fidelity flights.
+    pub fly_s: f64,
+    /// Writing the outputs.
+    pub report_s: f64,
+}
+
+/// One flown test in the report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FlownTest {
+    /// The candidate index.
+    pub candidate: u64,
+    /// LFS prediction, metres.
+    pub predicted_min_distance: f64,
+    /// Flown minimum distance (competition definition), metres.
+    pub min_distance: Option<f64>,
+    /// Flown un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// How the flight ended.
+    pub status: String,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+    /// The competition's points for this run.
+    pub points: u32,
+    /// The competition's test score.
+    pub test_score: f64,
+    /// `test_N.yaml` it was reported as, if it failed.
+    pub reported_as: Option<String>,
+    /// The vehicle that flew it.
+    pub vehicle: String,
+}
+
+/// The suite's numbers.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SuiteSummary {
+    /// Candidates drawn and screened.
+    pub candidates_screened: usize,
+    /// Flights made.
+    pub flown: usize,
+    /// Reported tests (flown below 1.5 m).
+    pub failing: usize,
+    /// Sum of the reported tests' scores.
+    pub failure_score: f64,
+    /// Diversity of the reported tests (1 - mean pairwise IoU).
+    pub diversity: Option<f64>,
+    /// Of the flown tests the LFS predicted below 1.5 m, the share that flew below 1.5 m.
+    pub lfs_precision: Option<f64>,
+    /// Mean |predicted - flown| minimum distance over flown tests, metres.
+    pub lfs_mean_abs_error_m: Option<f64>,
+    /// Candidates screened per second of screening wall time.
+    pub screening_per_s: f64,
+}
+
+/// The whole report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// The case study.
+    pub case: String,
+    /// The campaign's seed.
+    pub seed: u64,
+    /// The flight budget.
+    pub budget: usize,
+    /// Every flown test, in flight order.
+    pub flights: Vec<FlownTest>,
+    /// Suite numbers.
+    pub suite: SuiteSummary,
+    /// Wall time per stage.
+    pub stages: StageTimes,
+}
+
+/// Records of flights that failed (below 1.5 m), best first: smallest distance, then shorter flight.
+pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
+    let mut out: Vec<&FlightRecord> = records
+        .iter()
+        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_DISTANCE_M))
+        .collect();
+    out.sort_by(|a, b| {
+        let (da, db) = (
+            a.min_distance.unwrap_or(f64::INFINITY),
+            b.min_distance.unwrap_or(f64::INFINITY),
+        );
+        da.total_cmp(&db)
+            .then(a.flight_time_s.total_cmp(&b.flight_time_s))
+            .then(a.candidate.cmp(&b.candidate))
+    });
+    out
+}
+
+/// Writes `test_N.yaml` (+ `test_N.csv`) for each failing flight, best first, then report.json and report.md.
+/// Returns the report.
+#[allow(clippy::too_many_arguments)]
+pub fn write_outputs(
+    folder: &Path,
+    case: &TestCase,
+    seed: u64,
+    budget: usize,
+    candidates_screened: usize,
+    records: &[FlightRecord],
+    mut stages: StageTimes,
+    spelling: Spelling,
+) -> Result<Report, ModelError> {
+    let t0 = std::time::Instant::now();
+    let failing = failing_best_first(records);
+    let mut reported: Vec<(u64, String)> = Vec::new();
+    for (i, r) in failing.iter().enumerate() {
+        let name = format!("test_{i}");
+        case.with_obstacles(r.obstacles.clone())
+            .save(&folder.join(format!("{name}.yaml")), spelling)?;
+        let src = folder.join(&r.trajectory);
+        if let Ok(bytes) = std::fs::read(&src) {
+            write_atomic(&folder.join(format!("{name}.csv")), &bytes)?;
+        }
+        reported.push((r.candidate, format!("{name}.yaml")));
+    }
+    let flights: Vec<FlownTest> = records
+        .iter()
+        .map(|r| {
+            let d = r.min_distance.unwrap_or(f64::INFINITY);
+            FlownTest {
+                candidate: r.candidate,
+                predicted_min_distance: r.predicted_min_distance,
+                min_distance: r.min_distance,
+                min_distance_raw: r.min_distance_raw,
+                status: r.status.clone(),
+                flight_time_s: r.flight_time_s,
+                points: points(d),
+                test_score: if r.min_distance.is_some() {
+                    test_score(&[d], &[r.flight_time_s], r.obstacles.len())
+                } else {
+                    0.0
+                },
+                reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
+                vehicle: r.vehicle.clone(),
+            }
+        })
+        .collect();
+    let predicted_fail: Vec<&FlightRecord> = records
+        .iter()
+        .filter(|r| r.predicted_min_distance < FAIL_DISTANCE_M)
+        .collect();
+    let precision = (!predicted_fail.is_empty()).then(|| {
+        predicted_fail
+            .iter()
+            .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_DISTANCE_M))
+            .count() as f64
+            / predicted_fail.len() as f64
+    });
+    let errors: Vec<f64> = records
+        .iter()
+        .filter_map(|r| r.min_distance.map(|d| (d - r.predicted_min_distance).abs()))
+        .collect();
+    let suite = SuiteSummary {
+        candidates_screened,
+        flown: records.len(),
+        failing: failing.len(),
+        failure_score: flights
+            .iter()
+            .filter(|f| f.reported_as.is_some())
+            .map(|f| f.test_score)
+            .sum(),
+        diversity: diversity(&failing.iter().map(|r| r.obstacles.clone()).collect::<Vec<_>>()),
+        lfs_precision: precision,
+        lfs_mean_abs_error_m: (!errors.is_empty()).then(|| errors.iter().sum::<f64>() / errors.len() as f64),
+        screening_per_s: if stages.screen_s > 0.0 {
+            candidates_screened as f64 / stages.screen_s
+        } else {
+            0.0
+        },
+    };
+    stages.report_s = t0.elapsed().as_secs_f64();
+    let report = Report {
+        case: case.path.display().to_string(),
+        seed,
+        budget,
+        flights,
+        suite,
+        stages,
+    };
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+    write_atomic(&folder.join("report.json"), json.as_bytes())?;
+    write_atomic(&folder.join("report.md"), markdown(&report).as_bytes())?;
+    Ok(report)
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("-".into(), |v| format!("{v:.3}"))
+}
+
+/// The report as Markdown.
+pub fn markdown(r: &Report) -> String {
+    let s = &r.suite;
+    let mut md = format!("# prgenuav campaign: {}\n\n", r.case);
+    let _ = writeln!(
+        md,
+        "seed {}, budget {} flights, {} candidates screened\n",
+        r.seed, r.budget, s.candidates_screened
+    );
+    let _ = writeln!(md, "| metric | value |\n|---|---|");
+    let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);
+    let _ = writeln!(md, "| failure score | {:.3} |", s.failure_score);
+    let _ = writeln!(md, "| diversity | {} |", opt(s.diversity));
+    let _ = writeln!(
+        md,
+        "| LFS precision (predicted < 1.5 m that flew < 1.5 m) | {} |",
+        opt(s.lfs_precision)
+    );
+    let _ = writeln!(md, "| LFS mean absolute error | {} m |", opt(s.lfs_mean_abs_error_m));
+    let _ = writeln!(md, "| screening throughput | {:.1} candidates/s |", s.screening_per_s);
+    let st = &r.stages;
+    let _ = writeln!(
+        md,
+        "| wall time: sample / screen / fly / report | {:.2} / {:.2} / {:.2} / {:.2} s |\n",
+        st.sample_s, st.screen_s, st.fly_s, st.report_s
+    );
+    let _ = writeln!(
+        md,
+        "## Flights\n\n| candidate | predicted m | flown m | raw m | status | time s | points | score | reported as |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    for f in &r.flights {
+        let _ = writeln!(
+            md,
+            "| {} | {:.3} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
+            f.candidate,
+            f.predicted_min_distance,
+            opt(f.min_distance),
+            opt(f.min_distance_raw),
+            f.status,
+            f.flight_time_s,
+            f.points,
+            f.test_score,
+            f.reported_as.as_deref().unwrap_or("")
+        );
+    }
+    md
+}
+
+/// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.
+pub fn timestamped_folder(dir: &Path, now: std::time::SystemTime) -> PathBuf {
+    let secs = now.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    let (_, month, day) = civil_from_days(days as i64);
+    dir.join(format!(
+        "{day:02}-{month:02}-{:02}-{:02}-{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    ))
+}
+
+/// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar.
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folder_name_is_day_month_time() {
+        // 2026-11-22 03:42:07 UTC
+        let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_795_318_927);
+        assert_eq!(
+            timestamped_folder(Path::new("out"), t),
+            PathBuf::from("out/22-11-03-42-07")
+        );
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(19_782), (2024, 2, 29));
+    }
+}

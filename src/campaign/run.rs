@@ -1,0 +1,253 @@
+//! The campaign pipeline: sample candidates, screen them all with the LFS, fly the most severe within the
+//! budget, report the failing ones best first. Resumable from its folder.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::journal::{FlightRecord, Journal};
+use super::parallel::{available_threads, parallel_map};
+use super::pool::{Job, Vehicle, fly_all};
+use super::rank::{Screened, rank};
+use super::report::{Report, StageTimes, write_outputs};
+use crate::generator::{GenerateError, Generator, GeneratorConfig};
+use crate::io::write_atomic;
+use crate::model::{ModelError, Obstacle, Spelling, TestCase};
+
+/// Everything that defines a campaign; saved as `campaign.json` so `--resume` continues the same one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CampaignConfig {
+    /// The case study YAML.
+    pub case: PathBuf,
+    /// Seed of the generator.
+    pub seed: u64,
+    /// High-fidelity flights allowed.
+    pub budget: usize,
+    /// Candidates to draw and screen.
+    pub candidates: usize,
+    /// Only candidates predicted below this distance (metres) are flown.
+    pub threshold_m: f64,
+    /// Candidates overlapping an already chosen one by more than this IoU are skipped.
+    pub max_iou: f64,
+    /// Generator parameters.
+    pub generator: GeneratorConfig,
+    /// Whether tests are written with the old key spelling (`drone`/`test`).
+    pub old_spelling: bool,
+    /// The high-fidelity side as given (`mock` or MAVLink URLs).
+    pub hfs: Vec<String>,
+}
+
+/// Predicts a test's flight with the low-fidelity simulator.
+pub trait Screener: Sync {
+    /// Predicted minimum distance (m), flight time (s) and how the simulated flight ended.
+    fn screen(&self, test: &TestCase) -> (f64, f64, String);
+}
+
+/// Progress reporting for the stages.
+pub trait Progress: Sync {
+    /// A stage starts with `total` steps.
+    fn stage(&self, name: &str, total: usize);
+    /// `done` steps of the current stage are finished.
+    fn tick(&self, done: usize);
+    /// A line for the user.
+    fn note(&self, message: &str);
+}
+
+/// Why a campaign stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum CampaignError {
+    /// A file could not be read or written.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The generator could not place obstacles.
+    #[error(transparent)]
+    Generate(#[from] GenerateError),
+    /// Bad settings.
+    #[error("{0}")]
+    Config(String),
+    /// No vehicle could be reached.
+    #[error("no reachable vehicle: {0}")]
+    NoVehicle(String),
+}
+
+/// Runs (or resumes) a campaign in `folder`.
+pub fn run_campaign(
+    cfg: &CampaignConfig,
+    folder: &Path,
+    screener: &dyn Screener,
+    vehicles: Vec<Box<dyn Vehicle>>,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<Report, CampaignError> {
+    if cfg.budget == 0 {
+        return Err(CampaignError::Config("the budget must be at least 1 flight".into()));
+    }
+    if cfg.candidates == 0 {
+        return Err(CampaignError::Config("--candidates must be at least 1".into()));
+    }
+    let case = TestCase::load(&cfg.case)?;
+    let spelling = if cfg.old_spelling { Spelling::Old } else { Spelling::New };
+    std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
+        path: folder.to_path_buf(),
+        action: "cannot create",
+        source,
+    })?;
+    let config_json = serde_json::to_string_pretty(cfg).unwrap_or_default();
+    write_atomic(&folder.join("campaign.json"), config_json.as_bytes())?;
+    let mut stages = StageTimes::default();
+
+    let t = Instant::now();
+    let generator = Generator::new(&case, cfg.generator.clone(), cfg.seed)?;
+    progress.stage("sample", cfg.candidates);
+    let candidates: Vec<Vec<Obstacle>> = (0..cfg.candidates as u64)
+        .map(|i| generator.sample(i).map(|p| p.obstacles.to_vec()))
+        .collect::<Result<_, _>>()?;
+    progress.tick(cfg.candidates);
+    stages.sample_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let screened = screen_all(&case, &candidates, folder, screener, progress, cancel)?;
+    stages.screen_s = t.elapsed().as_secs_f64();
+
+    let journal_path = folder.join("journal.jsonl");
+    let done = Journal::read(&journal_path)?;
+    let remaining = cfg.budget.saturating_sub(done.len());
+    let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
+    let fresh: Vec<Screened> = screened.into_iter().filter(|s| !flown.contains(&s.candidate)).collect();
+    let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
+    // Diversity against what was already flown: start the ranking from the journal's tests.
+    let mut ranked = rank(&fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
+    });
+    ranked.truncate(remaining);
+    if !done.is_empty() {
+        progress.note(&format!(
+            "resuming: {} flights already journaled, {} left in the budget",
+            done.len(),
+            remaining
+        ));
+    }
+    progress.note(&format!(
+        "{} of {} candidates predicted below {} m; flying {}",
+        fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count(),
+        cfg.candidates,
+        cfg.threshold_m,
+        ranked.len()
+    ));
+
+    let t = Instant::now();
+    let jobs: Vec<Job> = ranked
+        .into_iter()
+        .map(|s| Job {
+            test: case.with_obstacles(candidates[s.candidate as usize].clone()),
+            screened: s,
+        })
+        .collect();
+    progress.stage("fly", jobs.len());
+    let count = std::sync::atomic::AtomicUsize::new(0);
+    let on_flight = |r: &FlightRecord| {
+        let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress.tick(n);
+        progress.note(&format!(
+            "flight {n}: candidate {} predicted {:.2} m, flew {} ({})",
+            r.candidate,
+            r.predicted_min_distance,
+            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
+            r.status
+        ));
+    };
+    let want = jobs.len();
+    let outcome = if want == 0 {
+        Default::default()
+    } else {
+        fly_all(
+            vehicles,
+            jobs,
+            remaining,
+            folder,
+            Journal::open(&journal_path)?,
+            cancel,
+            &on_flight,
+        )
+    };
+    for d in &outcome.dropped {
+        progress.note(&format!("dropped {d}"));
+    }
+    if let Some(e) = outcome.errors.first() {
+        return Err(CampaignError::Config(format!("journal: {e}")));
+    }
+    if want > 0 && outcome.flown == 0 && !outcome.dropped.is_empty() {
+        return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
+    }
+    stages.fly_s = t.elapsed().as_secs_f64();
+
+    let records = Journal::read(&journal_path)?;
+    Ok(write_outputs(
+        folder,
+        &case,
+        cfg.seed,
+        cfg.budget,
+        cfg.candidates,
+        &records,
+        stages,
+        spelling,
+    )?)
+}
+
+fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
+    let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
+    let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
+    crate::geometry::union_iou(&fa, &fb) > max_iou
+}
+
+/// Screens every candidate on every core; results are cached in `screening.json` for a resume.
+fn screen_all(
+    case: &TestCase,
+    candidates: &[Vec<Obstacle>],
+    folder: &Path,
+    screener: &dyn Screener,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+) -> Result<Vec<Screened>, CampaignError> {
+    let cache = folder.join("screening.json");
+    if let Ok(text) = std::fs::read_to_string(&cache)
+        && let Ok(cached) = serde_json::from_str::<Vec<Screened>>(&text)
+        && cached.len() == candidates.len()
+    {
+        progress.note(&format!("screening: reusing {} cached predictions", cached.len()));
+        return Ok(cached);
+    }
+    progress.stage("screen", candidates.len());
+    let indexed: Vec<(u64, &Vec<Obstacle>)> = candidates.iter().enumerate().map(|(i, o)| (i as u64, o)).collect();
+    let results = parallel_map(
+        &indexed,
+        available_threads(),
+        cancel,
+        &|n| progress.tick(n),
+        |(i, obstacles)| {
+            let (min_distance, flight_time_s, status) = screener.screen(&case.with_obstacles((*obstacles).clone()));
+            Screened {
+                candidate: *i,
+                min_distance,
+                flight_time_s,
+                status,
+            }
+        },
+    );
+    let screened: Vec<Screened> = results.into_iter().flatten().collect();
+    if screened.len() < candidates.len() {
+        return Err(CampaignError::Config("interrupted during screening".into()));
+    }
+    let json = serde_json::to_string(&screened).unwrap_or_default();
+    write_atomic(&cache, json.as_bytes())?;
+    Ok(screened)
+}
+
+#[cfg(test)]
+#[path = "run_tests.rs"]
+mod tests;

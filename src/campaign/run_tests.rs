@@ -1,0 +1,200 @@
+//! Campaign pipeline tests with a scripted screener and scripted vehicles (the real LFS and the mock
+//! autopilot are exercised by the integration tests).
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crate::campaign::journal::Journal;
+use crate::campaign::pool::{Flown, Vehicle, VehicleError};
+use crate::campaign::run::{CampaignConfig, CampaignError, Progress, Screener, run_campaign};
+use crate::generator::GeneratorConfig;
+use crate::model::TestCase;
+
+/// Predicts obstacle 1's centre y minus 20 as the distance: deterministic and spread out.
+struct ScriptedLfs;
+
+impl Screener for ScriptedLfs {
+    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+        ((test.obstacles[0].position.y - 20.0).abs() / 2.0, 40.0, "landed".into())
+    }
+}
+
+/// Flies by writing a two-sample CSV; the flown distance is the prediction plus 0.2 m. Cancels the
+/// campaign after `stop_after` flights (a "kill").
+struct ScriptedVehicle {
+    flown: Arc<Mutex<Vec<f64>>>,
+    stop_after: Option<usize>,
+    count: Arc<AtomicUsize>,
+}
+
+impl Vehicle for ScriptedVehicle {
+    fn name(&self) -> String {
+        "scripted".into()
+    }
+    fn fly(&mut self, test: &TestCase, csv: &Path, cancel: &AtomicBool) -> Result<Flown, VehicleError> {
+        let y = test.obstacles[0].position.y;
+        std::fs::write(csv, "timestamp,x,y,z,r\n0,0,0,0,\n1000000,0,10,10,\n").unwrap();
+        self.flown.lock().unwrap().push(y);
+        let n = self.count.fetch_add(1, Ordering::SeqCst) + 1;
+        if self.stop_after.is_some_and(|k| n >= k) {
+            cancel.store(true, Ordering::SeqCst);
+        }
+        let d = (y - 20.0).abs() / 2.0 + 0.2;
+        Ok(Flown {
+            status: "landed".into(),
+            min_distance: Some(d),
+            min_distance_raw: Some(d),
+            flight_time_s: 40.0,
+        })
+    }
+}
+
+struct Quiet;
+impl Progress for Quiet {
+    fn stage(&self, _: &str, _: usize) {}
+    fn tick(&self, _: usize) {}
+    fn note(&self, _: &str) {}
+}
+
+fn config(budget: usize) -> CampaignConfig {
+    CampaignConfig {
+        case: Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml"),
+        seed: 3,
+        budget,
+        candidates: 60,
+        threshold_m: 5.0,
+        max_iou: 0.5,
+        generator: GeneratorConfig::default(),
+        old_spelling: false,
+        hfs: vec!["scripted".into()],
+    }
+}
+
+fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<dyn Vehicle>> {
+    let count = Arc::new(AtomicUsize::new(0));
+    vec![Box::new(ScriptedVehicle {
+        flown: flown.clone(),
+        stop_after,
+        count,
+    })]
+}
+
+#[test]
+fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let r = run_campaign(
+        &config(8),
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(r.suite.flown, 8);
+    assert_eq!(flown.lock().unwrap().len(), 8);
+    // Flights went most-severe first.
+    let predicted: Vec<f64> = r.flights.iter().map(|f| f.predicted_min_distance).collect();
+    assert!(predicted.windows(2).all(|w| w[0] <= w[1]), "{predicted:?}");
+    // Reported tests are exactly the flights below 1.5 m, best first, as valid YAML with their CSVs.
+    let failing: Vec<f64> = r
+        .flights
+        .iter()
+        .filter_map(|f| f.min_distance.filter(|d| *d < 1.5))
+        .collect();
+    assert_eq!(r.suite.failing, failing.len());
+    let mut last = 0.0;
+    for i in 0..r.suite.failing {
+        let t = TestCase::load(&dir.path().join(format!("test_{i}.yaml"))).unwrap();
+        assert!(crate::rules::check(&t, &crate::model::Arena::default()).is_empty());
+        assert!(dir.path().join(format!("test_{i}.csv")).is_file());
+        let f = r
+            .flights
+            .iter()
+            .find(|f| f.reported_as.as_deref() == Some(&format!("test_{i}.yaml")))
+            .unwrap();
+        assert!(f.min_distance.unwrap() >= last);
+        last = f.min_distance.unwrap();
+    }
+    assert!(!dir.path().join(format!("test_{}.yaml", r.suite.failing)).exists());
+    for f in [
+        "report.json",
+        "report.md",
+        "journal.jsonl",
+        "campaign.json",
+        "screening.json",
+    ] {
+        assert!(dir.path().join(f).is_file(), "{f}");
+    }
+    assert_eq!(
+        r.suite.lfs_precision,
+        Some(1.0).filter(|_| r.flights.iter().any(|f| f.predicted_min_distance < 1.5))
+    );
+}
+
+#[test]
+fn killed_and_resumed_campaign_flies_nothing_twice_and_respects_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let cancel = AtomicBool::new(false);
+    let first = run_campaign(
+        &config(10),
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, Some(4)),
+        &Quiet,
+        &cancel,
+    );
+    assert_eq!(first.unwrap().suite.flown, 4);
+    assert_eq!(Journal::read(&dir.path().join("journal.jsonl")).unwrap().len(), 4);
+    let second = run_campaign(
+        &config(10),
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(second.suite.flown, 10);
+    let all = flown.lock().unwrap().clone();
+    assert_eq!(all.len(), 10);
+    let mut dedup = all.clone();
+    dedup.sort_by(f64::total_cmp);
+    dedup.dedup();
+    assert_eq!(dedup.len(), 10, "a test was flown twice: {all:?}");
+    // A third run has nothing left to fly.
+    let third = run_campaign(
+        &config(10),
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!((third.suite.flown, flown.lock().unwrap().len()), (10, 10));
+}
+
+#[test]
+fn bad_settings_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let quiet = AtomicBool::new(false);
+    let e = run_campaign(
+        &config(0),
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &quiet,
+    )
+    .unwrap_err();
+    assert!(matches!(e, CampaignError::Config(_)), "{e}");
+    let mut bad = config(3);
+    bad.case = "missions/does-not-exist.yaml".into();
+    let e = run_campaign(&bad, dir.path(), &ScriptedLfs, vehicle(&flown, None), &Quiet, &quiet).unwrap_err();
+    assert!(e.to_string().contains("does-not-exist.yaml"), "{e}");
+}

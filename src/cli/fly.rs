@@ -1,0 +1,178 @@
+//! `prgenuav fly TEST.yaml [--connect URL] [--mode avoidance|offboard|mission] [--timeout S] [--json]
+//! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence]`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use prgenuav::bridge::gazebo::world_sdf;
+use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
+use prgenuav::io::write_atomic;
+use prgenuav::lfs::sim::MotionModel;
+use prgenuav::model::TestCase;
+use prgenuav::plot::{FlightPlot, PathStyle};
+
+/// Obstacle mode on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Mode {
+    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; we are its avoidance companion.
+    Avoidance,
+    /// We fly the waypoints in OFFBOARD mode with the planner's setpoints (any PX4).
+    Offboard,
+    /// PX4 flies the plain mission (baseline, no avoidance).
+    Mission,
+}
+
+/// Arguments of `fly`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The test YAML (mission, parameters, commands and the virtual obstacles).
+    test: PathBuf,
+    /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
+    #[arg(long, default_value = DEFAULT_URL)]
+    connect: String,
+    /// How the virtual obstacles are avoided.
+    #[arg(long, value_enum, default_value = "avoidance")]
+    mode: Mode,
+    /// Give up after this many seconds of flight (LAND is commanded).
+    #[arg(long, default_value_t = 500.0)]
+    timeout: f64,
+    /// Print the report as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Append the flown trajectory to this Aerialist CSV as it arrives.
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
+    /// Write a top-down SVG of the flown and the predicted paths.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Write the obstacles as a Gazebo Classic world (before flying).
+    #[arg(long)]
+    world: Option<PathBuf>,
+    /// Only write the `--world` file, do not fly (to start Gazebo with it first).
+    #[arg(long, requires = "world")]
+    world_only: bool,
+    /// Do not upload the obstacles as a geofence.
+    #[arg(long)]
+    no_fence: bool,
+    /// The vehicle's simulated time runs this many times faster (PX4_SIM_SPEED_FACTOR, mock --speed-factor).
+    #[arg(long, default_value_t = 1.0)]
+    time_scale: f64,
+    /// Skip the low-fidelity prediction.
+    #[arg(long)]
+    no_predict: bool,
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    // Arguments first, resources second.
+    LinkAddress::parse(&args.connect)?;
+    let test = TestCase::load(&args.test)?;
+    if let Some(path) = &args.world {
+        write_atomic(path, world_sdf(&test.obstacles).as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        if args.world_only {
+            return Ok(ExitCode::SUCCESS);
+        }
+    }
+    let prediction = if args.no_predict {
+        None
+    } else {
+        match predict(&test, MotionModel::by_name("px4").context("px4 motion model")?) {
+            Ok(p) => Some(p),
+            Err(e) => {
+                eprintln!("warning: no LFS prediction: {e}");
+                None
+            }
+        }
+    };
+    let opts = FlyOptions {
+        connect: args.connect.clone(),
+        mode: match args.mode {
+            Mode::Avoidance => FlyMode::Avoidance,
+            Mode::Offboard => FlyMode::Offboard,
+            Mode::Mission => FlyMode::Mission,
+        },
+        timeout_s: args.timeout,
+        trajectory_csv: args.trajectory.clone(),
+        fence: !args.no_fence,
+        time_scale: args.time_scale,
+        lfs_min_distance: prediction.as_ref().and_then(|p| p.min_distance),
+        ..FlyOptions::default()
+    };
+    opts.validate()?;
+    let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
+    let report = runtime.block_on(async {
+        let cancel = CancelToken::new();
+        let on_ctrl_c = cancel.clone();
+        tokio::spawn(async move {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                eprintln!("Ctrl-C: landing the vehicle, keeping the recording");
+                on_ctrl_c.cancel();
+            }
+        });
+        if !args.json {
+            eprintln!("waiting for a vehicle on {} ...", args.connect);
+        }
+        fly(&test, &opts, cancel).await
+    })?;
+    if let Some(path) = &args.plot {
+        let mut plot = FlightPlot::new(&test);
+        if let Some(p) = &prediction {
+            plot.add_path(&p.trajectory, PathStyle::Simulated, "LFS prediction");
+        }
+        plot.add_path(
+            &report.trajectory,
+            PathStyle::Flown,
+            &format!("flown ({:?})", opts.mode),
+        );
+        if let Some(c) = &report.closest_approach {
+            plot.mark_closest(c);
+        }
+        write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        super::print_json(&report)?;
+    } else {
+        let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
+        println!(
+            "status            {}{}",
+            report.status.as_str(),
+            report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default()
+        );
+        println!("min_distance      {} (competition: 0.5 s bins)", m(report.min_distance));
+        println!("min_distance_raw  {}", m(report.min_distance_raw));
+        println!("lfs_min_distance  {}", m(report.lfs_min_distance));
+        for d in &report.per_obstacle {
+            println!(
+                "  obstacle {}: {:.3} m (raw {:.3} m)",
+                d.index, d.distance, d.distance_raw
+            );
+        }
+        if let Some(c) = &report.closest_approach {
+            println!(
+                "closest approach  t = {:.2} s at x = {:.2}, y = {:.2}, z = {:.2} (obstacle {})",
+                c.t_s, c.x, c.y, c.z, c.obstacle
+            );
+        }
+        println!(
+            "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
+            report.flight_time_s,
+            report.samples,
+            report.link.packets_received,
+            report.link.retries,
+            if report.fence_uploaded {
+                "on the vehicle"
+            } else {
+                "not uploaded"
+            }
+        );
+        for w in &report.warnings {
+            println!("warning           {w}");
+        }
+    }
+    // 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete.
+    Ok(match report.status {
+        Status::Landed | Status::Collision => ExitCode::SUCCESS,
+        _ => ExitCode::from(super::EXIT_FAIL),
+    })
+}

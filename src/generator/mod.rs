@@ -1,0 +1,138 @@
+//! The pseudo-random test generator (paper, section II): two box obstacles placed on the mission's segment
+//! of interest so that the drone must fly an S-shape.
+
+mod config;
+mod placement;
+mod soi;
+
+pub use config::GeneratorConfig;
+pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
+pub use soi::{Soi, SoiKind, segment_of_interest};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use crate::model::{Arena, Mission, Obstacle, TestCase};
+use crate::rules::check_obstacles;
+
+/// Why no test could be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum GenerateError {
+    /// The configuration cannot produce a test.
+    #[error("generator configuration: {0}")]
+    Config(String),
+    /// The mission's path never enters the arena.
+    #[error("the mission ({mission}) never flies through the obstacle area; no segment of interest to obstruct")]
+    NoSegment {
+        /// The mission file.
+        mission: String,
+    },
+    /// Every attempt broke a rule.
+    #[error("no valid placement after {attempts} attempts for test {index}: the segment of interest from ({:.2}, {:.2}) to ({:.2}, {:.2}) leaves too little room", .soi.start.x, .soi.start.y, .soi.end.x, .soi.end.y)]
+    NoRoom {
+        /// The test's index.
+        index: u64,
+        /// Attempts made.
+        attempts: u32,
+        /// The SoI.
+        soi: Soi,
+    },
+}
+
+/// One generated test: its obstacles and how they were drawn.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Placement {
+    /// The test's index for its seed.
+    pub index: u64,
+    /// Obstacle 1 (crossing the SoI) and obstacle 2 (beyond its A end).
+    pub obstacles: [Obstacle; 2],
+    /// The numbers drawn.
+    pub draw: Draw,
+    /// Attempts it took (1 = the first draw was valid).
+    pub attempts: u32,
+}
+
+/// Generates tests for one case study. Test `i` depends only on the seed and `i`, so tests can be drawn in
+/// any order or in parallel and the same seed always gives the same tests, bit for bit.
+#[derive(Debug, Clone)]
+pub struct Generator {
+    mission: Mission,
+    arena: Arena,
+    config: GeneratorConfig,
+    seed: u64,
+    soi: Soi,
+    mirror: Mirror,
+    a_side: Side,
+}
+
+impl Generator {
+    /// A generator for `case`'s mission in the competition's arena.
+    pub fn new(case: &TestCase, config: GeneratorConfig, seed: u64) -> Result<Self, GenerateError> {
+        Self::for_mission(&case.mission, Arena::default(), config, seed)
+    }
+
+    /// A generator for any mission and arena.
+    pub fn for_mission(
+        mission: &Mission,
+        arena: Arena,
+        config: GeneratorConfig,
+        seed: u64,
+    ) -> Result<Self, GenerateError> {
+        config.validate().map_err(GenerateError::Config)?;
+        let soi = segment_of_interest(mission, &arena).ok_or_else(|| GenerateError::NoSegment {
+            mission: mission.source.display().to_string(),
+        })?;
+        let (mirror, a_side) = canonical_mirror(&soi, &arena);
+        Ok(Self {
+            mission: mission.clone(),
+            arena,
+            config,
+            seed,
+            soi,
+            mirror,
+            a_side,
+        })
+    }
+
+    /// The segment of interest.
+    pub fn soi(&self) -> &Soi {
+        &self.soi
+    }
+
+    /// The side of the direction of flight obstacle 1's A part (and obstacle 2) lies on.
+    pub fn a_side(&self) -> Side {
+        self.a_side
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &GeneratorConfig {
+        &self.config
+    }
+
+    /// Test number `index`: redraws until the pair passes every rule, at most `max_attempts` times.
+    pub fn sample(&self, index: u64) -> Result<Placement, GenerateError> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(index);
+        for attempt in 1..=self.config.max_attempts {
+            let Some((draw, obstacles)) =
+                placement::draw_pair(&mut rng, &self.soi, self.mirror, &self.arena, &self.config)
+            else {
+                continue;
+            };
+            if check_obstacles(&obstacles, &self.mission, &self.arena).is_empty() {
+                return Ok(Placement {
+                    index,
+                    obstacles,
+                    draw,
+                    attempts: attempt,
+                });
+            }
+        }
+        Err(GenerateError::NoRoom {
+            index,
+            attempts: self.config.max_attempts,
+            soi: self.soi,
+        })
+    }
+}

@@ -1,0 +1,199 @@
+//! The paper's canonical two-obstacle construction, and the mirror transforms that serve every SoI.
+
+use rand::Rng;
+
+use super::config::GeneratorConfig;
+use super::soi::{Soi, SoiKind};
+use crate::geometry::{P2, V2};
+use crate::model::{Arena, Obstacle};
+
+/// Which side of the direction of flight a thing lies on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// Counter-clockwise of the direction of flight in the x-y plane (plotted with x across, y up).
+    Left,
+    /// To the right (clockwise of it).
+    Right,
+}
+
+/// Reflections about the arena's middle lines; they map the arena onto itself.
+///
+/// The canonical construction assumes the SoI is flown towards increasing `y` and obstacle 1's A part lies
+/// on its left; `y` decides the first, and `x` (together with `y`, as every reflection swaps left and right)
+/// the second.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Mirror {
+    /// Reflect `x` about the arena's middle `x`.
+    pub x: bool,
+    /// Reflect `y` about the arena's middle `y`.
+    pub y: bool,
+}
+
+impl Mirror {
+    /// The point's image (the map is its own inverse).
+    pub fn point(&self, p: P2, arena: &Arena) -> P2 {
+        P2::new(
+            if self.x { 2.0 * arena.x.mid() - p.x } else { p.x },
+            if self.y { 2.0 * arena.y.mid() - p.y } else { p.y },
+        )
+    }
+
+    /// The direction's image.
+    pub fn direction(&self, v: V2) -> V2 {
+        V2::new(if self.x { -v.x } else { v.x }, if self.y { -v.y } else { v.y })
+    }
+}
+
+/// The left-hand perpendicular of `v` (counter-clockwise by 90 degrees in the x-y plane).
+pub fn left_of(v: V2) -> V2 {
+    V2::new(-v.y, v.x)
+}
+
+/// Distance from `p` along unit `u` to the arena's border (0 if `p` is outside).
+pub fn room(p: P2, u: V2, arena: &Arena) -> f64 {
+    let mut t = f64::INFINITY;
+    for (pc, uc, lo, hi) in [
+        (p.x, u.x, arena.x.min, arena.x.max),
+        (p.y, u.y, arena.y.min, arena.y.max),
+    ] {
+        if uc > 0.0 {
+            t = t.min((hi - pc) / uc);
+        } else if uc < 0.0 {
+            t = t.min((lo - pc) / uc);
+        }
+    }
+    t.max(0.0)
+}
+
+/// The transform for a SoI: flown towards +y in the canonical frame, A part on the world side with more room
+/// (it also carries obstacle 2), measured from the SoI's midpoint.
+pub fn canonical_mirror(soi: &Soi, arena: &Arena) -> (Mirror, Side) {
+    let d = soi.direction();
+    let mid = P2::from((soi.start.coords + soi.end.coords) / 2.0);
+    let a_side = if room(mid, left_of(d), arena) >= room(mid, -left_of(d), arena) {
+        Side::Left
+    } else {
+        Side::Right
+    };
+    let y = d.y < 0.0;
+    // One reflection turns the world's left into the canonical right.
+    let x = y ^ (a_side == Side::Right);
+    (Mirror { x, y }, a_side)
+}
+
+/// The numbers drawn for one test, and where the SoI crosses obstacle 1.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Draw {
+    /// Diagonal of obstacle 1's base, metres.
+    pub diagonal_m: f64,
+    /// Length of obstacle 1's base, metres.
+    pub length_m: f64,
+    /// Acute angle between obstacle 1's A direction and the direction of flight, degrees.
+    pub angle_deg: f64,
+    /// Gap between obstacle 1's A end and obstacle 2, metres.
+    pub gap_m: f64,
+    /// Share of obstacle 2's length past obstacle 1's back face.
+    pub overhang: f64,
+    /// Where the SoI crosses obstacle 1's long axis (world frame, `x` North, `y` East).
+    #[serde(serialize_with = "ser_p2")]
+    pub crossing: P2,
+}
+
+fn ser_p2<S: serde::Serializer>(p: &P2, s: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&[p.x, p.y], s)
+}
+
+/// Draws one candidate pair of obstacles; `None` when the draw cannot fit (the caller draws again).
+///
+/// Always makes exactly five draws from `rng`, so a test's numbers do not depend on earlier rejections' paths.
+pub fn draw_pair(
+    rng: &mut impl Rng,
+    soi: &Soi,
+    mirror: Mirror,
+    arena: &Arena,
+    cfg: &GeneratorConfig,
+) -> Option<(Draw, [Obstacle; 2])> {
+    let u = [0; 5].map(|_| rng.random::<f64>());
+    let lerp = |r: crate::model::Range, t: f64| r.min + (r.max - r.min) * t;
+    let w = cfg.width_m;
+    // Obstacle 2 (length_factor x obstacle 1) must respect the length rule too.
+    let d_max = cfg
+        .diagonal_m
+        .max
+        .min(((arena.l.max.min(arena.w.max) / cfg.length_factor).powi(2) + w * w).sqrt());
+    let diagonal = cfg.diagonal_m.min + (d_max - cfg.diagonal_m.min) * u[0];
+    let length = (diagonal * diagonal - w * w).sqrt();
+
+    // Canonical frame: flown towards +y, A on the left.
+    let (s0, s1) = (mirror.point(soi.start, arena), mirror.point(soi.end, arena));
+    let d = (s1 - s0).normalize();
+    let crossing = match soi.kind {
+        // The paper: draw y so the diagonal fits between the bottom and top borders, x from the SoI's line.
+        SoiKind::Crossing => {
+            let (lo, hi) = (arena.y.min + diagonal / 2.0, arena.y.max - diagonal / 2.0);
+            if lo > hi {
+                return None;
+            }
+            let y = lo + (hi - lo) * u[1];
+            s0 + (s1 - s0) * ((y - s0.y) / (s1.y - s0.y))
+        }
+        SoiKind::LongestInside => {
+            let len = (s1 - s0).norm();
+            if len < diagonal {
+                return None;
+            }
+            s0 + d * (diagonal / 2.0 + (len - diagonal) * u[1])
+        }
+    };
+    // The paper's containment test: split x diagonal fits on the A side, the rest on the B side.
+    let left = left_of(d);
+    if room(crossing, left, arena) <= cfg.split * diagonal
+        || room(crossing, -left, arena) <= (1.0 - cfg.split) * diagonal
+    {
+        return None;
+    }
+    let angle = lerp(cfg.angle_deg, u[2]).to_radians();
+    let a = d * angle.cos() + left * angle.sin();
+    let m = V2::new(a.y, -a.x); // perpendicular to a, pointing forward (m . d = sin(angle) > 0)
+    let c1 = crossing - a * ((0.5 - cfg.split) * length);
+
+    let gap = lerp(cfg.gap_m, u[3]);
+    let overhang = lerp(cfg.overhang, u[4]);
+    let length2 = cfg.length_factor * length;
+    let along_m = w / 2.0 + overhang * length2 - length2 / 2.0;
+    let c2 = crossing + a * (cfg.split * length + gap + w / 2.0) + m * along_m;
+
+    let axis = mirror.direction(a);
+    let o1 = oriented(mirror.point(c1, arena), axis, length, w, cfg.height_m);
+    let o2 = oriented(
+        mirror.point(c2, arena),
+        V2::new(-axis.y, axis.x),
+        length2,
+        w,
+        cfg.height_m,
+    );
+    let draw = Draw {
+        diagonal_m: diagonal,
+        length_m: length,
+        angle_deg: angle.to_degrees(),
+        gap_m: gap,
+        overhang,
+        crossing: mirror.point(crossing, arena),
+    };
+    Some((draw, [o1, o2]))
+}
+
+/// A box whose long side (`long`) lies along `axis`, written with `r` in [0, 90] degrees as the rules want:
+/// a rectangle turned by more than 90 degrees is the same rectangle with `l` and `w` swapped.
+fn oriented(center: P2, axis: V2, long: f64, short: f64, height: f64) -> Obstacle {
+    let mut psi = axis.y.atan2(axis.x).to_degrees().rem_euclid(180.0);
+    if psi >= 180.0 {
+        psi = 0.0;
+    }
+    if psi <= 90.0 {
+        Obstacle::new(long, short, height, center.x, center.y, psi)
+    } else {
+        Obstacle::new(short, long, height, center.x, center.y, psi - 90.0)
+    }
+}

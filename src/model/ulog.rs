@@ -1,0 +1,80 @@
+//! Trajectories from PX4 ULog flight logs (`vehicle_local_position`), as Aerialist extracts them.
+
+use std::path::Path;
+
+use px4_ulog::full_parser::{SomeVec, read_file};
+
+use super::error::{ModelError, Result};
+use super::trajectory::{Sample, Trajectory};
+
+/// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
+/// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
+pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
+    let bad = |message: String| ModelError::Syntax {
+        path: path.to_path_buf(),
+        line: None,
+        column: None,
+        message,
+    };
+    let name = path.to_str().ok_or_else(|| bad("the path is not UTF-8".into()))?;
+    if !path.is_file() {
+        return Err(ModelError::Io {
+            path: path.to_path_buf(),
+            action: "cannot read",
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        });
+    }
+    // The parser asserts its own invariants; a malformed log must be an error, not a crash.
+    let parsed = std::panic::catch_unwind(|| read_file(name))
+        .map_err(|_| bad("malformed ULog (the parser gave up)".into()))?
+        .map_err(|e| bad(format!("not a readable ULog: {e}")))?;
+    let topic = parsed
+        .messages
+        .get("vehicle_local_position")
+        .ok_or_else(|| bad("no vehicle_local_position topic in the log".into()))?;
+    let mut instances: Vec<_> = topic.iter().collect();
+    instances.sort_by_key(|(id, _)| id.value());
+    let (_, fields) = instances
+        .first()
+        .ok_or_else(|| bad("vehicle_local_position has no data".into()))?;
+    let column = |name: &str| -> Result<Vec<f64>> {
+        match fields.get(name) {
+            Some(SomeVec::Float(v)) => Ok(v.iter().map(|x| f64::from(*x)).collect()),
+            Some(SomeVec::Double(v)) => Ok(v.clone()),
+            Some(SomeVec::UInt64(v)) => Ok(v.iter().map(|x| *x as f64).collect()),
+            Some(_) => Err(bad(format!("vehicle_local_position.{name} has an unexpected type"))),
+            None => Err(bad(format!("vehicle_local_position has no field {name}"))),
+        }
+    };
+    let (t, x, y, z) = (column("timestamp")?, column("x")?, column("y")?, column("z")?);
+    let heading = column("heading").ok();
+    let t0 = t
+        .first()
+        .copied()
+        .ok_or_else(|| bad("vehicle_local_position has no samples".into()))?;
+    let samples = (0..t.len().min(x.len()).min(y.len()).min(z.len()))
+        .filter(|&i| x[i].is_finite() && y[i].is_finite() && z[i].is_finite())
+        .map(|i| Sample {
+            t_s: (t[i] - t0) / 1e6,
+            x: x[i],
+            y: y[i],
+            z: -z[i],
+            r: heading
+                .as_ref()
+                .and_then(|h| h.get(i).copied())
+                .filter(|v| v.is_finite()),
+        })
+        .collect::<Vec<_>>();
+    if samples.is_empty() {
+        return Err(bad("vehicle_local_position holds no finite position".into()));
+    }
+    Ok(Trajectory::new(samples))
+}
+
+/// Reads a flight: a ULog (`.ulg`) or an Aerialist trajectory CSV (anything else).
+pub fn load_flight(path: &Path) -> Result<Trajectory> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("ulg") => load_ulog_trajectory(path),
+        _ => Trajectory::load_csv(path),
+    }
+}

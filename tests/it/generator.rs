@@ -1,0 +1,254 @@
+//! The generator over thousands of seeds: every test valid, the paper's geometry exact, any SoI direction.
+
+use prgenuav::generator::{Generator, GeneratorConfig, Placement, Side, Soi};
+use prgenuav::geometry::V2;
+use prgenuav::model::{Arena, GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, SIM_HOME};
+use prgenuav::rules::check_obstacles;
+use proptest::prelude::*;
+
+use super::{case, prgenuav, repo};
+
+/// Unit long axis, long side and short side of a box.
+fn long_axis(o: &Obstacle) -> (V2, f64, f64) {
+    let r = o.position.r.to_radians();
+    if o.size.l >= o.size.w {
+        (V2::new(r.cos(), r.sin()), o.size.l, o.size.w)
+    } else {
+        (V2::new(-r.sin(), r.cos()), o.size.w, o.size.l)
+    }
+}
+
+fn cross(a: V2, b: V2) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Checks one placement against the rules and the paper's construction.
+fn verify(p: &Placement, g: &Generator, mission: &Mission) {
+    let cfg = GeneratorConfig::default();
+    let v = check_obstacles(&p.obstacles, mission, &Arena::default());
+    assert!(v.is_empty(), "test {} breaks rules: {v:#?}", p.index);
+    let soi: &Soi = g.soi();
+    let d = soi.direction();
+    let [o1, o2] = &p.obstacles;
+    let (u1, long1, short1) = long_axis(o1);
+    let (u2, long2, short2) = long_axis(o2);
+    assert!((short1 - cfg.width_m).abs() < 1e-12 && (short2 - cfg.width_m).abs() < 1e-12);
+    assert!((o1.size.h - 20.0).abs() < 1e-12 && (o2.size.h - 20.0).abs() < 1e-12);
+    // Where the SoI's line crosses obstacle 1's long axis: centre + s u1.
+    let c1 = V2::new(o1.position.x, o1.position.y);
+    let s = cross(V2::new(soi.start.x, soi.start.y) - c1, d) / cross(u1, d);
+    let part_a = long1 / 2.0 - s.abs();
+    let ratio = part_a / long1;
+    assert!(
+        (ratio - 1.0 / 3.0).abs() <= 1e-6 / 3.0,
+        "test {}: split {ratio}",
+        p.index
+    );
+    // The crossing lies on the SoI, between its ends.
+    let at = c1 + u1 * s;
+    let t = (at - V2::new(soi.start.x, soi.start.y)).dot(&d);
+    assert!(t > 0.0 && t < soi.length(), "crossing outside the SoI: t {t}");
+    // A points forward (acute with the flight direction), B makes the obtuse angle.
+    let a_dir = u1 * s.signum();
+    assert!(a_dir.dot(&d) > 0.0, "A part must lean towards the goal");
+    assert!((-a_dir).dot(&d) < 0.0, "the SoI meets part B at an obtuse angle");
+    let side = if cross(d, a_dir) > 0.0 { Side::Left } else { Side::Right };
+    assert_eq!(side, g.a_side());
+    // Obstacle 2: perpendicular and 1.75 x as long.
+    let angle = u1.dot(&u2).abs().min(1.0).acos();
+    assert!(
+        (angle - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+        "test {}: angle {angle}",
+        p.index
+    );
+    assert!((long2 / long1 - cfg.length_factor).abs() < 1e-9);
+    // Beyond the A end: obstacle 2's centre is further along A than obstacle 1's A end.
+    let c2 = V2::new(o2.position.x, o2.position.y);
+    assert!((c2 - at).dot(&a_dir) > part_a, "obstacle 2 must stand beyond the A end");
+}
+
+fn generator_for(mission: &Mission, seed: u64) -> Generator {
+    Generator::for_mission(mission, Arena::default(), GeneratorConfig::default(), seed).expect("generator")
+}
+
+#[test]
+fn thousands_of_seeds_on_missions_1_to_7() {
+    for n in 1..=7 {
+        let mission = case(n).mission;
+        for seed in 0..3u64 {
+            let g = generator_for(&mission, seed);
+            for i in 0..700 {
+                verify(
+                    &g.sample(i)
+                        .unwrap_or_else(|e| panic!("mission{n} seed {seed} test {i}: {e}")),
+                    &g,
+                    &mission,
+                );
+            }
+        }
+    }
+}
+
+/// A synthetic mission: takeoff at `a`, fly to `b`, land at `c` (x North, y East, 10 m altitude).
+fn mission_through(points: &[(f64, f64)]) -> Mission {
+    let items = points
+        .iter()
+        .map(|&(x, y)| MissionItem {
+            command: 16,
+            frame: 3,
+            params: [None; 7],
+            auto_continue: true,
+            global: Some(GeoPoint {
+                lat_deg: 0.0,
+                lon_deg: 0.0,
+                alt_m: 10.0,
+            }),
+            local: Some(LocalPoint {
+                north_m: x,
+                east_m: y,
+                alt_m: 10.0,
+            }),
+        })
+        .collect();
+    Mission {
+        items,
+        planned_home: None,
+        home: SIM_HOME,
+        source: "synthetic".into(),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// SoIs of every slope sign and direction: up or down the arena, leaning either way, steep or vertical.
+    #[test]
+    fn any_soi_direction(x0 in -30.0f64..20.0, x1 in -30.0f64..20.0, vertical in any::<bool>(),
+                         reversed in any::<bool>(), seed in 0u64..1000) {
+        let x1 = if vertical { x0 } else { x1 };
+        let (mut a, mut b) = ((x0, 5.0), (x1, 45.0));
+        if reversed {
+            std::mem::swap(&mut a, &mut b);
+        }
+        let mission = mission_through(&[(0.0, 0.0), a, b, (0.0, 0.0)]);
+        let g = generator_for(&mission, seed);
+        for i in 0..5 {
+            verify(&g.sample(i).unwrap(), &g, &mission);
+        }
+    }
+}
+
+#[test]
+fn near_horizontal_path_uses_the_longest_stretch_inside() {
+    // Never crosses both y borders inside the arena: the fallback SoI still gets a valid S-pair.
+    let mission = mission_through(&[(-60.0, 18.0), (45.0, 32.0)]);
+    let g = generator_for(&mission, 7);
+    assert_eq!(g.soi().kind, prgenuav::generator::SoiKind::LongestInside);
+    for i in 0..200 {
+        let p = g.sample(i).unwrap();
+        assert!(check_obstacles(&p.obstacles, &mission, &Arena::default()).is_empty());
+    }
+    let outside = mission_through(&[(100.0, 0.0), (100.0, 60.0)]);
+    let e = Generator::for_mission(&outside, Arena::default(), GeneratorConfig::default(), 0).unwrap_err();
+    assert!(e.to_string().contains("never flies through"), "{e}");
+}
+
+#[test]
+fn same_seed_same_tests_different_seed_different_tests() {
+    let mission = case(2).mission;
+    let (a, b, c) = (
+        generator_for(&mission, 42),
+        generator_for(&mission, 42),
+        generator_for(&mission, 43),
+    );
+    for i in 0..50 {
+        assert_eq!(a.sample(i).unwrap(), b.sample(i).unwrap());
+        assert_ne!(a.sample(i).unwrap().obstacles, c.sample(i).unwrap().obstacles);
+    }
+    // Order does not matter: test 9 is test 9 whether drawn first or last.
+    assert_eq!(a.sample(9).unwrap(), generator_for(&mission, 42).sample(9).unwrap());
+}
+
+#[test]
+fn sample_cli_is_byte_identical_per_seed_and_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |seed: &str, out: &str| {
+        let out = dir.path().join(out);
+        let (code, stdout, err) = prgenuav(&[
+            "sample",
+            "missions/mission3.yaml",
+            "--count",
+            "5",
+            "--seed",
+            seed,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            stdout.contains(&format!("output folder: {}", out.display())),
+            "{stdout}"
+        );
+        (0..5)
+            .map(|i| std::fs::read(out.join(format!("test_{i}.yaml"))).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let (a, b, c) = (run("5", "a"), run("5", "b"), run("6", "c"));
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+    for i in 0..5 {
+        let f = dir.path().join(format!("a/test_{i}.yaml"));
+        let (code, out, err) = prgenuav(&["check", f.to_str().unwrap()]);
+        assert_eq!(code, 0, "{out}{err}");
+    }
+    let _ = repo();
+}
+
+#[test]
+fn sample_cli_bad_arguments() {
+    let (code, _, err) = prgenuav(&["sample", "missions/mission2.yaml", "--count", "0"]);
+    assert_eq!(code, 2, "{err}");
+    let (code, _, err) = prgenuav(&["sample", "missions/mission2.yaml", "--count", "2", "--gap", "5,1"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("gap_m"), "{err}");
+    let (code, _, err) = prgenuav(&["sample", "missions/nope.yaml", "--count", "2"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("nope.yaml"), "{err}");
+    let toml_dir = tempfile::tempdir().unwrap();
+    let cfg = toml_dir.path().join("g.toml");
+    std::fs::write(&cfg, "gap_m = { min = 2.5, max = 3.0 }\nbogus = 1\n").unwrap();
+    let (code, _, err) = prgenuav(&[
+        "sample",
+        "missions/mission2.yaml",
+        "--count",
+        "2",
+        "--config",
+        cfg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("bogus"), "{err}");
+}
+
+#[test]
+fn toml_and_flags_change_the_draw_ranges() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let (code, stdout, err) = prgenuav(&[
+        "sample",
+        "missions/mission2.yaml",
+        "--count",
+        "20",
+        "--gap",
+        "3,3.1",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    for t in j["tests"].as_array().unwrap() {
+        let gap = t["draw"]["gap_m"].as_f64().unwrap();
+        assert!((3.0..=3.1).contains(&gap), "{gap}");
+    }
+    assert!(j["diversity"].as_f64().unwrap() > 0.5);
+}
