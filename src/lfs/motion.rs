@@ -254,11 +254,11 @@ mod tests {
         let here = v.position_enu;
         p.track(&mut v, &here, 1.0, 0.1);
         assert!((v.yaw_enu_rad.to_degrees() - 4.5).abs() < 1e-9);
-        // Converges onto a near setpoint without oscillating far past it.
+        // Converges onto a near setpoint (time constant 1 / gain) without oscillating far past it.
         let mut v = at(0.0, 0.0, 0.0);
         let sp = Vector3::new(1.0, 0.0, 10.0);
         let mut max_x: f64 = 0.0;
-        for _ in 0..100 {
+        for _ in 0..(10.0 / (p.pos_gain_per_s * 0.1)) as usize {
             p.track(&mut v, &sp, 0.0, 0.1);
             max_x = max_x.max(v.position_enu.x);
         }
