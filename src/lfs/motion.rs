@@ -30,14 +30,20 @@
 //! | model | constants | MAE m | Spearman | precision | recall |
 //! |---|---|---|---|---|---|
 //! | paper, printed values | 3 m/s, 13.5 deg/s, 1/3 | 0.597 | 0.736 | 0.911 | 0.707 |
-//! | paper, **fitted** | 2 m/s, 30 deg/s, 1/3 | **0.514** | **0.765** | 0.917 | 0.569 |
+//! | paper, **fitted** | 2 m/s, 30 deg/s, 1/3 | **0.515** | **0.765** | 0.917 | 0.569 |
 //! | paper | 2 m/s, 30 deg/s, 1 | 0.527 | 0.747 | 0.972 | 0.603 |
 //! | paper | 3 m/s, 30 deg/s, 1/3 | 0.550 | 0.758 | 1.000 | 0.569 |
 //! | px4, PX4 defaults | gain 0.95, 5 m/s, 45 deg/s | 1.100 | 0.731 | 1.000 | 0.155 |
 //! | px4 | gain 0.5, 5 m/s, 45 deg/s | 0.667 | 0.780 | 1.000 | 0.172 |
-//! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s | **0.565** | 0.740 | 1.000 | 0.379 |
+//! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s | **0.552** | 0.751 | 1.000 | 0.379 |
 //! | px4 | gain 0.3, 5 m/s, 90 deg/s | 0.572 | 0.734 | 1.000 | 0.310 |
 //! | px4 | gain 0.2, 5 m/s, 90 deg/s | 0.634 | 0.630 | 1.000 | 0.345 |
+//!
+//! The fitted rows are from `prgenuav fidelity tests/data/hfs-flights --motion paper|px4` after the last change
+//! (sample times on whole microseconds, which moves a few 0.5 s bins); the other rows are the grid's own output.
+//! Per tier (MAE / Spearman / precision / recall): paper A 0.388 / 0.486 / 1.000 / 0.613, B 0.543 / 0.415 /
+//! 1.000 / 0.688, C 0.566 / 0.646 / 0.500 / 0.273; px4 A 0.646 / 0.583 / 1.000 / 0.387, B 0.705 / 0.124 / 1.000 /
+//! 0.625, C 0.479 / 0.661 / - / 0.000.
 //!
 //! The grid was 2 x 2 x 2 for each model (paper: speed {2, 3} x yaw rate {13.5, 30} x fraction {1/3, 1};
 //! px4: gain {0.5, 0.95} x speed {3, 5} x yaw rate {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}).
