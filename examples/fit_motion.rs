@@ -1,6 +1,6 @@
 //! Grid search of the motion models' free constants against the competition's recorded flights.
 //!
-//! `cargo run --release --example fit_motion -- paper|px4 [JOBS]` simulates every usable flight of
+//! `cargo run --release --example fit_motion -- paper|px4|px4-low-gain [JOBS]` simulates every usable flight of
 //! `tests/data/hfs-flights` for each grid point and prints MAE, Spearman and precision/recall of "below 1.5 m"
 //! (overall and per tier). Not a test: it takes minutes. The chosen values and the numbers are documented in
 //! `src/lfs/motion.rs`.
@@ -55,10 +55,15 @@ fn main() {
                 }
             }
         }
-        "px4" => {
-            for gain in [0.5, 0.95] {
-                for speed in [3.0, 5.0] {
-                    for yaw in [30.0, 45.0] {
+        "px4" | "px4-low-gain" => {
+            let (gains, speeds, yaws): (&[f64], &[f64], &[f64]) = if model == "px4" {
+                (&[0.5, 0.95], &[3.0, 5.0], &[30.0, 45.0])
+            } else {
+                (&[0.2, 0.3], &[5.0], &[45.0, 90.0])
+            };
+            for &gain in gains {
+                for &speed in speeds {
+                    for &yaw in yaws {
                         let p = Px4Params {
                             pos_gain_per_s: gain,
                             max_speed_xy_m_s: speed,
@@ -71,7 +76,7 @@ fn main() {
             }
         }
         other => {
-            eprintln!("error: unknown model {other:?} (paper or px4)");
+            eprintln!("error: unknown model {other:?} (paper, px4 or px4-low-gain)");
             std::process::exit(2);
         }
     }

@@ -152,17 +152,21 @@ pub fn render_cloud(
                 intervals.push(iv);
             }
         }
+        // Only intervals that reach the image's rows (the ground is often entirely below the frame).
+        let scale = fl * n;
+        let rows_hi = h as f64 + 1.0;
+        intervals.retain(|&(s_lo, s_hi)| cy - scale * s_hi <= rows_hi && cy - scale * s_lo >= -1.0);
         if intervals.is_empty() {
             continue;
         }
         let z_idx = cell_and_range(ux as f32, uy as f32, 0.0, SUB_RES_DEG).0.z;
         // A column this close to an azimuth cell edge may fall on either side once its points are rounded.
         let az_ambiguous = near_edge(ux.atan2(uy).to_degrees());
-        let scale = fl * n;
         let tan_y = std::mem::take(&mut scratch.tan_y);
         let tan_band = std::mem::take(&mut scratch.tan_band);
         // Row slope (rise per horizontal metre); its band k holds tan_band[k] <= s < tan_band[k + 1].
-        let slope = |j: u32| -tan_y[j as usize] / n;
+        let inv_n = 1.0 / n;
+        let slope = |j: u32| -tan_y[j as usize] * inv_n;
         // Within EDGE_EPS_DEG of a band edge, in slope units (d tan(a) = (1 + tan^2) da).
         let near_band_edge = |s: f64, k: usize| {
             let eps = EDGE_EPS_DEG.to_radians() * (1.0 + s * s);
@@ -215,7 +219,12 @@ pub fn render_cloud(
                 } else if !az_ambiguous && !el_ambiguous {
                     scratch.offer(k * SUB_Z + z_idx, j * w + i);
                 }
-                if j > ja && near_band_edge(slope(j - 1), band_below(slope(j - 1), (k + 1).min(SUB_E - 1))) {
+                // The row above (in band k + 1 or higher) may really belong to band k if it is at their edge.
+                let eps_prev = |sp: f64| EDGE_EPS_DEG.to_radians() * (1.0 + sp * sp);
+                if j > ja && {
+                    let sp = slope(j - 1);
+                    (sp - tan_band[k + 1]).abs() < eps_prev(sp)
+                } {
                     scratch.extras.push((j - 1) * w + i);
                 }
                 // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).

@@ -379,15 +379,17 @@ impl World {
             (Command::Track { setpoint, .. }, MotionState::Paper(p)) => p.step(v, &setpoint, dt),
         }
         v.position_enu.z = v.position_enu.z.max(0.0);
-        self.time_s += dt;
         self.cycles += 1;
+        // From the tick count (not summed), so no rounding drift over thousands of ticks.
+        self.time_s = self.cycles as f64 * dt;
     }
 
     /// Stage `record`: sample the trajectory and decide whether the flight is over.
     fn record(&mut self) {
         let p = self.vehicle.position_enu;
         self.samples.push(Sample {
-            t_s: self.time_s,
+            // Whole microseconds, as the CSV stores them, so the 0.5 s bins of the judge see the same samples.
+            t_s: (self.time_s * 1e6).round() / 1e6,
             x: p.y,
             y: p.x,
             z: p.z,
