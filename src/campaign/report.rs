@@ -119,6 +119,7 @@ pub fn write_outputs(
     records: &[FlightRecord],
     mut stages: StageTimes,
     spelling: Spelling,
+    screened: bool,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let failing = failing_best_first(records);
@@ -180,8 +181,9 @@ pub fn write_outputs(
             .map(|f| f.test_score)
             .sum(),
         diversity: diversity(&failing.iter().map(|r| r.obstacles.clone()).collect::<Vec<_>>()),
-        lfs_precision: precision,
-        lfs_mean_abs_error_m: (!errors.is_empty()).then(|| errors.iter().sum::<f64>() / errors.len() as f64),
+        lfs_precision: precision.filter(|_| screened),
+        lfs_mean_abs_error_m: (screened && !errors.is_empty())
+            .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
         screening_per_s: if stages.screen_s > 0.0 {
             candidates_screened as f64 / stages.screen_s
         } else {

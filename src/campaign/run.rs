@@ -46,6 +46,13 @@ pub struct CampaignConfig {
     /// Clock speed of the embedded mock autopilots.
     #[serde(default = "default_mock_speed")]
     pub mock_speed: f64,
+    /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
+    #[serde(default = "default_screen")]
+    pub screen: bool,
+}
+
+fn default_screen() -> bool {
+    true
 }
 
 fn default_mode() -> String {
@@ -129,7 +136,19 @@ pub fn run_campaign(
     stages.sample_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let screened = screen_all(&case, &candidates, folder, screener, progress, cancel)?;
+    let screened = if cfg.screen {
+        screen_all(&case, &candidates, folder, screener, progress, cancel)?
+    } else {
+        // Every candidate "predicted" at 0 m: the ranking then keeps the order they were drawn in.
+        (0..candidates.len() as u64)
+            .map(|candidate| Screened {
+                candidate,
+                min_distance: 0.0,
+                flight_time_s: 0.0,
+                status: "unscreened".into(),
+            })
+            .collect()
+    };
     stages.screen_s = t.elapsed().as_secs_f64();
 
     let journal_path = folder.join("journal.jsonl");

@@ -71,6 +71,7 @@ fn config(budget: usize) -> CampaignConfig {
         mode: "avoidance".into(),
         motion: "px4".into(),
         mock_speed: 20.0,
+        screen: true,
     }
 }
 

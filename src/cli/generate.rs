@@ -58,6 +58,9 @@ pub struct Args {
     /// Seconds to wait for each MAVLink vehicle's first heartbeat.
     #[arg(long, default_value_t = 15.0)]
     connect_timeout: f64,
+    /// Skip the LFS: fly candidates in the order drawn (the baseline that shows what screening buys).
+    #[arg(long)]
+    no_screen: bool,
     /// Continue a killed campaign in this folder (its campaign.json holds the settings).
     #[arg(long, value_name = "FOLDER")]
     resume: Option<PathBuf>,
@@ -117,6 +120,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 mode: args.mode.clone(),
                 motion: args.motion.clone(),
                 mock_speed: args.mock_speed,
+                screen: !args.no_screen,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
