@@ -236,6 +236,7 @@ pub fn run_campaign(
         &records,
         stages,
         spelling,
+        cfg.screen,
     )?)
 }
 
