@@ -7,8 +7,9 @@ use serde::Serialize;
 
 use super::journal::FlightRecord;
 use crate::io::write_atomic;
-use crate::judge::{diversity, points, test_score};
-use crate::model::{ModelError, Spelling, TestCase};
+use crate::judge::{diversity, judge_flight, points, test_score};
+use crate::model::{ModelError, Spelling, TestCase, Trajectory};
+use crate::plot::{FlightPlot, PathStyle};
 
 /// The competition's failure distance, metres.
 pub const FAIL_DISTANCE_M: f64 = 1.5;
@@ -107,7 +108,7 @@ pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
     out
 }
 
-/// Writes `test_N.yaml` (+ `test_N.csv`) for each failing flight, best first, then report.json and report.md.
+/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and report.md.
 /// Returns the report.
 #[allow(clippy::too_many_arguments)]
 pub fn write_outputs(
@@ -120,18 +121,25 @@ pub fn write_outputs(
     mut stages: StageTimes,
     spelling: Spelling,
     screened: bool,
+    lfs_path: &(dyn Fn(&TestCase) -> Option<Trajectory> + Sync),
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let failing = failing_best_first(records);
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, r) in failing.iter().enumerate() {
         let name = format!("test_{i}");
-        case.with_obstacles(r.obstacles.clone())
-            .save(&folder.join(format!("{name}.yaml")), spelling)?;
-        let src = folder.join(&r.trajectory);
-        if let Ok(bytes) = std::fs::read(&src) {
+        let test = case.with_obstacles(r.obstacles.clone());
+        test.save(&folder.join(format!("{name}.yaml")), spelling)?;
+        let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
+        if let Ok(bytes) = std::fs::read(folder.join(&r.trajectory)) {
             write_atomic(&folder.join(format!("{name}.csv")), &bytes)?;
         }
+        let title = format!(
+            "{name}: flew {}",
+            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
+        );
+        let svg = plot(&test, lfs_path(&test).as_ref(), flown.as_ref(), &title);
+        write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
         reported.push((r.candidate, format!("{name}.yaml")));
     }
     let flights: Vec<FlownTest> = records
@@ -203,6 +211,22 @@ pub fn write_outputs(
     write_atomic(&folder.join("report.json"), json.as_bytes())?;
     write_atomic(&folder.join("report.md"), markdown(&report).as_bytes())?;
     Ok(report)
+}
+
+/// Top-down plot: arena, obstacles, mission, the LFS's path and the flown path with its closest approach.
+fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, title: &str) -> String {
+    let mut p = FlightPlot::new(test);
+    p.set_title(title);
+    if let Some(t) = lfs {
+        p.add_path(t, PathStyle::Simulated, "LFS prediction");
+    }
+    if let Some(t) = flown {
+        p.add_path(t, PathStyle::Flown, "flown");
+        if let Some(v) = judge_flight(t, &test.obstacles) {
+            p.mark_closest(&v.closest);
+        }
+    }
+    p.to_svg()
 }
 
 fn opt(v: Option<f64>) -> String {

@@ -71,6 +71,11 @@ fn default_mock_speed() -> f64 {
 pub trait Screener: Sync {
     /// Predicted minimum distance (m), flight time (s) and how the simulated flight ended.
     fn screen(&self, test: &TestCase) -> (f64, f64, String);
+
+    /// The predicted path, for plots (`None` if the screener has none).
+    fn path(&self, _test: &TestCase) -> Option<crate::model::Trajectory> {
+        None
+    }
 }
 
 /// Progress reporting for the stages.
@@ -237,6 +242,7 @@ pub fn run_campaign(
         stages,
         spelling,
         cfg.screen,
+        &|t: &TestCase| screener.path(t),
     )?)
 }
 

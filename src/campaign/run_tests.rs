@@ -114,6 +114,8 @@ fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
         let t = TestCase::load(&dir.path().join(format!("test_{i}.yaml"))).unwrap();
         assert!(crate::rules::check(&t, &crate::model::Arena::default()).is_empty());
         assert!(dir.path().join(format!("test_{i}.csv")).is_file());
+        let svg = std::fs::read_to_string(dir.path().join(format!("test_{i}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") || svg.starts_with("<?xml"), "a plot per test");
         let f = r
             .flights
             .iter()

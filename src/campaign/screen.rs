@@ -34,4 +34,8 @@ impl Screener for LfsScreener {
             Err(e) => (NO_PREDICTION_M, self.config.timeout_s, format!("error: {e}")),
         }
     }
+
+    fn path(&self, test: &TestCase) -> Option<crate::model::Trajectory> {
+        simulate(test, &self.config).ok().map(|r| r.trajectory)
+    }
 }

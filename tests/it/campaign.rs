@@ -71,6 +71,7 @@ fn verify_folder(folder: &Path) -> serde_json::Value {
         let test = TestCase::load(&folder.join(format!("test_{i}.yaml"))).unwrap();
         assert!(check(&test, &Arena::default()).is_empty(), "test_{i} breaks a rule");
         let trajectory = Trajectory::load_csv(&folder.join(format!("test_{i}.csv"))).unwrap();
+        assert!(folder.join(format!("test_{i}.svg")).is_file(), "a plot per test");
         let verdict = judge_flight(&trajectory, &test.obstacles).unwrap();
         assert!(verdict.min_distance < 1.5, "test_{i} is reported but did not fail");
         assert!(verdict.min_distance >= last, "not best first at test_{i}");
