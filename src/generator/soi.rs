@@ -133,35 +133,10 @@ fn clip_to_arena(a: P2, b: P2, arena: &Arena) -> Option<(P2, P2)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{GeoPoint, LocalPoint, MissionItem, SIM_HOME};
+    use crate::model::SIM_HOME;
 
-    /// A mission through local points (x North, y East).
-    pub(crate) fn mission_through(points: &[(f64, f64)]) -> Mission {
-        let items = points
-            .iter()
-            .map(|&(x, y)| MissionItem {
-                command: 16,
-                frame: 3,
-                params: [None; 7],
-                auto_continue: true,
-                global: Some(GeoPoint {
-                    lat_deg: 0.0,
-                    lon_deg: 0.0,
-                    alt_m: 10.0,
-                }),
-                local: Some(LocalPoint {
-                    north_m: x,
-                    east_m: y,
-                    alt_m: 10.0,
-                }),
-            })
-            .collect();
-        Mission {
-            items,
-            planned_home: None,
-            home: SIM_HOME,
-            source: "synthetic".into(),
-        }
+    fn mission_through(points: &[(f64, f64)]) -> Mission {
+        Mission::through_local_points(points, 10.0, SIM_HOME)
     }
 
     #[test]

@@ -114,6 +114,37 @@ impl Mission {
         Ok(mission)
     }
 
+    /// A mission of plain waypoints (MAV_CMD_NAV_WAYPOINT, relative altitude) through local
+    /// `(north_m, east_m)` points at `alt_m`, with global positions projected back about `home`.
+    /// For synthetic missions in tests and experiments.
+    pub fn through_local_points(points: &[(f64, f64)], alt_m: f64, home: GeoPoint) -> Self {
+        let projection = LocalProjection::new(home);
+        let items = points
+            .iter()
+            .map(|&(north_m, east_m)| {
+                let (lat_deg, lon_deg) = projection.unproject(north_m, east_m);
+                MissionItem {
+                    command: CMD_WAYPOINT,
+                    frame: 3,
+                    params: [None, None, None, None, Some(lat_deg), Some(lon_deg), Some(alt_m)],
+                    auto_continue: true,
+                    global: Some(GeoPoint {
+                        lat_deg,
+                        lon_deg,
+                        alt_m,
+                    }),
+                    local: Some(LocalPoint { north_m, east_m, alt_m }),
+                }
+            })
+            .collect();
+        Self {
+            items,
+            planned_home: None,
+            home,
+            source: PathBuf::from("synthetic"),
+        }
+    }
+
     /// The positions PX4 flies through, in order (takeoff, waypoints, land).
     pub fn flight_path(&self) -> Vec<LocalPoint> {
         self.items.iter().filter_map(|i| i.local).collect()

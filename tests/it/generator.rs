@@ -2,7 +2,7 @@
 
 use prgenuav::generator::{Generator, GeneratorConfig, Placement, Side, Soi};
 use prgenuav::geometry::V2;
-use prgenuav::model::{Arena, GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, SIM_HOME};
+use prgenuav::model::{Arena, Mission, Obstacle, SIM_HOME};
 use prgenuav::rules::check_obstacles;
 use proptest::prelude::*;
 
@@ -89,33 +89,9 @@ fn thousands_of_seeds_on_missions_1_to_7() {
     }
 }
 
-/// A synthetic mission: takeoff at `a`, fly to `b`, land at `c` (x North, y East, 10 m altitude).
+/// A synthetic mission through local points (x North, y East), 10 m up.
 fn mission_through(points: &[(f64, f64)]) -> Mission {
-    let items = points
-        .iter()
-        .map(|&(x, y)| MissionItem {
-            command: 16,
-            frame: 3,
-            params: [None; 7],
-            auto_continue: true,
-            global: Some(GeoPoint {
-                lat_deg: 0.0,
-                lon_deg: 0.0,
-                alt_m: 10.0,
-            }),
-            local: Some(LocalPoint {
-                north_m: x,
-                east_m: y,
-                alt_m: 10.0,
-            }),
-        })
-        .collect();
-    Mission {
-        items,
-        planned_home: None,
-        home: SIM_HOME,
-        source: "synthetic".into(),
-    }
+    Mission::through_local_points(points, 10.0, SIM_HOME)
 }
 
 proptest! {
