@@ -5,6 +5,7 @@
 #![allow(deprecated)] // TRAJECTORY_REPRESENTATION_WAYPOINTS: deprecated upstream since PX4 1.15 removed it.
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use mavlink::dialects::common::{
@@ -193,10 +194,44 @@ pub fn heartbeat() -> MavMessage {
     })
 }
 
+/// How the companion answered, shared with the session so the flight report can say when the planner fell
+/// behind (a mirrored answer means PX4 flew its own setpoint, i.e. no avoidance).
+#[derive(Debug, Default)]
+pub struct CompanionStats {
+    /// Answers from the planner.
+    pub planned: AtomicU64,
+    /// Answers that mirrored PX4's setpoint.
+    pub mirrored: AtomicU64,
+}
+
+impl CompanionStats {
+    /// A report warning when any answer was mirrored.
+    pub fn warning(&self) -> Option<String> {
+        let (planned, mirrored) = (
+            self.planned.load(Ordering::Relaxed),
+            self.mirrored.load(Ordering::Relaxed),
+        );
+        (mirrored > 0).then(|| {
+            format!(
+                "{mirrored} of {} avoidance answers mirrored PX4's own setpoint (no plan in time): lower the time scale if this is more than a few",
+                planned + mirrored
+            )
+        })
+    }
+}
+
 /// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers at 10 Hz
-/// (vehicle time) with the latest planner result.
-pub fn spawn(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) -> [JoinHandle<()>; 2] {
-    [tokio::spawn(beat(link.clone())), tokio::spawn(run(link, target, steer))]
+/// (vehicle time) with the latest planner result, counting its answers in `stats`.
+pub fn spawn(
+    link: Arc<Link>,
+    target: Target,
+    steer: Box<dyn Steer>,
+    stats: Arc<CompanionStats>,
+) -> [JoinHandle<()>; 2] {
+    [
+        tokio::spawn(beat(link.clone())),
+        tokio::spawn(run(link, target, steer, stats)),
+    ]
 }
 
 async fn beat(link: Arc<Link>) {
@@ -206,7 +241,7 @@ async fn beat(link: Arc<Link>) {
     }
 }
 
-async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) {
+async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<CompanionStats>) {
     let clock = link.clock();
     let mut rx = link.subscribe();
     let mut view = VehicleView::default();
@@ -224,6 +259,8 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) {
             let planned = worker.latest(now, STALE_PLAN).flatten();
             let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
             if let Some(a) = companion.answer_with(planned, now, usec) {
+                stats.planned.store(companion.planned, Ordering::Relaxed);
+                stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
                 let _ = link
                     .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
                     .await;
@@ -255,6 +292,16 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mirrored_answers_warn_above_one_percent() {
+        let s = CompanionStats::default();
+        s.planned.store(700, Ordering::Relaxed);
+        s.mirrored.store(1, Ordering::Relaxed);
+        assert_eq!(s.warning(), None, "the first answer before any plan");
+        s.mirrored.store(40, Ordering::Relaxed);
+        assert!(s.warning().is_some_and(|w| w.starts_with("40 of 740")));
+    }
     use crate::bridge::steer::{Mirror, Straight};
     use crate::bridge::vehicle::PoseNed;
 

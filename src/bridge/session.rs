@@ -104,6 +104,8 @@ pub struct Session<'a> {
     pub restore: Vec<(String, f64)>,
     /// Background tasks.
     pub tasks: Tasks,
+    /// The avoidance companion's answer counts (avoidance mode).
+    pub companion: Arc<super::avoidance::CompanionStats>,
 }
 
 /// Runs one flight on `transport`.
@@ -136,6 +138,7 @@ pub async fn run(
         fence_uploaded: false,
         restore: Vec::new(),
         tasks,
+        companion: Arc::default(),
     };
     let mut recorder = recorder;
     let stop = match s.prepare().await {
@@ -145,6 +148,9 @@ pub async fn run(
     s.restore_params().await;
     if let Some(e) = recorder.write_error() {
         s.warnings.push(format!("trajectory CSV incomplete: {e}"));
+    }
+    if let Some(w) = s.companion.warning() {
+        s.warnings.push(w);
     }
     let mut warnings = std::mem::take(&mut s.view.warnings);
     warnings.append(&mut s.warnings);
@@ -243,7 +249,7 @@ impl Session<'_> {
     async fn prepare(&mut self) -> Result<(), Stop> {
         if self.opts.mode == FlyMode::Avoidance {
             let steer = super::flight::steer_for(self.test, self.opts);
-            for t in super::avoidance::spawn(self.link.clone(), self.target, steer) {
+            for t in super::avoidance::spawn(self.link.clone(), self.target, steer, self.companion.clone()) {
                 self.tasks.push(t);
             }
         }

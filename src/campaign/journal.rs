@@ -28,6 +28,9 @@ pub struct FlightRecord {
     pub status: String,
     /// Flight time, seconds.
     pub flight_time_s: f64,
+    /// Warnings of the flight side (e.g. the avoidance planner falling behind).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// The vehicle (MAVLink URL or `mock`) that flew it.
     pub vehicle: String,
     /// The trajectory CSV, relative to the campaign folder.
@@ -131,6 +134,7 @@ mod tests {
             min_distance_raw: Some(0.9),
             status: "landed".into(),
             flight_time_s: 41.0,
+            warnings: Vec::new(),
             vehicle: "mock".into(),
             trajectory: "flights/candidate_1.csv".into(),
             wall_s: 0.3,

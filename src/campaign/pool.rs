@@ -22,6 +22,8 @@ pub struct Flown {
     pub min_distance_raw: Option<f64>,
     /// Flight time, seconds.
     pub flight_time_s: f64,
+    /// What the flight side warned about (e.g. the avoidance planner falling behind).
+    pub warnings: Vec<String>,
 }
 
 /// Why a vehicle could not fly.
@@ -142,6 +144,7 @@ pub fn fly_all(
                                 min_distance_raw: flown.min_distance_raw,
                                 status: flown.status,
                                 flight_time_s: flown.flight_time_s,
+                                warnings: flown.warnings,
                                 vehicle: vehicle.name(),
                                 trajectory: rel,
                                 wall_s: t0.elapsed().as_secs_f64(),
@@ -216,6 +219,7 @@ mod tests {
                 min_distance: Some(1.0),
                 min_distance_raw: Some(0.9),
                 flight_time_s: 40.0,
+                warnings: Vec::new(),
             })
         }
     }

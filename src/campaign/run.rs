@@ -205,6 +205,9 @@ pub fn run_campaign(
             r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
             r.status
         ));
+        for w in &r.warnings {
+            progress.note(&format!("  warning: {w}"));
+        }
     };
     let want = jobs.len();
     let outcome = if want == 0 {

@@ -46,6 +46,7 @@ impl Vehicle for ScriptedVehicle {
             min_distance: Some(d),
             min_distance_raw: Some(d),
             flight_time_s: 40.0,
+            warnings: Vec::new(),
         })
     }
 }

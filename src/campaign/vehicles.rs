@@ -44,6 +44,7 @@ fn flown(report: FlightReport) -> Flown {
         min_distance: report.min_distance,
         min_distance_raw: report.min_distance_raw,
         flight_time_s: report.flight_time_s,
+        warnings: report.warnings,
     }
 }
 
