@@ -205,13 +205,14 @@ pub struct CompanionStats {
 }
 
 impl CompanionStats {
-    /// A report warning when any answer was mirrored.
+    /// A report warning when more than 1 % of the answers were mirrored (the very first answer, before any
+    /// plan exists, is always mirrored and not worth a warning).
     pub fn warning(&self) -> Option<String> {
         let (planned, mirrored) = (
             self.planned.load(Ordering::Relaxed),
             self.mirrored.load(Ordering::Relaxed),
         );
-        (mirrored > 0).then(|| {
+        (mirrored > 1 && mirrored * 100 > planned + mirrored).then(|| {
             format!(
                 "{mirrored} of {} avoidance answers mirrored PX4's own setpoint (no plan in time): lower the time scale if this is more than a few",
                 planned + mirrored
@@ -302,6 +303,7 @@ mod tests {
         s.mirrored.store(40, Ordering::Relaxed);
         assert!(s.warning().is_some_and(|w| w.starts_with("40 of 740")));
     }
+
     use crate::bridge::steer::{Mirror, Straight};
     use crate::bridge::vehicle::PoseNed;
 
