@@ -85,6 +85,28 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// A depth-camera preset by name, or an error listing the presets.
+pub fn camera_preset(name: &str) -> anyhow::Result<prgenuav::lfs::camera::Camera> {
+    use prgenuav::lfs::camera::{Camera, PRESET_NAMES};
+    Camera::preset(name)
+        .ok_or_else(|| anyhow::anyhow!("unknown camera {name:?} (use one of {})", PRESET_NAMES.join(", ")))
+}
+
+/// Loads a test and applies the competition's rules; an invalid test gets `check`'s violations on stderr
+/// and `None` (the caller exits with [`EXIT_FAIL`]).
+pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav::model::TestCase>> {
+    let test = prgenuav::model::TestCase::load(path)?;
+    let violations = prgenuav::rules::check(&test, &prgenuav::model::Arena::default());
+    if violations.is_empty() {
+        return Ok(Some(test));
+    }
+    eprintln!("{}: {} violation(s)", path.display(), violations.len());
+    for v in &violations {
+        eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
+    }
+    Ok(None)
+}
+
 /// Prints `value` as pretty JSON on stdout.
 pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string_pretty(value)?);

@@ -7,11 +7,8 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use nalgebra::Vector3;
 use prgenuav::io::write_atomic;
-use prgenuav::lfs::camera::{Camera, PRESET_NAMES};
 use prgenuav::lfs::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
 use prgenuav::lfs::render::{CameraPose, Scene, cloud_from_depth, render_depth};
-use prgenuav::model::{Arena, TestCase};
-use prgenuav::rules::check;
 
 /// Arguments of `render`.
 #[derive(Debug, clap::Args)]
@@ -51,22 +48,10 @@ fn parse_pose(s: &str) -> anyhow::Result<[f64; 4]> {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let [x, y, z, yaw_deg] = parse_pose(&args.pose)?;
-    let Some(camera) = Camera::preset(&args.camera) else {
-        bail!(
-            "unknown camera {:?} (use one of {})",
-            args.camera,
-            PRESET_NAMES.join(", ")
-        );
-    };
-    let test = TestCase::load(&args.test)?;
-    let violations = check(&test, &Arena::default());
-    if !violations.is_empty() {
-        eprintln!("{}: {} violation(s)", args.test.display(), violations.len());
-        for v in &violations {
-            eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
-        }
+    let camera = super::camera_preset(&args.camera)?;
+    let Some(test) = super::load_valid_test(&args.test)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
-    }
+    };
     let pose = CameraPose::level(north_east_up_to_enu(x, y, z), yaw_ned_deg_to_enu_rad(yaw_deg));
     let scene = Scene::new(&test.obstacles);
     let depth = render_depth(&scene, &camera, &pose).with_context(|| format!("cannot render pose {}", args.pose))?;

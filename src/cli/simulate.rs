@@ -7,11 +7,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::ObstacleDistance;
-use prgenuav::lfs::camera::{Camera, PRESET_NAMES};
 use prgenuav::lfs::sim::{MotionModel, SimConfig, Status, simulate};
-use prgenuav::model::{Arena, TestCase};
 use prgenuav::plot::{FlightPlot, PathStyle};
-use prgenuav::rules::check;
 
 /// Arguments of `simulate`.
 #[derive(Debug, clap::Args)]
@@ -50,22 +47,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let Some(motion) = MotionModel::by_name(&args.motion) else {
         bail!("unknown motion model {:?} (use paper or px4)", args.motion);
     };
-    let Some(camera) = Camera::preset(&args.camera) else {
-        bail!(
-            "unknown camera {:?} (use one of {})",
-            args.camera,
-            PRESET_NAMES.join(", ")
-        );
-    };
-    let test = TestCase::load(&args.test)?;
-    let violations = check(&test, &Arena::default());
-    if !violations.is_empty() {
-        eprintln!("{}: {} violation(s)", args.test.display(), violations.len());
-        for v in &violations {
-            eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
-        }
+    let camera = super::camera_preset(&args.camera)?;
+    let Some(test) = super::load_valid_test(&args.test)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
-    }
+    };
     let config = SimConfig {
         motion,
         camera,
