@@ -55,6 +55,10 @@ pub struct Args {
     /// of mock time, so raise it only with CPU to spare.
     #[arg(long, default_value_t = 20.0)]
     mock_speed: f64,
+    /// Embedded mock autopilots flying at once (default: one per core). Flights mostly wait on the mock's
+    /// clock, so more vehicles than cores can help while the planner keeps up.
+    #[arg(long)]
+    mock_vehicles: Option<usize>,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat.
     #[arg(long, default_value_t = 15.0)]
     connect_timeout: f64,
@@ -146,7 +150,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     });
     let vehicles: Vec<Box<dyn Vehicle>> = if cfg.hfs == ["mock"] {
-        (0..available_threads())
+        let count = args.mock_vehicles.unwrap_or_else(available_threads);
+        if count == 0 {
+            bail!("--mock-vehicles must be at least 1");
+        }
+        (0..count)
             .map(|i| Box::new(MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode)) as Box<dyn Vehicle>)
             .collect()
     } else {
