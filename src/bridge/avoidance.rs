@@ -42,6 +42,28 @@ fn velocity(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f
     v.iter().all(|v| v.is_finite()).then(|| v.map(f64::from))
 }
 
+/// A trajectory message with every point unset (NaN, command `u16::MAX`), as the interface expects for
+/// points beyond `valid_points`.
+pub fn empty_trajectory(time_usec: u64, valid_points: u8) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+    let nan = [f32::NAN; 5];
+    TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+        time_usec,
+        pos_x: nan,
+        pos_y: nan,
+        pos_z: nan,
+        vel_x: nan,
+        vel_y: nan,
+        vel_z: nan,
+        acc_x: nan,
+        acc_y: nan,
+        acc_z: nan,
+        pos_yaw: nan,
+        vel_yaw: nan,
+        command: [u16::MAX; 5],
+        valid_points,
+    }
+}
+
 /// The companion's memory: PX4's latest request and the goals it implies.
 #[derive(Debug, Clone, Default)]
 pub struct Companion {
@@ -119,23 +141,7 @@ impl Companion {
         if now.saturating_sub(at) > REQUEST_STALE {
             return None;
         }
-        let nan = [f32::NAN; 5];
-        let mut out = TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-            time_usec,
-            pos_x: nan,
-            pos_y: nan,
-            pos_z: nan,
-            vel_x: nan,
-            vel_y: nan,
-            vel_z: nan,
-            acc_x: nan,
-            acc_y: nan,
-            acc_z: nan,
-            pos_yaw: nan,
-            vel_yaw: nan,
-            command: [u16::MAX; 5],
-            valid_points: 1,
-        };
+        let mut out = empty_trajectory(time_usec, 1);
         match planned {
             Some(sp) => {
                 self.planned += 1;
@@ -308,23 +314,7 @@ mod tests {
     use crate::bridge::vehicle::PoseNed;
 
     fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        let nan = [f32::NAN; 5];
-        let mut t = TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-            time_usec: 0,
-            pos_x: nan,
-            pos_y: nan,
-            pos_z: nan,
-            vel_x: nan,
-            vel_y: nan,
-            vel_z: nan,
-            acc_x: nan,
-            acc_y: nan,
-            acc_z: nan,
-            pos_yaw: nan,
-            vel_yaw: nan,
-            command: [u16::MAX; 5],
-            valid_points: 3,
-        };
+        let mut t = empty_trajectory(0, 3);
         (t.pos_x[0], t.pos_y[0], t.pos_z[0]) = (p0[0], p0[1], p0[2]);
         (t.pos_x[1], t.pos_y[1], t.pos_z[1]) = (p1[0], p1[1], p1[2]);
         t.command[1] = cmd1;
