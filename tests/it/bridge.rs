@@ -367,6 +367,36 @@ async fn the_same_flight_over_a_serial_link() {
     assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_flight_over_tcp_in_lockstep() {
+    // rust-mavlink's tcpin cannot report an ephemeral port: take a free one from the OS first.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    let speed = 100.0;
+    let spawn = tokio::spawn(
+        MockAutopilot::builder()
+            .link(LinkSpec::Address(format!("tcpin:127.0.0.1:{port}")))
+            .speed_factor(SpeedFactor::Times(speed))
+            .lockstep(Some(mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT))
+            .spawn(),
+    );
+    let o = FlyOptions {
+        lockstep: Some(Duration::ZERO),
+        ..opts(&format!("tcpout:127.0.0.1:{port}"), FlyMode::Avoidance, speed)
+    };
+    let r = fly_bounded(&generated(2), &o, CancelToken::new()).await;
+    let m = tokio::time::timeout(WALL_LIMIT, spawn)
+        .await
+        .expect("mock started in time")
+        .expect("mock task")
+        .expect("mock on tcp");
+    m.shutdown().await.expect("mock stops");
+    assert_flown(&r, "tcp");
+    assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
+}
+
 #[test]
 fn fly_cli_checks_arguments_and_writes_the_world() {
     let (code, _, err) = super::prgenuav(&["fly", "missions/mission2.yaml", "--connect", "udp-in:14540"]);
