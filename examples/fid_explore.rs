@@ -4,7 +4,8 @@
 //! `cargo run --release --example fid_explore -- paper|px4 [key=value ...]`, keys: `speed`, `yaw`, `frac`
 //! (paper), `gain`, `vmax`, `acc`, `jerk` (px4; `jerk` > 0 selects the jerk-limited tracker), `tilt_tau`,
 //! `tilt_drag` (enable the camera pitch model), `delay` (control delay, ticks), `shift` (move every obstacle
-//! North, metres: a chance perturbation), `camera` (preset), `jobs`, `dump` (write the per-case JSON).
+//! North, metres: a chance perturbation), `c_mission` (a flight file whose mission the tier-C flights fly
+//! instead of their inferred one), `camera` (preset), `jobs`, `dump` (write the per-case JSON).
 //! Halves: `prgenuav::lfs::fidelity::split_half` (a hash of the repeat group or id). Not a test: it takes a
 //! minute per evaluation.
 
@@ -12,7 +13,7 @@ use std::path::Path;
 
 use prgenuav::lfs::attitude::TiltParams;
 use prgenuav::lfs::camera::Camera;
-use prgenuav::lfs::fidelity::{Aggregates, FidelityReport, aggregate, aggregate_half, evaluate, load_dir};
+use prgenuav::lfs::fidelity::{Aggregates, FidelityReport, aggregate, aggregate_half, evaluate, load_dir, load_flight};
 use prgenuav::lfs::motion::{PaperParams, Px4Params};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
@@ -41,6 +42,7 @@ fn main() {
     let mut camera = Camera::hfs();
     let mut jobs = 2;
     let mut shift = 0.0;
+    let mut c_mission: Option<String> = None;
     let mut dump: Option<String> = None;
     for kv in args {
         let Some((k, v)) = kv.split_once('=') else {
@@ -65,6 +67,7 @@ fn main() {
             "tilt_drag" => t.drag_per_s = x,
             "camera" => camera = Camera::preset(v).unwrap_or_else(Camera::hfs),
             "shift" => shift = x,
+            "c_mission" => c_mission = Some(v.to_string()),
             "delay" => {
                 let d = v.parse().unwrap_or(0);
                 paper.delay_ticks = d;
@@ -99,6 +102,20 @@ fn main() {
     for c in &mut cases {
         for o in &mut c.obstacles {
             o.position.x += shift;
+        }
+    }
+    // `c_mission` flies the tier-C flights (whose mission was inferred) on the mission of another flight file.
+    if let Some(path) = &c_mission {
+        match load_flight(Path::new(path)) {
+            Ok(Some(other)) => {
+                for c in cases.iter_mut().filter(|c| c.tier == "C") {
+                    c.mission = other.mission.clone();
+                }
+            }
+            _ => {
+                eprintln!("error: {path}: not a usable flight");
+                std::process::exit(2);
+            }
         }
     }
     let config = SimConfig {

@@ -49,7 +49,8 @@
 //! | px4 | gain 0.5, 5 m/s, 45 deg/s | 0.667 | 0.780 | 1.000 | 0.172 |
 //! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s, delay 0 | **0.552** | 0.751 | 1.000 | 0.379 |
 //! | px4 | same, delay 1 / 2 | 0.584 / 0.599 | 0.719 / 0.701 | 1.000 | 0.241 / 0.259 |
-//! | px4 | jerk 4 m/s^3 (MPC_JERK_AUTO), gain 0.3 / 0.5 | 0.582 / 0.721 | 0.708 / 0.728 | 1.000 | 0.328 / 0.155 |
+//! | px4 | jerk 4 / 8 m/s^3 (MPC_JERK_AUTO / _MAX), gain 0.3 | 0.582 / 0.559 | 0.708 / 0.737 | 1.000 | 0.328 / 0.293 |
+//! | px4 | jerk 4 m/s^3, gain 0.5 / 0.2 | 0.721 / 0.591 | 0.728 / 0.683 | 1.000 | 0.155 / 0.345 |
 //! | px4 | gain 0.3, 5 m/s, 90 deg/s | 0.572 | 0.734 | 1.000 | 0.310 |
 //! | px4 | gain 0.2, 5 m/s, 90 deg/s | 0.634 | 0.630 | 1.000 | 0.345 |
 //!
@@ -67,7 +68,10 @@
 //! {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}). Moving every obstacle 1 or 2 cm changes a single
 //! prediction by 0.08 m on average (up to 0.6 m) and the aggregates by about 0.007 m MAE and 0.005 Spearman
 //! (delay 0: 0.515 / 0.522 / 0.512 and 0.765 / 0.767 / 0.768; delay 1: 0.478 / 0.475 / 0.481 and 0.798 / 0.803 /
-//! 0.801), so the delay's gain is well above chance, but differences of 0.01-0.02 between other rows are not.
+//! 0.801; px4: 0.552 / 0.555 and 0.751 / 0.734), so the delay's gain is well above chance, but differences of
+//! 0.01-0.02 between other rows are not. Flying the tier-C flights on mission 3 instead of their inferred
+//! mission 2 makes them much worse (paper: C MAE 0.723 vs 0.510, Spearman 0.437 vs 0.688), which supports the
+//! inference.
 //!
 //! The delay works by raising predictions: the paper model was too close on tier C (the unselected generator
 //! log: bias -0.18 m, now -0.11) and too far on tiers A and B (+0.18 / +0.32, now +0.22 / +0.39). Tiers A and B
