@@ -37,6 +37,8 @@ pub struct Avoidance {
     hold: Option<Ned>,
     timeout_reported: bool,
     lost_reported: bool,
+    /// A request went out and no valid answer came since (lockstep waits on this).
+    awaiting: bool,
 }
 
 fn finite3(x: f32, y: f32, z: f32) -> Option<Ned> {
@@ -62,6 +64,7 @@ impl Avoidance {
         }
         let yaw = t.pos_yaw[0].is_finite().then(|| f64::from(t.pos_yaw[0]));
         self.answer = Some(Answer { pos, vel, yaw, at: now });
+        self.awaiting = false;
         self.timeout_reported = false;
         self.hold = None;
     }
@@ -71,11 +74,25 @@ impl Avoidance {
         matches!(self.heartbeat, Some((t, true)) if now.saturating_sub(t) <= HEARTBEAT_TIMEOUT)
     }
 
-    /// Forget the current episode (on disarm or when leaving auto modes).
+    /// Forget the current episode (on disarm or when leaving auto modes). The next request goes out at
+    /// once, so the request schedule is in phase with the mode switch (repeatable lockstep flights).
     pub fn reset(&mut self) {
         self.waiting_since = None;
         self.hold = None;
         self.timeout_reported = false;
+        self.awaiting = false;
+        self.next_send = Duration::ZERO;
+    }
+
+    /// True while the latest request is unanswered and the companion is alive: a lockstep simulation holds
+    /// its clock here (as PX4 SITL waits for its simulator), so the plan is never late in vehicle time.
+    pub fn awaiting_answer(&self, now: Duration) -> bool {
+        self.awaiting && self.is_healthy(now)
+    }
+
+    /// Stop waiting for the latest request's answer (the lockstep wait timed out).
+    pub fn release(&mut self) {
+        self.awaiting = false;
     }
 
     /// The setpoint to fly instead of `nav_sp`, plus texts and the message to send (5 Hz).
@@ -88,8 +105,11 @@ impl Avoidance {
         time_usec: u64,
         texts: &mut Vec<(MavSeverity, String)>,
     ) -> (Setpoint, Option<MavMessage>) {
-        let msg = (now >= self.next_send).then(|| {
+        // Idle on the ground there is nothing to avoid: no request, so a companion's state (and a lockstep
+        // flight) does not depend on how long the vehicle sat armed before the mission started.
+        let msg = (now >= self.next_send && nav_sp != Setpoint::Idle).then(|| {
             self.next_send = now + SEND_PERIOD;
+            self.awaiting = true;
             MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(request(&nav_sp, waypoints, time_usec))
         });
         if self.heartbeat.is_some() && !self.is_healthy(now) && !self.lost_reported {

@@ -61,6 +61,17 @@ impl Pacer {
         }
     }
 
+    /// Forget pacing credit beyond `max_lag`: after simulated time stood still (a lockstep wait), the
+    /// simulation may catch up at most `max_lag` unpaced instead of racing through every protocol timer.
+    pub fn limit_lag(&mut self, sim_now: Duration, wall_now: Instant, max_lag: Duration) {
+        if let SpeedFactor::Times(k) = self.speed
+            && self.sim_target(wall_now).is_some_and(|t| t > sim_now + max_lag)
+        {
+            let ahead = (sim_now + max_lag).div_f64(k);
+            self.start = wall_now.checked_sub(ahead).unwrap_or(self.start);
+        }
+    }
+
     /// The wall instant at which simulated time `sim` is due (None: immediately).
     pub fn wall_due(&self, sim: Duration) -> Option<Instant> {
         match self.speed {
@@ -95,6 +106,20 @@ mod tests {
         assert_eq!(
             p.wall_due(Duration::from_secs(1)),
             Some(t0 + Duration::from_millis(100))
+        );
+        let mut lagging = p.clone();
+        let wall = t0 + Duration::from_secs(1);
+        lagging.limit_lag(Duration::from_secs(2), wall, Duration::from_secs(1));
+        assert_eq!(
+            lagging.sim_target(wall),
+            Some(Duration::from_secs(3)),
+            "10 s of credit cut to 1 s"
+        );
+        lagging.limit_lag(Duration::from_secs(3), wall, Duration::from_secs(1));
+        assert_eq!(
+            lagging.sim_target(wall),
+            Some(Duration::from_secs(3)),
+            "within the limit: unchanged"
         );
         let fast = Pacer::new(SpeedFactor::AsFastAsPossible, Duration::from_millis(4), t0);
         assert_eq!(fast.sim_target(t0), None);

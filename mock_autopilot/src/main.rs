@@ -24,6 +24,14 @@ struct Args {
     /// Simulated time runs K times faster than wall time ("max": unpaced).
     #[arg(long, default_value = "1", value_parser = SpeedFactor::parse)]
     speed_factor: SpeedFactor,
+    /// Lockstep with the avoidance companion: with COM_OBS_AVOID = 1, simulated time stands still after
+    /// each trajectory request until the companion answers (at most --lockstep-wait wall seconds).
+    /// --speed-factor becomes an upper bound. For fault-free links.
+    #[arg(long)]
+    lockstep: bool,
+    /// Wall-time bound of one lockstep wait, seconds.
+    #[arg(long, default_value_t = 2.0, requires = "lockstep")]
+    lockstep_wait: f64,
     /// Fixed physics step, milliseconds.
     #[arg(long, default_value_t = 4.0)]
     step_ms: f64,
@@ -113,7 +121,12 @@ async fn run(args: Args) -> Result<()> {
         .step(Duration::from_secs_f64(args.step_ms / 1000.0))
         .faults(faults)
         .reject_mission(reject)
-        .fail_arm(args.fail_arm);
+        .fail_arm(args.fail_arm)
+        .lockstep(
+            args.lockstep
+                .then(|| secs("lockstep-wait", args.lockstep_wait))
+                .transpose()?,
+        );
     if let (Some(path), true) = (&args.obstacles, args.crash_on_collision) {
         let world = ObstacleWorld::from_test_file(path).map_err(|e| anyhow::anyhow!("--obstacles: {e}"))?;
         eprintln!("mock-autopilot: {} obstacles loaded", world.len());

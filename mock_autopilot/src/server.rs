@@ -21,6 +21,10 @@ use crate::vehicle::{CollisionWorld, Vehicle, VehicleConfig, VehicleState};
 pub const DEFAULT_STEP: Duration = Duration::from_millis(4);
 /// At most this many steps run between two looks at the network.
 const MAX_BATCH: u32 = 250;
+/// After a lockstep wait, at most this much simulated time runs unpaced to catch up with the speed factor.
+const LOCKSTEP_MAX_LAG: Duration = Duration::from_secs(1);
+/// Default wall-time bound of one lockstep wait for the companion's answer.
+pub const DEFAULT_LOCKSTEP_WAIT: Duration = Duration::from_secs(2);
 
 /// Where the mock talks.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,6 +90,7 @@ impl MockAutopilot {
             step: DEFAULT_STEP,
             faults: Faults::default(),
             vehicle: VehicleConfig::default(),
+            lockstep: None,
         }
     }
 }
@@ -97,9 +102,21 @@ pub struct Builder {
     step: Duration,
     faults: Faults,
     vehicle: VehicleConfig,
+    lockstep: Option<Duration>,
 }
 
 impl Builder {
+    /// Lockstep with the avoidance companion: while flying with COM_OBS_AVOID = 1, simulated time stands
+    /// still after each trajectory request until the companion answers (at most `wait` of wall time, then
+    /// it goes on as PX4 would). The speed factor becomes an upper bound, and a flight no longer depends on
+    /// how fast the companion's CPU is. `None` (the default): free-running, as PX4 on real hardware.
+    /// Meant for fault-free links: injected latency is counted in simulated time, which stands still, so
+    /// every answer would wait out the wall-time bound.
+    pub fn lockstep(mut self, wait: Option<Duration>) -> Self {
+        self.lockstep = wait;
+        self
+    }
+
     /// Where to talk.
     pub fn link(mut self, link: LinkSpec) -> Self {
         self.link = link;
@@ -178,6 +195,7 @@ impl Builder {
             link: FaultyLink::new(self.faults),
             step: self.step,
             speed: self.speed,
+            lockstep: self.lockstep,
         };
         let (task, local_addr) = match (&self.link, local) {
             (LinkSpec::Address(addr), _) => {
@@ -256,6 +274,14 @@ struct Runner {
     link: FaultyLink,
     step: Duration,
     speed: SpeedFactor,
+    lockstep: Option<Duration>,
+}
+
+/// What ended a lockstep wait.
+enum Waited {
+    Answered,
+    TimedOut,
+    Stop,
 }
 
 impl Runner {
@@ -283,7 +309,7 @@ impl Runner {
                 }
             }
         });
-        let pacer = Pacer::new(self.speed, self.step, Instant::now());
+        let mut pacer = Pacer::new(self.speed, self.step, Instant::now());
         let mut reboot_pending = self.link.faults().reboot_after;
         loop {
             if *stop.borrow() {
@@ -293,9 +319,24 @@ impl Runner {
                 self.link.incoming(self.vehicle.now(), h, m);
             }
             self.deliver(&*transport).await;
+            if let Some(wait) = self.lockstep
+                && self.vehicle.lockstep_blocked()
+            {
+                state.send_replace(self.vehicle.state());
+                match self.wait_for_answer(&*transport, &mut in_rx, &mut stop, wait).await {
+                    Waited::Stop => break,
+                    Waited::TimedOut => self.vehicle.lockstep_release(),
+                    Waited::Answered => {}
+                }
+                pacer.limit_lag(self.vehicle.now(), Instant::now(), LOCKSTEP_MAX_LAG);
+                continue;
+            }
             let target = pacer.sim_target(Instant::now());
             let mut n = 0;
-            while n < MAX_BATCH && target.is_none_or(|t| self.vehicle.now() + self.step <= t) {
+            while n < MAX_BATCH
+                && target.is_none_or(|t| self.vehicle.now() + self.step <= t)
+                && !(self.lockstep.is_some() && self.vehicle.lockstep_blocked())
+            {
                 self.vehicle.step(self.step);
                 n += 1;
                 if let Some(at) = reboot_pending.filter(|at| self.vehicle.now() >= *at) {
@@ -306,6 +347,9 @@ impl Runner {
                 self.deliver(&*transport).await;
             }
             state.send_replace(self.vehicle.state());
+            if self.lockstep.is_some() && self.vehicle.lockstep_blocked() {
+                continue;
+            }
             if target.is_none() {
                 tokio::task::yield_now().await;
                 continue;
@@ -322,6 +366,31 @@ impl Runner {
             }
         }
         receiver.abort();
+    }
+
+    /// Simulated time stands still until the companion answers, the wall-time bound passes or the mock stops.
+    async fn wait_for_answer<T: Transport>(
+        &mut self,
+        transport: &T,
+        in_rx: &mut mpsc::Receiver<(MavHeader, MavMessage)>,
+        stop: &mut watch::Receiver<bool>,
+        wait: Duration,
+    ) -> Waited {
+        let deadline = tokio::time::Instant::now() + wait;
+        while self.vehicle.lockstep_blocked() {
+            tokio::select! {
+                _ = stop.changed() => return Waited::Stop,
+                m = in_rx.recv() => match m {
+                    Some((h, m)) => {
+                        self.link.incoming(self.vehicle.now(), h, m);
+                        self.deliver(transport).await;
+                    }
+                    None => return Waited::Stop,
+                },
+                _ = tokio::time::sleep_until(deadline) => return Waited::TimedOut,
+            }
+        }
+        Waited::Answered
     }
 
     /// Hand due incoming messages to the vehicle and send due outgoing ones.

@@ -104,6 +104,13 @@ impl Streams {
         }
     }
 
+    /// Every enabled stream is next due at `now` (their phase follows `now`, not boot).
+    pub fn rephase(&mut self, now: Duration) {
+        for s in &mut self.entries {
+            s.next_due = now;
+        }
+    }
+
     /// SET_MESSAGE_INTERVAL semantics: -1 disables, 0 restores the default, >0 is µs.
     pub fn set_interval(&mut self, id: u32, interval_us: f32, now: Duration) -> IntervalResult {
         let Some(s) = self.entries.iter_mut().find(|s| s.id == id) else {

@@ -329,6 +329,9 @@ impl Vehicle {
     pub(crate) fn set_mode(&mut self, mode: FlightMode, takeoff_alt_m: f64) {
         self.nav.set_mode(mode, &self.body, takeoff_alt_m);
         self.avoidance.reset();
+        // Streams restart in phase with the mode switch: a flight is then the same whatever wall time the
+        // command arrived at (only the phase of PX4's free-running streams differs).
+        self.streams.rephase(self.now);
         self.send_mission_current();
     }
 
@@ -351,6 +354,20 @@ impl Vehicle {
             self.avoidance.reset();
             self.text(MavSeverity::MAV_SEVERITY_INFO, &format!("Disarmed by {why}"));
         }
+    }
+
+    /// True while a lockstep simulation must hold its clock: the vehicle flies with avoidance and the
+    /// companion has not answered the latest trajectory request yet.
+    pub fn lockstep_blocked(&self) -> bool {
+        self.armed
+            && self.params.f64("COM_OBS_AVOID") >= 1.0
+            && self.nav.mode().is_auto()
+            && self.avoidance.awaiting_answer(self.now)
+    }
+
+    /// Go on without the answer (the lockstep wait timed out; the avoidance timeout logic takes over).
+    pub fn lockstep_release(&mut self) {
+        self.avoidance.release();
     }
 
     /// Advance the simulation by one fixed step `dt`.

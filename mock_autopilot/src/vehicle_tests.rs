@@ -148,10 +148,18 @@ fn avoidance_companion_steers_and_its_silence_holds() {
             if let MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) = m {
                 requests += 1;
                 assert_eq!(t.valid_points, 3);
+                assert!(
+                    v.lockstep_blocked(),
+                    "a lockstep runner waits for this request's answer"
+                );
                 if answering {
                     let mut a = t.clone();
                     a.valid_points = 1;
                     v.handle(&header(196), &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a));
+                    assert!(!v.lockstep_blocked(), "answered");
+                } else {
+                    v.lockstep_release();
+                    assert!(!v.lockstep_blocked(), "released after the runner's wall-time bound");
                 }
             }
         }

@@ -18,7 +18,7 @@ use super::exchange::Target;
 use super::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
-use super::vehicle::VehicleView;
+use super::vehicle::{PoseNed, VehicleView};
 
 /// Answer period (10 Hz, as PX4-Avoidance's waypoint generator).
 pub const ANSWER_PERIOD: Duration = Duration::from_millis(100);
@@ -227,18 +227,93 @@ impl CompanionStats {
     }
 }
 
-/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers at 10 Hz
-/// (vehicle time) with the latest planner result, counting its answers in `stats`.
+/// How the companion paces its answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Pacing {
+    /// As PX4-Avoidance: answer at 10 Hz (vehicle time) with the latest finished plan.
+    #[default]
+    FreeRunning,
+    /// Answer every request at once, timed by the request's own timestamp (for a vehicle that holds its clock
+    /// until the answer: the mock's lockstep), with a plan made from the pose `latency` before the request:
+    /// a real companion plans on a camera frame and a pose that are already old when the answer lands.
+    Lockstep {
+        /// Age of the pose each plan is made from (vehicle time; 20 ms resolution at PX4's 50 Hz stream).
+        latency: Duration,
+    },
+}
+
+/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers them
+/// (see [`Pacing`]), counting its answers in `stats`.
 pub fn spawn(
     link: Arc<Link>,
     target: Target,
     steer: Box<dyn Steer>,
     stats: Arc<CompanionStats>,
+    pacing: Pacing,
 ) -> [JoinHandle<()>; 2] {
-    [
-        tokio::spawn(beat(link.clone())),
-        tokio::spawn(run(link, target, steer, stats)),
-    ]
+    let answers = match pacing {
+        Pacing::FreeRunning => tokio::spawn(run(link.clone(), target, steer, stats)),
+        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link.clone(), target, steer, stats, latency)),
+    };
+    [tokio::spawn(beat(link.clone())), answers]
+}
+
+fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> bool {
+    inb_header.component_id != AVOIDANCE_COMPONENT_ID && inb_header.system_id == u32::from(target.system)
+}
+
+/// Poses kept for the lockstep latency (2 s at 50 Hz).
+const POSE_HISTORY: usize = 100;
+
+async fn run_lockstep(
+    link: Arc<Link>,
+    target: Target,
+    steer: Box<dyn Steer>,
+    stats: Arc<CompanionStats>,
+    latency: Duration,
+) {
+    let clock = link.clock();
+    let mut rx = link.subscribe();
+    let mut view = VehicleView::default();
+    let mut history = PoseHistory::default();
+    let mut companion = Companion::default();
+    let mut worker = SteerWorker::new(steer);
+    loop {
+        let inb = match rx.recv().await {
+            Ok(inb) => inb,
+            Err(broadcast::error::RecvError::Lagged(_)) => continue,
+            Err(broadcast::error::RecvError::Closed) => return,
+        };
+        let MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) = &inb.msg else {
+            view.update(&inb.msg, clock.now());
+            if matches!(inb.msg, MavMessage::LOCAL_POSITION_NED(_)) {
+                history.push(view.pose);
+            }
+            continue;
+        };
+        if !is_request(&inb.header, target) {
+            continue;
+        }
+        // The vehicle's own time: the request was sent at it and the vehicle waits for the answer.
+        let now = Duration::from_micros(t.time_usec);
+        companion.on_request(t, now);
+        let mut seen = view.clone();
+        seen.pose = history.at(now.saturating_sub(latency)).or(view.pose);
+        let planned = match companion.steer_input(&seen, now) {
+            Some(input) => match worker.compute(input, now).await {
+                Some(out) => out,
+                None => return,
+            },
+            None => None,
+        };
+        if let Some(a) = companion.answer_with(planned, now, t.time_usec) {
+            stats.planned.store(companion.planned, Ordering::Relaxed);
+            stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
+            let _ = link
+                .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
+                .await;
+        }
+    }
 }
 
 async fn beat(link: Arc<Link>) {
@@ -279,10 +354,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
                 Ok(inb) => {
                     let now = clock.now();
                     match &inb.msg {
-                        MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t)
-                            if inb.header.component_id != AVOIDANCE_COMPONENT_ID
-                                && inb.header.system_id == u32::from(target.system) =>
-                        {
+                        MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) if is_request(&inb.header, target) => {
                             companion.on_request(t, now)
                         }
                         m => view.update(m, now),
@@ -293,6 +365,34 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
             },
             _ = tokio::time::sleep(wake) => {}
         }
+    }
+}
+
+/// The latest poses, to plan from an older one (lockstep latency).
+#[derive(Debug, Default)]
+struct PoseHistory(std::collections::VecDeque<PoseNed>);
+
+impl PoseHistory {
+    fn push(&mut self, pose: Option<PoseNed>) {
+        let Some(p) = pose else { return };
+        if self.0.back().is_some_and(|last| last.time_boot_ms > p.time_boot_ms) {
+            self.0.clear(); // a reboot
+        }
+        if self.0.len() == POSE_HISTORY {
+            self.0.pop_front();
+        }
+        self.0.push_back(p);
+    }
+
+    /// The newest pose at or before vehicle time `t` (the oldest kept if all are newer).
+    fn at(&self, t: Duration) -> Option<PoseNed> {
+        let ms = t.as_millis();
+        self.0
+            .iter()
+            .rev()
+            .find(|p| u128::from(p.time_boot_ms) <= ms)
+            .or(self.0.front())
+            .copied()
     }
 }
 
@@ -351,6 +451,29 @@ mod tests {
             c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(),
             "stale request"
         );
+    }
+
+    #[test]
+    fn pose_history_gives_the_pose_a_latency_ago() {
+        let pose = |ms: u32| PoseNed {
+            time_boot_ms: ms,
+            pos_ned: [f64::from(ms), 0.0, 0.0],
+            vel_ned: [0.0; 3],
+            yaw_rad: None,
+        };
+        let mut h = PoseHistory::default();
+        assert_eq!(h.at(Duration::from_secs(1)), None);
+        for ms in (1000..=3000).step_by(20) {
+            h.push(Some(pose(ms)));
+        }
+        assert_eq!(h.0.len(), POSE_HISTORY, "bounded");
+        let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
+        assert_eq!(at(3000), Some(3000));
+        assert_eq!(at(2999), Some(2980), "the newest at or before");
+        assert_eq!(at(100), Some(1020), "older than kept: the oldest");
+        h.push(Some(pose(40)));
+        let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
+        assert_eq!(at(3000), Some(40), "a reboot forgets the old boot's poses");
     }
 
     #[test]

@@ -10,7 +10,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::FlyMode;
 use super::cancel::CancelToken;
-use super::clock::secs;
+use super::clock::{VehicleClock, secs};
 use super::command::Command;
 use super::exchange::Retry;
 use super::offboard::{self, Pilot, Progress};
@@ -80,6 +80,23 @@ pub fn steer_for(test: &TestCase, opts: &FlyOptions) -> Box<dyn Steer> {
     }
 }
 
+/// In lockstep, silence shorter than this (wall time) is the vehicle waiting for the companion.
+const LOCKSTEP_SILENCE: Duration = Duration::from_secs(2);
+
+/// Vehicle time since the flight started. In lockstep the scaled wall clock runs ahead of the vehicle, so the
+/// vehicle's own `time_boot_ms` counts, bounded by real time (never slower than 1x) so a flight always ends.
+fn flight_time(s: &Session<'_>, clock: &VehicleClock, start: Duration, now: Duration, boot0: Option<u32>) -> Duration {
+    let scaled = now.saturating_sub(start);
+    if s.opts.lockstep.is_none() {
+        return scaled;
+    }
+    let reported = match (boot0, s.view.pose) {
+        (Some(b0), Some(p)) => Duration::from_millis(u64::from(p.time_boot_ms.saturating_sub(b0))),
+        _ => Duration::ZERO,
+    };
+    reported.max(clock.wall(scaled))
+}
+
 /// Follows the flight to its end.
 pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     let clock = s.link.clock();
@@ -106,6 +123,7 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     };
     let mut landing_sent = false;
     let mut was_armed = false;
+    let mut start_boot_ms = s.view.pose.map(|p| p.time_boot_ms);
     loop {
         let now = clock.now();
         while plan.front().is_some_and(|(at, _)| start + *at <= now) {
@@ -115,10 +133,16 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             }
         }
         was_armed |= s.view.armed;
+        start_boot_ms = start_boot_ms.or(s.view.pose.map(|p| p.time_boot_ms));
         if s.view.rebooted {
             return end(s, Stop::new(Status::LinkLost, "the autopilot rebooted mid-flight")).await;
         }
-        if s.view.silent_for(now).is_some_and(|d| d > loss) {
+        // In lockstep the vehicle is silent while it waits for our answer; only wall-time silence counts.
+        let silence = s
+            .view
+            .silent_for(now)
+            .filter(|d| s.opts.lockstep.is_none() || clock.wall(*d) > LOCKSTEP_SILENCE);
+        if silence.is_some_and(|d| d > loss) {
             let why = format!("no message from the vehicle for {:.1} s", loss.as_secs_f64());
             return end(s, Stop::new(Status::LinkLost, why)).await;
         }
@@ -137,7 +161,7 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
                 format!("the vehicle disarmed before taking off: {why}"),
             );
         }
-        if now.saturating_sub(start) > timeout {
+        if flight_time(s, &clock, start, now, start_boot_ms) > timeout {
             let why = format!("still flying after {} s", s.opts.timeout_s);
             return end(s, Stop::new(Status::Timeout, why)).await;
         }

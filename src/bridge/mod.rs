@@ -41,6 +41,7 @@ pub mod vehicle;
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 pub use cancel::CancelToken;
 pub use link::{LinkStats, Transport};
@@ -87,6 +88,11 @@ pub struct FlyOptions {
     pub target_system: Option<u8>,
     /// The LFS prediction to report beside the flown distance, if the caller computed it.
     pub lfs_min_distance: Option<f64>,
+    /// `Some(latency)`: the vehicle holds its clock until each avoidance answer (the mock's `--lockstep`), so
+    /// answer every request at once with a plan made from the pose `latency` (vehicle time) before it,
+    /// measure the flight timeout in the vehicle's reported time, and do not count the vehicle's silence
+    /// while it waits for us as a lost link. `time_scale` is then an upper bound.
+    pub lockstep: Option<Duration>,
 }
 
 impl Default for FlyOptions {
@@ -102,6 +108,7 @@ impl Default for FlyOptions {
             link_loss_s: 5.0,
             target_system: None,
             lfs_min_distance: None,
+            lockstep: None,
         }
     }
 }

@@ -249,7 +249,12 @@ impl Session<'_> {
     async fn prepare(&mut self) -> Result<(), Stop> {
         if self.opts.mode == FlyMode::Avoidance {
             let steer = super::flight::steer_for(self.test, self.opts);
-            for t in super::avoidance::spawn(self.link.clone(), self.target, steer, self.companion.clone()) {
+            let pacing = match self.opts.lockstep {
+                Some(latency) => super::avoidance::Pacing::Lockstep { latency },
+                None => super::avoidance::Pacing::FreeRunning,
+            };
+            let companion = self.companion.clone();
+            for t in super::avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing) {
                 self.tasks.push(t);
             }
         }

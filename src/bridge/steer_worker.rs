@@ -58,6 +58,26 @@ impl SteerWorker {
         true
     }
 
+    /// Steers on `input` now and waits for the result (lockstep: the vehicle's clock stands still meanwhile).
+    /// `None` if the steering was lost.
+    pub async fn compute(&mut self, input: SteerInput, now: Duration) -> Option<Option<SteerOutput>> {
+        if let Some((job, _)) = self.running.take() {
+            let (steer, _) = job.await.ok()?;
+            self.idle = Some(steer);
+        }
+        let mut steer = self.idle.take()?;
+        let (steer, out) = tokio::task::spawn_blocking(move || {
+            let out = steer.steer(&input);
+            (steer, out)
+        })
+        .await
+        .ok()?;
+        self.idle = Some(steer);
+        self.latest = Some((out, now));
+        self.finished += 1;
+        Some(out)
+    }
+
     /// The latest result whose input is at most `max_age` old: `Some(None)` means "cannot plan".
     pub fn latest(&self, now: Duration, max_age: Duration) -> Option<Option<SteerOutput>> {
         self.latest
@@ -112,6 +132,8 @@ mod tests {
             .expect("finished")
             .expect("planned");
         assert_eq!(got.pos_ned, [5.0, 0.0, -2.0]);
+        let now = w.compute(input, t).await.expect("steering kept").expect("planned");
+        assert_eq!(now.pos_ned, [5.0, 0.0, -2.0], "computed on demand");
         assert_eq!(
             w.latest(t + Duration::from_secs(2), Duration::from_millis(500)),
             None,

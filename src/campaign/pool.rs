@@ -197,6 +197,9 @@ mod tests {
         name: &'static str,
         reachable: bool,
         log: Arc<Mutex<Vec<(String, u64)>>>,
+        /// Set once an unreachable vehicle was tried; reachable ones wait for it (bounded), so a test does not
+        /// depend on which thread starts first.
+        dead_tried: Option<Arc<AtomicBool>>,
     }
 
     impl Vehicle for Fake {
@@ -205,12 +208,23 @@ mod tests {
         }
         fn fly(&mut self, test: &TestCase, _csv: &Path, _c: &AtomicBool) -> Result<Flown, VehicleError> {
             if !self.reachable {
+                if let Some(d) = &self.dead_tried {
+                    d.store(true, Ordering::SeqCst);
+                }
                 // Fail slowly, so the other vehicles see the whole budget reserved meanwhile.
                 std::thread::sleep(std::time::Duration::from_millis(100));
                 return Err(VehicleError::Unreachable {
                     vehicle: self.name.into(),
                     reason: "no heartbeat".into(),
                 });
+            }
+            if let Some(d) = &self.dead_tried {
+                for _ in 0..2000 {
+                    if d.load(Ordering::SeqCst) {
+                        break;
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                }
             }
             let id = test.obstacles[0].position.x as u64;
             self.log.lock().unwrap().push((self.name.into(), id));
@@ -249,8 +263,19 @@ mod tests {
     }
 
     fn run(vehicles: Vec<(&'static str, bool)>, n: u64, budget: usize) -> (PoolOutcome, Vec<(String, u64)>, usize) {
+        run_with(vehicles, n, budget, false)
+    }
+
+    /// `wait_for_dead`: reachable vehicles fly only once an unreachable one was tried.
+    fn run_with(
+        vehicles: Vec<(&'static str, bool)>,
+        n: u64,
+        budget: usize,
+        wait_for_dead: bool,
+    ) -> (PoolOutcome, Vec<(String, u64)>, usize) {
         let dir = tempfile::tempdir().unwrap();
         let log = Arc::new(Mutex::new(Vec::new()));
+        let dead_tried = wait_for_dead.then(|| Arc::new(AtomicBool::new(false)));
         let v: Vec<Box<dyn Vehicle>> = vehicles
             .into_iter()
             .map(|(name, reachable)| {
@@ -258,6 +283,7 @@ mod tests {
                     name,
                     reachable,
                     log: log.clone(),
+                    dead_tried: dead_tried.clone(),
                 }) as Box<dyn Vehicle>
             })
             .collect();
@@ -288,7 +314,7 @@ mod tests {
 
     #[test]
     fn an_unreachable_vehicle_is_dropped_and_its_job_flown_elsewhere() {
-        let (out, flown, _) = run(vec![("dead", false), ("ok", true)], 5, 5);
+        let (out, flown, _) = run_with(vec![("dead", false), ("ok", true)], 5, 5, true);
         assert_eq!(out.flown, 5);
         assert_eq!(out.dropped.len(), 1);
         assert!(flown.iter().all(|f| f.0 == "ok"));

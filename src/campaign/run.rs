@@ -46,6 +46,14 @@ pub struct CampaignConfig {
     /// Clock speed of the embedded mock autopilots.
     #[serde(default = "default_mock_speed")]
     pub mock_speed: f64,
+    /// The embedded mocks hold their clock for each avoidance answer (`mock_speed` is then an upper bound).
+    /// Campaign files written before lockstep existed lack the key: their flights were free-running.
+    #[serde(default)]
+    pub mock_lockstep: bool,
+    /// In lockstep, the companion plans on the pose this old (vehicle milliseconds), as a real companion's
+    /// camera and planner lag behind the vehicle.
+    #[serde(default = "default_mock_latency_ms")]
+    pub mock_latency_ms: f64,
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,
@@ -61,6 +69,13 @@ fn default_mode() -> String {
 
 fn default_motion() -> String {
     "px4".into()
+}
+
+/// Fitted against the recorded competition flights (see README, *Mock autopilot*).
+pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
+
+fn default_mock_latency_ms() -> f64 {
+    DEFAULT_MOCK_LATENCY_MS
 }
 
 fn default_mock_speed() -> f64 {

@@ -72,6 +72,8 @@ fn config(budget: usize) -> CampaignConfig {
         mode: "avoidance".into(),
         motion: "px4".into(),
         mock_speed: 20.0,
+        mock_lockstep: true,
+        mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
         screen: true,
     }
 }

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
 use tokio::runtime::Handle;
 
@@ -93,16 +94,20 @@ pub struct MockVehicle {
     name: String,
     speed: f64,
     mode: FlyMode,
+    lockstep: Option<Duration>,
 }
 
 impl MockVehicle {
-    /// Mock number `index`, its clock `speed` times faster than real time.
-    pub fn new(handle: Handle, index: usize, speed: f64, mode: FlyMode) -> Self {
+    /// Mock number `index`, its clock `speed` times faster than real time (at most, with `lockstep =
+    /// Some(latency)`: the mock then holds its clock until each avoidance answer, planned on the pose
+    /// `latency` old; see [`FlyOptions::lockstep`]).
+    pub fn new(handle: Handle, index: usize, speed: f64, mode: FlyMode, lockstep: Option<Duration>) -> Self {
         Self {
             handle,
             name: format!("mock#{index}"),
             speed,
             mode,
+            lockstep,
         }
     }
 }
@@ -124,6 +129,7 @@ impl Vehicle for MockVehicle {
                 MockAutopilot::builder()
                     .link(LinkSpec::UdpIn(addr))
                     .speed_factor(SpeedFactor::Times(self.speed))
+                    .lockstep(self.lockstep.map(|_| DEFAULT_LOCKSTEP_WAIT))
                     .spawn(),
             )
             .map_err(|e| unreachable(e.to_string()))?;
@@ -137,6 +143,7 @@ impl Vehicle for MockVehicle {
             time_scale: self.speed,
             trajectory_csv: Some(csv.to_path_buf()),
             heartbeat_wait_s: 20.0,
+            lockstep: self.lockstep,
             ..FlyOptions::default()
         };
         let result = fly_blocking(&self.handle, test, &opts, stop);

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::gazebo::world_sdf;
@@ -61,6 +62,10 @@ pub struct Args {
     /// Skip the low-fidelity prediction.
     #[arg(long)]
     no_predict: bool,
+    /// The vehicle is a `mock-autopilot --lockstep`: answer each avoidance request at once, planned on the
+    /// pose this many milliseconds old (--time-scale is then the mock's upper bound).
+    #[arg(long, value_name = "LATENCY_MS")]
+    lockstep: Option<f64>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -97,6 +102,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         fence: !args.no_fence,
         time_scale: args.time_scale,
         lfs_min_distance: prediction.as_ref().and_then(|p| p.min_distance),
+        lockstep: match args.lockstep {
+            None => None,
+            Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
+            Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
+        },
         ..FlyOptions::default()
     };
     opts.validate()?;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
 use prgenuav::bridge::FlyMode;
@@ -51,10 +52,17 @@ pub struct Args {
     /// Obstacle mode of the flights: avoidance (PX4 <= 1.14 companion), offboard, or mission (no avoidance).
     #[arg(long, default_value = "avoidance")]
     mode: String,
-    /// Clock speed of the embedded mock autopilots (times real time); the planner must keep up with 10 Hz
-    /// of mock time, so raise it only with CPU to spare.
-    #[arg(long, default_value_t = 20.0)]
+    /// Clock speed of the embedded mock autopilots (times real time). In lockstep (the default) it is an
+    /// upper bound: the mock holds its clock until each avoidance answer, so flights do not depend on CPU.
+    #[arg(long, default_value_t = 100.0)]
     mock_speed: f64,
+    /// Let the embedded mocks' clocks run free (no lockstep): flights then depend on how fast the planner
+    /// answers, as on a real vehicle; use a low --mock-speed (20) with it.
+    #[arg(long)]
+    mock_free_running: bool,
+    /// In lockstep, the companion plans on the pose this many (vehicle) milliseconds old.
+    #[arg(long, default_value_t = prgenuav::campaign::run::DEFAULT_MOCK_LATENCY_MS)]
+    mock_latency: f64,
     /// Embedded mock autopilots flying at once (default: one per core). Flights mostly wait on the mock's
     /// clock, so more vehicles than cores can help while the planner keeps up.
     #[arg(long)]
@@ -124,6 +132,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 mode: args.mode.clone(),
                 motion: args.motion.clone(),
                 mock_speed: args.mock_speed,
+                mock_lockstep: !args.mock_free_running,
+                mock_latency_ms: args.mock_latency,
                 screen: !args.no_screen,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
@@ -136,6 +146,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
         bail!("--mock-speed must be at least 1");
     }
+    if !(cfg.mock_latency_ms.is_finite() && (0.0..=1000.0).contains(&cfg.mock_latency_ms)) {
+        bail!("--mock-latency {} must be between 0 and 1000 ms", cfg.mock_latency_ms);
+    }
+    let lockstep = cfg
+        .mock_lockstep
+        .then(|| Duration::from_secs_f64(cfg.mock_latency_ms / 1000.0));
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -155,7 +171,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             bail!("--mock-vehicles must be at least 1");
         }
         (0..count)
-            .map(|i| Box::new(MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode)) as Box<dyn Vehicle>)
+            .map(|i| {
+                Box::new(MockVehicle::new(
+                    runtime.handle().clone(),
+                    i,
+                    cfg.mock_speed,
+                    mode,
+                    lockstep,
+                )) as Box<dyn Vehicle>
+            })
             .collect()
     } else {
         if cfg.hfs.iter().any(|u| u == "mock") {
