@@ -19,8 +19,12 @@
 //! 0.478 / 0.798 / 1.000 / 0.500), px4 0.589 / 0.724 / 1.000 / 0.310 (level 0.552 / 0.751 / 1.000 / 0.379). With
 //! the 64 x 48 camera, where the exact pitched pose is cheap to render in full: level 0.556 / 0.724, exact pitch
 //! 0.528 / 0.749, principal-point pitch 0.577 / 0.718, i.e. both within what moving the obstacles by a centimetre
-//! does to these numbers (about 0.01 m MAE and 0.005-0.02 Spearman). At cruise the pitch is about 1 degree
-//! (drag), and the floor only enters the 15 m sensor range at 10 m altitude above about 19 degrees of pitch.
+//! does to these numbers (about 0.01 m MAE and 0.005-0.02 Spearman). A slower vehicle (lag 1 s): paper with
+//! its delay 0.510 / 0.782 / 1.000 / 0.448 (worse), px4 0.538 / 0.760 / 1.000 / 0.345 and, with the obstacles
+//! moved 1 cm, 0.545 / 0.755 (level: 0.552 / 0.751, 0.555 / 0.734 and 0.551 / 0.743 with 1 cm / -2 cm): about
+//! 0.01 m and 0.015 better for px4 at lower recall, too little to change the model `generate` screens with. At
+//! cruise the pitch is about 1 degree (drag), and the floor only enters the 15 m sensor range at 10 m altitude
+//! above about 19 degrees of pitch.
 
 use nalgebra::{Vector2, Vector3};
 
