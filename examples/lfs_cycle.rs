@@ -1,0 +1,70 @@
+//! Profiling harness for one planner cycle (the state of `benches/lfs.rs`): run under
+//! `valgrind --tool=callgrind --toggle-collect=lfs_cycle::cycles` to count the instructions of N cycles.
+//!
+//! `cargo run --release --example lfs_cycle -- [N=10]`
+
+use std::hint::black_box;
+use std::path::Path;
+
+use prgenuav::lfs::sim::{SimConfig, World, step};
+use prgenuav::model::{Obstacle, TestCase};
+
+/// The bench's world: mission 2 with two boxes, flown to `t_s` seconds.
+fn world_at(t_s: f64) -> World {
+    let test = TestCase::load(Path::new("missions/mission2.yaml"))
+        .expect("missions/mission2.yaml (run from the crate root)")
+        .with_obstacles(vec![
+            Obstacle::new(10.0, 5.0, 20.0, 10.0, 20.0, 0.0),
+            Obstacle::new(10.0, 5.0, 20.0, -10.0, 20.0, 0.0),
+        ]);
+    let mut w = World::new(&test, SimConfig::default()).expect("valid test");
+    while w.time_s < t_s {
+        step(&mut w, 0.1);
+    }
+    w
+}
+
+/// Runs one cycle on each world (the only code callgrind should count).
+#[inline(never)]
+fn cycles(worlds: &mut [World]) {
+    for w in worlds {
+        black_box(step(w, 0.1));
+    }
+}
+
+fn main() {
+    let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10);
+    let world = world_at(14.0);
+    let mut worlds = vec![world; n];
+    // Tables built once per process are already initialised by the flight above.
+    cycles(&mut worlds);
+    let w = &worlds[0];
+    // FNV-1a over the tree, the memory and the vehicle: equal digests mean bit-identical results.
+    let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |v: u64| digest = (digest ^ v).wrapping_mul(0x0100_0000_01b3);
+    for node in w.planner().tree() {
+        let p = &node.position_enu;
+        [p.x, p.y, p.z, node.total_cost].iter().for_each(|b| eat(u64::from(b.to_bits())));
+    }
+    for (p, age) in w.planner().memory().points() {
+        [p.x, p.y, p.z, age].iter().for_each(|b| eat(u64::from(b.to_bits())));
+    }
+    w.vehicle.position_enu.iter().for_each(|b| eat(b.to_bits()));
+    println!(
+        "{n} cycles; memory {} points; tree {} nodes; digest {digest:016x}",
+        w.planner().memory().len(),
+        w.planner().tree().len(),
+    );
+    if std::env::var_os("LFS_CYCLE_FLIGHT").is_some() {
+        // A whole flight: the trajectory's digest checks many more cycles than the one above.
+        let mut w = world_at(0.0);
+        while step(&mut w, 0.1).is_none() {}
+        let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+        for s in &w.trajectory().samples {
+            for b in [s.x, s.y, s.z] {
+                digest = (digest ^ b.to_bits()).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        println!("flight: {:?} after {} cycles; trajectory digest {digest:016x}", w.status, w.cycles);
+    }
+}
