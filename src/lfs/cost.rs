@@ -219,7 +219,13 @@ fn add_into_avx2(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
 
 /// Fills the unsmoothed "other" and distance matrices; AVX2-compiled where available (same code: Rust never
 /// contracts `a * b + c` into a fused multiply-add, so the results are the same bits).
-fn fill_matrices(hist: &Histogram, ctx: &CostContext, k: &CostParams, other: &mut [f32; GRID_CELLS], dist: &mut [f32]) {
+pub(super) fn fill_matrices(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above).
@@ -365,21 +371,34 @@ pub struct Candidate {
 
 /// Integer key ordered exactly like [`f32::total_cmp`] (the standard library's own bit trick).
 #[inline(always)]
-fn total_key(c: f32) -> i32 {
+pub(super) fn total_key(c: f32) -> i32 {
     let b = c.to_bits() as i32;
     b ^ (((b >> 31) as u32) >> 1) as i32
 }
 
 /// The `n` smallest `(key, index)` pairs seen so far, ascending; `offer` order does not matter.
-struct TopN {
+pub(super) struct TopN {
     n: usize,
     kept: Vec<(i32, u32)>,
 }
 
 impl TopN {
+    /// Keeps the `n` smallest (n >= 1).
+    pub(super) fn new(n: usize) -> Self {
+        Self {
+            n,
+            kept: Vec::with_capacity(n + 1),
+        }
+    }
+
+    /// The kept `(key, index)` pairs, ascending.
+    pub(super) fn kept(&self) -> &[(i32, u32)] {
+        &self.kept
+    }
+
     /// The worst kept key once `n` are kept (a cell with a larger key cannot enter).
     #[inline(always)]
-    fn bound(&self) -> i32 {
+    pub(super) fn bound(&self) -> i32 {
         if self.kept.len() == self.n {
             self.kept[self.n - 1].0
         } else {
@@ -388,7 +407,7 @@ impl TopN {
     }
 
     #[inline]
-    fn offer(&mut self, key: i32, index: u32) {
+    pub(super) fn offer(&mut self, key: i32, index: u32) {
         let item = (key, index);
         if self.kept.len() == self.n {
             if item >= self.kept[self.n - 1] {

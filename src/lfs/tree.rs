@@ -7,10 +7,11 @@
 use nalgebra::Vector3;
 
 use super::cloud::PointMemory;
-use super::cost::{Candidate, CostInputs, CostScratch, best_candidates, cost_matrix};
+use super::cost::{Candidate, CostInputs};
 use super::histogram::{Histogram, HistogramScratch};
 use super::params::PlannerParams;
-use super::polar::{GRID_CELLS, PolarDeg, polar_histogram_to_cartesian};
+use super::polar::{PolarDeg, polar_histogram_to_cartesian};
+use super::select::{SelectScratch, best_candidates_lazy};
 
 /// A node of the tree. Index 0 is the root (the vehicle at planning time).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,8 +59,7 @@ pub struct StarPlanner {
     expanded: usize,
     hist: Histogram,
     hist_scratch: HistogramScratch,
-    cost_scratch: CostScratch,
-    total: Box<[f32; GRID_CELLS]>,
+    select_scratch: SelectScratch,
     candidates: Vec<Candidate>,
 }
 
@@ -74,8 +74,7 @@ impl Default for StarPlanner {
             expanded: 0,
             hist: Histogram::new(),
             hist_scratch: HistogramScratch::default(),
-            cost_scratch: CostScratch::default(),
-            total: Box::new([0.0; GRID_CELLS]),
+            select_scratch: SelectScratch::default(),
             candidates: Vec::new(),
         }
     }
@@ -201,18 +200,18 @@ impl StarPlanner {
                 velocity: o.velocity_enu,
                 closest_pt: inputs.closest_pt,
             };
-            cost_matrix(
+            let mut candidates = std::mem::take(&mut self.candidates);
+            best_candidates_lazy(
                 hist,
                 &cost_inputs,
                 &params.cost,
                 radius,
                 params.min_sensor_range_m,
                 params.max_sensor_range_m,
-                &mut self.cost_scratch,
-                &mut self.total,
+                params.children_per_node,
+                &mut self.select_scratch,
+                &mut candidates,
             );
-            let mut candidates = std::mem::take(&mut self.candidates);
-            best_candidates(&self.total, params.children_per_node, &mut candidates);
             if candidates.is_empty() {
                 self.nodes[origin].total_cost = f32::INFINITY;
             }
