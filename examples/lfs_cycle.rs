@@ -44,7 +44,9 @@ fn main() {
     let mut eat = |v: u64| digest = (digest ^ v).wrapping_mul(0x0100_0000_01b3);
     for node in w.planner().tree() {
         let p = &node.position_enu;
-        [p.x, p.y, p.z, node.total_cost].iter().for_each(|b| eat(u64::from(b.to_bits())));
+        [p.x, p.y, p.z, node.total_cost]
+            .iter()
+            .for_each(|b| eat(u64::from(b.to_bits())));
     }
     for (p, age) in w.planner().memory().points() {
         [p.x, p.y, p.z, age].iter().for_each(|b| eat(u64::from(b.to_bits())));
@@ -65,6 +67,9 @@ fn main() {
                 digest = (digest ^ b.to_bits()).wrapping_mul(0x0100_0000_01b3);
             }
         }
-        println!("flight: {:?} after {} cycles; trajectory digest {digest:016x}", w.status, w.cycles);
+        println!(
+            "flight: {:?} after {} cycles; trajectory digest {digest:016x}",
+            w.status, w.cycles
+        );
     }
 }

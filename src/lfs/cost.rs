@@ -279,25 +279,19 @@ fn fill_matrices_body(
         let hist_row = &hist.cells()[row..row + GRID_Z];
         let o_row = &mut other[row..row + GRID_Z];
         let d_row = &mut dist[row..row + GRID_Z];
-        if step == 1 {
-            for z in 0..GRID_Z {
-                o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
-                d_row[z] = dcost(hist_row[z]);
-            }
-            continue;
-        }
-        let mut any_dist = false;
-        for z in (0..GRID_Z).step_by(step) {
+        // Every column is computed (branch-free, vectorised); with a step above 1 the columns between the
+        // evaluated ones (every step-th, from 0) are then overwritten by the interpolation, which reads only the
+        // evaluated ones: the same bits as computing those alone.
+        for z in 0..GRID_Z {
             o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
             d_row[z] = dcost(hist_row[z]);
-            any_dist |= d_row[z] != 0.0;
         }
-        interpolate_row(o_row, step);
-        if any_dist {
-            interpolate_row(d_row, step);
-        } else {
-            // Every evaluated cell is +0: the interpolated ones are 0 + 0 * i = +0 too.
-            d_row.fill(0.0);
+        if step > 1 {
+            interpolate_row(o_row, step);
+            // An all-zero row stays all +0 (interpolating +0 gives 0 + 0 * i = +0).
+            if d_row.iter().fold(false, |a, &v| a | (v != 0.0)) {
+                interpolate_row(d_row, step);
+            }
         }
     }
 }

@@ -23,7 +23,7 @@ pub struct SelectScratch {
     x: Vec<f64>,
     w: Vec<f64>,
     padded: Vec<f64>,
-    pad_nonzero: Vec<bool>,
+    pad_state: Vec<u8>,
     fallback: CostScratch,
     total: Box<[f32; GRID_CELLS]>,
 }
@@ -36,7 +36,7 @@ impl Default for SelectScratch {
             x: Vec::new(),
             w: Vec::new(),
             padded: Vec::new(),
-            pad_nonzero: Vec::new(),
+            pad_state: Vec::new(),
             fallback: CostScratch::default(),
             total: Box::new([0.0; GRID_CELLS]),
         }
@@ -64,11 +64,7 @@ pub fn best_candidates_lazy(
     let facing = obstacle_facing_goal(hist, &inputs.goal, &inputs.origin, min_range_m, max_range_m);
     let ctx = CostContext::new(inputs, facing);
     fill_matrices(hist, &ctx, k, &mut scratch.other, &mut scratch.dist);
-    let usable = smoothing_radius <= GRID_E.min(GRID_Z)
-        && scratch.other.iter().fold(true, |a, o| a & o.is_finite())
-        // +0 or positive finite (no -0, negative, infinite or NaN distance cost).
-        && scratch.dist.iter().fold(true, |a, d| a & (d.to_bits() < f32::INFINITY.to_bits()));
-    if !usable {
+    if smoothing_radius > GRID_E.min(GRID_Z) || !select(scratch, smoothing_radius, n.min(GRID_CELLS), out) {
         // Outside the premises of the lazy search: the whole matrix (same result, or the same panic).
         let total = &mut scratch.total;
         cost_matrix(
@@ -82,41 +78,47 @@ pub fn best_candidates_lazy(
             total,
         );
         best_candidates(total, n, out);
-        return;
     }
-    select(scratch, smoothing_radius, n.min(GRID_CELLS), out);
 }
 
 /// The search over rows; AVX2-compiled where available (plain f64 additions and products: same bits).
-fn select(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) {
+/// Returns false, with `out` untouched, outside its premises: a non-finite "other" cost, or a distance cost that
+/// is not +0 or positive and finite.
+fn select(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above); the body is the same code, compiled for AVX2.
-        unsafe { select_avx2(s, radius, n, out) };
-        return;
+        return unsafe { select_avx2(s, radius, n, out) };
     }
-    select_body(s, radius, n, out);
+    select_body(s, radius, n, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn select_avx2(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) {
-    select_body(s, radius, n, out);
+fn select_avx2(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) -> bool {
+    select_body(s, radius, n, out)
 }
 
 #[inline(always)]
-fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) {
+fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Candidate>) -> bool {
     // Rows by ascending smallest "other" key (ties: lower row first), as one sortable i64 each.
     let mut order = [0i64; GRID_E];
+    let mut finite = true;
     for (r, (m, o)) in order.iter_mut().zip(s.other.chunks_exact(GRID_Z)).enumerate() {
         let min = o.iter().fold(i32::MAX, |a, &c| a.min(total_key(c)));
+        finite &= o.iter().fold(true, |a, c| a & c.is_finite());
         *m = (i64::from(min) << 8) | r as i64;
     }
-    order.sort_unstable();
     let mut row_nonzero = [false; GRID_E];
     for (nz, d) in row_nonzero.iter_mut().zip(s.dist.chunks_exact(GRID_Z)) {
         *nz = d.iter().fold(false, |a, &v| a | (v != 0.0));
+        // +0 or positive finite (no -0, negative, infinite or NaN distance cost).
+        finite &= d.iter().fold(true, |a, v| a & (v.to_bits() < f32::INFINITY.to_bits()));
     }
+    if !finite {
+        return false;
+    }
+    order.sort_unstable();
     pad_rows(s, radius, &row_nonzero);
     let mut top = TopN::new(n);
     for &packed in &order {
@@ -175,6 +177,7 @@ fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Can
             z_deg: p.z_deg,
         }
     }));
+    true
 }
 
 /// `sums[z]` = the conic kernel sum `sum_k w_k x[z + k]` of the padded pass-1 row `x` for `z` in
@@ -222,33 +225,36 @@ fn source_row(v: isize) -> (usize, usize) {
     }
 }
 
-/// The distance matrix as f64 with the pole padding of pass 1: padded row `p` (`0 .. rows + 2R`) is virtual row
-/// `p - R` (mirrored and turned by half a turn beyond a pole); `s.pad_nonzero[p]` tells whether it has a non-zero
-/// cell (rows without are left stale and never read). Also sets the kernel weights `s.w`.
+/// Padded row `p` (`0 .. rows + 2R`) of pass 1 is virtual row `p - R` of the distance matrix (mirrored and
+/// turned by half a turn beyond a pole). Marks which padded rows hold a non-zero cell (`s.pad_state`: 0 = all
+/// zero, 1 = not yet converted) and sets the kernel weights `s.w`; rows are converted to f64 on first use.
 #[inline(always)]
 fn pad_rows(s: &mut SelectScratch, n: usize, row_nonzero: &[bool; GRID_E]) {
     let pr = GRID_E + 2 * n;
     if s.padded.len() < pr * GRID_Z {
         s.padded.resize(pr * GRID_Z, 0.0);
     }
-    s.pad_nonzero.clear();
-    for (p, dst) in s.padded[..pr * GRID_Z].chunks_exact_mut(GRID_Z).enumerate() {
-        let (src, shift) = source_row(p as isize - n as isize);
-        s.pad_nonzero.push(row_nonzero[src]);
-        if !row_nonzero[src] {
-            continue;
-        }
-        let row = &s.dist[src * GRID_Z..(src + 1) * GRID_Z];
-        // Column c takes row[(c + shift) % cols].
-        let (lo, hi) = dst.split_at_mut(GRID_Z - shift);
-        lo.iter_mut().zip(&row[shift..]).for_each(|(a, &d)| *a = d as f64);
-        hi.iter_mut().zip(&row[..shift]).for_each(|(a, &d)| *a = d as f64);
-    }
+    s.pad_state.clear();
+    s.pad_state
+        .extend((0..pr).map(|p| u8::from(row_nonzero[source_row(p as isize - n as isize).0])));
     if s.w.len() != 2 * n + 1 {
         s.w = (0..=2 * n)
             .map(|k| (n + 1) as f64 - (k as f64 - n as f64).abs())
             .collect();
     }
+}
+
+/// Padded row `p` as f64 (state 2 once converted).
+#[inline(always)]
+fn convert_row(s: &mut SelectScratch, p: usize, n: usize) {
+    let (src, shift) = source_row(p as isize - n as isize);
+    let row = &s.dist[src * GRID_Z..(src + 1) * GRID_Z];
+    let dst = &mut s.padded[p * GRID_Z..(p + 1) * GRID_Z];
+    // Column c takes row[(c + shift) % cols].
+    let (lo, hi) = dst.split_at_mut(GRID_Z - shift);
+    lo.iter_mut().zip(&row[shift..]).for_each(|(a, &d)| *a = d as f64);
+    hi.iter_mut().zip(&row[..shift]).for_each(|(a, &d)| *a = d as f64);
+    s.pad_state[p] = 2;
 }
 
 /// Pass 1 (along elevation) at row `r` into `s.x`, rounded to f32 as the original's float matrix, with `R`
@@ -257,12 +263,17 @@ fn pad_rows(s: &mut SelectScratch, n: usize, row_nonzero: &[bool; GRID_E]) {
 #[inline(always)]
 fn pass1_row(s: &mut SelectScratch, r: usize, n: usize) -> bool {
     let window = r..=r + 2 * n;
-    if !s.pad_nonzero[window.clone()].iter().any(|&nz| nz) {
+    if s.pad_state[window.clone()].iter().all(|&st| st == 0) {
         return false;
+    }
+    for p in window.clone() {
+        if s.pad_state[p] == 1 {
+            convert_row(s, p, n);
+        }
     }
     let mut acc = [0.0f64; GRID_Z];
     for (p, &w) in window.zip(&s.w) {
-        if !s.pad_nonzero[p] {
+        if s.pad_state[p] == 0 {
             continue;
         }
         let row: &[f64; GRID_Z] = s.padded[p * GRID_Z..(p + 1) * GRID_Z].try_into().expect("a whole row");
