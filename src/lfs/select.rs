@@ -120,6 +120,7 @@ fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Can
     }
     order.sort_unstable();
     pad_rows(s, radius, &row_nonzero);
+    let mut band = Band::new();
     let mut top = TopN::new(n);
     for &packed in &order {
         if (packed >> 8) as i32 > top.bound() {
@@ -142,7 +143,7 @@ fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Can
             continue;
         }
         let (first, last) = (mask.trailing_zeros() as usize, 63 - mask.leading_zeros() as usize);
-        let smoothed = pass1_row(s, r, radius);
+        let smoothed = pass1_row(s, &mut band, r, radius);
         let mut sums = [0.0f64; GRID_Z];
         if smoothed {
             kernel_sums(&s.x, &s.w, radius, first, last, &mut sums);
@@ -237,6 +238,8 @@ fn pad_rows(s: &mut SelectScratch, n: usize, row_nonzero: &[bool; GRID_E]) {
     s.pad_state.clear();
     s.pad_state
         .extend((0..pr).map(|p| u8::from(row_nonzero[source_row(p as isize - n as isize).0])));
+    // One more, all zero, past the end: the box sum U of the last row reaches it.
+    s.pad_state.push(0);
     if s.w.len() != 2 * n + 1 {
         s.w = (0..=2 * n)
             .map(|k| (n + 1) as f64 - (k as f64 - n as f64).abs())
@@ -257,30 +260,116 @@ fn convert_row(s: &mut SelectScratch, p: usize, n: usize) {
     s.pad_state[p] = 2;
 }
 
+type Row = [f64; GRID_Z];
+
+/// Pass-1 kernel sums at one row `r` (padded rows `r ..= r + 2R`): `t = sum_k w_k X[r + k]` and the box sums
+/// `l = X[r ..= r + R]`, `u = X[r + R + 1 ..= r + 2R + 1]` that step it to a neighbouring row.
+#[derive(Clone, Copy)]
+struct RowSums {
+    r: usize,
+    t: Row,
+    l: Row,
+    u: Row,
+}
+
+/// The pass-1 sums at both ends of the band of rows computed so far, so that the next row (the search goes
+/// outwards from the cheapest row) costs a few row additions instead of a whole kernel.
+struct Band {
+    lo: RowSums,
+    hi: RowSums,
+    valid: bool,
+}
+
+impl Band {
+    fn new() -> Self {
+        let z = RowSums {
+            r: 0,
+            t: [0.0; GRID_Z],
+            l: [0.0; GRID_Z],
+            u: [0.0; GRID_Z],
+        };
+        Self {
+            lo: z,
+            hi: z,
+            valid: false,
+        }
+    }
+}
+
+/// `acc += X[p]` (`sign` +1) or `acc -= X[p]` (-1) for padded row `p`, converting it on first use; all-zero
+/// rows are skipped (exact f64 sums, so skipping zeros changes nothing).
+#[inline(always)]
+fn add_row(s: &mut SelectScratch, acc: &mut Row, p: usize, n: usize, w: f64) {
+    match s.pad_state[p] {
+        0 => return,
+        1 => convert_row(s, p, n),
+        _ => {}
+    }
+    let row: &Row = s.padded[p * GRID_Z..(p + 1) * GRID_Z].try_into().expect("a whole row");
+    for c in 0..GRID_Z {
+        acc[c] += w * row[c];
+    }
+}
+
 /// Pass 1 (along elevation) at row `r` into `s.x`, rounded to f32 as the original's float matrix, with `R`
 /// columns of azimuth wrap on each side (`x[R + c]` holds column `c`). Returns false, leaving `s.x` alone, when
 /// every row of the window is zero (every smoothed value of the row is then +0).
+///
+/// A row next to the band already computed is stepped from the band's end: `T[r+1] = T[r] - L[r] + U[r]`,
+/// `T[r-1] = T[r] + L[r-1] - U[r-1]`, with `L` and `U` stepped by one row in and one out. Every value is an exact
+/// f64 sum (as everywhere in the smoothing), so stepping gives the same bits as summing the kernel afresh.
 #[inline(always)]
-fn pass1_row(s: &mut SelectScratch, r: usize, n: usize) -> bool {
+fn pass1_row(s: &mut SelectScratch, band: &mut Band, r: usize, n: usize) -> bool {
     let window = r..=r + 2 * n;
-    if s.pad_state[window.clone()].iter().all(|&st| st == 0) {
+    let all_zero = s.pad_state[window.clone()].iter().all(|&st| st == 0);
+    if band.valid && r == band.hi.r + 1 {
+        let mut h = band.hi;
+        for c in 0..GRID_Z {
+            h.t[c] += h.u[c] - h.l[c];
+        }
+        // L and U of row r: row r + R in and r - 1 out of L; r + 2R + 1 in and r + R out of U.
+        add_row(s, &mut h.l, r + n, n, 1.0);
+        add_row(s, &mut h.l, r - 1, n, -1.0);
+        add_row(s, &mut h.u, r + 2 * n + 1, n, 1.0);
+        add_row(s, &mut h.u, r + n, n, -1.0);
+        h.r = r;
+        band.hi = h;
+    } else if band.valid && r + 1 == band.lo.r {
+        let mut l = band.lo;
+        add_row(s, &mut l.l, r, n, 1.0);
+        add_row(s, &mut l.l, r + n + 1, n, -1.0);
+        add_row(s, &mut l.u, r + n + 1, n, 1.0);
+        add_row(s, &mut l.u, r + 2 * n + 2, n, -1.0);
+        for c in 0..GRID_Z {
+            l.t[c] += l.l[c] - l.u[c];
+        }
+        l.r = r;
+        band.lo = l;
+    } else {
+        let mut f = RowSums {
+            r,
+            t: [0.0; GRID_Z],
+            l: [0.0; GRID_Z],
+            u: [0.0; GRID_Z],
+        };
+        for k in 0..=2 * n {
+            let w = s.w[k];
+            add_row(s, &mut f.t, r + k, n, w);
+        }
+        for k in 0..=n {
+            add_row(s, &mut f.l, r + k, n, 1.0);
+            add_row(s, &mut f.u, r + n + 1 + k, n, 1.0);
+        }
+        *band = Band {
+            lo: f,
+            hi: f,
+            valid: true,
+        };
+    }
+    if all_zero {
         return false;
     }
-    for p in window.clone() {
-        if s.pad_state[p] == 1 {
-            convert_row(s, p, n);
-        }
-    }
-    let mut acc = [0.0f64; GRID_Z];
-    for (p, &w) in window.zip(&s.w) {
-        if s.pad_state[p] == 0 {
-            continue;
-        }
-        let row: &[f64; GRID_Z] = s.padded[p * GRID_Z..(p + 1) * GRID_Z].try_into().expect("a whole row");
-        for c in 0..GRID_Z {
-            acc[c] += w * row[c];
-        }
-    }
+    let t = if band.hi.r == r { &band.hi.t } else { &band.lo.t };
     let inv = 1.0 / (n + 1) as f64;
     let pc = GRID_Z + 2 * n;
     // One spare element past the padding (read, never used, by `kernel_sums`).
@@ -290,7 +379,7 @@ fn pass1_row(s: &mut SelectScratch, r: usize, n: usize) -> bool {
     let x = &mut s.x[..pc];
     x[n..n + GRID_Z]
         .iter_mut()
-        .zip(&acc)
+        .zip(t)
         .for_each(|(o, &a)| *o = (a * inv) as f32 as f64);
     for c in 0..n {
         x[c] = x[GRID_Z + c];
