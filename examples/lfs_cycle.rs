@@ -32,9 +32,47 @@ fn cycles(worlds: &mut [World]) {
     }
 }
 
+/// Wall-clock medians (microseconds) of one cycle on a fresh clone: stepped right after cloning (warm), after
+/// cloning a batch of 64 (as criterion's `iter_batched`), and the drop of a stepped world.
+fn timings(world: &World) {
+    use std::time::Instant;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mut warm, mut batched, mut drops) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..30 {
+        for _ in 0..64 {
+            let mut w = world.clone();
+            let t = Instant::now();
+            black_box(step(&mut w, 0.1));
+            warm.push(t.elapsed().as_secs_f64() * 1e6);
+            let t = Instant::now();
+            drop(black_box(w));
+            drops.push(t.elapsed().as_secs_f64() * 1e6);
+        }
+        let mut ws: Vec<World> = (0..64).map(|_| world.clone()).collect();
+        for w in &mut ws {
+            let t = Instant::now();
+            black_box(step(w, 0.1));
+            batched.push(t.elapsed().as_secs_f64() * 1e6);
+        }
+    }
+    println!(
+        "median us: warm {:.1}, batched {:.1}, drop {:.1}",
+        median(warm),
+        median(batched),
+        median(drops)
+    );
+}
+
 fn main() {
     let n: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10);
     let world = world_at(14.0);
+    if std::env::var_os("LFS_CYCLE_TIME").is_some() {
+        timings(&world);
+        return;
+    }
     let mut worlds = vec![world; n];
     // Tables built once per process are already initialised by the flight above.
     cycles(&mut worlds);

@@ -11,8 +11,8 @@ use nalgebra::Vector3;
 use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
-    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference, cartesian_to_polar_histogram,
-    index_to_polar, polar_histogram_to_cartesian, polar_to_index,
+    ALPHA_RES, CellIndex, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference,
+    cartesian_to_polar_histogram, floor_f32, index_to_polar, polar_histogram_to_cartesian, wrap_180,
 };
 use super::smoothing::{SmoothScratch, smooth_fast};
 
@@ -78,17 +78,42 @@ pub fn obstacle_facing_goal(
     min_m: f32,
     max_m: f32,
 ) -> bool {
+    // `polar_to_index(wrap_polar(..))` of each of the 5 x 11 directions, split into its elevation part (row index
+    // and whether the elevation folds over a pole, which turns the azimuth by 180 degrees) and its azimuth part
+    // (column index unfolded and folded): the same operations, each done once instead of 55 times.
     let g = cartesian_to_polar_histogram(goal, origin);
-    for j in -2..=2 {
-        for i in -5..=5 {
-            let p = PolarDeg::new(g.e_deg + (j * ALPHA_RES) as f32, g.z_deg + (i * ALPHA_RES) as f32, 0.0);
-            let d = hist.at(polar_to_index(p, ALPHA_RES));
-            if d > min_m && d < max_m {
-                return true;
-            }
-        }
+    let res = ALPHA_RES as f32;
+    let mut rows = [(0usize, false); 5];
+    for (row, j) in rows.iter_mut().zip(-2..=2) {
+        let mut e = wrap_180(g.e_deg + (j * ALPHA_RES) as f32);
+        let fold = if e > 90.0 {
+            e = 180.0 - e;
+            true
+        } else if e < -90.0 {
+            e = -(180.0 + e);
+            true
+        } else {
+            false
+        };
+        let index = floor_f32(e / res + 90.0 / res) as i32;
+        *row = (index.clamp(0, 180 / ALPHA_RES - 1) as usize, fold);
     }
-    false
+    let column = |z: f32| (floor_f32(z / res + 180.0 / res) as i32).clamp(0, 360 / ALPHA_RES - 1) as usize;
+    let mut cols = [(0usize, 0usize); 11];
+    for (col, i) in cols.iter_mut().zip(-5..=5) {
+        let z = wrap_180(g.z_deg + (i * ALPHA_RES) as f32);
+        let folded = if z < 0.0 { z + 180.0 } else { z - 180.0 };
+        *col = (column(z), column(folded));
+    }
+    rows.iter().any(|&(e, fold)| {
+        cols.iter().any(|&(z, zf)| {
+            let d = hist.at(CellIndex {
+                e,
+                z: if fold { zf } else { z },
+            });
+            d > min_m && d < max_m
+        })
+    })
 }
 
 /// Per-origin terms of [`cost_function`] that do not depend on the candidate.

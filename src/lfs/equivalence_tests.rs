@@ -6,7 +6,7 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::cost::{CostInputs, CostScratch, best_candidates, cost_matrix};
+use super::cost::{CostInputs, CostScratch, best_candidates, cost_matrix, obstacle_facing_goal};
 use super::histogram::{Histogram, HistogramScratch};
 use super::params::CostParams;
 use super::polar::GRID_CELLS;
@@ -234,6 +234,25 @@ fn lazy_selection_falls_back_on_non_finite_costs() {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn goal_facing_test_matches_the_reference(
+        seed in any::<u64>(), n_pts in 1usize..300, up in -1.0f32..1.0, min_m in 0.0f32..3.0
+    ) {
+        // Goals in every direction, including straight up and down (pole folds) and South (azimuth wrap).
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = random_vec(&mut rng, 10.0);
+        let cloud: Vec<Vector3<f32>> = (0..n_pts).map(|_| origin + random_vec(&mut rng, 12.0)).collect();
+        let hist = Histogram::from_points(&cloud, &origin);
+        let horizontal = random_vec(&mut rng, 1.0);
+        let dir = Vector3::new(horizontal.x, horizontal.y, 0.0) * (1.0 - up.abs()) + Vector3::new(0.0, 0.0, up);
+        for goal in [origin + dir * 20.0, origin + Vector3::new(0.0, -20.0, up), origin + Vector3::new(0.0, 0.0, 5.0)] {
+            prop_assert_eq!(
+                obstacle_facing_goal(&hist, &goal, &origin, min_m, 15.0),
+                reference::obstacle_facing_goal(&hist, &goal, &origin, min_m, 15.0)
+            );
+        }
+    }
 
     #[test]
     fn random_clouds_select_lazily_like_the_reference(

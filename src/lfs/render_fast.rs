@@ -414,10 +414,27 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             f64::from_bits(s)
         };
-        let edge = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.5, -2.5, 4.5e15, -4.5e15, 1e300, -1e-300, f64::INFINITY];
+        let edge = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            4.5e15,
+            -4.5e15,
+            1e300,
+            -1e-300,
+            f64::INFINITY,
+        ];
         for x in edge.into_iter().chain((0..100_000).map(|_| next())) {
             let (a, b) = (floor_f64(x), x.floor());
-            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{x}: {a} vs {b}");
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{x}: {a} vs {b}"
+            );
         }
         for i in -2000..2000 {
             let x = i as f64 * 0.37;

@@ -15,6 +15,9 @@ use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{ALPHA_RES, GRID_CELLS, GRID_E, GRID_Z, index_to_polar};
 
+// A row's cells are tracked in one u64 mask.
+const _: () = assert!(GRID_Z <= 64);
+
 /// Reusable buffers of [`best_candidates_lazy`].
 #[derive(Debug, Clone)]
 pub struct SelectScratch {

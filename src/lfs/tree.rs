@@ -48,7 +48,7 @@ fn sqrt_threshold(limit: f32) -> f32 {
 const CLOSE_NODE_M: f32 = 0.2;
 
 /// Builds look-ahead trees, reusing its buffers between calls.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct StarPlanner {
     nodes: Vec<TreeNode>,
     // Node positions again as parallel arrays for the vectorised close-node test.
@@ -61,23 +61,6 @@ pub struct StarPlanner {
     hist_scratch: HistogramScratch,
     select_scratch: SelectScratch,
     candidates: Vec<Candidate>,
-}
-
-impl Default for StarPlanner {
-    fn default() -> Self {
-        Self {
-            nodes: Vec::new(),
-            nx: Vec::new(),
-            ny: Vec::new(),
-            nz: Vec::new(),
-            path: Vec::new(),
-            expanded: 0,
-            hist: Histogram::new(),
-            hist_scratch: HistogramScratch::default(),
-            select_scratch: SelectScratch::default(),
-            candidates: Vec::new(),
-        }
-    }
 }
 
 /// What the tree is built for (ENU).
