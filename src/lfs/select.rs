@@ -109,14 +109,20 @@ fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Can
     let mut finite = true;
     for (r, (m, o)) in order.iter_mut().zip(s.other.chunks_exact(GRID_Z)).enumerate() {
         let min = o.iter().fold(i32::MAX, |a, &c| a.min(total_key(c)));
-        finite &= o.iter().fold(true, |a, c| a & c.is_finite());
+        // Integer folds (they vectorise): finite means |bits| below those of infinity.
+        let abs_max = o.iter().fold(0u32, |a, &c| a.max(c.to_bits() & 0x7fff_ffff));
+        finite &= abs_max < f32::INFINITY.to_bits();
         *m = (i64::from(min) << 8) | r as i64;
     }
     let mut row_nonzero = [false; GRID_E];
     for (nz, d) in row_nonzero.iter_mut().zip(s.dist.chunks_exact(GRID_Z)) {
-        *nz = d.iter().fold(false, |a, &v| a | (v != 0.0));
-        // +0 or positive finite (no -0, negative, infinite or NaN distance cost).
-        finite &= d.iter().fold(true, |a, v| a & (v.to_bits() < f32::INFINITY.to_bits()));
+        // +0 or positive finite (no -0, negative, infinite or NaN distance cost): bits below those of infinity.
+        // Given that, a row is non-zero exactly when some bit is set.
+        let (max, any) = d
+            .iter()
+            .fold((0u32, 0u32), |(m, a), &v| (m.max(v.to_bits()), a | v.to_bits()));
+        finite &= max < f32::INFINITY.to_bits();
+        *nz = any != 0;
     }
     if !finite {
         return false;
