@@ -1,6 +1,10 @@
 //! Profiling harness for one planner cycle (the state of `benches/lfs.rs`): run under
 //! `valgrind --tool=callgrind --toggle-collect=lfs_cycle::cycles` to count the instructions of N cycles.
 //!
+//! It prints FNV digests of the tree, the point memory and the vehicle after the cycle (equal digests mean
+//! bit-identical results); `LFS_CYCLE_FLIGHT=1` adds the digest of a whole flight's trajectory, and
+//! `LFS_CYCLE_TIME=1` prints wall-clock medians instead (a quick A/B check; criterion gives the real numbers).
+//!
 //! `cargo run --release --example lfs_cycle -- [N=10]`
 
 use std::hint::black_box;
