@@ -187,6 +187,37 @@ fn lazy_selection_matches_the_reference_on_realistic_scenes() {
 }
 
 #[test]
+fn lazy_selection_of_every_cell_matches_the_reference() {
+    // More candidates than cells: every row is smoothed and all 1800 cells come out in order.
+    let eye = Vector3::new(0.5, -1.0, 4.0);
+    let (xs, ys, zs) = scene(&mut ChaCha8Rng::seed_from_u64(7), eye);
+    let mut hist = Histogram::new();
+    hist.build_from_soa(&xs, &ys, &zs, &eye, &mut HistogramScratch::default());
+    let inputs = CostInputs {
+        goal: eye + Vector3::new(3.0, 25.0, 1.0),
+        origin: eye,
+        velocity: Vector3::new(0.5, 2.0, 0.0),
+        closest_pt: eye + Vector3::new(0.0, 25.0, 0.0),
+    };
+    let k = CostParams::default();
+    let total = reference::cost_matrix(&hist, &inputs, &k, 7, 0.2, 15.0);
+    let mut got = Vec::new();
+    best_candidates_lazy(
+        &hist,
+        &inputs,
+        &k,
+        7,
+        0.2,
+        15.0,
+        2000,
+        &mut SelectScratch::default(),
+        &mut got,
+    );
+    assert_eq!(got.len(), GRID_CELLS);
+    assert_eq!(got, reference::best_candidates(&total, 2000));
+}
+
+#[test]
 fn lazy_selection_falls_back_on_non_finite_costs() {
     // An infinite velocity makes the "other" costs non-finite: the lazy search must give the full path's answer.
     let (xs, ys, zs) = scene(&mut ChaCha8Rng::seed_from_u64(6), Vector3::new(0.0, 0.0, 3.0));
