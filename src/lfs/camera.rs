@@ -146,11 +146,17 @@ impl Camera {
     /// The plugin's pixel-to-point rule (3dvfh.md §10): the optical-frame point `(d tan x, d tan y, d)` of a
     /// pixel with depth `d`, or `None` outside the cutoff `(cutoff_min, cutoff_max)` or when `d` is NaN.
     pub fn pixel_to_optical(&self, i: u32, j: u32, depth_m: f32) -> Option<Vector3<f64>> {
+        self.optical_from_tans(self.tan_x(i), self.tan_y(j), depth_m)
+    }
+
+    /// [`Camera::pixel_to_optical`] of the pixel whose [`Camera::tan_x`] and [`Camera::tan_y`] are given (callers
+    /// that cache them).
+    pub fn optical_from_tans(&self, tan_x: f64, tan_y: f64, depth_m: f32) -> Option<Vector3<f64>> {
         if !(depth_m > self.cutoff_min_m && depth_m < self.cutoff_max_m) {
             return None;
         }
         let d = f64::from(depth_m);
-        Some(Vector3::new(d * self.tan_x(i), d * self.tan_y(j), d))
+        Some(Vector3::new(d * tan_x, d * tan_y, d))
     }
 
     /// The planner's FOV model of this camera (level, forward; pixel-centre span as the original estimates it).

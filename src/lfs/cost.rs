@@ -11,8 +11,8 @@ use nalgebra::Vector3;
 use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
-    ALPHA_RES, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference, cartesian_to_polar_histogram,
-    index_to_polar, polar_histogram_to_cartesian, polar_to_index,
+    ALPHA_RES, CellIndex, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference,
+    cartesian_to_polar_histogram, floor_f32, index_to_polar, polar_histogram_to_cartesian, wrap_180,
 };
 use super::smoothing::{SmoothScratch, smooth_fast};
 
@@ -78,17 +78,42 @@ pub fn obstacle_facing_goal(
     min_m: f32,
     max_m: f32,
 ) -> bool {
+    // `polar_to_index(wrap_polar(..))` of each of the 5 x 11 directions, split into its elevation part (row index
+    // and whether the elevation folds over a pole, which turns the azimuth by 180 degrees) and its azimuth part
+    // (column index unfolded and folded): the same operations, each done once instead of 55 times.
     let g = cartesian_to_polar_histogram(goal, origin);
-    for j in -2..=2 {
-        for i in -5..=5 {
-            let p = PolarDeg::new(g.e_deg + (j * ALPHA_RES) as f32, g.z_deg + (i * ALPHA_RES) as f32, 0.0);
-            let d = hist.at(polar_to_index(p, ALPHA_RES));
-            if d > min_m && d < max_m {
-                return true;
-            }
-        }
+    let res = ALPHA_RES as f32;
+    let mut rows = [(0usize, false); 5];
+    for (row, j) in rows.iter_mut().zip(-2..=2) {
+        let mut e = wrap_180(g.e_deg + (j * ALPHA_RES) as f32);
+        let fold = if e > 90.0 {
+            e = 180.0 - e;
+            true
+        } else if e < -90.0 {
+            e = -(180.0 + e);
+            true
+        } else {
+            false
+        };
+        let index = floor_f32(e / res + 90.0 / res) as i32;
+        *row = (index.clamp(0, 180 / ALPHA_RES - 1) as usize, fold);
     }
-    false
+    let column = |z: f32| (floor_f32(z / res + 180.0 / res) as i32).clamp(0, 360 / ALPHA_RES - 1) as usize;
+    let mut cols = [(0usize, 0usize); 11];
+    for (col, i) in cols.iter_mut().zip(-5..=5) {
+        let z = wrap_180(g.z_deg + (i * ALPHA_RES) as f32);
+        let folded = if z < 0.0 { z + 180.0 } else { z - 180.0 };
+        *col = (column(z), column(folded));
+    }
+    rows.iter().any(|&(e, fold)| {
+        cols.iter().any(|&(z, zf)| {
+            let d = hist.at(CellIndex {
+                e,
+                z: if fold { zf } else { z },
+            });
+            d > min_m && d < max_m
+        })
+    })
 }
 
 /// Per-origin terms of [`cost_function`] that do not depend on the candidate.
@@ -219,7 +244,13 @@ fn add_into_avx2(total: &mut [f32; GRID_CELLS], dist: &[f32]) {
 
 /// Fills the unsmoothed "other" and distance matrices; AVX2-compiled where available (same code: Rust never
 /// contracts `a * b + c` into a fused multiply-add, so the results are the same bits).
-fn fill_matrices(hist: &Histogram, ctx: &CostContext, k: &CostParams, other: &mut [f32; GRID_CELLS], dist: &mut [f32]) {
+pub(super) fn fill_matrices(
+    hist: &Histogram,
+    ctx: &CostContext,
+    k: &CostParams,
+    other: &mut [f32; GRID_CELLS],
+    dist: &mut [f32],
+) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above).
@@ -273,25 +304,19 @@ fn fill_matrices_body(
         let hist_row = &hist.cells()[row..row + GRID_Z];
         let o_row = &mut other[row..row + GRID_Z];
         let d_row = &mut dist[row..row + GRID_Z];
-        if step == 1 {
-            for z in 0..GRID_Z {
-                o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
-                d_row[z] = dcost(hist_row[z]);
-            }
-            continue;
-        }
-        let mut any_dist = false;
-        for z in (0..GRID_Z).step_by(step) {
+        // Every column is computed (branch-free, vectorised); with a step above 1 the columns between the
+        // evaluated ones (every step-th, from 0) are then overwritten by the interpolation, which reads only the
+        // evaluated ones: the same bits as computing those alone.
+        for z in 0..GRID_Z {
             o_row[z] = velocity(row + z) + yaw[z] + line[z] + pitch;
             d_row[z] = dcost(hist_row[z]);
-            any_dist |= d_row[z] != 0.0;
         }
-        interpolate_row(o_row, step);
-        if any_dist {
-            interpolate_row(d_row, step);
-        } else {
-            // Every evaluated cell is +0: the interpolated ones are 0 + 0 * i = +0 too.
-            d_row.fill(0.0);
+        if step > 1 {
+            interpolate_row(o_row, step);
+            // An all-zero row stays all +0 (interpolating +0 gives 0 + 0 * i = +0).
+            if d_row.iter().fold(false, |a, &v| a | (v != 0.0)) {
+                interpolate_row(d_row, step);
+            }
         }
     }
 }
@@ -365,21 +390,34 @@ pub struct Candidate {
 
 /// Integer key ordered exactly like [`f32::total_cmp`] (the standard library's own bit trick).
 #[inline(always)]
-fn total_key(c: f32) -> i32 {
+pub(super) fn total_key(c: f32) -> i32 {
     let b = c.to_bits() as i32;
     b ^ (((b >> 31) as u32) >> 1) as i32
 }
 
 /// The `n` smallest `(key, index)` pairs seen so far, ascending; `offer` order does not matter.
-struct TopN {
+pub(super) struct TopN {
     n: usize,
     kept: Vec<(i32, u32)>,
 }
 
 impl TopN {
+    /// Keeps the `n` smallest (n >= 1).
+    pub(super) fn new(n: usize) -> Self {
+        Self {
+            n,
+            kept: Vec::with_capacity(n + 1),
+        }
+    }
+
+    /// The kept `(key, index)` pairs, ascending.
+    pub(super) fn kept(&self) -> &[(i32, u32)] {
+        &self.kept
+    }
+
     /// The worst kept key once `n` are kept (a cell with a larger key cannot enter).
     #[inline(always)]
-    fn bound(&self) -> i32 {
+    pub(super) fn bound(&self) -> i32 {
         if self.kept.len() == self.n {
             self.kept[self.n - 1].0
         } else {
@@ -388,7 +426,7 @@ impl TopN {
     }
 
     #[inline]
-    fn offer(&mut self, key: i32, index: u32) {
+    pub(super) fn offer(&mut self, key: i32, index: u32) {
         let item = (key, index);
         if self.kept.len() == self.n {
             if item >= self.kept[self.n - 1] {

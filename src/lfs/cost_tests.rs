@@ -1,7 +1,7 @@
 //! Tests of the cost matrix: known answers from 3dvfh.md §5 / §15 and AV's unit tests, plus per-term checks.
 
 use super::*;
-use crate::lfs::polar::{CellIndex, polar_histogram_to_cartesian};
+use crate::lfs::polar::{CellIndex, polar_histogram_to_cartesian, polar_to_index};
 use crate::lfs::smoothing::pad_polar_matrix;
 
 fn av_params() -> CostParams {

@@ -19,6 +19,7 @@ pub mod planner;
 pub mod polar;
 pub mod render;
 pub mod render_fast;
+pub mod select;
 pub mod sim;
 pub mod smoothing;
 pub mod tree;

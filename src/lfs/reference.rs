@@ -6,12 +6,12 @@
 
 use nalgebra::Vector3;
 
-use super::cost::{Candidate, CostContext, CostInputs, cost_function, obstacle_facing_goal};
+use super::cost::{Candidate, CostContext, CostInputs, cost_function};
 use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
-    ALPHA_RES, CellIndex, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, cartesian_to_polar_histogram, index_to_polar,
-    polar_to_index,
+    ALPHA_RES, CellIndex, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, cartesian_to_polar_histogram,
+    index_to_polar, polar_to_index,
 };
 use super::smoothing::pad_polar_matrix;
 
@@ -35,6 +35,27 @@ pub fn histogram(xs: &[f32], ys: &[f32], zs: &[f32], origin: &Vector3<f32>) -> H
         }
     }
     h
+}
+
+/// The goal-facing test cell by cell: [`polar_to_index`] of each of the 5 x 11 directions around the goal.
+pub fn obstacle_facing_goal(
+    hist: &Histogram,
+    goal: &Vector3<f32>,
+    origin: &Vector3<f32>,
+    min_m: f32,
+    max_m: f32,
+) -> bool {
+    let g = cartesian_to_polar_histogram(goal, origin);
+    for j in -2..=2 {
+        for i in -5..=5 {
+            let p = PolarDeg::new(g.e_deg + (j * ALPHA_RES) as f32, g.z_deg + (i * ALPHA_RES) as f32, 0.0);
+            let d = hist.at(polar_to_index(p, ALPHA_RES));
+            if d > min_m && d < max_m {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Two-pass conic smoothing as the original's kernel loops, each kernel sum accumulated in f64 with the

@@ -276,7 +276,19 @@ pub fn pixel_point_enu(
     j: u32,
     depth_m: f32,
 ) -> Option<Vector3<f32>> {
-    let optical = camera.pixel_to_optical(i, j, depth_m)?;
+    pixel_point_enu_tans(camera, pose, rot, camera.tan_x(i), camera.tan_y(j), depth_m)
+}
+
+/// [`pixel_point_enu`] of the pixel with the given [`Camera::tan_x`] and [`Camera::tan_y`] (cached by callers).
+pub fn pixel_point_enu_tans(
+    camera: &Camera,
+    pose: &CameraPose,
+    rot: &Rotation3<f64>,
+    tan_x: f64,
+    tan_y: f64,
+    depth_m: f32,
+) -> Option<Vector3<f32>> {
+    let optical = camera.optical_from_tans(tan_x, tan_y, depth_m)?;
     let p = pose.position_enu + rot * super::camera::optical_to_body(&optical);
     Some(Vector3::new(p.x as f32, p.y as f32, p.z as f32))
 }

@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 
 use super::camera::Camera;
 use super::histogram::cell_and_range;
-use super::render::{CameraPose, RenderError, Scene, cloud_from_depth, pixel_point_enu, render_depth};
+use super::render::{CameraPose, RenderError, Scene, cloud_from_depth, pixel_point_enu_tans, render_depth};
 
 const SUB_RES_DEG: i32 = 2;
 const SUB_E: usize = 90;
@@ -24,6 +24,18 @@ const SUB_Z: usize = 180;
 const EDGE_EPS_DEG: f64 = 2e-3;
 /// Row positions this close to an integer (pixels) are treated as on either side (parry casts in f32).
 const ROW_EPS: f64 = 0.01;
+
+/// Exactly `x.floor()` (sign of zero included) without the libm call that baseline x86-64 needs (no rounding
+/// instruction); it was the render's most frequent call.
+#[inline]
+fn floor_f64(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t > x { t - 1.0 } else { t.copysign(x) }
+    } else {
+        x
+    }
+}
 
 fn near_edge(angle_deg: f64) -> bool {
     let u = angle_deg / f64::from(SUB_RES_DEG);
@@ -181,8 +193,8 @@ pub fn render_cloud(
         for &(s_lo, s_hi) in &intervals {
             // Slope s of row j is (cy - j) / (fl n): rows from the top edge of the interval down.
             let (top, bottom) = (cy - scale * s_hi, cy - scale * s_lo);
-            let ja = top.ceil().max(0.0);
-            let jb = bottom.floor().min(h as f64 - 1.0);
+            let ja = (-floor_f64(-top)).max(0.0);
+            let jb = floor_f64(bottom).min(h as f64 - 1.0);
             // Rows at an interval end may be valid or not once parry's f32 ray decides: cast both neighbours.
             for end in [top, bottom] {
                 if (end - end.round()).abs() < ROW_EPS && end.round() >= 0.0 {
@@ -200,7 +212,7 @@ pub fn render_cloud(
             let (ja, jb) = (ja as u32, jb as u32);
             let mut j = ja;
             let el0 = slope(ja).atan().to_degrees();
-            let mut k = ((el0 / 2.0 + 45.0).floor() as usize).min(SUB_E - 1);
+            let mut k = (floor_f64(el0 / 2.0 + 45.0) as usize).min(SUB_E - 1);
             loop {
                 let s_j = slope(j);
                 // Pixels that may fall on either side of an edge once the planner rounds them are always cast
@@ -228,7 +240,7 @@ pub fn render_cloud(
                     scratch.extras.push((j - 1) * w + i);
                 }
                 // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).
-                let next = (cy - scale * tan_band[k]).floor() + 1.0;
+                let next = floor_f64(cy - scale * tan_band[k]) + 1.0;
                 if next > f64::from(jb) || k == 0 {
                     break;
                 }
@@ -246,9 +258,11 @@ pub fn render_cloud(
     let rot = pose.rotation();
     for &key in &scratch.keys {
         let (i, j) = (key % w, key / w);
-        let dir = rot * camera.ray_body(i, j);
+        // The cached tangents are those of `camera` (`prepare`): `ray_body(i, j)` without recomputing them.
+        let (tx, ty) = (scratch.tan_x[i as usize], scratch.tan_y[j as usize]);
+        let dir = rot * Vector3::new(1.0, -tx, -ty);
         if let Some(d) = scene.cast(&cam, &dir, camera)
-            && let Some(p) = pixel_point_enu(camera, pose, &rot, i, j, d)
+            && let Some(p) = pixel_point_enu_tans(camera, pose, &rot, tx, ty, d)
         {
             out.push(p);
         }
@@ -389,6 +403,43 @@ mod tests {
             p(30.0, 2.0, 4.0, 179.9),
             p(8.0, 14.0, 10.0, -60.0),
         ]
+    }
+
+    #[test]
+    fn floor_f64_is_std_floor() {
+        let mut s: u64 = 99;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            f64::from_bits(s)
+        };
+        let edge = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            4.5e15,
+            -4.5e15,
+            1e300,
+            -1e-300,
+            f64::INFINITY,
+        ];
+        for x in edge.into_iter().chain((0..100_000).map(|_| next())) {
+            let (a, b) = (floor_f64(x), x.floor());
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{x}: {a} vs {b}"
+            );
+        }
+        for i in -2000..2000 {
+            let x = i as f64 * 0.37;
+            assert_eq!(floor_f64(x).to_bits(), x.floor().to_bits(), "{x}");
+        }
     }
 
     #[test]

@@ -7,10 +7,11 @@
 use nalgebra::Vector3;
 
 use super::cloud::PointMemory;
-use super::cost::{Candidate, CostInputs, CostScratch, best_candidates, cost_matrix};
+use super::cost::{Candidate, CostInputs};
 use super::histogram::{Histogram, HistogramScratch};
 use super::params::PlannerParams;
-use super::polar::{GRID_CELLS, PolarDeg, polar_histogram_to_cartesian};
+use super::polar::{PolarDeg, polar_histogram_to_cartesian};
+use super::select::{SelectScratch, best_candidates_lazy};
 
 /// A node of the tree. Index 0 is the root (the vehicle at planning time).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,7 +48,7 @@ fn sqrt_threshold(limit: f32) -> f32 {
 const CLOSE_NODE_M: f32 = 0.2;
 
 /// Builds look-ahead trees, reusing its buffers between calls.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct StarPlanner {
     nodes: Vec<TreeNode>,
     // Node positions again as parallel arrays for the vectorised close-node test.
@@ -58,27 +59,8 @@ pub struct StarPlanner {
     expanded: usize,
     hist: Histogram,
     hist_scratch: HistogramScratch,
-    cost_scratch: CostScratch,
-    total: Box<[f32; GRID_CELLS]>,
+    select_scratch: SelectScratch,
     candidates: Vec<Candidate>,
-}
-
-impl Default for StarPlanner {
-    fn default() -> Self {
-        Self {
-            nodes: Vec::new(),
-            nx: Vec::new(),
-            ny: Vec::new(),
-            nz: Vec::new(),
-            path: Vec::new(),
-            expanded: 0,
-            hist: Histogram::new(),
-            hist_scratch: HistogramScratch::default(),
-            cost_scratch: CostScratch::default(),
-            total: Box::new([0.0; GRID_CELLS]),
-            candidates: Vec::new(),
-        }
-    }
 }
 
 /// What the tree is built for (ENU).
@@ -201,18 +183,18 @@ impl StarPlanner {
                 velocity: o.velocity_enu,
                 closest_pt: inputs.closest_pt,
             };
-            cost_matrix(
+            let mut candidates = std::mem::take(&mut self.candidates);
+            best_candidates_lazy(
                 hist,
                 &cost_inputs,
                 &params.cost,
                 radius,
                 params.min_sensor_range_m,
                 params.max_sensor_range_m,
-                &mut self.cost_scratch,
-                &mut self.total,
+                params.children_per_node,
+                &mut self.select_scratch,
+                &mut candidates,
             );
-            let mut candidates = std::mem::take(&mut self.candidates);
-            best_candidates(&self.total, params.children_per_node, &mut candidates);
             if candidates.is_empty() {
                 self.nodes[origin].total_cost = f32::INFINITY;
             }
