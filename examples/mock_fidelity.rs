@@ -5,6 +5,7 @@
 //! and recall of "< 1.5 m"). Used to fit the campaign's default mock latency.
 //!
 //! `cargo run --release --example mock_fidelity -- [DIR=tests/data/hfs-flights] [LATENCY_MS=0|free] [PARALLEL=2]`
+//! (env `TRAJ_DIR=DIR`: keep each flown trajectory as `DIR/<id>.csv`; `VERBOSE=1`: one line per flight)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -41,6 +42,8 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
         mode: FlyMode::Avoidance,
         time_scale: speed,
         lockstep: latency,
+        // TRAJ_DIR=DIR keeps each flown trajectory as DIR/<id>.csv, to compare paths with the recorded ones.
+        trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
         ..FlyOptions::default()
     };
     let report = fly(&test, &opts, CancelToken::new()).await;

@@ -118,6 +118,17 @@ fn approach_speed(dist: f64, cap: f64, brake_acc: f64) -> f64 {
     cap.min((2.0 * brake_acc * dist).sqrt()).min(POS_GAIN * dist)
 }
 
+/// The highest speed (m/s) from which a jerk-limited stop still ends within `dist_m` at `final_m_s`, as PX4's
+/// trajectory generator limits the horizontal speed towards its target (`computeMaxSpeedFromDistance`: a
+/// constant deceleration `acc` that starts after the `2 acc / jerk` ramp from full opposite acceleration).
+/// Near the target this is about `(jerk / 2 acc) * dist`: with PX4's defaults (jerk 4, acc 3) a gain of only
+/// 0.67 /s, which is why PX4 crawls towards a setpoint that stays a few metres ahead (an avoidance carrot).
+pub fn max_speed_from_distance(jerk_m_s3: f64, acc_m_s2: f64, dist_m: f64, final_m_s: f64) -> f64 {
+    let b = 4.0 * acc_m_s2 * acc_m_s2 / jerk_m_s3;
+    let c = -2.0 * acc_m_s2 * dist_m.max(0.0) - final_m_s * final_m_s;
+    (0.5 * (-b + (b * b - 4.0 * c).sqrt())).max(final_m_s)
+}
+
 impl Body {
     /// True when resting on the ground (z = 0, not climbing).
     pub fn on_ground(&self) -> bool {
@@ -154,7 +165,8 @@ impl Body {
                 let err_h = Ned::new(err.x, err.y, 0.0);
                 let d_h = err_h.norm();
                 let v_h = if d_h > 1e-9 {
-                    err_h * (approach_speed(d_h, h_speed_m_s.min(lim.max_h_speed_m_s), 0.5 * lim.acc_hor_m_s2) / d_h)
+                    let cap = h_speed_m_s.min(lim.max_h_speed_m_s);
+                    err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, d_h, 0.0)) / d_h)
                 } else {
                     Ned::zeros()
                 };
