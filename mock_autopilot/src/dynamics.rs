@@ -277,6 +277,23 @@ mod tests {
     }
 
     #[test]
+    fn braking_speed_matches_px4s_jerk_limited_rule() {
+        // b = 4 a^2 / j = 9, speed = (-b + sqrt(b^2 + 8 a d)) / 2: d = 3 m -> 1.685 m/s, d = 5 m -> 2.589 m/s.
+        assert!((max_speed_from_distance(4.0, 3.0, 3.0, 0.0) - 1.6847).abs() < 1e-3);
+        assert!((max_speed_from_distance(4.0, 3.0, 5.0, 0.0) - 2.5887).abs() < 1e-3);
+        assert_eq!(max_speed_from_distance(4.0, 3.0, 0.0, 0.0), 0.0);
+        assert_eq!(max_speed_from_distance(4.0, 3.0, -1.0, 0.0), 0.0);
+        // Never below the speed wanted at the target; grows with distance.
+        assert!(max_speed_from_distance(4.0, 3.0, 0.1, 2.0) >= 2.0);
+        let mut last = 0.0;
+        for k in 1..100 {
+            let v = max_speed_from_distance(4.0, 3.0, f64::from(k) * 0.2, 0.0);
+            assert!(v > last);
+            last = v;
+        }
+    }
+
+    #[test]
     fn ground_stops_descent_and_idle_stays_put() {
         let lim = limits();
         let mut b = Body {
