@@ -1,22 +1,26 @@
 //! Grid search of the motion models' free constants against the competition's recorded flights.
 //!
-//! `cargo run --release --example fit_motion -- paper|px4|px4-low-gain [JOBS]` simulates every usable flight of
-//! `tests/data/hfs-flights` for each grid point and prints MAE, Spearman and precision/recall of "below 1.5 m"
-//! (overall and per tier). Not a test: it takes minutes. The chosen values and the numbers are documented in
-//! `src/lfs/motion.rs`.
+//! `cargo run --release --example fit_motion -- paper|paper-delay|px4|px4-low-gain [JOBS]` simulates every
+//! usable flight of `tests/data/hfs-flights` for each grid point and prints MAE, Spearman and precision/recall of
+//! "below 1.5 m" (overall, per tier and per fixed half of the flights, for fit-on-one-half numbers). Not a
+//! test: it takes minutes. The chosen values and the numbers are documented in `src/lfs/motion.rs`.
 
 use std::path::Path;
 
-use prgenuav::lfs::fidelity::{FidelityReport, evaluate, load_dir};
+use prgenuav::lfs::fidelity::{FidelityReport, FlightCase, aggregate_half, evaluate, load_dir};
 use prgenuav::lfs::motion::{PaperParams, Px4Params};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
-fn show(label: &str, r: &FidelityReport) {
+fn show(label: &str, r: &FidelityReport, cases: &[FlightCase]) {
     let f = |v: Option<f64>| v.map_or("  -  ".into(), |v| format!("{v:.3}"));
     let tiers: Vec<String> = r
         .tiers
         .iter()
         .map(|(t, a)| format!("{t}: mae {} rho {}", f(a.mae), f(a.spearman)))
+        .chain((0..2).map(|h| {
+            let a = aggregate_half(r, cases, h);
+            format!("half{h}: mae {} rho {}", f(a.mae), f(a.spearman))
+        }))
         .collect();
     println!(
         "{label:<44} MAE {} rho {} P {} R {} | {}",
@@ -49,10 +53,20 @@ fn main() {
                             max_speed_m_s: speed,
                             max_yaw_rate_deg_s: yaw,
                             full_speed_yaw_fraction: frac,
+                            delay_ticks: 0,
                         };
                         grid.push((format!("speed {speed} yaw {yaw} frac {frac:.2}"), MotionModel::Paper(p)));
                     }
                 }
+            }
+        }
+        "paper-delay" => {
+            for delay_ticks in 0..=4 {
+                let p = PaperParams {
+                    delay_ticks,
+                    ..PaperParams::default()
+                };
+                grid.push((format!("delay {delay_ticks}"), MotionModel::Paper(p)));
             }
         }
         "px4" | "px4-low-gain" => {
@@ -76,7 +90,7 @@ fn main() {
             }
         }
         other => {
-            eprintln!("error: unknown model {other:?} (paper, px4 or px4-low-gain)");
+            eprintln!("error: unknown model {other:?} (paper, paper-delay, px4 or px4-low-gain)");
             std::process::exit(2);
         }
     }
@@ -86,6 +100,6 @@ fn main() {
             ..Default::default()
         };
         let report = evaluate(&cases, skipped.clone(), &config, jobs);
-        show(&label, &report);
+        show(&label, &report, &cases);
     }
 }

@@ -29,6 +29,12 @@ pub struct Camera {
     pub cutoff_max_m: f32,
     /// Camera position ahead of the body origin along body +x, metres (Gazebo mount 0.1 m).
     pub mount_forward_m: f32,
+    /// Downward view tilt of a level camera, radians (0 for the presets): the principal point moves up by
+    /// `focal * tan(view_pitch_rad)` pixels, so the centre row looks down by exactly this angle and the others by
+    /// about it (the image plane stays vertical: at the HFS camera's top and bottom rows a 5-degree tilt is off by
+    /// 0.9 degrees). [`Camera::with_view_pitch`] uses it to stand in for a small body pitch, because the fast
+    /// renderer needs vertical image columns.
+    pub view_pitch_rad: f64,
 }
 
 impl Default for Camera {
@@ -54,6 +60,7 @@ impl Camera {
             cutoff_min_m: 0.2,
             cutoff_max_m: 20.0,
             mount_forward_m: 0.1,
+            view_pitch_rad: 0.0,
         }
     }
 
@@ -79,6 +86,7 @@ impl Camera {
             cutoff_min_m: 0.2,
             cutoff_max_m: 65.535,
             mount_forward_m: 0.1,
+            view_pitch_rad: 0.0,
         }
     }
 
@@ -97,9 +105,26 @@ impl Camera {
         self.width_px as f64 / (2.0 * (self.h_fov_deg.to_radians() / 2.0).tan())
     }
 
-    /// Principal point `((W - 1) / 2, (H - 1) / 2)`, pixels (the plugin's convention).
+    /// Principal point `((W - 1) / 2, (H - 1) / 2)`, pixels (the plugin's convention), the row moved up by
+    /// `focal * tan(view_pitch_rad)`.
     pub fn center_px(&self) -> (f64, f64) {
-        ((self.width_px as f64 - 1.0) / 2.0, (self.height_px as f64 - 1.0) / 2.0)
+        let shift = if self.view_pitch_rad == 0.0 {
+            0.0
+        } else {
+            self.focal_px() * self.view_pitch_rad.tan()
+        };
+        (
+            (self.width_px as f64 - 1.0) / 2.0,
+            (self.height_px as f64 - 1.0) / 2.0 - shift,
+        )
+    }
+
+    /// This camera tilted down by `pitch_rad` (positive nose-down) through [`Camera::view_pitch_rad`].
+    pub fn with_view_pitch(&self, pitch_rad: f64) -> Self {
+        Self {
+            view_pitch_rad: pitch_rad,
+            ..self.clone()
+        }
     }
 
     /// Optical `x / z` of column `i` (`tan(yAngle)` of the plugin).
@@ -192,6 +217,32 @@ mod tests {
         assert!(c.pixel_to_optical(5, 5, 20.0).is_none());
         assert!(c.pixel_to_optical(5, 5, f32::NAN).is_none());
         assert!(c.pixel_to_optical(5, 5, 19.9).is_some());
+    }
+
+    #[test]
+    fn view_pitch_tilts_the_rays_down() {
+        let c = Camera::hfs();
+        let p = 5f64.to_radians();
+        let t = c.with_view_pitch(p);
+        assert_eq!(c.with_view_pitch(0.0), c);
+        // At the principal point's old row the ray now looks down by exactly the pitch (body FLU: z up).
+        let (cx, cy) = c.center_px();
+        let f = c.focal_px();
+        let down = |cam: &Camera, j: u32| -cam.ray_body(0, j).z.atan();
+        let j = cy.round() as u32;
+        let exact = (j as f64 - cy) / f;
+        assert!((down(&t, j) - (exact.atan() + p)).abs() < 1e-3, "{}", down(&t, j));
+        // Every row tilts down by about the pitch (within 1 degree at the edges), columns are unchanged.
+        for j in [0, 120, 240, 479] {
+            let d = down(&t, j) - down(&c, j);
+            assert!(
+                d > 0.0 && (d - p).abs() < 1f64.to_radians(),
+                "row {j}: {}",
+                d.to_degrees()
+            );
+        }
+        assert_eq!(t.tan_x(17), c.tan_x(17));
+        assert_eq!(t.center_px().0, cx);
     }
 
     #[test]

@@ -332,6 +332,32 @@ pub fn aggregate(pairs: &[(f64, f64)]) -> Aggregates {
     }
 }
 
+/// Which of two fixed halves (0 or 1) a case belongs to, for fitting constants on one half and checking them on
+/// the other: a hash (FNV-1a) of the repeat group, or of the id without one, so that repeats of one obstacle set
+/// never straddle the halves and the split does not depend on file order.
+pub fn split_half(case: &FlightCase) -> usize {
+    let key = case.repeat_group.as_deref().unwrap_or(&case.id);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in key.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x100_0000_01b3);
+    }
+    ((h >> 7) % 2) as usize
+}
+
+/// Aggregates of `report` over the cases of half `half` (see [`split_half`]); `cases` are the evaluated cases
+/// in the report's order.
+pub fn aggregate_half(report: &FidelityReport, cases: &[FlightCase], half: usize) -> Aggregates {
+    let pairs: Vec<(f64, f64)> = report
+        .cases
+        .iter()
+        .zip(cases)
+        .filter(|(_, c)| split_half(c) == half)
+        .filter_map(|(r, _)| r.predicted.map(|p| (p, r.real)))
+        .collect();
+    aggregate(&pairs)
+}
+
 /// Mean |d_i - d_j| over pairs within each repeat group.
 fn repeat_mae(cases: &[FlightCase]) -> Option<f64> {
     let mut groups: BTreeMap<&str, Vec<f64>> = BTreeMap::new();

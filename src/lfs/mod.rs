@@ -4,6 +4,7 @@
 //! Every position, velocity and direction here is in the planner's **ENU** world frame (x East, y North, z Up,
 //! metres, m/s); [`frames`] converts from and to our local NED. Angles are degrees unless named `_rad`.
 
+pub mod attitude;
 pub mod camera;
 pub mod cloud;
 pub mod cost;

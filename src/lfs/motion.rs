@@ -1,7 +1,8 @@
 //! Vehicle motion models of the simulator: the paper's kinematic rule and a PX4-like setpoint tracker.
 //!
 //! State is planner ENU (x East, y North, z Up; metres, m/s) with ENU yaw in radians (counter-clockwise from
-//! East). Both models are level (no pitch or roll), so the body-fixed camera stays level.
+//! East). Both models are kinematically level; the optional tilt model (`SimConfig::tilt`, [`super::attitude`],
+//! off by default) pitches the camera from their acceleration.
 //!
 //! # `paper` (the PRGenUAV-LFS paper, section III)
 //! Each 100 ms step the drone turns towards the first tree node at most `max_yaw_rate_deg_s * dt` and moves
@@ -17,40 +18,69 @@
 //! # `px4`
 //! The waypoint generator's setpoint (carrot on the tree path, FOV speed taper, speed low-pass, damped smoothing;
 //! see [`super::waypoint`]) is tracked like PX4's position controller: velocity command `pos_gain * error`,
-//! limited to `max_speed_xy` / `max_speed_z`, reached with at most `max_acc` (MPC_ACC_HOR), and yaw turned towards
-//! the yaw setpoint at most `max_yaw_rate_deg_s` (MPC_YAWRAUTO_MAX), integrated in sub-steps.
+//! limited to `max_speed_xy` / `max_speed_z`, reached with at most `max_acc` (MPC_ACC_HOR), optionally with a
+//! jerk limit as PX4's trajectory smoother (`max_jerk_m_s3`, off: it fitted worse), and yaw turned towards the
+//! yaw setpoint at most `max_yaw_rate_deg_s` (MPC_YAWRAUTO_MAX), integrated in sub-steps.
+//!
+//! # Control delay (both models)
+//! `delay_ticks`: the vehicle acts on the command of that many ticks earlier (and holds before the first). The
+//! real pipeline has such a lag (the depth image goes through Gazebo, ROS and the planner, the answer through
+//! MAVROS to PX4), which the paper's same-tick rule leaves out.
 //!
 //! # Fitted constants
-//! Fitted by a grid search (`examples/fit_motion.rs`, run with `cargo run --release --example fit_motion --
-//! paper|px4|px4-low-gain`) that simulates all 127 usable flights of `tests/data/hfs-flights` (PX4 v1.12.3 +
-//! PX4-Avoidance + Gazebo, tiers A/B/C) per grid point and compares minimum distances. Criterion: lowest mean
-//! absolute error, Spearman and precision of "below 1.5 m" as tie-breakers. Results (overall MAE / Spearman /
-//! precision / recall):
+//! Fitted by grid searches (`examples/fit_motion.rs`: `cargo run --release --example fit_motion --
+//! paper|paper-delay|px4|px4-low-gain`; single points with `examples/fid_explore.rs`) that simulate all 127
+//! usable flights of `tests/data/hfs-flights` (PX4 v1.12.3 + PX4-Avoidance + Gazebo, tiers A/B/C) and compare
+//! minimum distances. Criterion: lowest mean absolute error, Spearman and precision of "below 1.5 m" as
+//! tie-breakers. Overall MAE / Spearman / precision / recall (the two fitted rows are `prgenuav fidelity`):
 //!
 //! | model | constants | MAE m | Spearman | precision | recall |
 //! |---|---|---|---|---|---|
-//! | paper, printed values | 3 m/s, 13.5 deg/s, 1/3 | 0.597 | 0.736 | 0.911 | 0.707 |
-//! | paper, **fitted** | 2 m/s, 30 deg/s, 1/3 | **0.515** | **0.765** | 0.917 | 0.569 |
-//! | paper | 2 m/s, 30 deg/s, 1 | 0.527 | 0.747 | 0.972 | 0.603 |
-//! | paper | 3 m/s, 30 deg/s, 1/3 | 0.550 | 0.758 | 1.000 | 0.569 |
+//! | paper, printed values | 3 m/s, 13.5 deg/s, 1/3, delay 0 | 0.597 | 0.736 | 0.911 | 0.707 |
+//! | paper, fitted before | 2 m/s, 30 deg/s, 1/3, delay 0 | 0.515 | 0.765 | 0.917 | 0.569 |
+//! | paper, **fitted** | 2 m/s, 30 deg/s, 1/3, **delay 1** (0.1 s) | **0.478** | **0.798** | 1.000 | 0.500 |
+//! | paper | same, delay 2 / 3 / 4 | 0.482 / 0.514 / 0.516 | 0.799 / 0.781 / 0.762 | 1.000 | 0.500 / 0.397 / 0.414 |
+//! | paper | delay 1, 45 deg/s | 0.476 | 0.788 | 1.000 | 0.517 |
+//! | paper | delay 1, 2.5 m/s | 0.510 | 0.781 | 1.000 | 0.517 |
+//! | paper | delay 0, 1.5 / 1.75 m/s | 0.558 / 0.545 | 0.699 / 0.725 | 0.935 / 0.854 | 0.500 / 0.603 |
+//! | paper | delay 0, 2 m/s, 30 deg/s, 1 | 0.527 | 0.747 | 0.972 | 0.603 |
+//! | paper | delay 0, 3 m/s, 30 deg/s, 1/3 | 0.550 | 0.758 | 1.000 | 0.569 |
 //! | px4, PX4 defaults | gain 0.95, 5 m/s, 45 deg/s | 1.100 | 0.731 | 1.000 | 0.155 |
 //! | px4 | gain 0.5, 5 m/s, 45 deg/s | 0.667 | 0.780 | 1.000 | 0.172 |
-//! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s | **0.552** | 0.751 | 1.000 | 0.379 |
+//! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s, delay 0 | **0.552** | 0.751 | 1.000 | 0.379 |
+//! | px4 | same, delay 1 / 2 | 0.584 / 0.599 | 0.719 / 0.701 | 1.000 | 0.241 / 0.259 |
+//! | px4 | jerk 4 / 8 m/s^3 (MPC_JERK_AUTO / _MAX), gain 0.3 | 0.582 / 0.559 | 0.708 / 0.737 | 1.000 | 0.328 / 0.293 |
+//! | px4 | jerk 4 m/s^3, gain 0.5 / 0.2 | 0.721 / 0.591 | 0.728 / 0.683 | 1.000 | 0.155 / 0.345 |
 //! | px4 | gain 0.3, 5 m/s, 90 deg/s | 0.572 | 0.734 | 1.000 | 0.310 |
 //! | px4 | gain 0.2, 5 m/s, 90 deg/s | 0.634 | 0.630 | 1.000 | 0.345 |
 //!
-//! The fitted rows are from `prgenuav fidelity tests/data/hfs-flights --motion paper|px4` after the last change
-//! (sample times on whole microseconds, which moves a few 0.5 s bins); the other rows are the grid's own output.
-//! Per tier (MAE / Spearman / precision / recall): paper A 0.388 / 0.486 / 1.000 / 0.613, B 0.543 / 0.415 /
-//! 1.000 / 0.688, C 0.566 / 0.646 / 0.500 / 0.273; px4 A 0.646 / 0.583 / 1.000 / 0.387, B 0.705 / 0.124 / 1.000 /
-//! 0.625, C 0.479 / 0.661 / - / 0.000.
+//! Per tier (MAE / Spearman / precision / recall), paper fitted: A (34) 0.374 / 0.551 / 1.000 / 0.613, B (16)
+//! 0.550 / 0.482 / 1.000 / 0.625, C (77) 0.510 / 0.688 / - / 0.000; px4 fitted: A 0.646 / 0.583 / 1.000 /
+//! 0.387, B 0.705 / 0.124 / 1.000 / 0.625, C 0.479 / 0.661 / - / 0.000.
 //!
-//! The grid was 2 x 2 x 2 for each model (paper: speed {2, 3} x yaw rate {13.5, 30} x fraction {1/3, 1};
-//! px4: gain {0.5, 0.95} x speed {3, 5} x yaw rate {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}).
-//! The real simulator disagrees with itself by 0.29 m on average between repeated runs of the same obstacles
-//! (and by up to 3 m, see the flights' README), which bounds what any fit can reach. The px4 model keeps about
-//! 0.5-1 m more clearance than the real flights (low recall); a slower position loop (a lagging vehicle that cuts
-//! the planner's corners) brings it closer, but a gain below 0.3 loses rank agreement.
+//! **Honest numbers.** The delay was also chosen on one fixed half of the flights and checked on the other
+//! (`fidelity::split_half`, repeats of one obstacle set kept together): chosen on half 0 (60 flights; MAE 0.558,
+//! 0.516, 0.525, 0.553, 0.568 for delay 0-4) it is 1, which on the held-out half 1 (67) gives 0.445 / 0.833 /
+//! 1.000 / 0.414 against 0.477 / 0.786 / 0.889 / 0.552 without it; chosen on half 1 it is 2 (0.443 vs 0.445),
+//! which on half 0 gives 0.525 / 0.739 / 1.000 / 0.517 against 0.558 / 0.761 / 0.944 / 0.586 (MAE better,
+//! Spearman and recall slightly worse). Speed and yaw rate were fitted on all flights before (a 2 x 2 x 2 grid:
+//! speed {2, 3} x yaw rate {13.5, 30} x fraction {1/3, 1}; px4: gain {0.5, 0.95} x speed {3, 5} x yaw rate
+//! {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}). Moving every obstacle 1 or 2 cm changes a single
+//! prediction by 0.08 m on average (up to 0.6 m) and the aggregates by about 0.007 m MAE and 0.005 Spearman
+//! (delay 0: 0.515 / 0.522 / 0.512 and 0.765 / 0.767 / 0.768; delay 1: 0.478 / 0.475 / 0.481 and 0.798 / 0.803 /
+//! 0.801; px4: 0.552 / 0.555 and 0.751 / 0.734), so the delay's gain is well above chance, but differences of
+//! 0.01-0.02 between other rows are not. Flying the tier-C flights on mission 3 instead of their inferred
+//! mission 2 makes them much worse (paper: C MAE 0.723 vs 0.510, Spearman 0.437 vs 0.688), which supports the
+//! inference.
+//!
+//! The delay works by raising predictions: the paper model was too close on tier C (the unselected generator
+//! log: bias -0.18 m, now -0.11) and too far on tiers A and B (+0.18 / +0.32, now +0.22 / +0.39). Tiers A and B
+//! hold tests their authors kept because they failed (B: the minimum over 1-2 runs), so given the real
+//! simulator's own scatter their recorded distances are biased low. The real simulator disagrees with itself by
+//! 0.29 m on average between repeated runs of the same obstacles (and by up to 3 m, see the flights' README),
+//! about 0.2 m of MAE that no deterministic prediction can remove. The px4 model keeps about 0.5 m more
+//! clearance than the real flights on tiers A and B (low recall); a slower position loop brings it closer, but a
+//! gain below 0.3 loses rank agreement, and a delay, a jerk limit or the tilt model all made it worse.
 
 use nalgebra::Vector3;
 
@@ -61,6 +91,8 @@ pub struct Vehicle {
     pub position_enu: Vector3<f64>,
     /// Velocity, ENU m/s.
     pub velocity_enu: Vector3<f64>,
+    /// Acceleration, ENU m/s^2 (kept only by the jerk-limited tracker; zero otherwise).
+    pub acceleration_enu: Vector3<f64>,
     /// ENU yaw, radians, counter-clockwise from East.
     pub yaw_enu_rad: f64,
 }
@@ -79,15 +111,19 @@ pub struct PaperParams {
     pub max_yaw_rate_deg_s: f64,
     /// Yaw errors below this fraction of the yaw rate (in degrees) allow full speed (paper: 1/3).
     pub full_speed_yaw_fraction: f64,
+    /// Ticks between the planner's answer and the vehicle acting on it (paper: 0, the same tick; fitted 1).
+    pub delay_ticks: usize,
 }
 
 impl Default for PaperParams {
-    /// FITTED (see the module docs): 2 m/s, 30 deg/s, full speed below 1/3 of the yaw rate (10 degrees).
+    /// FITTED (see the module docs): 2 m/s, 30 deg/s, full speed below 1/3 of the yaw rate (10 degrees), acting
+    /// one tick (0.1 s) after the planner's answer.
     fn default() -> Self {
         Self {
             max_speed_m_s: 2.0,
             max_yaw_rate_deg_s: 30.0,
             full_speed_yaw_fraction: 1.0 / 3.0,
+            delay_ticks: 1,
         }
     }
 }
@@ -99,6 +135,7 @@ impl PaperParams {
             max_speed_m_s: 3.0,
             max_yaw_rate_deg_s: 13.5,
             full_speed_yaw_fraction: 1.0 / 3.0,
+            delay_ticks: 0,
         }
     }
 
@@ -135,6 +172,11 @@ pub struct Px4Params {
     pub max_acc_m_s2: f64,
     /// Yaw-rate limit, degrees/s (MPC_YAWRAUTO_MAX 45).
     pub max_yaw_rate_deg_s: f64,
+    /// Jerk limit, m/s^3 (MPC_JERK_AUTO 4): `Some` makes the velocity a second-order, jerk-limited response
+    /// (as PX4's trajectory smoother); `None` reaches the commanded velocity with the acceleration limit alone.
+    pub max_jerk_m_s3: Option<f64>,
+    /// Ticks between the waypoint generator's setpoint and the vehicle acting on it (0 = the same tick).
+    pub delay_ticks: usize,
     /// Integration sub-steps per tick.
     pub substeps: u32,
 }
@@ -148,6 +190,8 @@ impl Default for Px4Params {
             max_speed_z_m_s: 1.0,
             max_acc_m_s2: 3.0,
             max_yaw_rate_deg_s: 45.0,
+            max_jerk_m_s3: None,
+            delay_ticks: 0,
             substeps: 5,
         }
     }
@@ -168,12 +212,9 @@ impl Px4Params {
                 cmd.y *= s;
             }
             cmd.z = cmd.z.clamp(-self.max_speed_z_m_s, self.max_speed_z_m_s);
-            let dv = cmd - v.velocity_enu;
-            let max_dv = self.max_acc_m_s2 * h;
-            let dv = if dv.norm() > max_dv {
-                dv * (max_dv / dv.norm())
-            } else {
-                dv
+            let dv = match self.max_jerk_m_s3 {
+                Some(jerk) => self.jerk_limited_dv(v, &cmd, jerk, h),
+                None => limit(cmd - v.velocity_enu, self.max_acc_m_s2 * h),
             };
             let v0 = v.velocity_enu;
             v.velocity_enu += dv;
@@ -185,11 +226,33 @@ impl Px4Params {
     }
 }
 
+impl Px4Params {
+    /// Velocity change of one sub-step `h` towards `cmd` with acceleration and jerk limits: the acceleration
+    /// heads for the largest value from which the velocity error can still be closed without overshoot at this
+    /// jerk (`sqrt(2 jerk |dv|)`, at most `max_acc`) and changes at most `jerk * h` per sub-step.
+    fn jerk_limited_dv(&self, v: &mut Vehicle, cmd: &Vector3<f64>, jerk: f64, h: f64) -> Vector3<f64> {
+        let err = cmd - v.velocity_enu;
+        let n = err.norm();
+        let want = if n > 1e-12 {
+            err * ((2.0 * jerk.max(1e-6) * n).sqrt().min(self.max_acc_m_s2) / n)
+        } else {
+            Vector3::zeros()
+        };
+        v.acceleration_enu += limit(want - v.acceleration_enu, jerk * h);
+        v.acceleration_enu * h
+    }
+}
+
+fn limit(d: Vector3<f64>, max: f64) -> Vector3<f64> {
+    if d.norm() > max { d * (max / d.norm()) } else { d }
+}
+
 /// Moves `v` vertically towards altitude `alt_m` at `speed_m_s` (takeoff climb and landing descent), holding xy.
 pub fn vertical_step(v: &mut Vehicle, alt_m: f64, speed_m_s: f64, dt: f64) {
     let dz = (alt_m - v.position_enu.z).clamp(-speed_m_s * dt, speed_m_s * dt);
     v.position_enu.z += dz;
     v.velocity_enu = Vector3::new(0.0, 0.0, if dt > 0.0 { dz / dt } else { 0.0 });
+    v.acceleration_enu = Vector3::zeros();
 }
 
 #[cfg(test)]
@@ -200,6 +263,7 @@ mod tests {
         Vehicle {
             position_enu: Vector3::new(x, y, 10.0),
             velocity_enu: Vector3::zeros(),
+            acceleration_enu: Vector3::zeros(),
             yaw_enu_rad: yaw_deg.to_radians(),
         }
     }
@@ -270,6 +334,44 @@ mod tests {
         }
         assert!(
             (v.position_enu.x - 1.0).abs() < 0.01 && max_x < 1.2,
+            "{} {max_x}",
+            v.position_enu.x
+        );
+    }
+
+    #[test]
+    fn jerk_limited_tracker_ramps_the_acceleration() {
+        let p = Px4Params {
+            max_jerk_m_s3: Some(4.0),
+            ..Px4Params::default()
+        };
+        let mut v = at(0.0, 0.0, 0.0);
+        let sp = Vector3::new(1000.0, 0.0, 10.0);
+        // Five sub-steps of 0.02 s: the acceleration grows by at most 4 * 0.02 per sub-step.
+        p.track(&mut v, &sp, 0.0, 0.1);
+        assert!((v.acceleration_enu.x - 0.4).abs() < 1e-9, "{}", v.acceleration_enu.x);
+        assert!(v.velocity_enu.x > 0.0 && v.velocity_enu.x < 0.3 * 0.1 * 5.0);
+        let mut max_acc: f64 = 0.0;
+        for _ in 0..100 {
+            p.track(&mut v, &sp, 0.0, 0.1);
+            max_acc = max_acc.max(v.acceleration_enu.norm());
+        }
+        assert!(max_acc <= 3.0 + 1e-9, "acceleration limited: {max_acc}");
+        assert!(
+            (v.velocity_enu.xy().norm() - 5.0).abs() < 0.05,
+            "speed limited: {}",
+            v.velocity_enu.x
+        );
+        // Settles on a near setpoint without a large overshoot.
+        let mut v = at(0.0, 0.0, 0.0);
+        let sp = Vector3::new(1.0, 0.0, 10.0);
+        let mut max_x: f64 = 0.0;
+        for _ in 0..400 {
+            p.track(&mut v, &sp, 0.0, 0.1);
+            max_x = max_x.max(v.position_enu.x);
+        }
+        assert!(
+            (v.position_enu.x - 1.0).abs() < 0.02 && max_x < 1.3,
             "{} {max_x}",
             v.position_enu.x
         );

@@ -10,6 +10,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use super::attitude::{TiltParams, TiltState};
 use super::camera::Camera;
 use super::frames::yaw_enu_to_ned_rad;
 use super::mission::{MissionParams, MissionRunner, Phase};
@@ -44,6 +45,14 @@ impl MotionModel {
         }
     }
 
+    /// Ticks between the planner's answer and the vehicle acting on it (0 = the same tick).
+    pub fn delay_ticks(&self) -> usize {
+        match self {
+            Self::Paper(p) => p.delay_ticks,
+            Self::Px4(p) => p.delay_ticks,
+        }
+    }
+
     /// CLI name.
     pub fn name(&self) -> &'static str {
         match self {
@@ -74,6 +83,8 @@ pub struct SimConfig {
     pub motion: MotionModel,
     /// Depth camera.
     pub camera: Camera,
+    /// Camera pitch from the vehicle's acceleration and drag ([`super::attitude`]); `None` = level camera.
+    pub tilt: Option<TiltParams>,
     /// Planner parameters (its FOV is replaced by the camera's).
     pub planner: PlannerParams,
     /// Mission parameters; `None` = PX4 defaults overridden by the test's parameters.
@@ -93,6 +104,7 @@ impl Default for SimConfig {
         Self {
             motion: MotionModel::Paper(PaperParams::default()),
             camera: Camera::hfs(),
+            tilt: None,
             planner: PlannerParams::default(),
             mission: None,
             dt_s: 0.1,
@@ -152,6 +164,7 @@ pub struct World {
     pub vehicle: Vehicle,
     /// Set once the flight is over.
     pub status: Option<Status>,
+    tilt: TiltState,
     scene: Scene,
     obstacles: Vec<Obstacle>,
     camera: Camera,
@@ -162,6 +175,7 @@ pub struct World {
     mission: MissionRunner,
     motion: MotionState,
     command: Command,
+    pending: std::collections::VecDeque<Command>,
     samples: Vec<Sample>,
     config: SimConfig,
     best_goal_dist_m: f64,
@@ -209,6 +223,7 @@ impl World {
         let vehicle = Vehicle {
             position_enu: Vector3::zeros(),
             velocity_enu: Vector3::zeros(),
+            acceleration_enu: Vector3::zeros(),
             yaw_enu_rad: std::f64::consts::FRAC_PI_2,
         };
         let motion = match config.motion {
@@ -220,6 +235,7 @@ impl World {
             cycles: 0,
             vehicle,
             status: None,
+            tilt: TiltState::default(),
             scene: Scene::new(obstacles),
             obstacles: obstacles.to_vec(),
             camera: config.camera.clone(),
@@ -233,6 +249,7 @@ impl World {
             mission,
             motion,
             command: Command::Hold,
+            pending: std::collections::VecDeque::new(),
             samples: Vec::new(),
             config,
             best_goal_dist_m: f64::INFINITY,
@@ -257,7 +274,7 @@ impl World {
             position_enu: f32v(&self.vehicle.position_enu),
             velocity_enu: f32v(&self.vehicle.velocity_enu),
             yaw_enu_rad: self.vehicle.yaw_enu_rad as f32,
-            pitch_rad: 0.0,
+            pitch_rad: self.tilt.pitch_rad as f32,
         }
     }
 
@@ -266,7 +283,12 @@ impl World {
         if self.mission.phase() == Phase::Ground {
             return;
         }
+        // The body pitch tilts the view through the camera's principal point (the fast renderer needs a level
+        // pose); the planner gets the pitch itself with the vehicle state.
         let pose = CameraPose::level(self.vehicle.position_enu, self.vehicle.yaw_enu_rad);
+        if self.config.tilt.is_some() {
+            self.camera.view_pitch_rad = self.tilt.pitch_rad;
+        }
         self.frame.clear();
         if self.vehicle.position_enu.z > 0.05 {
             let r = render_cloud(
@@ -367,9 +389,22 @@ impl World {
 
     /// Stage `integrate`: move the vehicle for `dt` seconds.
     fn integrate(&mut self, dt: f64) {
+        // The motion model's control delay: act on the command of `delay` ticks ago (hold until there is one).
+        let delay = self.config.motion.delay_ticks();
+        if delay > 0 {
+            self.pending.push_back(self.command);
+            self.command = if self.pending.len() > delay {
+                self.pending.pop_front().unwrap_or(Command::Hold)
+            } else {
+                Command::Hold
+            };
+        }
         let v = &mut self.vehicle;
         match (self.command, &self.motion) {
-            (Command::Hold, _) => v.velocity_enu = Vector3::zeros(),
+            (Command::Hold, _) => {
+                v.velocity_enu = Vector3::zeros();
+                v.acceleration_enu = Vector3::zeros();
+            }
             (Command::Vertical { alt_m, speed_m_s }, _) => vertical_step(v, alt_m, speed_m_s, dt),
             (Command::Toward(t), MotionState::Paper(p)) => p.step(v, &t, dt),
             (Command::Toward(t), MotionState::Px4(p, _)) => p.track(v, &t, v.yaw_enu_rad, dt),
@@ -379,6 +414,9 @@ impl World {
             (Command::Track { setpoint, .. }, MotionState::Paper(p)) => p.step(v, &setpoint, dt),
         }
         v.position_enu.z = v.position_enu.z.max(0.0);
+        if let Some(p) = &self.config.tilt {
+            self.tilt.update(p, &v.velocity_enu, v.yaw_enu_rad, dt);
+        }
         self.cycles += 1;
         // From the tick count (not summed), so no rounding drift over thousands of ticks.
         self.time_s = self.cycles as f64 * dt;

@@ -106,3 +106,41 @@ fn bad_settings_are_errors() {
     assert!(matches!(World::new(&mission(1), bad), Err(SimError::Setting(_))));
     assert!(MotionModel::by_name("jetpack").is_none());
 }
+
+#[test]
+fn control_delay_postpones_every_command_by_its_ticks() {
+    let first_climb = |delay_ticks: usize| {
+        let config = SimConfig {
+            motion: MotionModel::Paper(PaperParams {
+                delay_ticks,
+                ..PaperParams::default()
+            }),
+            timeout_s: 2.0,
+            ..Default::default()
+        };
+        let r = simulate(&mission(1), &config).unwrap();
+        r.trajectory.samples.iter().position(|s| s.z > 0.0).unwrap()
+    };
+    assert_eq!(first_climb(0), 1, "the takeoff command acts in the first tick");
+    assert_eq!(first_climb(3), 4);
+    assert_eq!(MotionModel::by_name("paper").unwrap().delay_ticks(), 1);
+    assert_eq!(MotionModel::by_name("px4").unwrap().delay_ticks(), 0);
+}
+
+#[test]
+fn tilted_camera_keeps_the_fast_render_and_passes_the_pitch_on() {
+    let test = mission(2).with_obstacles(two_boxes());
+    let config = SimConfig {
+        tilt: Some(crate::lfs::attitude::TiltParams::default()),
+        timeout_s: 30.0,
+        ..Default::default()
+    };
+    let mut w = World::new(&test, config).unwrap();
+    let mut max_pitch: f64 = 0.0;
+    while step(&mut w, 0.1).is_none() {
+        max_pitch = max_pitch.max(f64::from(w.vehicle_state().pitch_rad));
+    }
+    // The vehicle accelerates forward at the start of the cruise, so it pitched nose-down at some point.
+    assert!(max_pitch > 1f64.to_radians(), "{}", max_pitch.to_degrees());
+    assert_eq!(w.full_renders(), 0);
+}

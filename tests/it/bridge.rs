@@ -16,6 +16,8 @@ const SPEED: f64 = 20.0;
 /// Speed factor when the planner steers: 10 Hz of vehicle time is 100 plans per wall second, which leaves a
 /// loaded 2-core CI machine headroom (a stale plan is mirrored, and the drone would fly straight).
 const PLANNED_SPEED: f64 = 10.0;
+/// Upper bound of a lockstep mock's clock: the mock waits for every avoidance answer, however slow the build.
+const LOCKSTEP_SPEED: f64 = 100.0;
 /// No test may take longer than this (wall time).
 const WALL_LIMIT: Duration = Duration::from_secs(60);
 
@@ -68,9 +70,20 @@ fn assert_flown(r: &FlightReport, what: &str) {
 
 async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     let test = generated(n);
-    let speed = if mode == FlyMode::Mission { SPEED } else { PLANNED_SPEED };
-    let (m, url) = mock(speed, |b| b).await;
-    let r = fly_bounded(&test, &opts(&url, mode, speed), CancelToken::new()).await;
+    // Avoidance flies in lockstep (the free-running companion is covered by the serial and fault tests).
+    let lockstep = (mode == FlyMode::Avoidance).then_some(Duration::ZERO);
+    let speed = match mode {
+        FlyMode::Mission => SPEED,
+        FlyMode::Avoidance => LOCKSTEP_SPEED,
+        FlyMode::Offboard => PLANNED_SPEED,
+    };
+    let wait = lockstep.map(|_| mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT);
+    let (m, url) = mock(speed, |b| b.lockstep(wait)).await;
+    let o = FlyOptions {
+        lockstep,
+        ..opts(&url, mode, speed)
+    };
+    let r = fly_bounded(&test, &o, CancelToken::new()).await;
     let state = m.state();
     assert!(!state.armed, "{mode:?} mission {n}: still armed");
     m.shutdown().await.expect("mock stops");
@@ -364,6 +377,36 @@ async fn the_same_flight_over_a_serial_link() {
     let r = fly_bounded(&test, &o, CancelToken::new()).await;
     m.shutdown().await.expect("mock stops");
     assert_flown(&r, "serial");
+    assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_flight_over_tcp_in_lockstep() {
+    // rust-mavlink's tcpin cannot report an ephemeral port: take a free one from the OS first.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    let speed = 100.0;
+    let spawn = tokio::spawn(
+        MockAutopilot::builder()
+            .link(LinkSpec::Address(format!("tcpin:127.0.0.1:{port}")))
+            .speed_factor(SpeedFactor::Times(speed))
+            .lockstep(Some(mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT))
+            .spawn(),
+    );
+    let o = FlyOptions {
+        lockstep: Some(Duration::ZERO),
+        ..opts(&format!("tcpout:127.0.0.1:{port}"), FlyMode::Avoidance, speed)
+    };
+    let r = fly_bounded(&generated(2), &o, CancelToken::new()).await;
+    let m = tokio::time::timeout(WALL_LIMIT, spawn)
+        .await
+        .expect("mock started in time")
+        .expect("mock task")
+        .expect("mock on tcp");
+    m.shutdown().await.expect("mock stops");
+    assert_flown(&r, "tcp");
     assert_eq!(r.status, Status::Landed, "{:?}", r.reason);
 }
 
