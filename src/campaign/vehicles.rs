@@ -102,7 +102,8 @@ pub struct MockVehicle {
 /// of `tests/data/hfs-flights` of the 95th-percentile horizontal speed is 1.40 m/s (their median maximum 1.54,
 /// 29 of 37 between 1.2 and 1.63). PX4 v1.12's defaults (MPC_XY_CRUISE 5, jerk-limited braking towards the
 /// avoidance setpoint about 5 m ahead) would fly about 2.6 m/s; why the recorded stack flew slower is not known
-/// (see README, *Mock autopilot fidelity*). Measured with `examples/mock_fidelity.rs`: MAE 1.21 m at 5 m/s,
+/// (see README, *Mock autopilot fidelity*). It acts as a vehicle-side cap only: our companion does not read
+/// MPC_XY_CRUISE and keeps planning with 5 m/s (PX4-Avoidance would read it and shorten its carrot). Measured with `examples/mock_fidelity.rs`: MAE 1.21 m at 5 m/s,
 /// 0.86 m at 1.5 m/s, 0.72 m at 1.3 m/s.
 pub const MOCK_AVOIDANCE_CRUISE_M_S: f64 = 1.4;
 
