@@ -5,14 +5,16 @@
 //! and recall of "< 1.5 m"). Used to fit the campaign's default mock latency.
 //!
 //! `cargo run --release --example mock_fidelity -- [DIR=tests/data/hfs-flights] [LATENCY_MS=0|free] [PARALLEL=2]`
+//! (env `TRAJ_DIR=DIR`: keep each flown trajectory as `DIR/<id>.csv`; `VERBOSE=1`: one line per flight; `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
-use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
+use mock_autopilot::{LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use prgenuav::campaign::vehicles::mock_builder;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, load_dir};
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;
@@ -26,7 +28,22 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
     let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
     let mut test = base.with_obstacles(case.obstacles.clone());
     test.params = case.params.clone();
-    let mock = MockAutopilot::builder()
+    // EXTRA_PARAMS=NAME=VALUE,... sets more vehicle parameters (experiments: what would move the mock closer).
+    for kv in std::env::var("EXTRA_PARAMS")
+        .unwrap_or_default()
+        .split(',')
+        .filter(|s| !s.is_empty())
+    {
+        let (name, value) = kv
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("EXTRA_PARAMS: {kv:?} is not NAME=VALUE"))?;
+        test.params.retain(|p| p.name != name);
+        test.params.push(prgenuav::model::Param {
+            name: name.to_string(),
+            value: value.parse()?,
+        });
+    }
+    let mock = mock_builder(FlyMode::Avoidance)
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
         .speed_factor(SpeedFactor::Times(speed))
         .lockstep(latency.map(|_| DEFAULT_LOCKSTEP_WAIT))
@@ -41,6 +58,8 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
         mode: FlyMode::Avoidance,
         time_scale: speed,
         lockstep: latency,
+        // TRAJ_DIR=DIR keeps each flown trajectory as DIR/<id>.csv, to compare paths with the recorded ones.
+        trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
         ..FlyOptions::default()
     };
     let report = fly(&test, &opts, CancelToken::new()).await;

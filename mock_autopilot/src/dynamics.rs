@@ -118,6 +118,17 @@ fn approach_speed(dist: f64, cap: f64, brake_acc: f64) -> f64 {
     cap.min((2.0 * brake_acc * dist).sqrt()).min(POS_GAIN * dist)
 }
 
+/// The highest speed (m/s) from which a jerk-limited stop still ends within `dist_m` at `final_m_s`, as PX4's
+/// trajectory generator limits the horizontal speed towards its target (`computeMaxSpeedFromDistance`: a
+/// constant deceleration `acc` that starts after the `2 acc / jerk` ramp from full opposite acceleration).
+/// Near the target this is about `(jerk / 2 acc) * dist`: with PX4's defaults (jerk 4, acc 3) a gain of only
+/// 0.67 /s, which is why PX4 crawls towards a setpoint that stays a few metres ahead (an avoidance carrot).
+pub fn max_speed_from_distance(jerk_m_s3: f64, acc_m_s2: f64, dist_m: f64, final_m_s: f64) -> f64 {
+    let b = 4.0 * acc_m_s2 * acc_m_s2 / jerk_m_s3;
+    let c = -2.0 * acc_m_s2 * dist_m.max(0.0) - final_m_s * final_m_s;
+    (0.5 * (-b + (b * b - 4.0 * c).sqrt())).max(final_m_s)
+}
+
 impl Body {
     /// True when resting on the ground (z = 0, not climbing).
     pub fn on_ground(&self) -> bool {
@@ -154,7 +165,8 @@ impl Body {
                 let err_h = Ned::new(err.x, err.y, 0.0);
                 let d_h = err_h.norm();
                 let v_h = if d_h > 1e-9 {
-                    err_h * (approach_speed(d_h, h_speed_m_s.min(lim.max_h_speed_m_s), 0.5 * lim.acc_hor_m_s2) / d_h)
+                    let cap = h_speed_m_s.min(lim.max_h_speed_m_s);
+                    err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, d_h, 0.0)) / d_h)
                 } else {
                     Ned::zeros()
                 };
@@ -262,6 +274,23 @@ mod tests {
         assert!(max_acc <= 3.0 + 1e-6);
         assert!(overshoot < 0.3, "overshoot {overshoot}");
         assert!((b.yaw_rad - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn braking_speed_matches_px4s_jerk_limited_rule() {
+        // b = 4 a^2 / j = 9, speed = (-b + sqrt(b^2 + 8 a d)) / 2: d = 3 m -> 1.685 m/s, d = 5 m -> 2.589 m/s.
+        assert!((max_speed_from_distance(4.0, 3.0, 3.0, 0.0) - 1.6847).abs() < 1e-3);
+        assert!((max_speed_from_distance(4.0, 3.0, 5.0, 0.0) - 2.5887).abs() < 1e-3);
+        assert_eq!(max_speed_from_distance(4.0, 3.0, 0.0, 0.0), 0.0);
+        assert_eq!(max_speed_from_distance(4.0, 3.0, -1.0, 0.0), 0.0);
+        // Never below the speed wanted at the target; grows with distance.
+        assert!(max_speed_from_distance(4.0, 3.0, 0.1, 2.0) >= 2.0);
+        let mut last = 0.0;
+        for k in 1..100 {
+            let v = max_speed_from_distance(4.0, 3.0, f64::from(k) * 0.2, 0.0);
+            assert!(v > last);
+            last = v;
+        }
     }
 
     #[test]

@@ -325,16 +325,23 @@ impl Navigator {
     }
 
     /// Current and next mission waypoint (position, command) for the avoidance interface.
+    ///
+    /// While a land item is still approached at altitude, PX4's navigator has made the current item a plain
+    /// waypoint above the land point at the altitude where the approach began ("move to land"), so that is what
+    /// the companion sees: a fixed goal altitude, not the ground.
     pub fn waypoints(&self) -> [Option<(Ned, u16)>; 2] {
         let mut out = [None, None];
         let mut k = 0;
-        for (cmd, kind) in self.items.iter().skip(self.current) {
-            let pos = match kind {
-                NavKind::Takeoff { target, .. } | NavKind::Waypoint { target, .. } => *target,
-                NavKind::Land { xy: Some((n, e)) } => Ned::new(*n, *e, 0.0),
+        for (i, (cmd, kind)) in self.items.iter().enumerate().skip(self.current) {
+            let (pos, cmd) = match (kind, self.phase) {
+                (NavKind::Takeoff { target, .. } | NavKind::Waypoint { target, .. }, _) => (*target, *cmd as u16),
+                (NavKind::Land { xy: Some((n, e)) }, Phase::LandApproach { z }) if i == self.current => {
+                    (Ned::new(*n, *e, z), MavCmd::MAV_CMD_NAV_WAYPOINT as u16)
+                }
+                (NavKind::Land { xy: Some((n, e)) }, _) => (Ned::new(*n, *e, 0.0), *cmd as u16),
                 _ => continue,
             };
-            out[k] = Some((pos, *cmd as u16));
+            out[k] = Some((pos, cmd));
             k += 1;
             if k == 2 {
                 break;

@@ -120,3 +120,31 @@ fn disarmed_is_idle_and_waypoints_list_next_two() {
     c.armed = false;
     assert_eq!(nav.update(&c, &mut Vec::new()), Setpoint::Idle);
 }
+
+#[test]
+fn land_approach_is_reported_as_a_waypoint_at_the_approach_altitude() {
+    let p = NavParams::from_params(&ParamTable::default());
+    let mut nav = Navigator::new();
+    nav.set_mission(vec![(
+        MavCmd::MAV_CMD_NAV_LAND,
+        NavKind::Land { xy: Some((0.0, 40.0)) },
+    )]);
+    // Before the item starts: the land point on the ground, as a land command.
+    let w = nav.waypoints();
+    assert_eq!(w[0], Some((Ned::new(0.0, 40.0, 0.0), MavCmd::MAV_CMD_NAV_LAND as u16)));
+    nav.set_mode(FlightMode::Mission, &Body::default(), 0.0);
+    let mut body = Body {
+        pos_ned: Ned::new(0.0, 0.0, -10.0),
+        ..Default::default()
+    };
+    let mut ev = Vec::new();
+    run(&mut nav, &mut body, &p, 1.0, &mut ev);
+    // Approaching: a plain waypoint above the land point at the altitude the approach began at (PX4's
+    // "move to land"), however the vehicle's height wanders meanwhile.
+    let (pos, cmd) = nav.waypoints()[0].unwrap();
+    assert_eq!(cmd, MavCmd::MAV_CMD_NAV_WAYPOINT as u16);
+    assert!((pos - Ned::new(0.0, 40.0, -10.0)).norm() < 1e-9, "{pos:?}");
+    body.pos_ned.z = -12.0;
+    run(&mut nav, &mut body, &p, 0.5, &mut ev);
+    assert!((nav.waypoints()[0].unwrap().0.z + 10.0).abs() < 1e-9);
+}
