@@ -1,5 +1,7 @@
 //! COMMAND_LONG with its COMMAND_ACK as a socket-free state machine: resend on timeout with `confirmation`
-//! incremented (MAVLink command protocol), wait longer on MAV_RESULT_IN_PROGRESS, any other result is final.
+//! incremented (MAVLink command protocol), wait longer on MAV_RESULT_IN_PROGRESS, ask again a few times on
+//! MAV_RESULT_TEMPORARILY_REJECTED ("try again later", e.g. a pre-arm check not ready yet), any other result
+//! is final.
 
 use std::time::Duration;
 
@@ -9,6 +11,10 @@ use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
 
 /// How long to keep waiting after an IN_PROGRESS ack before resending (vehicle time).
 pub const IN_PROGRESS_WAIT: Duration = Duration::from_secs(5);
+/// After MAV_RESULT_TEMPORARILY_REJECTED, ask again after this long (vehicle time)...
+pub const TEMPORARY_BACKOFF: Duration = Duration::from_millis(500);
+/// ...at most this many times; then the rejection is final.
+pub const MAX_TEMPORARY_REJECTIONS: u32 = 3;
 
 /// One command and its acknowledgement.
 #[derive(Debug, Clone)]
@@ -20,6 +26,7 @@ pub struct Command {
     confirmation: u8,
     in_a_row: u32,
     retries: u32,
+    rejections: u32,
     deadline: Duration,
 }
 
@@ -34,6 +41,7 @@ impl Command {
             confirmation: 0,
             in_a_row: 0,
             retries: 0,
+            rejections: 0,
             deadline: Duration::ZERO,
         }
     }
@@ -81,6 +89,13 @@ impl Exchange for Command {
             MavResult::MAV_RESULT_IN_PROGRESS => {
                 self.in_a_row = 0;
                 self.deadline = now + IN_PROGRESS_WAIT.max(self.retry.timeout);
+                Step::wait()
+            }
+            MavResult::MAV_RESULT_TEMPORARILY_REJECTED if self.rejections < MAX_TEMPORARY_REJECTIONS => {
+                // The resend happens at the deadline, as after a lost answer, without using up those retries.
+                self.rejections += 1;
+                self.in_a_row = 0;
+                self.deadline = now + TEMPORARY_BACKOFF;
                 Step::wait()
             }
             result => Step::done(Err(ProtocolError::CommandRefused {
@@ -168,12 +183,34 @@ mod tests {
                 ack(cmd, MavResult::MAV_RESULT_TEMPORARILY_REJECTED),
             ]
         });
-        assert_eq!(sent.len(), 1);
+        assert_eq!(
+            sent.len(),
+            1 + MAX_TEMPORARY_REJECTIONS as usize,
+            "asked again after each temporary rejection, then gave up"
+        );
         let e = r.unwrap_err();
         assert!(
             e.to_string().contains("not possible in the vehicle's current state"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_temporary_rejection_is_asked_again() {
+        let cmd = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+        let mut c = Command::new(T, cmd, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Retry::COMMAND);
+        let mut asked = 0;
+        let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| {
+            asked += 1;
+            let result = if asked < 3 {
+                MavResult::MAV_RESULT_TEMPORARILY_REJECTED
+            } else {
+                MavResult::MAV_RESULT_ACCEPTED
+            };
+            vec![ack(cmd, result)]
+        });
+        assert!(r.is_ok(), "{r:?}");
+        assert_eq!(sent.len(), 3);
     }
 
     #[test]

@@ -178,13 +178,36 @@ impl FlyOptions {
 pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Result<FlightReport, BridgeError> {
     opts.validate()?;
     let address = LinkAddress::parse(&opts.connect)?.to_mavlink();
-    let transport = link::MavTransport::open(&address)
-        .await
-        .map_err(|source| BridgeError::Open {
-            url: address.clone(),
-            source,
-        })?;
+    let transport = open_with_retry(&address, opts, &cancel).await?;
     fly_on(test, opts, Arc::new(transport), cancel).await
+}
+
+/// Opens the link. A refused TCP connection (the simulator is still starting) is tried again every 200 ms
+/// within the heartbeat wait (as wall seconds) or until cancelled; any other error is final.
+async fn open_with_retry(
+    address: &str,
+    opts: &FlyOptions,
+    cancel: &CancelToken,
+) -> Result<link::MavTransport, BridgeError> {
+    let deadline = std::time::Instant::now() + clock::secs(opts.heartbeat_wait_s);
+    loop {
+        match link::MavTransport::open(address).await {
+            Ok(t) => return Ok(t),
+            Err(e)
+                if e.kind() == std::io::ErrorKind::ConnectionRefused
+                    && std::time::Instant::now() < deadline
+                    && !cancel.is_cancelled() =>
+            {
+                tokio::time::sleep(Duration::from_millis(200)).await;
+            }
+            Err(source) => {
+                return Err(BridgeError::Open {
+                    url: address.to_string(),
+                    source,
+                });
+            }
+        }
+    }
 }
 
 /// As [`fly`] on an already open transport (`opts.connect` only names it in messages).
