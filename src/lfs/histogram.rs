@@ -70,6 +70,23 @@ pub fn cell_and_range(dx: f32, dy: f32, dz: f32, res_deg: i32) -> (CellIndex, f3
     }
 }
 
+/// Azimuth column (on a `res_deg` grid) of a horizontal ENU offset (`dz = 0`): equal to
+/// `cell_and_range(dx, dy, 0.0, res_deg).0.z`, which always takes the exact path because an elevation of exactly
+/// 0 lies on a cell edge; here only the azimuth decides whether the exact `atan2` is needed.
+#[inline]
+pub fn azimuth_cell(dx: f32, dy: f32, res_deg: i32) -> usize {
+    let res = res_deg as f32;
+    let uz = fast_atan2_deg(dx, dy) / res + 180.0 / res;
+    let iz = floor_guess(uz);
+    let fz = uz - iz as f32;
+    let m = BOUNDARY_MARGIN_DEG / res;
+    if (fz > m) & (fz < 1.0 - m) {
+        iz as usize
+    } else {
+        exact_cell(dx, dy, 0.0, res_deg).z
+    }
+}
+
 /// Mean obstacle distance (metres) per 6-degree cell; 0 = empty.
 #[derive(Clone, PartialEq)]
 pub struct Histogram {
@@ -303,6 +320,22 @@ mod tests {
                 ALPHA_RES,
             );
             assert_eq!(cell_and_range(dx, dy, dz, ALPHA_RES).0, exact, "{dx},{dy},{dz}");
+        }
+    }
+
+    #[test]
+    fn azimuth_cell_equals_the_exact_cell_of_a_horizontal_offset() {
+        for k in 0..200_000u32 {
+            let a = (k as f32 * 0.001_8).to_radians() - std::f32::consts::PI;
+            let r = 0.01 + (k % 97) as f32;
+            let (dx, dy) = (r * a.sin(), r * a.cos());
+            for res in [2, 6] {
+                assert_eq!(
+                    azimuth_cell(dx, dy, res),
+                    exact_cell(dx, dy, 0.0, res).z,
+                    "{dx} {dy} {res}"
+                );
+            }
         }
     }
 

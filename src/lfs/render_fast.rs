@@ -13,7 +13,7 @@
 use nalgebra::Vector3;
 
 use super::camera::Camera;
-use super::histogram::cell_and_range;
+use super::histogram::azimuth_cell;
 use super::render::{CameraPose, RenderError, Scene, cloud_from_depth, pixel_point_enu_tans, render_depth};
 
 const SUB_RES_DEG: i32 = 2;
@@ -171,7 +171,7 @@ pub fn render_cloud(
         if intervals.is_empty() {
             continue;
         }
-        let z_idx = cell_and_range(ux as f32, uy as f32, 0.0, SUB_RES_DEG).0.z;
+        let z_idx = azimuth_cell(ux as f32, uy as f32, SUB_RES_DEG);
         // A column this close to an azimuth cell edge may fall on either side once its points are rounded.
         let az_ambiguous = near_edge(ux.atan2(uy).to_degrees());
         let tan_y = std::mem::take(&mut scratch.tan_y);
