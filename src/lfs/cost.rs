@@ -12,7 +12,8 @@ use super::histogram::Histogram;
 use super::params::CostParams;
 use super::polar::{
     ALPHA_RES, CellIndex, DEG_TO_RAD, GRID_CELLS, GRID_E, GRID_Z, PolarDeg, angle_difference,
-    cartesian_to_polar_histogram, floor_f32, index_to_polar, polar_histogram_to_cartesian, wrap_180,
+    cartesian_to_polar_histogram, floor_f32, fold_elevation_deg, index_to_polar, polar_histogram_to_cartesian,
+    wrap_180,
 };
 use super::smoothing::{SmoothScratch, smooth_fast};
 
@@ -85,16 +86,7 @@ pub fn obstacle_facing_goal(
     let res = ALPHA_RES as f32;
     let mut rows = [(0usize, false); 5];
     for (row, j) in rows.iter_mut().zip(-2..=2) {
-        let mut e = wrap_180(g.e_deg + (j * ALPHA_RES) as f32);
-        let fold = if e > 90.0 {
-            e = 180.0 - e;
-            true
-        } else if e < -90.0 {
-            e = -(180.0 + e);
-            true
-        } else {
-            false
-        };
+        let (e, fold) = fold_elevation_deg(wrap_180(g.e_deg + (j * ALPHA_RES) as f32));
         let index = floor_f32(e / res + 90.0 / res) as i32;
         *row = (index.clamp(0, 180 / ALPHA_RES - 1) as usize, fold);
     }
@@ -425,6 +417,25 @@ impl TopN {
         }
     }
 
+    /// Offers the cells `totals` (indices from `first_index` on) in chunks of 16, skipping a chunk none of whose
+    /// keys can enter: the scan order, and so the tie-breaking, is that of offering every cell in turn.
+    #[inline]
+    pub(super) fn offer_cells(&mut self, totals: &[f32], first_index: usize) {
+        const CHUNK: usize = 16;
+        for (ci, chunk) in totals.chunks(CHUNK).enumerate() {
+            let bound = self.bound();
+            if !chunk.iter().fold(false, |a, &t| a | (total_key(t) <= bound)) {
+                continue;
+            }
+            for (j, &t) in chunk.iter().enumerate() {
+                let key = total_key(t);
+                if key <= self.bound() {
+                    self.offer(key, (first_index + ci * CHUNK + j) as u32);
+                }
+            }
+        }
+    }
+
     #[inline]
     pub(super) fn offer(&mut self, key: i32, index: u32) {
         let item = (key, index);
@@ -481,24 +492,12 @@ fn best_candidates_body(total: &[f32; GRID_CELLS], n: usize, out: &mut Vec<Candi
     }
     let first = (0..GRID_E).min_by_key(|&r| row_min[r]).unwrap_or(0);
     let rows = std::iter::once(first).chain((0..GRID_E).filter(|&r| r != first));
-    const CHUNK: usize = 16;
     for r in rows {
         if row_min[r] > top.bound() {
             continue;
         }
         let base = r * GRID_Z;
-        for (ci, chunk) in total[base..base + GRID_Z].chunks(CHUNK).enumerate() {
-            let bound = top.bound();
-            if !chunk.iter().fold(false, |a, &c| a | (total_key(c) <= bound)) {
-                continue;
-            }
-            for (j, &c) in chunk.iter().enumerate() {
-                let k = total_key(c);
-                if k <= top.bound() {
-                    top.offer(k, (base + ci * CHUNK + j) as u32);
-                }
-            }
-        }
+        top.offer_cells(&total[base..base + GRID_Z], base);
     }
     out.extend(top.kept.iter().map(|&(_, i)| {
         let i = i as usize;

@@ -73,20 +73,24 @@ pub fn wrap_pi(a_rad: f32) -> f32 {
     a_rad - two_pi * floor_f32(a_rad / two_pi + 0.5)
 }
 
+/// An elevation in [-180, 180) folded back over the pole it passed, and whether it was (the azimuth then turns
+/// by 180 degrees).
+#[inline]
+pub fn fold_elevation_deg(e: f32) -> (f32, bool) {
+    if e > 90.0 {
+        (180.0 - e, true)
+    } else if e < -90.0 {
+        (-(180.0 + e), true)
+    } else {
+        (e, false)
+    }
+}
+
 /// Polar wrap: both angles to [-180, 180), then an elevation beyond a pole is folded back and the azimuth
 /// turned by 180 degrees towards zero.
 pub fn wrap_polar(p: PolarDeg) -> PolarDeg {
-    let mut e = wrap_180(p.e_deg);
+    let (e, wrapped) = fold_elevation_deg(wrap_180(p.e_deg));
     let mut z = wrap_180(p.z_deg);
-    let wrapped = if e > 90.0 {
-        e = 180.0 - e;
-        true
-    } else if e < -90.0 {
-        e = -(180.0 + e);
-        true
-    } else {
-        false
-    };
     if wrapped {
         z = if z < 0.0 { z + 180.0 } else { z - 180.0 };
     }

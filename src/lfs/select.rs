@@ -164,19 +164,7 @@ fn select_body(s: &mut SelectScratch, radius: usize, n: usize, out: &mut Vec<Can
         for ((t, &o), &v) in total.iter_mut().zip(other).zip(&sums[first..last + 1]) {
             *t = o + (v * inv) as f32;
         }
-        const CHUNK: usize = 16;
-        for (ci, chunk) in total.chunks(CHUNK).enumerate() {
-            let bound = top.bound();
-            if !chunk.iter().fold(false, |a, &t| a | (total_key(t) <= bound)) {
-                continue;
-            }
-            for (j, &t) in chunk.iter().enumerate() {
-                let key = total_key(t);
-                if key <= top.bound() {
-                    top.offer(key, (base + first + ci * CHUNK + j) as u32);
-                }
-            }
-        }
+        top.offer_cells(total, base + first);
     }
     out.extend(top.kept().iter().map(|&(_, i)| {
         let i = i as usize;
