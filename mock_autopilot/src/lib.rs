@@ -26,6 +26,7 @@ pub mod messages;
 pub mod mission_items;
 pub mod mission_server;
 pub mod modes;
+pub mod nav_items;
 pub mod navigator;
 pub mod obstacles;
 pub mod offboard;
