@@ -258,6 +258,24 @@ pub fn spawn(
     [tokio::spawn(beat(link.clone())), answers]
 }
 
+/// Sends the companion's answer (if PX4 is asking) and publishes its answer counts.
+async fn answer(
+    link: &Link,
+    companion: &mut Companion,
+    stats: &CompanionStats,
+    planned: Option<SteerOutput>,
+    now: Duration,
+    time_usec: u64,
+) {
+    if let Some(a) = companion.answer_with(planned, now, time_usec) {
+        stats.planned.store(companion.planned, Ordering::Relaxed);
+        stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
+        let _ = link
+            .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
+            .await;
+    }
+}
+
 fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> bool {
     inb_header.component_id != AVOIDANCE_COMPONENT_ID && inb_header.system_id == u32::from(target.system)
 }
@@ -297,22 +315,19 @@ async fn run_lockstep(
         // The vehicle's own time: the request was sent at it and the vehicle waits for the answer.
         let now = Duration::from_micros(t.time_usec);
         companion.on_request(t, now);
-        let mut seen = view.clone();
-        seen.pose = history.at(now.saturating_sub(latency)).or(view.pose);
-        let planned = match companion.steer_input(&seen, now) {
+        // Plan on the pose `latency` old: swapped in for the question only (no copy of the whole view).
+        let current = view.pose;
+        view.pose = history.at(now.saturating_sub(latency)).or(current);
+        let input = companion.steer_input(&view, now);
+        view.pose = current;
+        let planned = match input {
             Some(input) => match worker.compute(input, now).await {
                 Some(out) => out,
                 None => return,
             },
             None => None,
         };
-        if let Some(a) = companion.answer_with(planned, now, t.time_usec) {
-            stats.planned.store(companion.planned, Ordering::Relaxed);
-            stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
-            let _ = link
-                .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
-                .await;
-        }
+        answer(&link, &mut companion, &stats, planned, now, t.time_usec).await;
     }
 }
 
@@ -340,13 +355,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
             // A plan older than PX4's own patience (0.5 s) is not used: mirror instead.
             let planned = worker.latest(now, STALE_PLAN).flatten();
             let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
-            if let Some(a) = companion.answer_with(planned, now, usec) {
-                stats.planned.store(companion.planned, Ordering::Relaxed);
-                stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
-                let _ = link
-                    .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
-                    .await;
-            }
+            answer(&link, &mut companion, &stats, planned, now, usec).await;
         }
         let wake = clock.wall_until(next_answer);
         tokio::select! {
