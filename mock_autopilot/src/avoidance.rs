@@ -17,6 +17,7 @@ pub const SEND_PERIOD: Duration = Duration::from_millis(200);
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(500);
 /// Without a companion heartbeat for this long the avoidance system counts as lost.
 pub const HEARTBEAT_TIMEOUT: Duration = Duration::from_secs(5);
+const LAND: u16 = mavlink::dialects::common::MavCmd::MAV_CMD_NAV_LAND as u16;
 
 /// Companion setpoint from point 0 (local NED).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,6 +25,8 @@ struct Answer {
     pos: Option<Ned>,
     vel: Option<Ned>,
     yaw: Option<f64>,
+    /// Descent speed of a land answer (z unset, z velocity set), m/s down.
+    descend: Option<f64>,
     at: Duration,
 }
 
@@ -57,13 +60,27 @@ impl Avoidance {
         if t.valid_points == 0 {
             return;
         }
-        let pos = finite3(t.pos_x[0], t.pos_y[0], t.pos_z[0]);
+        let mut pos = finite3(t.pos_x[0], t.pos_y[0], t.pos_z[0]);
         let vel = finite3(t.vel_x[0], t.vel_y[0], t.vel_z[0]);
+        // PX4's own kind of land setpoint (x, y held, z unset, descent speed; FlightTaskAuto.cpp
+        // _prepareLandSetpoints), as PX4-Avoidance answers while landing: the mock's descent model aims below
+        // the ground at that speed, as its navigator does for its own landing.
+        let mut descend = None;
+        if pos.is_none() && t.pos_x[0].is_finite() && t.pos_y[0].is_finite() && t.vel_z[0].is_finite() {
+            pos = Some(Ned::new(t.pos_x[0].into(), t.pos_y[0].into(), 1.0));
+            descend = Some(f64::from(t.vel_z[0]).max(0.1));
+        }
         if pos.is_none() && vel.is_none() {
             return;
         }
         let yaw = t.pos_yaw[0].is_finite().then(|| f64::from(t.pos_yaw[0]));
-        self.answer = Some(Answer { pos, vel, yaw, at: now });
+        self.answer = Some(Answer {
+            pos,
+            vel,
+            yaw,
+            descend,
+            at: now,
+        });
         self.awaiting = false;
         self.timeout_reported = false;
         self.hold = None;
@@ -101,7 +118,7 @@ impl Avoidance {
         now: Duration,
         nav_sp: Setpoint,
         pos: Ned,
-        waypoints: [Option<(Ned, u16)>; 2],
+        (sp_command, waypoints): (u16, [Option<(Ned, u16)>; 2]),
         time_usec: u64,
         texts: &mut Vec<(MavSeverity, String)>,
     ) -> (Setpoint, Option<MavMessage>) {
@@ -110,7 +127,7 @@ impl Avoidance {
         let msg = (now >= self.next_send && nav_sp != Setpoint::Idle).then(|| {
             self.next_send = now + SEND_PERIOD;
             self.awaiting = true;
-            MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(request(&nav_sp, waypoints, time_usec))
+            MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(request(&nav_sp, sp_command, waypoints, time_usec))
         });
         if self.heartbeat.is_some() && !self.is_healthy(now) && !self.lost_reported {
             self.lost_reported = true;
@@ -136,7 +153,7 @@ impl Avoidance {
                 target_ned: a.pos.unwrap_or(pos),
                 h_speed_m_s,
                 up_speed_m_s,
-                down_speed_m_s,
+                down_speed_m_s: a.descend.unwrap_or(down_speed_m_s),
                 yaw_rad: a.yaw,
             },
             (Some(a), _) if a.vel.is_some() => Setpoint::Velocity {
@@ -178,8 +195,13 @@ impl Avoidance {
     }
 }
 
+/// PX4 1.14's request: point 0 is the auto flight task's own setpoint with its type as `command[0]`
+/// (FlightTaskAuto.cpp `updateAvoidanceDesiredSetpoints(_position_setpoint, _velocity_setpoint, _type)`); while
+/// landing that is the land point's x, y with z unset and the descent speed as z velocity
+/// (`_prepareLandSetpoints`). Points 1 and 2 are the current and next mission item.
 fn request(
     nav_sp: &Setpoint,
+    sp_command: u16,
     waypoints: [Option<(Ned, u16)>; 2],
     time_usec: u64,
 ) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
@@ -202,10 +224,17 @@ fn request(
     };
     match *nav_sp {
         Setpoint::Position {
-            target_ned, yaw_rad, ..
+            target_ned,
+            yaw_rad,
+            down_speed_m_s,
+            ..
         } => {
             set_point(&mut t, 0, target_ned);
             t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
+            if sp_command == LAND {
+                t.pos_z[0] = f32::NAN;
+                t.vel_z[0] = down_speed_m_s as f32;
+            }
         }
         Setpoint::Velocity { vel_ned, .. } => {
             t.vel_x[0] = vel_ned.x as f32;
@@ -214,6 +243,7 @@ fn request(
         }
         Setpoint::Idle => {}
     }
+    t.command[0] = sp_command;
     for (i, wp) in waypoints.iter().enumerate() {
         if let Some((p, cmd)) = wp {
             set_point(&mut t, i + 1, *p);
@@ -244,7 +274,7 @@ mod tests {
     }
 
     fn answer(p: Ned) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        let mut t = request(&sp(p), [None, None], 0);
+        let mut t = request(&sp(p), u16::MAX, [None, None], 0);
         t.valid_points = 1;
         t
     }
@@ -255,7 +285,14 @@ mod tests {
         let mut texts = vec![];
         let air = Ned::new(0.0, 0.0, -10.0);
         let ms = Duration::from_millis;
-        let (s, m) = a.apply(ms(0), sp(Ned::new(50.0, 0.0, -10.0)), air, [None, None], 0, &mut texts);
+        let (s, m) = a.apply(
+            ms(0),
+            sp(Ned::new(50.0, 0.0, -10.0)),
+            air,
+            (u16::MAX, [None, None]),
+            0,
+            &mut texts,
+        );
         assert!(m.is_some(), "first request goes out at once");
         assert!(
             matches!(s, Setpoint::Position { target_ned, .. } if target_ned == air),
@@ -265,7 +302,7 @@ mod tests {
             ms(100),
             sp(Ned::new(50.0, 0.0, -10.0)),
             air,
-            [None, None],
+            (u16::MAX, [None, None]),
             0,
             &mut texts,
         );
@@ -275,7 +312,7 @@ mod tests {
             ms(200),
             sp(Ned::new(50.0, 0.0, -10.0)),
             air,
-            [None, None],
+            (u16::MAX, [None, None]),
             0,
             &mut texts,
         );
@@ -286,7 +323,7 @@ mod tests {
             ms(700),
             sp(Ned::new(50.0, 0.0, -10.0)),
             Ned::new(1.0, 0.0, -10.0),
-            [None, None],
+            (u16::MAX, [None, None]),
             0,
             &mut texts,
         );
@@ -302,7 +339,7 @@ mod tests {
         t.valid_points = 0;
         a.on_trajectory(Duration::ZERO, &t);
         assert!(a.answer.is_none());
-        let mut t = request(&Setpoint::Idle, [None, None], 0);
+        let mut t = request(&Setpoint::Idle, u16::MAX, [None, None], 0);
         t.valid_points = 1;
         a.on_trajectory(Duration::ZERO, &t);
         assert!(a.answer.is_none());

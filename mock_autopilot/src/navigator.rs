@@ -174,6 +174,18 @@ impl Navigator {
         matches!(self.phase, Phase::Descend { .. })
     }
 
+    /// What kind of setpoint PX4's auto flight task flies now, as the MAV_CMD PX4 puts in point 0's
+    /// `command` of TRAJECTORY_REPRESENTATION_WAYPOINTS (PX4 1.14 streams/TRAJECTORY_REPRESENTATION_WAYPOINTS.hpp:
+    /// takeoff, loiter and land map to their NAV commands, a plain position to `u16::MAX`).
+    pub fn setpoint_command(&self) -> u16 {
+        match (self.mode, self.phase) {
+            (_, Phase::Descend { .. }) => MavCmd::MAV_CMD_NAV_LAND as u16,
+            (_, Phase::Climb { .. }) => MavCmd::MAV_CMD_NAV_TAKEOFF as u16,
+            (FlightMode::Loiter, _) => MavCmd::MAV_CMD_NAV_LOITER_UNLIM as u16,
+            _ => u16::MAX,
+        }
+    }
+
     /// Replace the mission (keeps the mode; restarts at item 0).
     pub fn set_mission(&mut self, items: Vec<(MavCmd, NavKind)>) {
         self.jumps = vec![0; items.len()];
@@ -228,11 +240,18 @@ impl Navigator {
         let mut k = 0;
         for (i, (cmd, kind)) in self.items.iter().enumerate().skip(self.current) {
             let (pos, cmd) = match (kind, self.phase) {
-                (NavKind::Takeoff { target, .. } | NavKind::Waypoint { target, .. }, _) => (*target, *cmd as u16),
+                // PX4 names only takeoff, loiter and land items; a plain position is u16::MAX.
+                (NavKind::Takeoff { target, .. }, _) => (*target, MavCmd::MAV_CMD_NAV_TAKEOFF as u16),
+                (NavKind::Waypoint { target, .. }, _) => match cmd {
+                    MavCmd::MAV_CMD_NAV_LOITER_TIME | MavCmd::MAV_CMD_NAV_LOITER_UNLIM => {
+                        (*target, MavCmd::MAV_CMD_NAV_LOITER_UNLIM as u16)
+                    }
+                    _ => (*target, u16::MAX),
+                },
                 (NavKind::Land { xy: Some((n, e)) }, Phase::LandApproach { z }) if i == self.current => {
-                    (Ned::new(*n, *e, z), MavCmd::MAV_CMD_NAV_WAYPOINT as u16)
+                    (Ned::new(*n, *e, z), u16::MAX)
                 }
-                (NavKind::Land { xy: Some((n, e)) }, _) => (Ned::new(*n, *e, 0.0), *cmd as u16),
+                (NavKind::Land { xy: Some((n, e)) }, _) => (Ned::new(*n, *e, 0.0), MavCmd::MAV_CMD_NAV_LAND as u16),
                 _ => continue,
             };
             out[k] = Some((pos, cmd));

@@ -423,7 +423,7 @@ impl Vehicle {
                 self.now,
                 sp,
                 self.body.pos_ned,
-                self.nav.waypoints(),
+                (self.nav.setpoint_command(), self.nav.waypoints()),
                 time_usec,
                 &mut texts,
             );

@@ -1,7 +1,10 @@
 //! The obstacle-avoidance companion of PX4 <= 1.14 (COM_OBS_AVOID = 1): heartbeats as component 196 with the
 //! vehicle's system id (MAV_TYPE_ONBOARD_CONTROLLER, MAV_STATE_ACTIVE), reads PX4's desired trajectory
-//! (TRAJECTORY_REPRESENTATION_WAYPOINTS: point 0 PX4's setpoint, 1 the current waypoint, 2 the next) and
-//! answers at 10 Hz with point 0 = the planner's setpoint, or PX4's own setpoint mirrored when it cannot plan.
+//! (TRAJECTORY_REPRESENTATION_WAYPOINTS: point 0 PX4's setpoint with its type in `command[0]`, 1 the current
+//! item, 2 the next) and answers at 10 Hz with point 0 = the planner's setpoint, or PX4's own setpoint
+//! mirrored when it cannot plan. Goals, takeoff and land follow PX4-Avoidance (see [`Companion::on_request`]):
+//! while landing the answer is PX4's own kind of land setpoint (x, y held, z unset, descent velocity), which is
+//! what lets PX4's land detector see the vehicle resting with low thrust and disarm.
 #![allow(deprecated)] // TRAJECTORY_REPRESENTATION_WAYPOINTS: deprecated upstream since PX4 1.15 removed it.
 
 use std::sync::Arc;
@@ -37,9 +40,10 @@ fn point(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64;
     p.iter().all(|v| v.is_finite()).then(|| p.map(f64::from))
 }
 
-fn velocity(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
-    let v = [t.vel_x[i], t.vel_y[i], t.vel_z[i]];
-    v.iter().all(|v| v.is_finite()).then(|| v.map(f64::from))
+/// Velocity of point `i`, unset axes as NaN; `None` if no axis is set.
+fn velocity_axes(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
+    let v = [t.vel_x[i], t.vel_y[i], t.vel_z[i]].map(f64::from);
+    v.iter().any(|v| v.is_finite()).then_some(v)
 }
 
 /// A trajectory message with every point unset (NaN, command `u16::MAX`), as the interface expects for
@@ -64,12 +68,18 @@ pub fn empty_trajectory(time_usec: u64, valid_points: u8) -> TRAJECTORY_REPRESEN
     }
 }
 
-/// The companion's memory: PX4's latest request and the goals it implies.
+/// The companion's memory: PX4's latest request and the goal it implies, kept as PX4-Avoidance's
+/// `fcuInputGoalCallback` (local_planner_nodelet.cpp) keeps them.
 #[derive(Debug, Clone, Default)]
 pub struct Companion {
     request: Option<(TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, Duration)>,
+    /// The goal; its z may be NaN while landing (PX4's land setpoint leaves z unset).
     goal: Option<[f64; 3]>,
     prev_goal: Option<[f64; 3]>,
+    /// PX4's point-0 velocity latched with the goal (the descent speed while landing).
+    desired_vel: Option<[f64; 3]>,
+    /// Point 1 (the current mission item) as last seen: a new item is what makes a new goal.
+    mission_item: Option<[f64; 3]>,
     nav: Option<Nav>,
     /// Answers sent that mirrored PX4's setpoint.
     pub mirrored: u64,
@@ -77,33 +87,58 @@ pub struct Companion {
     pub planned: u64,
 }
 
+/// Position of point `i` with NaN axes kept (PX4's land setpoint has z unset); `None` if x or y is unset.
+fn point_xy(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
+    let p = [t.pos_x[i], t.pos_y[i], t.pos_z[i]].map(f64::from);
+    (p[0].is_finite() && p[1].is_finite()).then_some(p)
+}
+
 impl Companion {
     /// A request from PX4 at vehicle time `now`.
+    ///
+    /// As PX4-Avoidance: when the current item (point 1) moved by more than 1 cm, the goal becomes PX4's own
+    /// setpoint (point 0, with its velocity), and the takeoff and land flags come from point 0's command; a
+    /// current item that is a plain position (`command[1]` unset) is itself the goal.
     pub fn on_request(&mut self, t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, now: Duration) {
-        // The current waypoint is point 1; without it, PX4's own (type-adapted) setpoint is the goal.
-        let goal = if t.valid_points >= 2 { point(t, 1) } else { None }.or_else(|| point(t, 0));
-        if let Some(g) = goal
-            && self.goal.is_none_or(|old| dist(&old, &g) > 0.01)
-        {
-            self.prev_goal = self.goal.or(Some(g));
-            self.goal = Some(g);
+        let valid = |i: usize| usize::from(t.valid_points) > i;
+        let p1 = valid(1).then(|| point(t, 1)).flatten();
+        let moved = match (p1, self.mission_item) {
+            (Some(p), Some(m)) => dist(&p, &m) > 0.01,
+            (Some(_), None) => true,
+            (None, _) => false,
+        };
+        if valid(0) && (moved || self.goal.is_none()) {
+            if let Some(g) = point_xy(t, 0) {
+                self.prev_goal = self.goal.or(Some(g));
+                self.goal = Some(g);
+                self.desired_vel = velocity_axes(t, 0);
+                self.nav = Some(match t.command[0] {
+                    MAV_CMD_NAV_TAKEOFF => Nav::Takeoff,
+                    MAV_CMD_NAV_LAND => Nav::Land,
+                    _ => Nav::Mission,
+                });
+            }
         }
-        self.nav = Some(match t.command[1] {
-            MAV_CMD_NAV_TAKEOFF => Nav::Takeoff,
-            MAV_CMD_NAV_LAND => Nav::Land,
-            _ => Nav::Mission,
-        });
+        if let Some(p) = p1 {
+            self.mission_item = Some(p);
+            if t.command[1] == u16::MAX {
+                if self.goal.is_none() {
+                    self.prev_goal = Some(p);
+                }
+                self.goal = Some(p);
+                self.desired_vel = None;
+            }
+        }
         self.request = Some((t.clone(), now));
     }
 
     /// The steering question at vehicle time `now`, if PX4 is asking and the pose is known.
     pub fn steer_input(&self, view: &VehicleView, now: Duration) -> Option<SteerInput> {
-        let (req, at) = self.request.as_ref()?;
+        let (_, at) = self.request.as_ref()?;
         if now.saturating_sub(*at) > REQUEST_STALE {
             return None;
         }
         let (pose, goal) = (view.pose?, self.goal?);
-        let (nav, goal) = approach_land(self.nav.unwrap_or(Nav::Mission), goal, pose.pos_ned);
         Some(SteerInput {
             now_s: now.as_secs_f64(),
             pos_ned: pose.pos_ned,
@@ -111,8 +146,8 @@ impl Companion {
             yaw_rad: pose.yaw_rad.unwrap_or(0.0),
             goal_ned: goal,
             prev_goal_ned: self.prev_goal.unwrap_or(goal),
-            desired_vel_ned: velocity(req, 0),
-            nav,
+            desired_vel_ned: self.desired_vel,
+            nav: self.nav.unwrap_or(Nav::Mission),
             airborne: view.armed,
         })
     }
@@ -148,6 +183,8 @@ impl Companion {
                 out.pos_x[0] = sp.pos_ned[0] as f32;
                 out.pos_y[0] = sp.pos_ned[1] as f32;
                 out.pos_z[0] = sp.pos_ned[2] as f32;
+                let [vx, vy, vz] = sp.vel_ned.map(|v| v.map_or(f32::NAN, |v| v as f32));
+                (out.vel_x[0], out.vel_y[0], out.vel_z[0]) = (vx, vy, vz);
                 out.pos_yaw[0] = sp.yaw_rad.map_or(f32::NAN, |y| y as f32);
             }
             None => {
@@ -167,20 +204,6 @@ impl Companion {
             }
         }
         Some(out)
-    }
-}
-
-/// Horizontal distance to a land point beyond which the vehicle still has to fly there.
-pub const LAND_APPROACH_M: f64 = 1.0;
-
-/// PX4 flies a land item in two parts: first to the land point at the current altitude (a plain position
-/// setpoint), then down. A vehicle that reports the land item for both parts gets the same treatment here.
-pub fn approach_land(nav: Nav, goal: [f64; 3], pos_ned: [f64; 3]) -> (Nav, [f64; 3]) {
-    let far = (goal[0] - pos_ned[0]).hypot(goal[1] - pos_ned[1]) > LAND_APPROACH_M;
-    if nav == Nav::Land && far {
-        (Nav::Mission, [goal[0], goal[1], pos_ned[2]])
-    } else {
-        (nav, goal)
     }
 }
 
@@ -447,7 +470,7 @@ mod tests {
         let mut c = Companion::default();
         let t0 = Duration::ZERO;
         assert!(c.answer(&flying(), &mut Mirror, t0, 0).is_none(), "nobody asked");
-        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], 16), t0);
+        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], u16::MAX), t0);
         let a = c.answer(&flying(), &mut Mirror, t0, 7).unwrap();
         assert_eq!(
             (a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points),
@@ -485,24 +508,87 @@ mod tests {
         assert_eq!(at(3000), Some(40), "a reboot forgets the old boot's poses");
     }
 
+    /// A PX4 1.14 request: point 0 = PX4's setpoint (type `cmd0`), point 1 = current item (type `cmd1`).
+    fn px4(p0: [f32; 3], v0: [f32; 3], cmd0: u16, p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+        let mut t = request(p0, p1, cmd1);
+        (t.vel_x[0], t.vel_y[0], t.vel_z[0]) = (v0[0], v0[1], v0[2]);
+        t.command[0] = cmd0;
+        t
+    }
+
+    const UNSET: u16 = u16::MAX;
+    const NAN3: [f32; 3] = [f32::NAN; 3];
+
+    #[test]
+    fn goals_follow_px4_avoidance_through_takeoff_cruise_and_land() {
+        let mut c = Companion::default();
+        let t0 = Duration::ZERO;
+        // Takeoff item: point 0 is the takeoff target, typed TAKEOFF.
+        let tko = [0.0, 0.0, -10.0];
+        c.on_request(&px4(tko, NAN3, MAV_CMD_NAV_TAKEOFF, tko, MAV_CMD_NAV_TAKEOFF), t0);
+        assert_eq!((c.goal, c.nav), (Some([0.0, 0.0, -10.0]), Some(Nav::Takeoff)));
+        // A plain waypoint as current item: it is the goal, whatever point 0 says.
+        c.on_request(&px4([3.0, 0.0, -10.0], NAN3, UNSET, [30.0, 5.0, -10.0], UNSET), t0);
+        assert_eq!(c.goal, Some([30.0, 5.0, -10.0]));
+        assert_eq!(c.prev_goal, Some([0.0, 0.0, -10.0]));
+        assert_eq!(c.nav, Some(Nav::Mission));
+        // Move-to-land: PX4 makes the current item a plain position above the land point.
+        c.on_request(&px4([50.0, 0.0, -10.0], NAN3, UNSET, [50.0, 0.0, -10.0], UNSET), t0);
+        assert_eq!(c.goal, Some([50.0, 0.0, -10.0]));
+        // Land: point 0 is PX4's land setpoint (z unset, descent speed); the flag comes from command[0].
+        let land = px4(
+            [50.0, 0.0, f32::NAN],
+            [f32::NAN, f32::NAN, 1.5],
+            MAV_CMD_NAV_LAND,
+            [50.0, 0.0, 0.0],
+            MAV_CMD_NAV_LAND,
+        );
+        c.on_request(&land, t0);
+        assert_eq!(c.nav, Some(Nav::Land));
+        let g = c.goal.unwrap();
+        assert_eq!((g[0], g[1]), (50.0, 0.0));
+        assert!(g[2].is_nan(), "land goal has no height");
+        let v = c.desired_vel.unwrap();
+        assert!(v[0].is_nan() && v[2] == 1.5, "descent speed latched: {v:?}");
+        // The same item again with another point 0: the goal stays (PX4-Avoidance updates on a new item only).
+        let mut later = land.clone();
+        later.vel_z[0] = 0.7;
+        c.on_request(&later, t0);
+        assert_eq!(c.desired_vel.unwrap()[2], 1.5);
+    }
+
+    #[test]
+    fn landing_answer_is_a_descent_velocity_with_z_unset() {
+        let mut c = Companion::default();
+        let land = px4(
+            [50.0, 0.0, f32::NAN],
+            [f32::NAN, f32::NAN, 1.5],
+            MAV_CMD_NAV_LAND,
+            [50.0, 0.0, 0.0],
+            MAV_CMD_NAV_LAND,
+        );
+        c.on_request(&land, Duration::ZERO);
+        let sp = SteerOutput {
+            pos_ned: [50.0, 0.0, f64::NAN],
+            vel_ned: [None, None, Some(1.5)],
+            yaw_rad: None,
+        };
+        assert!(sp.is_complete());
+        let a = c.answer_with(Some(sp), Duration::ZERO, 0).unwrap();
+        assert_eq!((a.pos_x[0], a.vel_z[0]), (50.0, 1.5));
+        assert!(a.pos_z[0].is_nan() && a.vel_x[0].is_nan());
+        // Mirroring PX4's own land setpoint carries its velocity too.
+        let m = c.answer_with(None, Duration::ZERO, 0).unwrap();
+        assert!(m.pos_z[0].is_nan() && m.vel_z[0] == 1.5);
+        assert!(!SteerOutput::position([0.0, 0.0, f64::NAN], None).is_complete());
+    }
+
     #[test]
     fn plans_towards_the_current_waypoint() {
         let mut c = Companion::default();
-        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], 16), Duration::ZERO);
+        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], UNSET), Duration::ZERO);
         let a = c.answer(&flying(), &mut Straight, Duration::ZERO, 0).unwrap();
         assert_eq!((a.pos_x[0], a.pos_z[0]), (10.0, -5.0));
         assert_eq!(c.planned, 1);
-        c.on_request(&request([1.0, 2.0, -3.0], [20.0, 0.0, -5.0], 21), Duration::ZERO);
-        assert_eq!(c.nav, Some(Nav::Land));
-        assert_eq!(c.prev_goal, Some([10.0, 0.0, -5.0]));
-        // Far from the land point: fly there at altitude first; above it: land.
-        assert_eq!(
-            approach_land(Nav::Land, [20.0, 0.0, 0.0], [0.0, 0.0, -5.0]),
-            (Nav::Mission, [20.0, 0.0, -5.0])
-        );
-        assert_eq!(
-            approach_land(Nav::Land, [20.0, 0.0, 0.0], [19.5, 0.0, -5.0]),
-            (Nav::Land, [20.0, 0.0, 0.0])
-        );
     }
 }

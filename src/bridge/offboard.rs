@@ -172,15 +172,9 @@ async fn run(link: Arc<Link>, target: Target, mut pilot: Pilot, steer: Box<dyn S
             let sp = match (leg, worker.latest(now, Duration::MAX)) {
                 (Some(_), Some(Some(out))) => Some(out),
                 // Cannot plan, or no result yet: straight at the goal.
-                (Some((_, (goal, _))), _) => Some(SteerOutput {
-                    pos_ned: goal,
-                    yaw_rad: None,
-                }),
+                (Some((_, (goal, _))), _) => Some(SteerOutput::position(goal, None)),
                 // After the last goal: hold the last goal (the session lands); before a position: nothing.
-                (None, _) => pilot.last_goal().map(|g| SteerOutput {
-                    pos_ned: g,
-                    yaw_rad: None,
-                }),
+                (None, _) => pilot.last_goal().map(|g| SteerOutput::position(g, None)),
             };
             if let Some(sp) = sp {
                 let ms = view.pose.map_or(0, |p| p.time_boot_ms);
@@ -236,14 +230,7 @@ mod tests {
             system: 1,
             component: 1,
         };
-        let with_yaw = setpoint_msg(
-            t,
-            5,
-            &SteerOutput {
-                pos_ned: [1.0, 2.0, -3.0],
-                yaw_rad: Some(0.3),
-            },
-        );
+        let with_yaw = setpoint_msg(t, 5, &SteerOutput::position([1.0, 2.0, -3.0], Some(0.3)));
         let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = with_yaw else {
             panic!()
         };
@@ -256,14 +243,7 @@ mod tests {
                 .contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_X_IGNORE)
         );
         assert_eq!((m.x, m.z, m.target_system), (1.0, -3.0, 1));
-        let no_yaw = setpoint_msg(
-            t,
-            5,
-            &SteerOutput {
-                pos_ned: [0.0; 3],
-                yaw_rad: None,
-            },
-        );
+        let no_yaw = setpoint_msg(t, 5, &SteerOutput::position([0.0; 3], None));
         let MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) = no_yaw else {
             panic!()
         };

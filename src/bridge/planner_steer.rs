@@ -126,13 +126,15 @@ impl Steer for PlannerSteer {
             input.now_s,
         );
         let sp = enu_to_ned(&out.position_enu);
-        if !sp.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        Some(SteerOutput {
+        // ENU (east, north, up) -> NED (north, east, down), per axis, unset stays unset.
+        let [ve, vn, vu] = out.velocity_enu;
+        let vel = [vn, ve, vu.map(|v| -v)].map(|v| v.map(f64::from).filter(|v| v.is_finite()));
+        let out = SteerOutput {
             pos_ned: [f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)],
+            vel_ned: vel,
             yaw_rad: Some(yaw_enu_to_ned_rad(f64::from(out.yaw_enu_rad))),
-        })
+        };
+        out.is_complete().then_some(out)
     }
 }
 
@@ -178,5 +180,25 @@ mod tests {
         let deflected = (sp.pos_ned[1] - free_sp.pos_ned[1]).abs() > 0.5;
         let braking = sp.pos_ned[0] < free_sp.pos_ned[0] - 0.5;
         assert!(deflected || braking, "blocked {sp:?} vs free {free_sp:?}");
+    }
+
+    #[test]
+    fn landing_descends_by_velocity_above_the_hold_point() {
+        let mut steer = PlannerSteer::new(&[], Camera::hfs()).unwrap();
+        let mut i = input(0.0, [50.0, 0.2, -8.0], [50.0, 0.0, f64::NAN]);
+        i.nav = Nav::Land;
+        i.desired_vel_ned = Some([f64::NAN, f64::NAN, 1.5]);
+        let mut out = None;
+        for k in 0..5 {
+            i.now_s = f64::from(k) * 0.1;
+            out = steer.steer(&i);
+        }
+        let sp = out.expect("a landing setpoint");
+        assert!(sp.pos_ned[2].is_nan(), "z left to the velocity: {sp:?}");
+        assert_eq!(sp.vel_ned[2], Some(1.5));
+        assert!(
+            (sp.pos_ned[0] - 50.0).abs() < 1e-3 && (sp.pos_ned[1] - 0.2).abs() < 1e-3,
+            "holds x, y where the descent began"
+        );
     }
 }

@@ -28,11 +28,11 @@ pub struct SteerInput {
     pub vel_ned: [f64; 3],
     /// Vehicle yaw.
     pub yaw_rad: f64,
-    /// Where to go (the current waypoint).
+    /// Where to go (the current waypoint); z is NaN while landing (PX4 leaves the land setpoint's z unset).
     pub goal_ned: [f64; 3],
     /// Where the leg started (the previous waypoint).
     pub prev_goal_ned: [f64; 3],
-    /// PX4's desired velocity for this setpoint, if it sent one (trajectory point 0).
+    /// PX4's desired velocity for this setpoint, if it sent one (trajectory point 0); unset axes are NaN.
     pub desired_vel_ned: Option<[f64; 3]>,
     /// Navigation state.
     pub nav: Nav,
@@ -40,13 +40,34 @@ pub struct SteerInput {
     pub airborne: bool,
 }
 
-/// A setpoint: local NED position and optional yaw (radians clockwise from North).
+/// A setpoint: local NED position, optional velocity and optional yaw (radians clockwise from North).
+///
+/// While landing, PX4-Avoidance answers as PX4's own land setpoint does: x, y held, z unset (NaN) and a
+/// descent velocity in `vel_ned[2]`, so PX4 descends into the ground and its land detector can fire.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SteerOutput {
-    /// Position setpoint.
+    /// Position setpoint; an axis may be NaN (unset) only when `vel_ned` sets it.
     pub pos_ned: [f64; 3],
+    /// Velocity setpoint per axis, m/s; `None` = unset.
+    pub vel_ned: [Option<f64>; 3],
     /// Yaw setpoint.
     pub yaw_rad: Option<f64>,
+}
+
+impl SteerOutput {
+    /// A plain position setpoint.
+    pub fn position(pos_ned: [f64; 3], yaw_rad: Option<f64>) -> Self {
+        Self {
+            pos_ned,
+            vel_ned: [None; 3],
+            yaw_rad,
+        }
+    }
+
+    /// Every axis is set by a finite position or a finite velocity.
+    pub fn is_complete(&self) -> bool {
+        (0..3).all(|i| self.pos_ned[i].is_finite() || self.vel_ned[i].is_some_and(f64::is_finite))
+    }
 }
 
 /// Decides the next setpoint; `None` means "cannot plan" (the companion then mirrors PX4's own setpoint).
@@ -66,10 +87,7 @@ impl Steer for Straight {
             input.goal_ned[1] - input.pos_ned[1],
         ];
         let yaw = (d[0].hypot(d[1]) > 0.5).then(|| d[1].atan2(d[0]));
-        Some(SteerOutput {
-            pos_ned: input.goal_ned,
-            yaw_rad: yaw,
-        })
+        Some(SteerOutput::position(input.goal_ned, yaw))
     }
 }
 

@@ -85,12 +85,12 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     };
     let r = fly_bounded(&test, &o, CancelToken::new()).await;
     let state = m.state();
-    assert!(!state.armed, "{mode:?} mission {n}: still armed");
-    m.shutdown().await.expect("mock stops");
     eprintln!(
         "{mode:?} mission {n}: {}",
         serde_json::to_string(&r).unwrap_or_default()
     );
+    assert!(!state.armed, "{mode:?} mission {n}: still armed");
+    m.shutdown().await.expect("mock stops");
     assert_flown(&r, &format!("{mode:?} mission {n}"));
     // It flew the whole mission: it ended at the land point.
     let land = test.mission.flight_path().last().copied().expect("land item");
