@@ -107,17 +107,18 @@ impl Companion {
             (Some(_), None) => true,
             (None, _) => false,
         };
-        if valid(0) && (moved || self.goal.is_none()) {
-            if let Some(g) = point_xy(t, 0) {
-                self.prev_goal = self.goal.or(Some(g));
-                self.goal = Some(g);
-                self.desired_vel = velocity_axes(t, 0);
-                self.nav = Some(match t.command[0] {
-                    MAV_CMD_NAV_TAKEOFF => Nav::Takeoff,
-                    MAV_CMD_NAV_LAND => Nav::Land,
-                    _ => Nav::Mission,
-                });
-            }
+        if valid(0)
+            && (moved || self.goal.is_none())
+            && let Some(g) = point_xy(t, 0)
+        {
+            self.prev_goal = self.goal.or(Some(g));
+            self.goal = Some(g);
+            self.desired_vel = velocity_axes(t, 0);
+            self.nav = Some(match t.command[0] {
+                MAV_CMD_NAV_TAKEOFF => Nav::Takeoff,
+                MAV_CMD_NAV_LAND => Nav::Land,
+                _ => Nav::Mission,
+            });
         }
         if let Some(p) = p1 {
             self.mission_item = Some(p);
