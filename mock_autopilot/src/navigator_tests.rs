@@ -142,9 +142,10 @@ fn land_approach_is_reported_as_a_waypoint_at_the_approach_altitude() {
     // Approaching: a plain waypoint above the land point at the altitude the approach began at (PX4's
     // "move to land"), however the vehicle's height wanders meanwhile.
     let (pos, cmd) = nav.waypoints()[0].unwrap();
-    assert_eq!(cmd, MavCmd::MAV_CMD_NAV_WAYPOINT as u16);
+    assert_eq!(cmd, u16::MAX, "PX4 leaves a plain position's command unset");
     assert!((pos - Ned::new(0.0, 40.0, -10.0)).norm() < 1e-9, "{pos:?}");
     body.pos_ned.z = -12.0;
     run(&mut nav, &mut body, &p, 0.5, &mut ev);
     assert!((nav.waypoints()[0].unwrap().0.z + 10.0).abs() < 1e-9);
+    assert_eq!(nav.setpoint_command(), u16::MAX);
 }
