@@ -236,6 +236,20 @@ impl Navigator {
     /// waypoint above the land point at the altitude where the approach began ("move to land"), so that is what
     /// the companion sees: a fixed goal altitude, not the ground.
     pub fn waypoints(&self) -> [Option<(Ned, u16)>; 2] {
+        // Outside a mission PX4's triplet is the mode's own target (navigator land.cpp, takeoff.cpp, loiter.cpp).
+        match (self.mode, self.phase) {
+            (FlightMode::Land, Phase::Descend { xy }) => {
+                return [Some((Ned::new(xy.0, xy.1, 0.0), MavCmd::MAV_CMD_NAV_LAND as u16)), None];
+            }
+            (FlightMode::Takeoff, Phase::Climb { xy, z }) => {
+                return [
+                    Some((Ned::new(xy.0, xy.1, z), MavCmd::MAV_CMD_NAV_TAKEOFF as u16)),
+                    None,
+                ];
+            }
+            (FlightMode::Loiter, _) => return [Some((self.hold, MavCmd::MAV_CMD_NAV_LOITER_UNLIM as u16)), None],
+            _ => {}
+        }
         let mut out = [None, None];
         let mut k = 0;
         for (i, (cmd, kind)) in self.items.iter().enumerate().skip(self.current) {

@@ -163,7 +163,9 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
         }
         if flight_time(s, &clock, start, now, start_boot_ms) > timeout {
             let why = format!("still flying after {} s", s.opts.timeout_s);
-            return end(s, Stop::new(Status::Timeout, why)).await;
+            let stop = end(s, Stop::new(Status::Timeout, why)).await;
+            see_it_land(s, rec).await;
+            return stop;
         }
         if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
             landing_sent = true;
@@ -278,6 +280,44 @@ async fn end(s: &mut Session<'_>, stop: Stop) -> Stop {
         }
     }
     stop
+}
+
+/// How long (vehicle time) to follow a vehicle landing after a timeout: from the arena's 25 m ceiling at
+/// PX4's slowest default descent (0.7 m/s) with margin.
+const SETTLE_AFTER_LAND: Duration = Duration::from_secs(60);
+
+/// After LAND at a timeout: keep recording until the vehicle has landed and disarmed (bounded), so the next
+/// flight on this vehicle starts on the ground and the report says whether the LAND took effect.
+async fn see_it_land(s: &mut Session<'_>, rec: &mut Recorder) {
+    let clock = s.link.clock();
+    let start = clock.now();
+    let boot0 = s.view.pose.map(|p| p.time_boot_ms);
+    while !(s.view.landed_after_flight() || !s.view.armed) {
+        let elapsed = flight_time(s, &clock, start, clock.now(), boot0);
+        let wait = clock
+            .wall(SETTLE_AFTER_LAND.saturating_sub(elapsed))
+            .min(clock.wall(TICK));
+        if elapsed >= SETTLE_AFTER_LAND {
+            s.warnings
+                .push(format!("still armed {} s after LAND", SETTLE_AFTER_LAND.as_secs()));
+            return;
+        }
+        match tokio::time::timeout(wait, s.rx.recv()).await {
+            Ok(Ok(inb)) => {
+                s.view.update(&inb.msg, clock.now());
+                if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (&inb.msg, s.view.pose) {
+                    rec.push(&p);
+                }
+            }
+            Ok(Err(broadcast::error::RecvError::Lagged(_))) => {}
+            Err(_) => {} // a tick without news: the deadline is checked above
+            Ok(Err(broadcast::error::RecvError::Closed)) => {
+                s.warnings.push("lost the vehicle while it landed after LAND".into());
+                return;
+            }
+        }
+    }
+    s.warnings.push("landed and disarmed after LAND".into());
 }
 
 fn needs_landing(view: &VehicleView, status: Status) -> bool {

@@ -430,3 +430,32 @@ fn fly_cli_checks_arguments_and_writes_the_world() {
     let (code, _, err) = super::prgenuav(&["fly", "missions/mission2.yaml", "--world-only"]);
     assert_eq!(code, 2, "--world-only needs --world: {err}");
 }
+
+/// A timeout in avoidance mode ends with LAND, and the companion lands the vehicle as PX4-Avoidance would
+/// (PX4 1.14 kept bouncing at 0-0.7 m with a companion that answered landing with a position): the bridge
+/// follows it until it has landed and disarmed, recording all the way.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_timeout_lands_and_disarms_the_vehicle() {
+    let test = generated(2);
+    let (m, url) = mock(LOCKSTEP_SPEED, |b| {
+        b.lockstep(Some(mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT))
+    })
+    .await;
+    let o = FlyOptions {
+        lockstep: Some(Duration::ZERO),
+        timeout_s: 25.0,
+        ..opts(&url, FlyMode::Avoidance, LOCKSTEP_SPEED)
+    };
+    let r = fly_bounded(&test, &o, CancelToken::new()).await;
+    let state = m.state();
+    m.shutdown().await.expect("mock stops");
+    assert_eq!(r.status, Status::Timeout, "{:?}", r.reason);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("landed and disarmed after LAND")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(!state.armed, "disarmed");
+    let end = r.trajectory.samples.last().copied().expect("samples");
+    assert!(end.z < 0.3, "recorded down to the ground: {end:?}");
+}
