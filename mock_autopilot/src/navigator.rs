@@ -236,7 +236,7 @@ impl Navigator {
     /// waypoint above the land point at the altitude where the approach began ("move to land"), so that is what
     /// the companion sees: a fixed goal altitude, not the ground.
     pub fn waypoints(&self) -> [Option<(Ned, u16)>; 2] {
-        // Outside a mission PX4's triplet is the mode's own target (navigator land.cpp, takeoff.cpp, loiter.cpp).
+        // Outside a mission PX4's triplet is the mode's own target (navigator land.cpp, takeoff.cpp).
         match (self.mode, self.phase) {
             (FlightMode::Land, Phase::Descend { xy }) => {
                 return [Some((Ned::new(xy.0, xy.1, 0.0), MavCmd::MAV_CMD_NAV_LAND as u16)), None];
@@ -247,7 +247,6 @@ impl Navigator {
                     None,
                 ];
             }
-            (FlightMode::Loiter, _) => return [Some((self.hold, MavCmd::MAV_CMD_NAV_LOITER_UNLIM as u16)), None],
             _ => {}
         }
         let mut out = [None, None];

@@ -292,7 +292,7 @@ async fn see_it_land(s: &mut Session<'_>, rec: &mut Recorder) {
     let clock = s.link.clock();
     let start = clock.now();
     let boot0 = s.view.pose.map(|p| p.time_boot_ms);
-    while !(s.view.landed_after_flight() || !s.view.armed) {
+    while s.view.armed && !s.view.landed_after_flight() {
         let elapsed = flight_time(s, &clock, start, clock.now(), boot0);
         let wait = clock
             .wall(SETTLE_AFTER_LAND.saturating_sub(elapsed))
