@@ -51,11 +51,12 @@ fn shifted(p: GeoPoint, north_m: f64, east_m: f64) -> GeoPoint {
     GeoPoint { lat_deg, lon_deg, ..p }
 }
 
-/// Flies `test` while recording the mock's true positions, converted into the frame about `test.home` with the
+/// Flies `test` while recording the mock's true positions, converted into the frame about `frame_home` with the
 /// mock's own projection (not the bridge's code). Returns the report, the true path and whether it ever armed.
 async fn fly_with_truth(
     m: &MockHandle,
     boot: GeoPoint,
+    frame_home: GeoPoint,
     test: &TestCase,
     o: &FlyOptions,
 ) -> (FlightReport, Trajectory, bool) {
@@ -67,7 +68,7 @@ async fn fly_with_truth(
     };
     let (vehicle, home) = (
         MockProjection::new(mock_geo(boot)),
-        MockProjection::new(mock_geo(test.home)),
+        MockProjection::new(mock_geo(frame_home)),
     );
     let seen: Arc<Mutex<(Vec<Sample>, bool)>> = Arc::default();
     let sink = Arc::clone(&seen);
@@ -126,7 +127,7 @@ async fn second_flight_on_one_instance_is_judged_where_it_flew() {
     let (m, url) = mock_at(SIM_HOME).await;
     let plain = case(2);
     // Flight 1: mission 2 goes East and lands 12 m South of home.
-    let (r1, _, _) = fly_with_truth(&m, SIM_HOME, &plain, &opts(&url)).await;
+    let (r1, _, _) = fly_with_truth(&m, SIM_HOME, SIM_HOME, &plain, &opts(&url)).await;
     assert_eq!(r1.status, Status::Landed, "{:?}", r1.reason);
     let landed = m.state().pos_ned;
     assert!(landed.x < -8.0, "mission 2 lands South of home: {landed:?}");
@@ -135,7 +136,7 @@ async fn second_flight_on_one_instance_is_judged_where_it_flew() {
     let wp = plain.mission.flight_path()[1];
     let mid = ((landed.x + wp.north_m) / 2.0, (landed.y + wp.east_m) / 2.0);
     let test = plain.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, mid.0, mid.1, 0.0)]);
-    let (r2, truth, _) = fly_with_truth(&m, SIM_HOME, &test, &opts(&url)).await;
+    let (r2, truth, _) = fly_with_truth(&m, SIM_HOME, SIM_HOME, &test, &opts(&url)).await;
     m.shutdown().await.expect("mock stops");
     let first = r2.trajectory.samples.first().copied().expect("samples");
     assert!(
@@ -167,7 +168,7 @@ async fn ekf_origin_metres_from_the_test_home_is_no_false_collision() {
     let (wp, land) = (path[1], path[2]);
     let mid = ((wp.north_m + land.north_m) / 2.0 - 6.0, (wp.east_m + land.east_m) / 2.0);
     let test = plain.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, mid.0, mid.1, 0.0)]);
-    let (r, truth, _) = fly_with_truth(&m, boot, &test, &opts(&url)).await;
+    let (r, truth, _) = fly_with_truth(&m, boot, SIM_HOME, &test, &opts(&url)).await;
     m.shutdown().await.expect("mock stops");
     let offset = r.frame_origin_offset_m.expect("frame measured");
     assert!(
@@ -185,7 +186,7 @@ async fn a_vehicle_far_away_is_refused_unless_the_test_is_anchored_at_its_home()
     let boot = shifted(SIM_HOME, 2200.0, 0.0);
     let (m, url) = mock_at(boot).await;
     let test = super::case(2).with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, 2.0, 27.0, 0.0)]);
-    let (r, _, armed) = fly_with_truth(&m, boot, &test, &opts(&url)).await;
+    let (r, _, armed) = fly_with_truth(&m, boot, SIM_HOME, &test, &opts(&url)).await;
     assert_eq!(r.status, Status::Rejected);
     let reason = r.reason.clone().unwrap_or_default();
     assert!(
@@ -204,11 +205,11 @@ async fn a_vehicle_far_away_is_refused_unless_the_test_is_anchored_at_its_home()
         ..opts(&url)
     };
     let anchored = test.anchored_at(boot);
-    let (r, truth, _) = fly_with_truth(&m, boot, &anchored, &opts(&url)).await;
+    let (r, truth, _) = fly_with_truth(&m, boot, boot, &anchored, &opts(&url)).await;
     // (the pre-anchored test flown plainly is the reference for what anchoring must do)
     assert_judged_like_truth(&r, &anchored.obstacles, &truth, "pre-anchored reference");
     let reference = r.min_distance_raw;
-    let (r, truth, _) = fly_with_truth(&m, boot, &test, &o).await;
+    let (r, truth, _) = fly_with_truth(&m, boot, boot, &test, &o).await;
     m.shutdown().await.expect("mock stops");
     let p = r.placement.clone().expect("placement reported");
     assert!(p.anchored && !p.too_far, "{p:?}");
