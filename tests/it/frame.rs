@@ -19,9 +19,13 @@ const SPEED: f64 = 20.0;
 const WALL_LIMIT: Duration = Duration::from_secs(60);
 
 async fn mock_at(boot: GeoPoint) -> (MockHandle, String) {
+    mock_at_speed(boot, SPEED).await
+}
+
+async fn mock_at_speed(boot: GeoPoint, speed: f64) -> (MockHandle, String) {
     let m = MockAutopilot::builder()
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse().expect("addr")))
-        .speed_factor(SpeedFactor::Times(SPEED))
+        .speed_factor(SpeedFactor::Times(speed))
         .home(MockGeo {
             lat_deg: boot.lat_deg,
             lon_deg: boot.lon_deg,
@@ -220,4 +224,90 @@ async fn a_vehicle_far_away_is_refused_unless_the_test_is_anchored_at_its_home()
     let c = p.obstacle_centres[0];
     let (n, e) = LocalProjection::new(boot).project(c.lat_deg, c.lon_deg);
     assert!((n - 2.0).abs() < 0.01 && (e - 27.0).abs() < 0.01, "{n} {e}");
+}
+
+/// `case(2)` with `obstacles`, saved where the CLI can read it (the mission path resolves from the repo root).
+fn saved_test(dir: &std::path::Path, obstacles: Vec<Obstacle>) -> String {
+    let path = dir.join("test.yaml");
+    case(2)
+        .with_obstacles(obstacles)
+        .save(&path, prgenuav::model::Spelling::Old)
+        .expect("test written");
+    path.display().to_string()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn fly_cli_exits_2_for_a_far_vehicle_and_prints_the_boxes_when_anchored() {
+    let boot = shifted(SIM_HOME, 2200.0, 0.0);
+    // A separate process under a loaded CI machine: a slower clock keeps wall-time hiccups short in vehicle time.
+    let (m, url) = mock_at_speed(boot, 10.0).await;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let test = saved_test(dir.path(), vec![Obstacle::new(2.0, 2.0, 20.0, 2.0, 27.0, 0.0)]);
+    let run = |extra: &'static [&'static str]| {
+        let (test, url) = (test.clone(), url.clone());
+        tokio::task::spawn_blocking(move || {
+            let mut args = vec![
+                "fly",
+                &test,
+                "--connect",
+                &url,
+                "--mode",
+                "mission",
+                "--time-scale",
+                "10",
+            ];
+            args.extend(["--no-predict", "--json", "--no-fence"]);
+            args.extend(extra);
+            super::prgenuav(&args)
+        })
+    };
+    let (code, out, _) = tokio::time::timeout(WALL_LIMIT, run(&[]))
+        .await
+        .expect("bounded")
+        .expect("ran");
+    assert_eq!(code, 2, "{out}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(json["status"], "rejected");
+    assert!(
+        json["reason"]
+            .as_str()
+            .unwrap_or("")
+            .contains("--anchor-at-vehicle-home"),
+        "{json}"
+    );
+    let (code, out, err) = tokio::time::timeout(WALL_LIMIT, run(&["--anchor-at-vehicle-home", "--judge", "2025"]))
+        .await
+        .expect("bounded")
+        .expect("ran");
+    m.shutdown().await.expect("mock stops");
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(err.contains("box 0 centre now at"), "{err}");
+    let json: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(
+        (&json["judge"], &json["frame"]),
+        (&"2025".into(), &"test_home_ned".into())
+    );
+    assert_eq!(json["frame_source"], "gps_global_origin");
+    assert_eq!(json["placement"]["anchored"], true);
+}
+
+#[test]
+fn old_rule_tests_are_simulated_with_a_warning_unless_strict() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // A 10 m high box: older editions allowed it, the current rules want it taller than the flight altitude.
+    let test = saved_test(dir.path(), vec![Obstacle::new(2.0, 2.0, 10.0, -6.0, 27.0, 0.0)]);
+    let (code, out, err) = super::prgenuav(&["simulate", &test, "--json", "--judge", "2025"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning") && err.contains("size.h") && err.contains("--strict"),
+        "{err}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(json["judge"], "2025");
+    let (code, _, err) = super::prgenuav(&["simulate", &test, "--strict"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("violation"), "{err}");
+    let (code, _, err) = super::prgenuav(&["simulate", &test, "--judge", "2024"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("2025 or 2026"), "{err}");
 }
