@@ -57,8 +57,12 @@ fn main() -> anyhow::Result<()> {
             let gate = gate.clone();
             handles.push(tokio::spawn(async move {
                 let _permit = gate.acquire_owned().await.expect("semaphore");
-                let lfs_px4 = predict(&test, px4).ok().and_then(|p| p.min_distance);
-                let lfs_paper = predict(&test, paper).ok().and_then(|p| p.min_distance);
+                let lfs_px4 = predict(&test, px4, Default::default())
+                    .ok()
+                    .and_then(|p| p.min_distance);
+                let lfs_paper = predict(&test, paper, Default::default())
+                    .ok()
+                    .and_then(|p| p.min_distance);
                 let mock = MockAutopilot::builder()
                     .link(LinkSpec::UdpIn("127.0.0.1:0".parse().expect("addr")))
                     .speed_factor(SpeedFactor::Times(speed))

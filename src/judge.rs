@@ -1,7 +1,11 @@
 //! How the competition judges a flight (competition.md section 4): minimum distance to the obstacles,
-//! points per run and the test score.
+//! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
+
+pub mod edition;
 
 use serde::Serialize;
+
+pub use edition::{Judge, VEHICLE_WIDTH_M};
 
 use crate::geometry::{Footprint, P2};
 use crate::model::{AERIALIST_BIN_S, Obstacle, Sample, Trajectory};
@@ -11,13 +15,13 @@ use crate::model::{AERIALIST_BIN_S, Obstacle, Sample, Trajectory};
 pub struct ObstacleDistance {
     /// Index of the obstacle in the test.
     pub index: usize,
-    /// Aerialist's value: origin-aligned, 0.5 s bins, 2-D with the height-gap rule.
+    /// The judged value: 0.5 s bins, the edition's definition.
     pub distance: f64,
-    /// The same rule on the origin-aligned path without binning.
+    /// The same rule on the path without binning.
     pub distance_raw: f64,
 }
 
-/// Where the un-binned path came closest to an obstacle (origin-aligned frame, `x` North, `y` East, `z` up).
+/// Where the un-binned path came closest to an obstacle (the judged frame, `x` North, `y` East, `z` up).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ClosestApproach {
     /// Seconds from the first sample.
@@ -30,13 +34,17 @@ pub struct ClosestApproach {
     pub z: f64,
     /// The obstacle's index.
     pub obstacle: usize,
-    /// The distance there, metres.
+    /// The distance there, metres (the edition's definition).
     pub distance: f64,
 }
 
 /// The verdict on one flight.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlightDistance {
+    /// The edition whose definition gave these numbers.
+    pub judge: Judge,
+    /// That definition in one line.
+    pub judge_definition: &'static str,
     /// The competition's minimum distance, metres.
     pub min_distance: f64,
     /// The continuous minimum distance on the un-binned path, metres.
@@ -45,54 +53,62 @@ pub struct FlightDistance {
     pub per_obstacle: Vec<ObstacleDistance>,
     /// Closest approach on the un-binned path.
     pub closest: ClosestApproach,
-    /// Whether the un-binned path entered a box.
+    /// Whether the un-binned bare path entered a box (a physical collision, whatever the edition).
     pub collision: bool,
 }
 
-/// Judges a trajectory against obstacles, as Aerialist does; `None` without samples or obstacles.
+/// Judges a recorded log against obstacles, as Aerialist does; `None` without samples or obstacles.
 ///
 /// The trajectory is first origin-aligned (its first sample becomes the origin, as Aerialist's
-/// `ALLIGN_ORIGIN`); the competition's value then uses 0.5 s bin averages, the raw value every sample.
-pub fn judge_flight(trajectory: &Trajectory, obstacles: &[Obstacle]) -> Option<FlightDistance> {
+/// `ALLIGN_ORIGIN`, right for logs that start at home), then judged by [`judge_in_frame`].
+pub fn judge_flight(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Judge) -> Option<FlightDistance> {
+    judge_in_frame(&trajectory.origin_aligned(), obstacles, judge)
+}
+
+/// Judges a trajectory that is already in the obstacles' frame (no alignment); `None` without samples or
+/// obstacles. The competition's value uses 0.5 s bin averages, the raw value every sample.
+pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Judge) -> Option<FlightDistance> {
     if trajectory.samples.is_empty() || obstacles.is_empty() {
         return None;
     }
-    let raw = trajectory.origin_aligned();
+    let raw = trajectory;
     let binned = raw.binned(AERIALIST_BIN_S);
     let per_obstacle: Vec<ObstacleDistance> = obstacles
         .iter()
         .enumerate()
         .map(|(index, o)| ObstacleDistance {
             index,
-            distance: obstacle_distance(o, &binned.samples),
-            distance_raw: obstacle_distance(o, &raw.samples),
+            distance: judged_distance(judge, o, &binned.samples),
+            distance_raw: judged_distance(judge, o, &raw.samples),
         })
         .collect();
     let min = |f: fn(&ObstacleDistance) -> f64| per_obstacle.iter().map(f).fold(f64::INFINITY, f64::min);
-    let min_distance_raw = min(|d| d.distance_raw);
-    let closest = closest_approach(obstacles, &raw.samples);
+    let closest = closest_approach(judge, obstacles, &raw.samples);
+    // A collision is the bare path inside a box, whatever the edition's buffer says.
+    let collision = obstacles.iter().any(|o| obstacle_distance(o, &raw.samples) == 0.0);
     Some(FlightDistance {
+        judge,
+        judge_definition: judge.description(),
         min_distance: min(|d| d.distance),
-        min_distance_raw,
+        min_distance_raw: min(|d| d.distance_raw),
         per_obstacle,
         closest,
-        collision: min_distance_raw == 0.0,
+        collision,
     })
 }
 
-/// Aerialist's `Obstacle.distance`: 2-D distance from the footprint to the path as a polyline; when that is 0
-/// and the path over the footprint is higher than the box everywhere, the height gap instead.
-pub fn obstacle_distance(obstacle: &Obstacle, path: &[Sample]) -> f64 {
+/// The distance from `obstacle` to `path` by `judge`'s definition.
+pub fn judged_distance(judge: Judge, obstacle: &Obstacle, path: &[Sample]) -> f64 {
     let f = obstacle.footprint();
     let pts: Vec<P2> = path.iter().map(|s| P2::new(s.x, s.y)).collect();
     let d = f.distance_to_polyline(&pts).unwrap_or(f64::INFINITY);
-    if d > 0.0 {
-        return d;
-    }
-    match lowest_over(&f, path) {
-        Some(z) if z > obstacle.size.h => z - obstacle.size.h,
-        _ => 0.0,
-    }
+    judge.from_bare(d, obstacle.size.h, || lowest_over(&f, path))
+}
+
+/// Aerialist's `Obstacle.distance` (the 2025 edition): 2-D distance from the footprint to the path as a
+/// polyline; when that is 0 and the path over the footprint is higher than the box everywhere, the height gap.
+pub fn obstacle_distance(obstacle: &Obstacle, path: &[Sample]) -> f64 {
+    judged_distance(Judge::E2025, obstacle, path)
 }
 
 /// Lowest height of the path where it lies over the footprint (heights interpolated along segments).
@@ -115,7 +131,7 @@ fn lowest_over(f: &Footprint, path: &[Sample]) -> Option<f64> {
     low
 }
 
-fn closest_approach(obstacles: &[Obstacle], path: &[Sample]) -> ClosestApproach {
+fn closest_approach(judge: Judge, obstacles: &[Obstacle], path: &[Sample]) -> ClosestApproach {
     let mut best = ClosestApproach {
         t_s: 0.0,
         x: 0.0,
@@ -151,10 +167,7 @@ fn closest_approach(obstacles: &[Obstacle], path: &[Sample]) -> ClosestApproach 
                 }
             }
             let s = lerp((lo + hi) / 2.0);
-            let mut d = at(&s);
-            if d == 0.0 && s.z > o.size.h {
-                d = s.z - o.size.h;
-            }
+            let d = judge.from_bare(at(&s), o.size.h, || Some(s.z));
             if d < best.distance {
                 best = ClosestApproach {
                     t_s: s.t_s,
@@ -233,7 +246,7 @@ mod tests {
     fn straight_pass_beside_a_box() {
         let o = Obstacle::new(4.0, 2.0, 20.0, 10.0, 3.0, 0.0);
         let t = path(&[(0.0, 0.0, 0.0, 0.0), (5.0, 20.0, 0.0, 10.0)]);
-        let j = judge_flight(&t, &[o]).unwrap();
+        let j = judge_flight(&t, &[o], Judge::E2025).unwrap();
         assert!((j.min_distance - 2.0).abs() < 1e-12);
         assert!((j.min_distance_raw - 2.0).abs() < 1e-12);
         assert!(!j.collision);
@@ -249,10 +262,49 @@ mod tests {
     fn passing_over_a_low_box_counts_the_height_gap() {
         let o = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
         let t = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 8.0), (2.0, 20.0, 0.0, 8.0)]);
-        let j = judge_flight(&t, &[o]).unwrap();
+        let j = judge_flight(&t, &[o], Judge::E2025).unwrap();
         assert!((j.min_distance_raw - 3.0).abs() < 1e-12);
         let crash = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 4.0), (2.0, 20.0, 0.0, 4.0)]);
-        assert!(judge_flight(&crash, &[o]).unwrap().collision);
+        assert!(judge_flight(&crash, &[o], Judge::E2025).unwrap().collision);
+    }
+
+    #[test]
+    fn the_2026_edition_measures_from_the_buffered_path_horizontally() {
+        let o = Obstacle::new(4.0, 2.0, 20.0, 10.0, 3.0, 0.0);
+        let beside = path(&[(0.0, 0.0, 0.0, 0.0), (5.0, 20.0, 0.0, 10.0)]);
+        let j = judge_flight(&beside, &[o], Judge::E2026).unwrap();
+        assert!((j.min_distance - 1.875).abs() < 1e-12 && (j.min_distance_raw - 1.875).abs() < 1e-12);
+        assert!((j.closest.distance - 1.875).abs() < 1e-9);
+        assert_eq!(
+            (j.judge, j.judge_definition),
+            (Judge::E2026, Judge::E2026.description())
+        );
+        // Over a low box: 2025 counts the 3 m height gap, 2026 only the horizontal 0 (but no collision).
+        let low = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
+        let over = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 8.0), (2.0, 20.0, 0.0, 8.0)]);
+        assert!((judge_flight(&over, &[low], Judge::E2025).unwrap().min_distance_raw - 3.0).abs() < 1e-12);
+        let j = judge_flight(&over, &[low], Judge::E2026).unwrap();
+        assert_eq!(j.min_distance_raw, 0.0);
+        assert!(!j.collision, "flying over a box is no collision");
+        let json = serde_json::to_value(&j).unwrap();
+        assert_eq!(json["judge"], "2026");
+        assert!(json["judge_definition"].as_str().unwrap().contains("0.125"));
+    }
+
+    #[test]
+    fn judging_in_frame_does_not_align_the_origin() {
+        let o = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
+        // Starts 2 m East of the test's home: in the frame it passes 1 m beside the box; aligned to its
+        // first sample it would run through it.
+        let t = path(&[(0.0, 0.0, 2.0, 0.0), (5.0, 20.0, 2.0, 0.0)]);
+        let framed = judge_in_frame(&t, &[o], Judge::E2025).unwrap();
+        let aligned = judge_flight(&t, &[o], Judge::E2025).unwrap();
+        assert!(
+            (framed.min_distance_raw - 1.0).abs() < 1e-12,
+            "{}",
+            framed.min_distance_raw
+        );
+        assert!(!framed.collision && aligned.collision);
     }
 
     #[test]
@@ -262,7 +314,7 @@ mod tests {
         let mut pts: Vec<(f64, f64, f64, f64)> =
             (0..=20).map(|i| (i as f64 * 0.1, i as f64 * 0.5, 0.0, 10.0)).collect();
         pts[10].2 = 1.5; // at x = 5, 0.5 m from the box's near side (y = 2)
-        let j = judge_flight(&path(&pts), &[o]).unwrap();
+        let j = judge_flight(&path(&pts), &[o], Judge::E2025).unwrap();
         assert!((j.min_distance_raw - 0.5).abs() < 1e-12);
         assert!(j.min_distance > 1.5, "binned {}", j.min_distance);
     }

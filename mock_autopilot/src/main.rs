@@ -65,6 +65,28 @@ struct Args {
     /// Entering an obstacle is a crash (disarm, STATUSTEXT, on ground). Needs --obstacles.
     #[arg(long, requires = "obstacles")]
     crash_on_collision: bool,
+    /// Boot here (home and EKF origin): LAT,LON,ALT (degrees, degrees, metres AMSL); default PX4 SITL's.
+    #[arg(long, value_parser = parse_home, allow_hyphen_values = true)]
+    home: Option<mock_autopilot::geo::GeoPoint>,
+}
+
+fn parse_home(s: &str) -> Result<mock_autopilot::geo::GeoPoint, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [lat_deg, lon_deg, alt_m]
+            if (-90.0..=90.0).contains(&lat_deg) && (-180.0..=180.0).contains(&lon_deg) && alt_m.is_finite() =>
+        {
+            Ok(mock_autopilot::geo::GeoPoint {
+                lat_deg,
+                lon_deg,
+                alt_m,
+            })
+        }
+        _ => Err("expected LAT,LON,ALT with latitude in -90..90 and longitude in -180..180".into()),
+    }
 }
 
 fn secs(name: &str, v: f64) -> Result<Duration> {
@@ -127,6 +149,9 @@ async fn run(args: Args) -> Result<()> {
                 .then(|| secs("lockstep-wait", args.lockstep_wait))
                 .transpose()?,
         );
+    if let Some(home) = args.home {
+        builder = builder.home(home);
+    }
     if let (Some(path), true) = (&args.obstacles, args.crash_on_collision) {
         let world = ObstacleWorld::from_test_file(path).map_err(|e| anyhow::anyhow!("--obstacles: {e}"))?;
         eprintln!("mock-autopilot: {} obstacles loaded", world.len());

@@ -1,9 +1,10 @@
 //! Builders for the telemetry messages, filled the way PX4 fills them.
 
 use mavlink::dialects::common::{
-    ATTITUDE_DATA, AUTOPILOT_VERSION_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, HEARTBEAT_DATA,
-    HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA, MavAutopilot, MavMessage, MavMissionType,
-    MavProtocolCapability, MavSysStatusSensor, MavType, MavVtolState, MissionState, SYS_STATUS_DATA, VFR_HUD_DATA,
+    ATTITUDE_DATA, AUTOPILOT_VERSION_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA,
+    HEARTBEAT_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA, MavAutopilot, MavMessage,
+    MavMissionType, MavProtocolCapability, MavSysStatusSensor, MavType, MavVtolState, MissionState, SYS_STATUS_DATA,
+    VFR_HUD_DATA,
 };
 
 use crate::modes::FlightMode;
@@ -30,6 +31,7 @@ impl Vehicle {
                 landed_state: self.landed_state(),
             }),
             ids::AUTOPILOT_VERSION => self.autopilot_version(),
+            ids::GPS_GLOBAL_ORIGIN => self.gps_global_origin(),
             _ => return None,
         })
     }
@@ -110,6 +112,17 @@ impl Vehicle {
             vy: (v.y * 100.0).round() as i16,
             vz: (v.z * 100.0).round() as i16,
             hdg: ((hdg * 100.0).round() as u16) % 36_000,
+        })
+    }
+
+    /// The EKF origin: where the vehicle booted (PX4 v1.14 streams/GPS_GLOBAL_ORIGIN.hpp: ref_lat/ref_lon in
+    /// degE7, ref_alt in mm, time_usec the origin's timestamp since boot).
+    fn gps_global_origin(&self) -> MavMessage {
+        MavMessage::GPS_GLOBAL_ORIGIN(GPS_GLOBAL_ORIGIN_DATA {
+            latitude: (self.origin.lat_deg * 1e7).round() as i32,
+            longitude: (self.origin.lon_deg * 1e7).round() as i32,
+            altitude: (self.origin.alt_m * 1000.0).round() as i32,
+            time_usec: 0,
         })
     }
 
@@ -198,3 +211,7 @@ impl Vehicle {
         })
     }
 }
+
+#[cfg(test)]
+#[path = "origin_tests.rs"]
+mod origin_tests;

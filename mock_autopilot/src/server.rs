@@ -165,6 +165,12 @@ impl Builder {
         self
     }
 
+    /// Boot (and keep the EKF origin) at `home`.
+    pub fn home(mut self, home: crate::geo::GeoPoint) -> Self {
+        self.vehicle.home = home;
+        self
+    }
+
     /// Replace the whole vehicle configuration.
     pub fn vehicle(mut self, cfg: VehicleConfig) -> Self {
         self.vehicle = cfg;

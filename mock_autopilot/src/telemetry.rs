@@ -16,6 +16,8 @@ pub mod ids {
     pub const LOCAL_POSITION_NED: u32 = 32;
     /// GLOBAL_POSITION_INT.
     pub const GLOBAL_POSITION_INT: u32 = 33;
+    /// GPS_GLOBAL_ORIGIN (the EKF origin; sent once per boot and when it changes, or on request).
+    pub const GPS_GLOBAL_ORIGIN: u32 = 49;
     /// MISSION_CURRENT.
     pub const MISSION_CURRENT: u32 = 42;
     /// VFR_HUD.
@@ -39,7 +41,14 @@ const DEFAULT_RATES_HZ: &[(u32, f64)] = &[
     (ids::VFR_HUD, 10.0),
     (ids::HOME_POSITION, 0.5),
     (ids::EXTENDED_SYS_STATE, 5.0),
+    // PX4 v1.14 src/modules/mavlink/mavlink_main.cpp line 1474 (onboard mode): 1 Hz, but the stream
+    // (streams/GPS_GLOBAL_ORIGIN.hpp) only sends when the origin is new or changed, or on request.
+    (ids::GPS_GLOBAL_ORIGIN, 1.0),
 ];
+
+/// Streams that PX4 sends only when their content changes: once per boot here (the mock's EKF origin is fixed
+/// where it booted), and again on request.
+const ON_CHANGE: &[u32] = &[ids::GPS_GLOBAL_ORIGIN];
 
 #[derive(Debug, Clone)]
 struct Stream {
@@ -47,6 +56,8 @@ struct Stream {
     default: Duration,
     interval: Option<Duration>,
     next_due: Duration,
+    /// An on-change stream whose content was sent since boot.
+    sent: bool,
 }
 
 /// The stream table.
@@ -67,6 +78,7 @@ impl Default for Streams {
                         default: d,
                         interval: Some(d),
                         next_due: Duration::ZERO,
+                        sent: false,
                     }
                 })
                 .collect(),
@@ -97,6 +109,12 @@ impl Streams {
             if let Some(iv) = s.interval
                 && now >= s.next_due
             {
+                if ON_CHANGE.contains(&s.id) {
+                    if s.sent {
+                        continue;
+                    }
+                    s.sent = true;
+                }
                 out.push(s.id);
                 // Catch up without bursts if a step was longer than the interval.
                 s.next_due = (s.next_due + iv).max(now);

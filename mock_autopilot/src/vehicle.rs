@@ -92,6 +92,8 @@ pub struct VehicleState {
     pub mission_finished: bool,
     /// True after a crash (collision).
     pub crashed: bool,
+    /// Mission items on the vehicle (0 until a mission is uploaded).
+    pub mission_items: usize,
 }
 
 /// The simulated vehicle.
@@ -193,6 +195,7 @@ impl Vehicle {
             mission_current: self.nav.current(),
             mission_finished: self.nav.mission_finished(),
             crashed: self.crashed,
+            mission_items: self.nav.count(),
         }
     }
 

@@ -13,6 +13,7 @@ use super::cancel::CancelToken;
 use super::clock::{VehicleClock, secs};
 use super::command::Command;
 use super::exchange::Retry;
+use super::frame::{FramedSteer, TestFrame};
 use super::offboard::{self, Pilot, Progress};
 use super::planner_steer::PlannerSteer;
 use super::recorder::Recorder;
@@ -70,13 +71,18 @@ pub fn schedule(commands: &[TestCommand], warnings: &mut Vec<String>) -> VecDequ
     out.into()
 }
 
-/// The steering for `opts.mode`: the LFS planner over the test's boxes; if it cannot be built, the
-/// interface's fallbacks (mirror PX4's setpoint; fly straight in offboard).
-pub fn steer_for(test: &TestCase, opts: &FlyOptions) -> Box<dyn Steer> {
-    match (PlannerSteer::new(&test.obstacles, Camera::hfs()), opts.mode) {
+/// The steering for `opts.mode`: the LFS planner over the test's boxes, planning in the test's frame and
+/// answering in the vehicle's (`frame`; `None` = the two coincide); if it cannot be built, the interface's
+/// fallbacks (mirror PX4's setpoint; fly straight in offboard).
+pub fn steer_for(test: &TestCase, opts: &FlyOptions, frame: Option<TestFrame>) -> Box<dyn Steer> {
+    let planned: Box<dyn Steer> = match (PlannerSteer::new(&test.obstacles, Camera::hfs()), opts.mode) {
         (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
-        (_, Mode::Avoidance) => Box::new(Mirror),
+        (_, Mode::Avoidance) => return Box::new(Mirror),
         _ => Box::new(Straight),
+    };
+    match frame {
+        Some(f) => Box::new(FramedSteer::new(f, planned)),
+        None => planned,
     }
 }
 
@@ -114,8 +120,15 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             .iter()
             .find(|p| p.name == "NAV_ACC_RAD")
             .map_or(1.0, |p| p.value.clamp(0.5, 1.0));
-        let pilot = Pilot::new(offboard::goals(&s.test.mission), acc);
-        let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer_for(s.test, s.opts));
+        // The mission's goals are in the test's frame; the pilot flies in the vehicle's.
+        let goals = offboard::goals(&s.test.mission);
+        let goals = match s.frame {
+            Some(f) => goals.into_iter().map(|g| f.to_vehicle(g)).collect(),
+            None => goals,
+        };
+        let pilot = Pilot::new(goals, acc);
+        let steer = steer_for(s.test, s.opts, s.frame);
+        let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer);
         s.tasks.push(task);
         Some(rx)
     } else {
@@ -188,7 +201,8 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
                     if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (&inb.msg, s.view.pose)
                         && !s.view.rebooted
                     {
-                        rec.push(&p);
+                        // Recorded (and judged) in the test's frame, where the obstacles are.
+                        rec.push(&s.frame.map_or(p, |f| f.pose_to_test(&p)));
                     }
                 }
                 Err(broadcast::error::RecvError::Lagged(n)) => s.warnings.push(format!("{n} messages lost (slow consumer)")),

@@ -22,12 +22,16 @@ pub mod clock;
 pub mod command;
 pub mod exchange;
 pub mod flight;
+pub mod frame;
 pub mod gazebo;
+pub mod geo_view;
 pub mod link;
 pub mod mission_download;
 pub mod mission_upload;
 pub mod offboard;
+pub mod param_read;
 pub mod params;
+pub mod placement;
 pub mod plan_items;
 pub mod planner_steer;
 pub mod predict;
@@ -93,6 +97,11 @@ pub struct FlyOptions {
     /// measure the flight timeout in the vehicle's reported time, and do not count the vehicle's silence
     /// while it waits for us as a lost link. `time_scale` is then an upper bound.
     pub lockstep: Option<Duration>,
+    /// The judge edition whose distance definition the report uses.
+    pub judge: crate::judge::Judge,
+    /// Re-anchor the test (mission, obstacles, fence) at the vehicle's home instead of refusing a vehicle
+    /// farther than MIS_DIST_1WP from the test's home ([`placement`]).
+    pub anchor_at_vehicle_home: bool,
 }
 
 impl Default for FlyOptions {
@@ -109,6 +118,8 @@ impl Default for FlyOptions {
             target_system: None,
             lfs_min_distance: None,
             lockstep: None,
+            judge: crate::judge::Judge::default(),
+            anchor_at_vehicle_home: false,
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The low-fidelity simulator's prediction for a test, computed before the flight and reported beside it.
 
+use crate::judge::Judge;
 use crate::lfs::camera::Camera;
 use crate::lfs::sim::{MotionModel, SimConfig, simulate};
 use crate::model::{TestCase, Trajectory};
@@ -7,18 +8,20 @@ use crate::model::{TestCase, Trajectory};
 /// What the LFS predicts.
 #[derive(Debug, Clone)]
 pub struct Prediction {
-    /// The competition's minimum distance of the simulated flight, metres (`None` without obstacles).
+    /// The minimum distance of the simulated flight by the judge edition asked for, metres (`None` without
+    /// obstacles).
     pub min_distance: Option<f64>,
     /// The simulated trajectory (Aerialist frame).
     pub trajectory: Trajectory,
 }
 
 /// Simulates `test` with `motion` (the `px4` model follows the same waypoint generator the bridge flies with)
-/// and the competition's camera; `Err` says why it could not.
-pub fn predict(test: &TestCase, motion: MotionModel) -> Result<Prediction, String> {
+/// and the competition's camera, judged by `judge` as the flight will be; `Err` says why it could not.
+pub fn predict(test: &TestCase, motion: MotionModel, judge: Judge) -> Result<Prediction, String> {
     let config = SimConfig {
         motion,
         camera: Camera::hfs(),
+        judge,
         ..SimConfig::default()
     };
     let r = simulate(test, &config).map_err(|e| e.to_string())?;

@@ -4,11 +4,13 @@
 
 use serde::Serialize;
 
-use crate::judge::{ClosestApproach, ObstacleDistance, judge_flight};
+use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
 use super::FlyMode;
+use super::frame::{FRAME_NAME, FrameSource, TestFrame};
 use super::link::LinkStats;
+use super::placement::Placement;
 
 /// How a flight ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -71,13 +73,25 @@ impl From<LinkStats> for LinkReport {
 /// One flight's report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlightReport {
+    /// The judge edition of every distance here.
+    pub judge: Judge,
+    /// Its definition in one line.
+    pub judge_definition: &'static str,
+    /// The frame of the trajectory and the closest approach: `test_home_ned` (local NED about the test's home).
+    pub frame: &'static str,
+    /// How the vehicle's local frame was placed in it (`null` if the flight stopped before).
+    pub frame_source: Option<FrameSource>,
+    /// Where the vehicle's EKF origin lies in the test's frame, (North, East) metres.
+    pub frame_origin_offset_m: Option<[f64; 2]>,
+    /// Where the vehicle stood against the test's home (and the boxes' latitude/longitude).
+    pub placement: Option<Placement>,
     /// The competition's minimum distance (0.5 s bins), metres; `null` without obstacles or positions.
     pub min_distance: Option<f64>,
     /// The continuous minimum distance, metres.
     pub min_distance_raw: Option<f64>,
     /// Per obstacle.
     pub per_obstacle: Vec<ObstacleDistance>,
-    /// Where the raw path came closest (origin-aligned frame, x North, y East, z up).
+    /// Where the raw path came closest (the test's frame, x North, y East, z up).
     pub closest_approach: Option<ClosestApproach>,
     /// How the flight ended.
     pub status: Status,
@@ -119,12 +133,18 @@ pub struct Ending {
     pub link: LinkStats,
     /// LFS prediction.
     pub lfs_min_distance: Option<f64>,
+    /// The judge edition.
+    pub judge: Judge,
+    /// The test's frame, if it was measured (the trajectory is in it).
+    pub frame: Option<TestFrame>,
+    /// The vehicle against the test's home.
+    pub placement: Option<Placement>,
 }
 
 impl FlightReport {
-    /// Judges `trajectory` against `obstacles` and assembles the report.
+    /// Judges `trajectory` (in the test's frame) against `obstacles` and assembles the report.
     pub fn judge(trajectory: Trajectory, obstacles: &[Obstacle], end: Ending) -> Self {
-        let judged = judge_flight(&trajectory, obstacles);
+        let judged = judge_in_frame(&trajectory, obstacles, end.judge);
         let mut status = end.status;
         let mut reason = end.reason;
         if let Some(j) = &judged
@@ -139,6 +159,12 @@ impl FlightReport {
             ));
         }
         Self {
+            judge: end.judge,
+            judge_definition: end.judge.description(),
+            frame: FRAME_NAME,
+            frame_source: end.frame.map(|f| f.source),
+            frame_origin_offset_m: end.frame.map(|f| f.origin_offset_m),
+            placement: end.placement,
             min_distance: judged.as_ref().map(|j| j.min_distance),
             min_distance_raw: judged.as_ref().map(|j| j.min_distance_raw),
             per_obstacle: judged.as_ref().map(|j| j.per_obstacle.clone()).unwrap_or_default(),
@@ -185,6 +211,9 @@ mod tests {
             warnings: vec![],
             link: LinkStats::default(),
             lfs_min_distance: Some(1.0),
+            judge: Judge::E2025,
+            frame: None,
+            placement: None,
         }
     }
 
@@ -219,10 +248,17 @@ mod tests {
             "lfs_min_distance",
             "link",
             "closest_approach",
+            "judge",
+            "judge_definition",
+            "frame",
         ] {
             assert!(json.get(key).is_some(), "{key} missing in {json}");
         }
         assert_eq!(json["status"], "landed");
+        assert_eq!(
+            (&json["judge"], &json["frame"]),
+            (&"2025".into(), &"test_home_ned".into())
+        );
         assert!(json["link"].get("packets_received").is_some() && json["link"].get("retries").is_some());
         assert!(json.get("trajectory").is_none());
     }

@@ -106,6 +106,10 @@ pub struct Session<'a> {
     pub tasks: Tasks,
     /// The avoidance companion's answer counts (avoidance mode).
     pub companion: Arc<super::avoidance::CompanionStats>,
+    /// PX4's local frame -> the test's frame, once measured ([`super::placement`]).
+    pub frame: Option<super::frame::TestFrame>,
+    /// Where the vehicle stood against the test's home, once known.
+    pub placement: Option<super::placement::Placement>,
 }
 
 /// Runs one flight on `transport`.
@@ -126,6 +130,8 @@ pub async fn run(
     let mut rx = link.subscribe();
     let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
+    // The test re-anchored at the vehicle's home, if asked (it must outlive the session that borrows it).
+    let anchored = std::sync::OnceLock::new();
     let mut s = Session {
         link,
         target,
@@ -139,10 +145,15 @@ pub async fn run(
         restore: Vec::new(),
         tasks,
         companion: Arc::default(),
+        frame: None,
+        placement: None,
     };
     let mut recorder = recorder;
-    let stop = match s.prepare().await {
-        Ok(()) => flight::follow(&mut s, &mut recorder).await,
+    let stop = match s.place(&anchored).await {
+        Ok(()) => match s.prepare().await {
+            Ok(()) => flight::follow(&mut s, &mut recorder).await,
+            Err(stop) => stop,
+        },
         Err(stop) => stop,
     };
     s.restore_params().await;
@@ -157,8 +168,11 @@ pub async fn run(
     let reason = (stop.status != Status::Landed).then_some(stop.reason);
     Ok(FlightReport::judge(
         recorder.trajectory(),
-        &test.obstacles,
+        &s.test.obstacles,
         Ending {
+            judge: opts.judge,
+            frame: s.frame,
+            placement: s.placement.take(),
             status: stop.status,
             reason,
             mode: opts.mode,
@@ -248,7 +262,7 @@ impl Session<'_> {
     /// Everything before the first command of the flight.
     async fn prepare(&mut self) -> Result<(), Stop> {
         if self.opts.mode == FlyMode::Avoidance {
-            let steer = super::flight::steer_for(self.test, self.opts);
+            let steer = super::flight::steer_for(self.test, self.opts, self.frame);
             let pacing = match self.opts.lockstep {
                 Some(latency) => super::avoidance::Pacing::Lockstep { latency },
                 None => super::avoidance::Pacing::FreeRunning,
@@ -362,7 +376,7 @@ impl Session<'_> {
     }
 
     /// Waits (bounded, 30 s vehicle time) for HOME_POSITION, asking for it once.
-    async fn wait_home(&mut self) -> Result<(), Stop> {
+    pub(super) async fn wait_home(&mut self) -> Result<(), Stop> {
         self.drain();
         if self.view.home_known {
             return Ok(());

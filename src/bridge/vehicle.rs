@@ -49,6 +49,8 @@ pub struct VehicleView {
     pub rebooted: bool,
     /// STATUSTEXTs of severity warning or worse, in order.
     pub warnings: Vec<String>,
+    /// Where the vehicle is placed on Earth (home, EKF origin, global position).
+    pub geo: super::geo_view::GeoView,
     max_boot_ms: u32,
 }
 
@@ -56,6 +58,7 @@ impl VehicleView {
     /// Folds one message in, at vehicle-clock time `now`.
     pub fn update(&mut self, msg: &MavMessage, now: Duration) {
         self.last_heard = Some(now);
+        self.geo.update(msg, self.pose.as_ref());
         match msg {
             MavMessage::HEARTBEAT(h) if h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID => {
                 self.armed = h.base_mode.contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);

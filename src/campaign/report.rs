@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::journal::FlightRecord;
 use crate::io::write_atomic;
-use crate::judge::{diversity, judge_flight, points, test_score};
+use crate::judge::{Judge, diversity, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
@@ -78,6 +78,10 @@ pub struct SuiteSummary {
 pub struct Report {
     /// The case study.
     pub case: String,
+    /// The judge edition of every flown distance and point here.
+    pub judge: Judge,
+    /// Its definition in one line.
+    pub judge_definition: &'static str,
     /// The campaign's seed.
     pub seed: u64,
     /// The flight budget.
@@ -122,6 +126,7 @@ pub fn write_outputs(
     spelling: Spelling,
     screened: bool,
     lfs_path: &(dyn Fn(&TestCase) -> Option<Trajectory> + Sync),
+    judge: Judge,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let failing = failing_best_first(records);
@@ -138,7 +143,7 @@ pub fn write_outputs(
             "{name}: flew {}",
             r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
         );
-        let svg = plot(&test, lfs_path(&test).as_ref(), flown.as_ref(), &title);
+        let svg = plot(&test, lfs_path(&test).as_ref(), flown.as_ref(), &title, judge);
         write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
         reported.push((r.candidate, format!("{name}.yaml")));
     }
@@ -201,6 +206,8 @@ pub fn write_outputs(
     stages.report_s = t0.elapsed().as_secs_f64();
     let report = Report {
         case: case.path.display().to_string(),
+        judge,
+        judge_definition: judge.description(),
         seed,
         budget,
         flights,
@@ -214,7 +221,7 @@ pub fn write_outputs(
 }
 
 /// Top-down plot: arena, obstacles, mission, the LFS's path and the flown path with its closest approach.
-fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, title: &str) -> String {
+fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, title: &str, judge: Judge) -> String {
     let mut p = FlightPlot::new(test);
     p.set_title(title);
     if let Some(t) = lfs {
@@ -222,7 +229,8 @@ fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, t
     }
     if let Some(t) = flown {
         p.add_path(t, PathStyle::Flown, "flown");
-        if let Some(v) = judge_flight(t, &test.obstacles) {
+        // Flown trajectories are recorded in the test's frame.
+        if let Some(v) = judge_in_frame(t, &test.obstacles, judge) {
             p.mark_closest(&v.closest);
         }
     }
@@ -239,8 +247,8 @@ pub fn markdown(r: &Report) -> String {
     let mut md = format!("# prgenuav campaign: {}\n\n", r.case);
     let _ = writeln!(
         md,
-        "seed {}, budget {} flights, {} candidates screened\n",
-        r.seed, r.budget, s.candidates_screened
+        "seed {}, budget {} flights, {} candidates screened; judge {}: {}\n",
+        r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
     );
     let _ = writeln!(md, "| metric | value |\n|---|---|");
     let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);

@@ -14,6 +14,7 @@ use super::rank::{Screened, rank};
 use super::report::{Report, StageTimes, write_outputs};
 use crate::generator::{GenerateError, Generator, GeneratorConfig};
 use crate::io::write_atomic;
+use crate::judge::Judge;
 use crate::model::{ModelError, Obstacle, Spelling, TestCase};
 
 /// Everything that defines a campaign; saved as `campaign.json` so `--resume` continues the same one.
@@ -57,6 +58,16 @@ pub struct CampaignConfig {
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,
+    /// The judge edition of the flights (campaign files written before editions existed were judged by 2025's).
+    #[serde(default = "judge_before_editions")]
+    pub judge: Judge,
+    /// Re-anchor each test at the vehicle's home (`--anchor-at-vehicle-home`).
+    #[serde(default)]
+    pub anchor_at_vehicle_home: bool,
+}
+
+fn judge_before_editions() -> Judge {
+    Judge::E2025
 }
 
 fn default_screen() -> bool {
@@ -264,6 +275,7 @@ pub fn run_campaign(
         spelling,
         cfg.screen,
         &|t: &TestCase| screener.path(t),
+        cfg.judge,
     )?)
 }
 

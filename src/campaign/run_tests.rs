@@ -60,6 +60,8 @@ impl Progress for Quiet {
 
 fn config(budget: usize) -> CampaignConfig {
     CampaignConfig {
+        judge: crate::judge::Judge::default(),
+        anchor_at_vehicle_home: false,
         case: Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml"),
         seed: 3,
         budget,

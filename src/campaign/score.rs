@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::geometry::union_iou;
-use crate::judge::{diversity, judge_flight, points, test_score};
+use crate::judge::{Judge, diversity, judge_flight, points, test_score};
 use crate::model::{ModelError, Obstacle, TestCase, load_flight};
 
 /// Tests whose footprints overlap this much (IoU) count as duplicates of an earlier one.
@@ -46,6 +46,10 @@ pub struct TestScore {
 /// A suite's metrics.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SuiteScore {
+    /// The judge edition of every distance and point here.
+    pub judge: Judge,
+    /// Its definition in one line.
+    pub judge_definition: &'static str,
     /// Per test, in test order.
     pub tests: Vec<TestScore>,
     /// Sum of the test scores, duplicates excluded.
@@ -59,11 +63,16 @@ pub struct SuiteScore {
 }
 
 /// Scores one test from its runs' flights.
-pub fn score_test(test: &TestCase, test_path: &Path, flights: &[PathBuf]) -> Result<TestScore, ModelError> {
+pub fn score_test(
+    test: &TestCase,
+    test_path: &Path,
+    flights: &[PathBuf],
+    judge: Judge,
+) -> Result<TestScore, ModelError> {
     let mut runs = Vec::new();
     for f in flights {
         let trajectory = load_flight(f)?;
-        let Some(verdict) = judge_flight(&trajectory, &test.obstacles) else {
+        let Some(verdict) = judge_flight(&trajectory, &test.obstacles, judge) else {
             return Err(ModelError::field(
                 test_path,
                 "simulation.obstacles",
@@ -137,7 +146,7 @@ pub fn tests_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
 }
 
 /// Scores a suite: marks duplicates and sums the failure score.
-pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>]) -> SuiteScore {
+pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>], judge: Judge) -> SuiteScore {
     let prints: Vec<Vec<_>> = obstacles
         .iter()
         .map(|o| o.iter().map(Obstacle::footprint).collect())
@@ -150,6 +159,8 @@ pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>]) -> Su
     }
     let counted = || tests.iter().filter(|t| t.duplicate_of.is_none());
     SuiteScore {
+        judge,
+        judge_definition: judge.description(),
         failure_score: counted().map(|t| t.score).sum::<f64>() + 0.0,
         failing: counted().filter(|t| t.failed).count(),
         evaluated: tests.iter().filter(|t| !t.runs.is_empty()).count(),
@@ -159,7 +170,7 @@ pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>]) -> Su
 }
 
 /// Scores every `test_N.yaml` of a folder with its flights.
-pub fn score_folder(dir: &Path) -> Result<SuiteScore, ModelError> {
+pub fn score_folder(dir: &Path, judge: Judge) -> Result<SuiteScore, ModelError> {
     let io = |source| ModelError::Io {
         path: dir.to_path_buf(),
         action: "cannot list",
@@ -170,8 +181,8 @@ pub fn score_folder(dir: &Path) -> Result<SuiteScore, ModelError> {
     let mut obstacles = Vec::new();
     for p in &paths {
         let test = TestCase::load(p)?;
-        scores.push(score_test(&test, p, &flights_of(p))?);
+        scores.push(score_test(&test, p, &flights_of(p), judge)?);
         obstacles.push(test.obstacles);
     }
-    Ok(score_suite(scores, &obstacles))
+    Ok(score_suite(scores, &obstacles, judge))
 }

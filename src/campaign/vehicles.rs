@@ -12,6 +12,7 @@ use tokio::runtime::Handle;
 
 use super::pool::{Flown, Vehicle, VehicleError};
 use crate::bridge::{BridgeError, CancelToken, FlightReport, FlyMode, FlyOptions, fly};
+use crate::judge::Judge;
 use crate::model::TestCase;
 
 /// Flies with the bridge on `handle`'s runtime, turning the campaign's stop flag into a bridge cancel (the
@@ -66,6 +67,13 @@ impl LinkVehicle {
         };
         Self { handle, opts }
     }
+
+    /// Judge its flights by `judge`; re-anchor each test at the vehicle's home if `anchor`.
+    pub fn judged(mut self, judge: Judge, anchor: bool) -> Self {
+        self.opts.judge = judge;
+        self.opts.anchor_at_vehicle_home = anchor;
+        self
+    }
 }
 
 impl Vehicle for LinkVehicle {
@@ -95,6 +103,8 @@ pub struct MockVehicle {
     speed: f64,
     mode: FlyMode,
     lockstep: Option<Duration>,
+    judge: Judge,
+    anchor: bool,
 }
 
 /// Horizontal cruise speed (MPC_XY_CRUISE, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
@@ -129,7 +139,16 @@ impl MockVehicle {
             speed,
             mode,
             lockstep,
+            judge: Judge::default(),
+            anchor: false,
         }
+    }
+
+    /// Judge its flights by `judge`; re-anchor each test at the vehicle's home if `anchor`.
+    pub fn judged(mut self, judge: Judge, anchor: bool) -> Self {
+        self.judge = judge;
+        self.anchor = anchor;
+        self
     }
 }
 
@@ -165,6 +184,8 @@ impl Vehicle for MockVehicle {
             trajectory_csv: Some(csv.to_path_buf()),
             heartbeat_wait_s: 20.0,
             lockstep: self.lockstep,
+            judge: self.judge,
+            anchor_at_vehicle_home: self.anchor,
             ..FlyOptions::default()
         };
         let result = fly_blocking(&self.handle, test, &opts, stop);

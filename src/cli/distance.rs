@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use prgenuav::judge::judge_flight;
+use prgenuav::judge::{Judge, judge_flight};
 use prgenuav::model::{TestCase, Trajectory};
 
 /// Arguments of `distance`.
@@ -14,23 +14,29 @@ pub struct Args {
     test: PathBuf,
     /// The flight: an Aerialist trajectory CSV (`timestamp,x,y,z,r`, microseconds, local NED, z up).
     flight: PathBuf,
-    /// Print `{"min_distance", "min_distance_raw", "per_obstacle", ...}`.
+    /// Print `{"judge", "min_distance", "min_distance_raw", "per_obstacle", ...}`.
     #[arg(long)]
     json: bool,
+    /// Judge edition: 2026 (path buffered by half the vehicle width, horizontal) or 2025 (bare path,
+    /// height-gap rule). Both origin-align the log first (Aerialist's rule for logs that start at home).
+    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
+    judge: Judge,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let test = TestCase::load(&args.test)?;
     let flight = Trajectory::load_csv(&args.flight)?;
-    let Some(verdict) = judge_flight(&flight, &test.obstacles) else {
+    let Some(verdict) = judge_flight(&flight, &test.obstacles, args.judge) else {
         bail!("{}: the test has no obstacles to measure against", args.test.display());
     };
     if args.json {
         super::print_json(&verdict)?;
     } else {
         println!(
-            "min_distance      {:.3} m (Aerialist: origin-aligned, 0.5 s bins)",
-            verdict.min_distance
+            "min_distance      {:.3} m (judge {}: origin-aligned, 0.5 s bins; {})",
+            verdict.min_distance,
+            args.judge,
+            args.judge.description()
         );
         println!("min_distance_raw  {:.3} m (every sample)", verdict.min_distance_raw);
         for d in &verdict.per_obstacle {

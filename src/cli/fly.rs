@@ -1,5 +1,6 @@
 //! `prgenuav fly TEST.yaml [--connect URL] [--mode avoidance|offboard|mission] [--timeout S] [--json]
-//! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence]`.
+//! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence] [--judge 2025|2026]
+//! [--anchor-at-vehicle-home] [--strict]`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,8 +10,8 @@ use anyhow::Context;
 use prgenuav::bridge::gazebo::world_sdf;
 use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
 use prgenuav::io::write_atomic;
+use prgenuav::judge::Judge;
 use prgenuav::lfs::sim::MotionModel;
-use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
 /// Obstacle mode on the command line.
@@ -66,12 +67,27 @@ pub struct Args {
     /// pose this many milliseconds old (--time-scale is then the mock's upper bound).
     #[arg(long, value_name = "LATENCY_MS")]
     lockstep: Option<f64>,
+    /// Judge edition of the distances (and of the LFS prediction): 2026 measures from the path buffered by
+    /// half the vehicle width, horizontally; 2025 from the bare path with the height-gap rule.
+    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
+    judge: Judge,
+    /// Re-anchor the test (mission, obstacles, fence) at the vehicle's home (HOME_POSITION), keeping its local
+    /// geometry, and print where the boxes now are. Without it, a vehicle whose home is farther from the
+    /// test's home than its MIS_DIST_1WP is refused before anything is uploaded (exit code 2).
+    #[arg(long)]
+    anchor_at_vehicle_home: bool,
+    /// Refuse a test that breaks the current competition rules (default: warn and fly it anyway, as the
+    /// recorded flights of older editions need).
+    #[arg(long)]
+    strict: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Arguments first, resources second.
     LinkAddress::parse(&args.connect)?;
-    let test = TestCase::load(&args.test)?;
+    let Some(test) = super::load_test(&args.test, args.strict)? else {
+        return Ok(ExitCode::from(super::EXIT_FAIL));
+    };
     if let Some(path) = &args.world {
         write_atomic(path, world_sdf(&test.obstacles).as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
@@ -82,7 +98,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let prediction = if args.no_predict {
         None
     } else {
-        match predict(&test, MotionModel::by_name("px4").context("px4 motion model")?) {
+        match predict(
+            &test,
+            MotionModel::by_name("px4").context("px4 motion model")?,
+            args.judge,
+        ) {
             Ok(p) => Some(p),
             Err(e) => {
                 eprintln!("warning: no LFS prediction: {e}");
@@ -107,6 +127,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
             Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
         },
+        judge: args.judge,
+        anchor_at_vehicle_home: args.anchor_at_vehicle_home,
         ..FlyOptions::default()
     };
     opts.validate()?;
@@ -140,6 +162,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
     }
+    if let Some(p) = report.placement.as_ref().filter(|p| p.anchored) {
+        eprintln!(
+            "re-anchored at the vehicle's home {:.7}, {:.7} ({:.1} m AMSL), {:.0} m from the test's home",
+            p.vehicle_home.lat_deg, p.vehicle_home.lon_deg, p.vehicle_home.alt_m, p.distance_m
+        );
+        for (i, c) in p.obstacle_centres.iter().enumerate() {
+            eprintln!("  box {i} centre now at {:.7}, {:.7}", c.lat_deg, c.lon_deg);
+        }
+    }
     if args.json {
         super::print_json(&report)?;
     } else {
@@ -149,7 +180,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             report.status.as_str(),
             report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default()
         );
-        println!("min_distance      {} (competition: 0.5 s bins)", m(report.min_distance));
+        println!(
+            "min_distance      {} (judge {}: 0.5 s bins; {})",
+            m(report.min_distance),
+            report.judge,
+            report.judge_definition
+        );
+        if let (Some(src), Some([n, e])) = (report.frame_source, report.frame_origin_offset_m) {
+            println!(
+                "frame             {} ({src:?}: EKF origin at N {n:.2} m, E {e:.2} m)",
+                report.frame
+            );
+        }
         println!("min_distance_raw  {}", m(report.min_distance_raw));
         println!("lfs_min_distance  {}", m(report.lfs_min_distance));
         for d in &report.per_obstacle {
@@ -180,9 +222,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             println!("warning           {w}");
         }
     }
-    // 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete.
+    // 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete; 2: the vehicle
+    // stands too far from the test's home to fly it without --anchor-at-vehicle-home.
+    let too_far = report.placement.as_ref().is_some_and(|p| p.too_far);
     Ok(match report.status {
         Status::Landed | Status::Collision => ExitCode::SUCCESS,
+        Status::Rejected if too_far => ExitCode::from(super::EXIT_ERROR),
         _ => ExitCode::from(super::EXIT_FAIL),
     })
 }

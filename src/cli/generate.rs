@@ -15,6 +15,7 @@ use prgenuav::campaign::report::timestamped_folder;
 use prgenuav::campaign::run::{CampaignConfig, run_campaign};
 use prgenuav::campaign::screen::LfsScreener;
 use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
+use prgenuav::judge::Judge;
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
 use super::progress::Reporter;
@@ -82,6 +83,14 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// Judge edition of the distances (and of the LFS prediction): 2026 measures from the path buffered by
+    /// half the vehicle width, horizontally; 2025 from the bare path with the height-gap rule.
+    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
+    judge: Judge,
+    /// Re-anchor every test (mission, obstacles, fence) at each vehicle's home (HOME_POSITION) instead of
+    /// refusing a vehicle farther from the test's home than its MIS_DIST_1WP (bench drones anywhere).
+    #[arg(long)]
+    anchor_at_vehicle_home: bool,
     #[command(flatten)]
     generator: GeneratorArgs,
 }
@@ -135,6 +144,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 mock_lockstep: !args.mock_free_running,
                 mock_latency_ms: args.mock_latency,
                 screen: !args.no_screen,
+                judge: args.judge,
+                anchor_at_vehicle_home: args.anchor_at_vehicle_home,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
@@ -172,13 +183,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         (0..count)
             .map(|i| {
-                Box::new(MockVehicle::new(
-                    runtime.handle().clone(),
-                    i,
-                    cfg.mock_speed,
-                    mode,
-                    lockstep,
-                )) as Box<dyn Vehicle>
+                Box::new(
+                    MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
+                        .judged(cfg.judge, cfg.anchor_at_vehicle_home),
+                ) as Box<dyn Vehicle>
             })
             .collect()
     } else {
@@ -188,12 +196,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         cfg.hfs
             .iter()
             .map(|url| {
-                Box::new(LinkVehicle::new(
-                    runtime.handle().clone(),
-                    url,
-                    mode,
-                    args.connect_timeout,
-                )) as Box<dyn Vehicle>
+                Box::new(
+                    LinkVehicle::new(runtime.handle().clone(), url, mode, args.connect_timeout)
+                        .judged(cfg.judge, cfg.anchor_at_vehicle_home),
+                ) as Box<dyn Vehicle>
             })
             .collect()
     };
@@ -204,6 +210,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let screener = LfsScreener {
         config: SimConfig {
             motion,
+            judge: cfg.judge,
             ..SimConfig::default()
         },
     };

@@ -107,6 +107,31 @@ pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav
     Ok(None)
 }
 
+/// `--judge 2025|2026`.
+pub fn parse_judge(s: &str) -> Result<prgenuav::judge::Judge, String> {
+    s.parse()
+}
+
+/// Loads a test for `fly` or `simulate`: a test that breaks the current competition rules (older editions
+/// allowed 10 m high boxes and footprints past the arena; the recorded flights use them) is accepted with a
+/// warning naming each rule, unless `strict`, which refuses it as `check` does (`None`: exit [`EXIT_FAIL`]).
+pub fn load_test(path: &std::path::Path, strict: bool) -> anyhow::Result<Option<prgenuav::model::TestCase>> {
+    if strict {
+        return load_valid_test(path);
+    }
+    let test = prgenuav::model::TestCase::load(path)?;
+    for v in prgenuav::rules::check(&test, &prgenuav::model::Arena::default()) {
+        eprintln!(
+            "warning: {}: breaks a current rule, flown anyway (--strict refuses): {} = {}: {}",
+            path.display(),
+            v.path,
+            v.value,
+            v.rule
+        );
+    }
+    Ok(Some(test))
+}
+
 /// Prints `value` as pretty JSON on stdout.
 pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string_pretty(value)?);

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::bail;
 use prgenuav::campaign::score::score_folder;
+use prgenuav::judge::Judge;
 
 /// Arguments of `score`.
 #[derive(Debug, clap::Args)]
@@ -14,10 +15,14 @@ pub struct Args {
     /// Print the full result as JSON.
     #[arg(long)]
     json: bool,
+    /// Judge edition of the distances and points: 2026 (path buffered by half the vehicle width,
+    /// horizontal) or 2025 (bare path, height-gap rule).
+    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
+    judge: Judge,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let suite = score_folder(&args.folder)?;
+    let suite = score_folder(&args.folder, args.judge)?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());
     }
@@ -58,5 +63,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         "failing {} / {} evaluated, failure score {:.3}, diversity {div}",
         suite.failing, suite.evaluated, suite.failure_score
     );
+    println!("judge {}: {}", suite.judge, suite.judge_definition);
     Ok(ExitCode::SUCCESS)
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use prgenuav::io::write_atomic;
-use prgenuav::judge::ObstacleDistance;
+use prgenuav::judge::{Judge, ObstacleDistance};
 use prgenuav::lfs::sim::{MotionModel, SimConfig, Status, simulate};
 use prgenuav::plot::{FlightPlot, PathStyle};
 
@@ -30,10 +30,19 @@ pub struct Args {
     /// Write a top-down SVG plot of the flight.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Judge edition of the predicted distance: 2026 (path buffered by half the vehicle width, horizontal) or
+    /// 2025 (bare path, height-gap rule).
+    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
+    judge: Judge,
+    /// Refuse a test that breaks the current competition rules (default: warn and simulate it anyway).
+    #[arg(long)]
+    strict: bool,
 }
 
 #[derive(serde::Serialize)]
 struct Report {
+    judge: Judge,
+    judge_definition: &'static str,
     min_distance: Option<f64>,
     min_distance_raw: Option<f64>,
     per_obstacle: Vec<ObstacleDistance>,
@@ -48,12 +57,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bail!("unknown motion model {:?} (use paper or px4)", args.motion);
     };
     let camera = super::camera_preset(&args.camera)?;
-    let Some(test) = super::load_valid_test(&args.test)? else {
+    let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
     let config = SimConfig {
         motion,
         camera,
+        judge: args.judge,
         ..Default::default()
     };
     let start = Instant::now();
@@ -77,6 +87,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let d = result.distance.as_ref();
     let report = Report {
+        judge: args.judge,
+        judge_definition: args.judge.description(),
         min_distance: d.map(|d| d.min_distance),
         min_distance_raw: d.map(|d| d.min_distance_raw),
         per_obstacle: d.map(|d| d.per_obstacle.clone()).unwrap_or_default(),
@@ -90,8 +102,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         match d {
             Some(d) => println!(
-                "min_distance      {:.3} m (competition: origin-aligned, 0.5 s bins)",
-                d.min_distance
+                "min_distance      {:.3} m (judge {}: 0.5 s bins; {})",
+                d.min_distance,
+                args.judge,
+                args.judge.description()
             ),
             None => println!("min_distance      - (no obstacles)"),
         }

@@ -378,7 +378,14 @@ fn repeat_mae(cases: &[FlightCase]) -> Option<f64> {
 }
 
 /// Simulates one case and compares.
+///
+/// The recorded distances are the 2025 edition's (bare path), so the prediction is judged by it too, whatever
+/// `config.judge` says.
 pub fn evaluate_case(case: &FlightCase, config: &SimConfig) -> CaseResult {
+    let config = &SimConfig {
+        judge: crate::judge::Judge::E2025,
+        ..config.clone()
+    };
     let sim = simulate_parts(&case.mission, &case.obstacles, &case.params, config).ok();
     let predicted = sim
         .as_ref()

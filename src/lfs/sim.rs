@@ -20,7 +20,7 @@ use super::planner::{PlanInput, Planner, VehicleState};
 use super::render::{CameraPose, Scene};
 use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
 use super::waypoint::{NavState, WaypointGenerator, WaypointInput};
-use crate::judge::{FlightDistance, judge_flight};
+use crate::judge::{FlightDistance, Judge, judge_in_frame};
 use crate::model::{Mission, Obstacle, Param, Sample, TestCase, Trajectory};
 
 /// The stages of one tick, in order.
@@ -97,6 +97,8 @@ pub struct SimConfig {
     pub stuck_s: f64,
     /// Progress means getting this much closer (metres) to the current target.
     pub progress_m: f64,
+    /// The judge edition whose definition the prediction uses (the flights it predicts are judged alike).
+    pub judge: Judge,
 }
 
 impl Default for SimConfig {
@@ -111,6 +113,7 @@ impl Default for SimConfig {
             timeout_s: 500.0,
             stuck_s: 20.0,
             progress_m: 1.0,
+            judge: Judge::default(),
         }
     }
 }
@@ -505,7 +508,8 @@ pub fn simulate_parts(
         }
     };
     let trajectory = world.trajectory();
-    let distance = judge_flight(&trajectory, obstacles);
+    // The simulated flight starts at the test's home, in the obstacles' frame.
+    let distance = judge_in_frame(&trajectory, obstacles, config.judge);
     Ok(SimResult {
         status,
         flight_time_s: world.time_s,

@@ -1,6 +1,7 @@
 //! The competition's domain: missions, obstacles, the arena, tests and trajectories, read from and
 //! written to the formats Aerialist uses.
 
+mod anchor;
 mod arena;
 mod error;
 mod fields;

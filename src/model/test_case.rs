@@ -56,7 +56,7 @@ const COMMAND_KEYS: [&str; 3] = ["commands", "commands_file", "speed"];
 /// Obstacles are in Aerialist's frame (local NED on the ground, `x` North, `y` East, `r` degrees). The mission's
 /// local positions are projected about [`TestCase::home`]: `simulation.home_position` when the YAML sets it,
 /// otherwise the competition simulator's default home [`SIM_HOME`], because that is where PX4 SITL puts its
-/// local origin (and the flown trajectory, origin-aligned, starts there).
+/// local origin; the bridge records and judges flights in the local frame about this home.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TestCase {
     /// The YAML file it was read from.

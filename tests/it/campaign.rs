@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use prgenuav::judge::{judge_flight, test_score};
+use prgenuav::judge::{Judge, judge_in_frame, test_score};
 use prgenuav::model::{Arena, TestCase, Trajectory};
 use prgenuav::rules::check;
 
@@ -72,7 +72,8 @@ fn verify_folder(folder: &Path) -> serde_json::Value {
         assert!(check(&test, &Arena::default()).is_empty(), "test_{i} breaks a rule");
         let trajectory = Trajectory::load_csv(&folder.join(format!("test_{i}.csv"))).unwrap();
         assert!(folder.join(format!("test_{i}.svg")).is_file(), "a plot per test");
-        let verdict = judge_flight(&trajectory, &test.obstacles).unwrap();
+        // Flights are recorded in the test's frame and judged by the current edition.
+        let verdict = judge_in_frame(&trajectory, &test.obstacles, Judge::default()).unwrap();
         assert!(verdict.min_distance < 1.5, "test_{i} is reported but did not fail");
         assert!(verdict.min_distance >= last, "not best first at test_{i}");
         last = verdict.min_distance;

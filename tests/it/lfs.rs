@@ -128,17 +128,21 @@ fn simulate_reports_json_and_writes_files() {
 
 #[test]
 fn simulate_rejects_invalid_tests_like_check() {
-    // Overlapping boxes break a rule: same violations as `check`, exit 1.
+    // Overlapping boxes break a rule: with --strict, same violations as `check`, exit 1; without, a warning
+    // naming the rule (old editions' tests are re-flown and re-simulated).
     let overlapping = vec![
         Obstacle::new(10.0, 4.0, 20.0, -5.0, 20.0, 0.0),
         Obstacle::new(10.0, 4.0, 20.0, -6.0, 21.0, 0.0),
     ];
     let (_d, test) = test_file(2, overlapping);
     let (code_c, out_c, _) = prgenuav(&["check", test.to_str().unwrap()]);
-    let (code_s, _, err_s) = prgenuav(&["simulate", test.to_str().unwrap()]);
+    let (code_s, _, err_s) = prgenuav(&["simulate", test.to_str().unwrap(), "--strict"]);
     assert_eq!((code_c, code_s), (1, 1));
     let first_violation = out_c.lines().nth(1).unwrap().trim();
     assert!(err_s.contains(first_violation), "{err_s} vs {out_c}");
+    let (code_w, _, err_w) = prgenuav(&["simulate", test.to_str().unwrap()]);
+    assert_eq!(code_w, 0, "{err_w}");
+    assert!(err_w.contains("warning") && err_w.contains("overlap"), "{err_w}");
     // Unreadable input: exit 2 with the loader's message.
     let (_d2, bad) = temp_file("bad.yaml", b"drone: [1,\n");
     let (code, _, err) = prgenuav(&["simulate", bad.to_str().unwrap()]);

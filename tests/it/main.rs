@@ -3,6 +3,7 @@
 mod bridge;
 mod campaign;
 mod cli_errors;
+mod frame;
 mod generator;
 mod geometry_props;
 mod lfs;

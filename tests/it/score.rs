@@ -1,6 +1,7 @@
 //! `score`: the competition's metrics over a folder of tests with CSV and ULog flights.
 
 use prgenuav::campaign::score::score_folder;
+use prgenuav::judge::Judge;
 use prgenuav::model::{Obstacle, Spelling, load_ulog_trajectory};
 
 use super::ulog::ULogWriter;
@@ -64,7 +65,8 @@ fn folder_scores_by_hand() {
     }
     std::fs::write(d.join("test_3.ulg"), w.finish()).unwrap();
 
-    let s = score_folder(d).unwrap();
+    let s = score_folder(d, Judge::E2025).unwrap();
+    assert_eq!(s.judge, Judge::E2025);
     assert_eq!(s.tests.len(), 4);
     let t0 = &s.tests[0];
     assert_eq!(t0.runs.len(), 2);
@@ -85,6 +87,9 @@ fn folder_scores_by_hand() {
         t3.runs[0].min_distance
     );
     assert!((t3.runs[0].flight_time_s - 120.0).abs() < 1e-9);
+    // The 2026 edition measures from the path buffered by half the vehicle width: 0.125 m closer.
+    let s26 = score_folder(d, Judge::E2026).unwrap();
+    assert!((s26.tests[3].runs[0].min_distance - 1.075).abs() < 1e-5);
     assert_eq!(s.evaluated, 3);
     assert_eq!(s.failing, 2);
     assert!((s.failure_score - (t0.score + t3.score)).abs() < 1e-9);
