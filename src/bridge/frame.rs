@@ -182,10 +182,7 @@ mod tests {
     impl Steer for Probe {
         fn steer(&mut self, input: &SteerInput) -> Option<SteerOutput> {
             *self.0.lock().unwrap() = Some(*input);
-            Some(SteerOutput {
-                pos_ned: [100.0, 0.0, -10.0],
-                yaw_rad: Some(1.0),
-            })
+            Some(SteerOutput::position([100.0, 0.0, -10.0], Some(1.0)))
         }
     }
 
