@@ -18,11 +18,27 @@ pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(500);
 /// Without a companion heartbeat for this long the avoidance system counts as lost.
 pub const HEARTBEAT_TIMEOUT: Duration = Duration::from_secs(5);
 
-/// Companion setpoint from point 0 (local NED).
+/// What the companion's point 0 asks for, by which of its components are finite (local NED).
+///
+/// PX4 copies point 0's position and velocity over its own setpoint (ObstacleAvoidance.cpp
+/// `injectAvoidanceSetpoints`, release/1.14 l. 116-119), and its trajectory generator then treats a finite
+/// position axis as a target and a NaN one as "follow the velocity" (PositionSmoothing.cpp
+/// `_generateVelocitySetpoint`, l. 170-257).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Target {
+    /// Position (x, y, z): fly there (a velocity alongside is a feed-forward the mock ignores).
+    Position(Ned),
+    /// Position (x, y, NaN) with velocity z: hold x, y and climb or descend at that rate (PX4's own land
+    /// setpoint has this shape).
+    XyPositionZVelocity((f64, f64), f64),
+    /// Position NaN, velocity (vx, vy, vz).
+    Velocity(Ned),
+}
+
+/// Companion setpoint from point 0.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Answer {
-    pos: Option<Ned>,
-    vel: Option<Ned>,
+    target: Target,
     yaw: Option<f64>,
     at: Duration,
 }
@@ -39,6 +55,9 @@ pub struct Avoidance {
     lost_reported: bool,
     /// A request went out and no valid answer came since (lockstep waits on this).
     awaiting: bool,
+    /// Vertical speed caps (up, down), m/s, of PX4's auto modes (MPC_Z_V_AUTO_UP/DN; the mock's
+    /// MPC_Z_VEL_MAX_UP/DN), for a companion's position during landing.
+    z_caps_m_s: Option<(f64, f64)>,
 }
 
 fn finite3(x: f32, y: f32, z: f32) -> Option<Ned> {
@@ -59,11 +78,17 @@ impl Avoidance {
         }
         let pos = finite3(t.pos_x[0], t.pos_y[0], t.pos_z[0]);
         let vel = finite3(t.vel_x[0], t.vel_y[0], t.vel_z[0]);
-        if pos.is_none() && vel.is_none() {
-            return;
-        }
+        let xy_vz = (t.pos_x[0].is_finite() && t.pos_y[0].is_finite() && t.vel_z[0].is_finite())
+            .then(|| ((f64::from(t.pos_x[0]), f64::from(t.pos_y[0])), f64::from(t.vel_z[0])));
+        let target = match (pos, xy_vz, vel) {
+            (Some(p), _, _) => Target::Position(p),
+            (None, Some((xy, vz)), _) => Target::XyPositionZVelocity(xy, vz),
+            (None, None, Some(v)) => Target::Velocity(v),
+            // Nothing PX4's controller could track on every axis.
+            (None, None, None) => return,
+        };
         let yaw = t.pos_yaw[0].is_finite().then(|| f64::from(t.pos_yaw[0]));
-        self.answer = Some(Answer { pos, vel, yaw, at: now });
+        self.answer = Some(Answer { target, yaw, at: now });
         self.awaiting = false;
         self.timeout_reported = false;
         self.hold = None;
@@ -88,6 +113,11 @@ impl Avoidance {
     /// its clock here (as PX4 SITL waits for its simulator), so the plan is never late in vehicle time.
     pub fn awaiting_answer(&self, now: Duration) -> bool {
         self.awaiting && self.is_healthy(now)
+    }
+
+    /// The auto modes' vertical speed caps (up, down), m/s, positive.
+    pub fn set_z_caps(&mut self, up_m_s: f64, down_m_s: f64) {
+        self.z_caps_m_s = Some((up_m_s, down_m_s));
     }
 
     /// Stop waiting for the latest request's answer (the lockstep wait timed out).
@@ -123,37 +153,9 @@ impl Avoidance {
         let fresh = self
             .answer
             .filter(|a| a.at >= since && now.saturating_sub(a.at) <= ANSWER_TIMEOUT);
-        let sp = match (fresh, nav_sp) {
-            (
-                Some(a),
-                Setpoint::Position {
-                    h_speed_m_s,
-                    up_speed_m_s,
-                    down_speed_m_s,
-                    ..
-                },
-            ) if a.pos.is_some() => Setpoint::Position {
-                target_ned: a.pos.unwrap_or(pos),
-                h_speed_m_s,
-                up_speed_m_s,
-                down_speed_m_s,
-                yaw_rad: a.yaw,
-            },
-            (Some(a), _) if a.vel.is_some() => Setpoint::Velocity {
-                vel_ned: a.vel.unwrap_or_default(),
-                yaw_rad: a.yaw,
-            },
-            (Some(a), other) => match a.pos {
-                Some(p) => Setpoint::Position {
-                    target_ned: p,
-                    h_speed_m_s: 5.0,
-                    up_speed_m_s: 1.0,
-                    down_speed_m_s: 1.0,
-                    yaw_rad: a.yaw,
-                },
-                None => other,
-            },
-            (None, _) => {
+        let sp = match fresh {
+            Some(a) => answer_setpoint(&a, &nav_sp, self.z_caps_m_s),
+            None => {
                 if now.saturating_sub(self.answer.map_or(since, |a| a.at.max(since))) > ANSWER_TIMEOUT
                     && !self.timeout_reported
                 {
@@ -175,6 +177,53 @@ impl Avoidance {
             }
         };
         (sp, msg)
+    }
+}
+
+/// The speed caps (horizontal, up, down; m/s) PX4 keeps applying whatever the companion sends: the
+/// navigator's own, e.g. MPC_TKO_SPEED during takeoff (FlightTaskAuto.cpp `_updateTrajConstraints`, l. 819-843,
+/// chooses them from PX4's waypoint type, not from the injected setpoint); while landing the auto modes'
+/// vertical caps `z_caps` (the land speed is only PX4's own velocity setpoint).
+fn caps(nav_sp: &Setpoint, z_caps: Option<(f64, f64)>) -> (f64, f64, f64) {
+    match *nav_sp {
+        Setpoint::Position {
+            h_speed_m_s,
+            up_speed_m_s,
+            down_speed_m_s,
+            ..
+        } => (h_speed_m_s, up_speed_m_s, down_speed_m_s),
+        Setpoint::XyPositionZVelocity {
+            h_speed_m_s, vel_z_m_s, ..
+        } => {
+            let (up, down) = z_caps.unwrap_or((vel_z_m_s.abs(), vel_z_m_s.abs()));
+            (h_speed_m_s, up, down)
+        }
+        Setpoint::Velocity { .. } | Setpoint::Idle => (5.0, 1.0, 1.0),
+    }
+}
+
+/// The setpoint to fly for a fresh answer, within the navigator's caps (`nav_sp`).
+fn answer_setpoint(a: &Answer, nav_sp: &Setpoint, z_caps: Option<(f64, f64)>) -> Setpoint {
+    let (h_speed_m_s, up_speed_m_s, down_speed_m_s) = caps(nav_sp, z_caps);
+    let vz = |vz: f64| vz.clamp(-up_speed_m_s, down_speed_m_s);
+    match a.target {
+        Target::Position(target_ned) => Setpoint::Position {
+            target_ned,
+            h_speed_m_s,
+            up_speed_m_s,
+            down_speed_m_s,
+            yaw_rad: a.yaw,
+        },
+        Target::XyPositionZVelocity(target_xy_ned, vel_z_m_s) => Setpoint::XyPositionZVelocity {
+            target_xy_ned,
+            h_speed_m_s,
+            vel_z_m_s: vz(vel_z_m_s),
+            yaw_rad: a.yaw,
+        },
+        Target::Velocity(v) => Setpoint::Velocity {
+            vel_ned: Ned::new(v.x, v.y, vz(v.z)),
+            yaw_rad: a.yaw,
+        },
     }
 }
 
@@ -205,6 +254,18 @@ fn request(
             target_ned, yaw_rad, ..
         } => {
             set_point(&mut t, 0, target_ned);
+            t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
+        }
+        Setpoint::XyPositionZVelocity {
+            target_xy_ned: (n, e),
+            vel_z_m_s,
+            yaw_rad,
+            ..
+        } => {
+            // PX4's land setpoint as it asks the companion: position (x, y, NaN), velocity (NaN, NaN, vz).
+            t.pos_x[0] = n as f32;
+            t.pos_y[0] = e as f32;
+            t.vel_z[0] = vel_z_m_s as f32;
             t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
         }
         Setpoint::Velocity { vel_ned, .. } => {
