@@ -162,17 +162,14 @@ impl Avoidance {
                     self.timeout_reported = true;
                     texts.push((MavSeverity::MAV_SEVERITY_CRITICAL, "Avoidance system timeout".into()));
                 }
-                let h = *self.hold.get_or_insert(pos);
-                if h.z >= -0.05 {
-                    Setpoint::Idle
-                } else {
-                    Setpoint::Position {
-                        target_ned: h,
-                        h_speed_m_s: 1.0,
-                        up_speed_m_s: 1.0,
-                        down_speed_m_s: 1.0,
-                        yaw_rad: None,
-                    }
+                // PX4 holds the position where the answers stopped, also at the ground, where that is no
+                // commanded descent, so it never lands (ObstacleAvoidance.cpp l. 96-104).
+                Setpoint::Position {
+                    target_ned: *self.hold.get_or_insert(pos),
+                    h_speed_m_s: 1.0,
+                    up_speed_m_s: 1.0,
+                    down_speed_m_s: 1.0,
+                    yaw_rad: None,
                 }
             }
         };
@@ -354,6 +351,43 @@ mod tests {
         assert!(matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(1.0, 0.0, -10.0)));
         assert_eq!(texts.len(), 1);
         assert!(texts[0].1.contains("timeout"));
+    }
+
+    #[test]
+    fn silence_at_the_ground_holds_position_and_land_answers_keep_their_shape() {
+        let mut a = Avoidance::default();
+        let mut texts = vec![];
+        let land = Setpoint::XyPositionZVelocity {
+            target_xy_ned: (2.0, 3.0),
+            h_speed_m_s: 5.0,
+            vel_z_m_s: 0.7,
+            yaw_rad: None,
+        };
+        let ground = Ned::new(2.0, 3.0, 0.0);
+        let (_, m) = a.apply(Duration::ZERO, land, ground, [None, None], 0, &mut texts);
+        let Some(MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(req)) = m else {
+            panic!("request expected")
+        };
+        // PX4's land setpoint as the companion sees it.
+        assert_eq!((req.pos_x[0], req.pos_y[0], req.vel_z[0]), (2.0, 3.0, 0.7));
+        assert!(req.pos_z[0].is_nan() && req.vel_x[0].is_nan() && req.vel_y[0].is_nan());
+        // No answer: hold where the answers stopped, even on the ground (not idle: that would land).
+        let (s, _) = a.apply(Duration::from_secs(1), land, ground, [None, None], 0, &mut texts);
+        assert!(
+            matches!(s, Setpoint::Position { target_ned, .. } if target_ned == ground),
+            "{s:?}"
+        );
+        // Its mirror flies PX4's land setpoint, within the auto modes' vertical caps.
+        let mut answer = req.clone();
+        answer.valid_points = 1;
+        answer.vel_z[0] = 9.0;
+        a.set_z_caps(3.0, 1.5);
+        a.on_trajectory(Duration::from_millis(1100), &answer);
+        let (s, _) = a.apply(Duration::from_millis(1200), land, ground, [None, None], 0, &mut texts);
+        assert!(
+            matches!(s, Setpoint::XyPositionZVelocity { target_xy_ned: (2.0, 3.0), vel_z_m_s, .. } if vel_z_m_s == 1.5),
+            "{s:?}"
+        );
     }
 
     #[test]

@@ -16,7 +16,7 @@
 
 use std::time::Duration;
 
-use crate::dynamics::{GRAVITY_M_S2, Ned};
+use crate::dynamics::{Body, GRAVITY_M_S2, Ned};
 use crate::params::ParamTable;
 
 /// PX4's `systemlib::Hysteresis` as the land detector uses it: a change to true takes effect after the
@@ -112,6 +112,19 @@ pub struct LandInputs {
     pub on_ground: bool,
     /// The trajectory setpoint's velocity (local NED m/s) from the controller; None when idle.
     pub vel_sp_ned: Option<Ned>,
+}
+
+impl LandInputs {
+    /// What the detector sees of `body` with trajectory setpoint velocity `vel_sp_ned`.
+    pub fn of(armed: bool, body: &Body, vel_sp_ned: Option<Ned>) -> Self {
+        Self {
+            armed,
+            vel_ned: body.vel_ned,
+            acc_ned: body.acc_ned,
+            on_ground: body.on_ground(),
+            vel_sp_ned,
+        }
+    }
 }
 
 /// The land detector's state (landed at boot, as PX4's hysteresis objects start true: LandDetector.h).

@@ -394,13 +394,7 @@ impl Vehicle {
         if !self.crashed {
             self.body.step(&sp, &self.limits, dt.as_secs_f64());
         }
-        let inputs = LandInputs {
-            armed: self.armed,
-            vel_ned: self.body.vel_ned,
-            acc_ned: self.body.acc_ned,
-            on_ground: self.body.on_ground(),
-            vel_sp_ned: vel_sp_ned.filter(|_| !self.crashed),
-        };
+        let inputs = LandInputs::of(self.armed, &self.body, vel_sp_ned.filter(|_| !self.crashed));
         self.land_detector
             .update(self.now, dt.as_secs_f64(), &inputs, &self.land_params);
         self.detect_land_and_takeoff();
