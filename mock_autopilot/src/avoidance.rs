@@ -17,16 +17,29 @@ pub const SEND_PERIOD: Duration = Duration::from_millis(200);
 pub const ANSWER_TIMEOUT: Duration = Duration::from_millis(500);
 /// Without a companion heartbeat for this long the avoidance system counts as lost.
 pub const HEARTBEAT_TIMEOUT: Duration = Duration::from_secs(5);
-const LAND: u16 = mavlink::dialects::common::MavCmd::MAV_CMD_NAV_LAND as u16;
 
-/// Companion setpoint from point 0 (local NED).
+/// What the companion's point 0 asks for, by which of its components are finite (local NED).
+///
+/// PX4 copies point 0's position and velocity over its own setpoint (ObstacleAvoidance.cpp
+/// `injectAvoidanceSetpoints`, release/1.14 l. 116-119), and its trajectory generator then treats a finite
+/// position axis as a target and a NaN one as "follow the velocity" (PositionSmoothing.cpp
+/// `_generateVelocitySetpoint`, l. 170-257).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Target {
+    /// Position (x, y, z): fly there (a velocity alongside is a feed-forward the mock ignores).
+    Position(Ned),
+    /// Position (x, y, NaN) with velocity z: hold x, y and climb or descend at that rate (PX4's own land
+    /// setpoint has this shape).
+    XyPositionZVelocity((f64, f64), f64),
+    /// Position NaN, velocity (vx, vy, vz).
+    Velocity(Ned),
+}
+
+/// Companion setpoint from point 0.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Answer {
-    pos: Option<Ned>,
-    vel: Option<Ned>,
+    target: Target,
     yaw: Option<f64>,
-    /// Descent speed of a land answer (z unset, z velocity set), m/s down.
-    descend: Option<f64>,
     at: Duration,
 }
 
@@ -42,6 +55,9 @@ pub struct Avoidance {
     lost_reported: bool,
     /// A request went out and no valid answer came since (lockstep waits on this).
     awaiting: bool,
+    /// Vertical speed caps (up, down), m/s, of PX4's auto modes (MPC_Z_V_AUTO_UP/DN; the mock's
+    /// MPC_Z_VEL_MAX_UP/DN), for a companion's position during landing.
+    z_caps_m_s: Option<(f64, f64)>,
 }
 
 fn finite3(x: f32, y: f32, z: f32) -> Option<Ned> {
@@ -60,27 +76,19 @@ impl Avoidance {
         if t.valid_points == 0 {
             return;
         }
-        let mut pos = finite3(t.pos_x[0], t.pos_y[0], t.pos_z[0]);
+        let pos = finite3(t.pos_x[0], t.pos_y[0], t.pos_z[0]);
         let vel = finite3(t.vel_x[0], t.vel_y[0], t.vel_z[0]);
-        // PX4's own kind of land setpoint (x, y held, z unset, descent speed; FlightTaskAuto.cpp
-        // _prepareLandSetpoints), as PX4-Avoidance answers while landing: the mock's descent model aims below
-        // the ground at that speed, as its navigator does for its own landing.
-        let mut descend = None;
-        if pos.is_none() && t.pos_x[0].is_finite() && t.pos_y[0].is_finite() && t.vel_z[0].is_finite() {
-            pos = Some(Ned::new(t.pos_x[0].into(), t.pos_y[0].into(), 1.0));
-            descend = Some(f64::from(t.vel_z[0]).max(0.1));
-        }
-        if pos.is_none() && vel.is_none() {
-            return;
-        }
+        let xy_vz = (t.pos_x[0].is_finite() && t.pos_y[0].is_finite() && t.vel_z[0].is_finite())
+            .then(|| ((f64::from(t.pos_x[0]), f64::from(t.pos_y[0])), f64::from(t.vel_z[0])));
+        let target = match (pos, xy_vz, vel) {
+            (Some(p), _, _) => Target::Position(p),
+            (None, Some((xy, vz)), _) => Target::XyPositionZVelocity(xy, vz),
+            (None, None, Some(v)) => Target::Velocity(v),
+            // Nothing PX4's controller could track on every axis.
+            (None, None, None) => return,
+        };
         let yaw = t.pos_yaw[0].is_finite().then(|| f64::from(t.pos_yaw[0]));
-        self.answer = Some(Answer {
-            pos,
-            vel,
-            yaw,
-            descend,
-            at: now,
-        });
+        self.answer = Some(Answer { target, yaw, at: now });
         self.awaiting = false;
         self.timeout_reported = false;
         self.hold = None;
@@ -105,6 +113,11 @@ impl Avoidance {
     /// its clock here (as PX4 SITL waits for its simulator), so the plan is never late in vehicle time.
     pub fn awaiting_answer(&self, now: Duration) -> bool {
         self.awaiting && self.is_healthy(now)
+    }
+
+    /// The auto modes' vertical speed caps (up, down), m/s, positive.
+    pub fn set_z_caps(&mut self, up_m_s: f64, down_m_s: f64) {
+        self.z_caps_m_s = Some((up_m_s, down_m_s));
     }
 
     /// Stop waiting for the latest request's answer (the lockstep wait timed out).
@@ -140,58 +153,74 @@ impl Avoidance {
         let fresh = self
             .answer
             .filter(|a| a.at >= since && now.saturating_sub(a.at) <= ANSWER_TIMEOUT);
-        let sp = match (fresh, nav_sp) {
-            (
-                Some(a),
-                Setpoint::Position {
-                    h_speed_m_s,
-                    up_speed_m_s,
-                    down_speed_m_s,
-                    ..
-                },
-            ) if a.pos.is_some() => Setpoint::Position {
-                target_ned: a.pos.unwrap_or(pos),
-                h_speed_m_s,
-                up_speed_m_s,
-                down_speed_m_s: a.descend.unwrap_or(down_speed_m_s),
-                yaw_rad: a.yaw,
-            },
-            (Some(a), _) if a.vel.is_some() => Setpoint::Velocity {
-                vel_ned: a.vel.unwrap_or_default(),
-                yaw_rad: a.yaw,
-            },
-            (Some(a), other) => match a.pos {
-                Some(p) => Setpoint::Position {
-                    target_ned: p,
-                    h_speed_m_s: 5.0,
-                    up_speed_m_s: 1.0,
-                    down_speed_m_s: 1.0,
-                    yaw_rad: a.yaw,
-                },
-                None => other,
-            },
-            (None, _) => {
+        let sp = match fresh {
+            Some(a) => answer_setpoint(&a, &nav_sp, self.z_caps_m_s),
+            None => {
                 if now.saturating_sub(self.answer.map_or(since, |a| a.at.max(since))) > ANSWER_TIMEOUT
                     && !self.timeout_reported
                 {
                     self.timeout_reported = true;
                     texts.push((MavSeverity::MAV_SEVERITY_CRITICAL, "Avoidance system timeout".into()));
                 }
-                let h = *self.hold.get_or_insert(pos);
-                if h.z >= -0.05 {
-                    Setpoint::Idle
-                } else {
-                    Setpoint::Position {
-                        target_ned: h,
-                        h_speed_m_s: 1.0,
-                        up_speed_m_s: 1.0,
-                        down_speed_m_s: 1.0,
-                        yaw_rad: None,
-                    }
+                // PX4 holds the position where the answers stopped, also at the ground, where that is no
+                // commanded descent, so it never lands (ObstacleAvoidance.cpp l. 96-104).
+                Setpoint::Position {
+                    target_ned: *self.hold.get_or_insert(pos),
+                    h_speed_m_s: 1.0,
+                    up_speed_m_s: 1.0,
+                    down_speed_m_s: 1.0,
+                    yaw_rad: None,
                 }
             }
         };
         (sp, msg)
+    }
+}
+
+/// The speed caps (horizontal, up, down; m/s) PX4 keeps applying whatever the companion sends: the
+/// navigator's own, e.g. MPC_TKO_SPEED during takeoff (FlightTaskAuto.cpp `_updateTrajConstraints`, l. 819-843,
+/// chooses them from PX4's waypoint type, not from the injected setpoint); while landing the auto modes'
+/// vertical caps `z_caps` (the land speed is only PX4's own velocity setpoint).
+fn caps(nav_sp: &Setpoint, z_caps: Option<(f64, f64)>) -> (f64, f64, f64) {
+    match *nav_sp {
+        Setpoint::Position {
+            h_speed_m_s,
+            up_speed_m_s,
+            down_speed_m_s,
+            ..
+        } => (h_speed_m_s, up_speed_m_s, down_speed_m_s),
+        Setpoint::XyPositionZVelocity {
+            h_speed_m_s, vel_z_m_s, ..
+        } => {
+            let (up, down) = z_caps.unwrap_or((vel_z_m_s.abs(), vel_z_m_s.abs()));
+            (h_speed_m_s, up, down)
+        }
+        Setpoint::Velocity { .. } | Setpoint::Idle => (5.0, 1.0, 1.0),
+    }
+}
+
+/// The setpoint to fly for a fresh answer, within the navigator's caps (`nav_sp`).
+fn answer_setpoint(a: &Answer, nav_sp: &Setpoint, z_caps: Option<(f64, f64)>) -> Setpoint {
+    let (h_speed_m_s, up_speed_m_s, down_speed_m_s) = caps(nav_sp, z_caps);
+    let vz = |vz: f64| vz.clamp(-up_speed_m_s, down_speed_m_s);
+    match a.target {
+        Target::Position(target_ned) => Setpoint::Position {
+            target_ned,
+            h_speed_m_s,
+            up_speed_m_s,
+            down_speed_m_s,
+            yaw_rad: a.yaw,
+        },
+        Target::XyPositionZVelocity(target_xy_ned, vel_z_m_s) => Setpoint::XyPositionZVelocity {
+            target_xy_ned,
+            h_speed_m_s,
+            vel_z_m_s: vz(vel_z_m_s),
+            yaw_rad: a.yaw,
+        },
+        Target::Velocity(v) => Setpoint::Velocity {
+            vel_ned: Ned::new(v.x, v.y, vz(v.z)),
+            yaw_rad: a.yaw,
+        },
     }
 }
 
@@ -224,17 +253,22 @@ fn request(
     };
     match *nav_sp {
         Setpoint::Position {
-            target_ned,
-            yaw_rad,
-            down_speed_m_s,
-            ..
+            target_ned, yaw_rad, ..
         } => {
             set_point(&mut t, 0, target_ned);
             t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
-            if sp_command == LAND {
-                t.pos_z[0] = f32::NAN;
-                t.vel_z[0] = down_speed_m_s as f32;
-            }
+        }
+        Setpoint::XyPositionZVelocity {
+            target_xy_ned: (n, e),
+            vel_z_m_s,
+            yaw_rad,
+            ..
+        } => {
+            // PX4's land setpoint as it asks the companion: position (x, y, NaN), velocity (NaN, NaN, vz).
+            t.pos_x[0] = n as f32;
+            t.pos_y[0] = e as f32;
+            t.vel_z[0] = vel_z_m_s as f32;
+            t.pos_yaw[0] = yaw_rad.map_or(f32::NAN, |y| y as f32);
         }
         Setpoint::Velocity { vel_ned, .. } => {
             t.vel_x[0] = vel_ned.x as f32;
@@ -330,6 +364,57 @@ mod tests {
         assert!(matches!(s, Setpoint::Position { target_ned, .. } if target_ned == Ned::new(1.0, 0.0, -10.0)));
         assert_eq!(texts.len(), 1);
         assert!(texts[0].1.contains("timeout"));
+    }
+
+    #[test]
+    fn silence_at_the_ground_holds_position_and_land_answers_keep_their_shape() {
+        let mut a = Avoidance::default();
+        let mut texts = vec![];
+        let land = Setpoint::XyPositionZVelocity {
+            target_xy_ned: (2.0, 3.0),
+            h_speed_m_s: 5.0,
+            vel_z_m_s: 0.7,
+            yaw_rad: None,
+        };
+        let ground = Ned::new(2.0, 3.0, 0.0);
+        let (_, m) = a.apply(Duration::ZERO, land, ground, (u16::MAX, [None, None]), 0, &mut texts);
+        let Some(MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(req)) = m else {
+            panic!("request expected")
+        };
+        // PX4's land setpoint as the companion sees it.
+        assert_eq!((req.pos_x[0], req.pos_y[0], req.vel_z[0]), (2.0, 3.0, 0.7));
+        assert!(req.pos_z[0].is_nan() && req.vel_x[0].is_nan() && req.vel_y[0].is_nan());
+        // No answer: hold where the answers stopped, even on the ground (not idle: that would land).
+        let (s, _) = a.apply(
+            Duration::from_secs(1),
+            land,
+            ground,
+            (u16::MAX, [None, None]),
+            0,
+            &mut texts,
+        );
+        assert!(
+            matches!(s, Setpoint::Position { target_ned, .. } if target_ned == ground),
+            "{s:?}"
+        );
+        // Its mirror flies PX4's land setpoint, within the auto modes' vertical caps.
+        let mut answer = req.clone();
+        answer.valid_points = 1;
+        answer.vel_z[0] = 9.0;
+        a.set_z_caps(3.0, 1.5);
+        a.on_trajectory(Duration::from_millis(1100), &answer);
+        let (s, _) = a.apply(
+            Duration::from_millis(1200),
+            land,
+            ground,
+            (u16::MAX, [None, None]),
+            0,
+            &mut texts,
+        );
+        assert!(
+            matches!(s, Setpoint::XyPositionZVelocity { target_xy_ned: (2.0, 3.0), vel_z_m_s, .. } if vel_z_m_s == 1.5),
+            "{s:?}"
+        );
     }
 
     #[test]

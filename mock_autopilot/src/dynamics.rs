@@ -68,6 +68,18 @@ pub enum Setpoint {
         /// Heading to turn to (rad, 0 = North, clockwise), None to keep.
         yaw_rad: Option<f64>,
     },
+    /// Hold a horizontal position and track a vertical velocity: PX4's land setpoint, position (x, y, NaN)
+    /// with velocity (NaN, NaN, vz) (FlightTaskAuto.cpp `_prepareLandSetpoints`, release/1.14 l. 297-299).
+    XyPositionZVelocity {
+        /// Horizontal target, local NED metres (x North, y East).
+        target_xy_ned: (f64, f64),
+        /// Horizontal speed cap, m/s (positive).
+        h_speed_m_s: f64,
+        /// Vertical velocity, m/s, NED (positive down).
+        vel_z_m_s: f64,
+        /// Heading to turn to, None to keep.
+        yaw_rad: Option<f64>,
+    },
     /// Track a velocity (local NED, m/s).
     Velocity {
         /// Velocity, local NED m/s.
@@ -144,16 +156,21 @@ impl Body {
         (right.atan2(up), -fwd.atan2(up))
     }
 
-    /// Advance by `dt_s` seconds towards `sp` within `lim`.
-    pub fn step(&mut self, sp: &Setpoint, lim: &Limits, dt_s: f64) {
-        let (vel_des, yaw_des) = match *sp {
-            Setpoint::Idle => {
-                self.vel_ned = Ned::zeros();
-                self.acc_ned = Ned::zeros();
-                self.yaw_rate_rad_s = 0.0;
-                self.pos_ned.z = 0.0_f64.max(self.pos_ned.z);
-                return;
+    /// The velocity (local NED, m/s) and heading the controller tracks for `sp` from the current state, as
+    /// PX4's trajectory setpoint; None for `Idle` (motors idle, no velocity setpoint).
+    pub fn velocity_setpoint(&self, sp: &Setpoint, lim: &Limits) -> Option<(Ned, Option<f64>)> {
+        let horizontal = |n: f64, e: f64, cap: f64| {
+            let err_h = Ned::new(n - self.pos_ned.x, e - self.pos_ned.y, 0.0);
+            let d_h = err_h.norm();
+            if d_h > 1e-9 {
+                let cap = cap.min(lim.max_h_speed_m_s);
+                err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, d_h, 0.0)) / d_h)
+            } else {
+                Ned::zeros()
             }
+        };
+        match *sp {
+            Setpoint::Idle => None,
             Setpoint::Position {
                 target_ned,
                 h_speed_m_s,
@@ -161,21 +178,23 @@ impl Body {
                 down_speed_m_s,
                 yaw_rad,
             } => {
-                let err = target_ned - self.pos_ned;
-                let err_h = Ned::new(err.x, err.y, 0.0);
-                let d_h = err_h.norm();
-                let v_h = if d_h > 1e-9 {
-                    let cap = h_speed_m_s.min(lim.max_h_speed_m_s);
-                    err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, d_h, 0.0)) / d_h)
+                let v_h = horizontal(target_ned.x, target_ned.y, h_speed_m_s);
+                let err_z = target_ned.z - self.pos_ned.z;
+                let v_z = if err_z < 0.0 {
+                    -approach_speed(-err_z, up_speed_m_s, 0.5 * lim.acc_down_m_s2)
                 } else {
-                    Ned::zeros()
+                    approach_speed(err_z, down_speed_m_s, 0.5 * lim.acc_up_m_s2)
                 };
-                let v_z = if err.z < 0.0 {
-                    -approach_speed(-err.z, up_speed_m_s, 0.5 * lim.acc_down_m_s2)
-                } else {
-                    approach_speed(err.z, down_speed_m_s, 0.5 * lim.acc_up_m_s2)
-                };
-                (Ned::new(v_h.x, v_h.y, v_z), yaw_rad)
+                Some((Ned::new(v_h.x, v_h.y, v_z), yaw_rad))
+            }
+            Setpoint::XyPositionZVelocity {
+                target_xy_ned: (n, e),
+                h_speed_m_s,
+                vel_z_m_s,
+                yaw_rad,
+            } => {
+                let v_h = horizontal(n, e, h_speed_m_s);
+                Some((Ned::new(v_h.x, v_h.y, vel_z_m_s), yaw_rad))
             }
             Setpoint::Velocity { vel_ned, yaw_rad } => {
                 let mut v = vel_ned;
@@ -184,8 +203,19 @@ impl Body {
                     v.x *= lim.max_h_speed_m_s / h;
                     v.y *= lim.max_h_speed_m_s / h;
                 }
-                (v, yaw_rad)
+                Some((v, yaw_rad))
             }
+        }
+    }
+
+    /// Advance by `dt_s` seconds towards `sp` within `lim`.
+    pub fn step(&mut self, sp: &Setpoint, lim: &Limits, dt_s: f64) {
+        let Some((vel_des, yaw_des)) = self.velocity_setpoint(sp, lim) else {
+            self.vel_ned = Ned::zeros();
+            self.acc_ned = Ned::zeros();
+            self.yaw_rate_rad_s = 0.0;
+            self.pos_ned.z = 0.0_f64.max(self.pos_ned.z);
+            return;
         };
         let mut acc_des = (vel_des - self.vel_ned) * VEL_GAIN;
         let h = acc_des.xy().norm();

@@ -21,6 +21,7 @@ pub mod commands;
 pub mod dynamics;
 pub mod fence;
 pub mod geo;
+pub mod land_detector;
 pub mod link;
 pub mod messages;
 pub mod mission_items;

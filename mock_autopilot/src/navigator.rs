@@ -126,6 +126,8 @@ pub struct NavCtx<'a> {
     pub p: &'a NavParams,
     /// Home, local NED.
     pub home: Ned,
+    /// The land detector says landed (PX4's `vehicle_land_detected.landed`).
+    pub landed: bool,
 }
 
 fn heading_to(from: &Ned, to: &Ned) -> Option<f64> {
@@ -293,11 +295,17 @@ impl Navigator {
         self.goto(self.hold, ctx.p.cruise_m_s, ctx.p.up_m_s, ctx.p.down_m_s, None)
     }
 
+    /// PX4's land setpoint: hold the land point horizontally, descend at the land speed for the height
+    /// (FlightTaskAuto.cpp `_prepareLandSetpoints`, release/1.14 l. 232-301: position (x, y, NaN), velocity
+    /// (NaN, NaN, speed)); it keeps pushing into the ground until the land detector fires.
     fn descend(&self, ctx: &NavCtx, xy: (f64, f64)) -> Setpoint {
         let alt = -ctx.body.pos_ned.z;
-        let v = ctx.p.land_speed_at(alt);
-        // Aim below the ground so the descent never stops short of touchdown.
-        self.goto(Ned::new(xy.0, xy.1, 1.0), ctx.p.cruise_m_s, ctx.p.up_m_s, v, None)
+        Setpoint::XyPositionZVelocity {
+            target_xy_ned: xy,
+            h_speed_m_s: ctx.p.cruise_m_s,
+            vel_z_m_s: ctx.p.land_speed_at(alt),
+            yaw_rad: None,
+        }
     }
 
     /// One update: the setpoint to fly and what happened.
@@ -505,7 +513,9 @@ impl Navigator {
                             return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
                         }
                         Phase::Descend { xy } => {
-                            if ctx.body.on_ground() {
+                            // A land item is reached when the land detector says landed (mission_block.cpp
+                            // l. 101-103), not at touchdown.
+                            if ctx.landed {
                                 self.advance(ev);
                                 self.hold = pos;
                                 continue;

@@ -8,6 +8,7 @@ fn ctx<'a>(now: Duration, body: &'a Body, p: &'a NavParams) -> NavCtx<'a> {
         armed: true,
         p,
         home: Ned::zeros(),
+        landed: false,
     }
 }
 

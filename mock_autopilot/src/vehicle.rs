@@ -15,6 +15,7 @@ use crate::avoidance::Avoidance;
 use crate::dynamics::{Body, Limits, Ned, Setpoint};
 use crate::fence::Fence;
 use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
+use crate::land_detector::{LandDetector, LandInputs, LandParams};
 use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
 use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
@@ -111,6 +112,8 @@ pub struct Vehicle {
     pub(crate) landed: bool,
     pub(crate) landed_since: Duration,
     took_off: bool,
+    pub(crate) land_detector: LandDetector,
+    land_params: LandParams,
     pub(crate) home_ned: Ned,
     pub(crate) origin: GeoPoint,
     pub(crate) proj: LocalProjection,
@@ -141,6 +144,7 @@ impl Vehicle {
             boot_at: Duration::ZERO,
             limits: Limits::from_params(&params),
             nav_params: NavParams::from_params(&params),
+            land_params: LandParams::from_params(&params),
             params_seen: params.version(),
             params,
             missions: MissionServer::new(cfg.reject_mission),
@@ -150,6 +154,7 @@ impl Vehicle {
             landed: true,
             landed_since: Duration::ZERO,
             took_off: false,
+            land_detector: LandDetector::default(),
             home_ned: Ned::zeros(),
             origin: cfg.home,
             proj,
@@ -212,6 +217,7 @@ impl Vehicle {
         self.landed = true;
         self.landed_since = self.now;
         self.took_off = false;
+        self.land_detector.reset_landed();
         self.crashed = false;
         self.failsafe = false;
         self.offboard = None;
@@ -380,14 +386,20 @@ impl Vehicle {
             self.params_seen = self.params.version();
             self.limits = Limits::from_params(&self.params);
             self.nav_params = NavParams::from_params(&self.params);
+            self.land_params = LandParams::from_params(&self.params);
         }
         let actions = self.missions.on_tick(self.now);
         self.apply_mission_actions(actions);
         self.offboard_failsafe();
         let sp = self.navigate();
+        // What the controller tracks this step: PX4's trajectory setpoint, which the land detector watches.
+        let vel_sp_ned = self.body.velocity_setpoint(&sp, &self.limits).map(|(v, _)| v);
         if !self.crashed {
             self.body.step(&sp, &self.limits, dt.as_secs_f64());
         }
+        let inputs = LandInputs::of(self.armed, &self.body, vel_sp_ned.filter(|_| !self.crashed));
+        self.land_detector
+            .update(self.now, dt.as_secs_f64(), &inputs, &self.land_params);
         self.detect_land_and_takeoff();
         self.check_fence();
         self.check_collision();
@@ -402,6 +414,7 @@ impl Vehicle {
             armed: self.armed,
             p: &self.nav_params,
             home: self.home_ned,
+            landed: self.land_detector.landed(),
         };
         let mut sp = self.nav.update(&ctx, &mut events);
         for e in events {
@@ -422,6 +435,8 @@ impl Vehicle {
         if self.params.f64("COM_OBS_AVOID") >= 1.0 && self.nav.mode().is_auto() && self.armed {
             let mut texts = Vec::new();
             let time_usec = u64::from(self.time_boot_ms()) * 1000;
+            self.avoidance
+                .set_z_caps(self.nav_params.up_m_s, self.nav_params.down_m_s);
             let (s, msg) = self.avoidance.apply(
                 self.now,
                 sp,
@@ -445,7 +460,8 @@ impl Vehicle {
             self.landed = false;
             self.took_off = true;
             self.text(MavSeverity::MAV_SEVERITY_INFO, "Takeoff detected");
-        } else if !self.landed && on_ground {
+        } else if !self.landed && self.land_detector.landed() {
+            // PX4's commander reports the land detector's verdict, not the touchdown (Commander.cpp l. 1984).
             self.landed = true;
             self.landed_since = self.now;
             self.text(MavSeverity::MAV_SEVERITY_INFO, "Landing detected");
@@ -453,7 +469,8 @@ impl Vehicle {
         if self.armed && self.landed {
             let secs = |name: &str| self.params.f64(name);
             let on_ground_for = self.now.saturating_sub(self.landed_since).as_secs_f64();
-            if self.took_off && secs("COM_DISARM_LAND") >= 0.0 && on_ground_for >= secs("COM_DISARM_LAND") {
+            // A zero or negative COM_DISARM_LAND disables it (commander_params.c l. 200-214, Commander.cpp l. 2136).
+            if self.took_off && secs("COM_DISARM_LAND") > 0.0 && on_ground_for >= secs("COM_DISARM_LAND") {
                 self.disarm("landing");
             } else if !self.took_off && secs("COM_DISARM_PRFLT") > 0.0 && on_ground_for >= secs("COM_DISARM_PRFLT") {
                 self.disarm("auto preflight disarming");
@@ -502,6 +519,7 @@ impl Vehicle {
         self.body.acc_ned = Ned::zeros();
         self.landed = true;
         self.landed_since = self.now;
+        self.land_detector.reset_landed();
     }
 
     fn check_collision(&mut self) {
@@ -576,3 +594,7 @@ fn target_of(msg: &MavMessage) -> Option<(u8, u8)> {
 #[cfg(test)]
 #[path = "vehicle_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "vehicle_landing_tests.rs"]
+mod landing_tests;
