@@ -44,6 +44,7 @@ const DEFAULTS: &[(&str, ParamValue)] = {
         ("COM_OBL_RC_ACT", I(0)),
         ("COM_OF_LOSS_T", F(0.5)),
         ("GF_ACTION", I(2)),
+        ("MIS_DIST_1WP", F(900.0)),
         ("MIS_TAKEOFF_ALT", F(2.5)),
         ("MIS_YAW_ERR", F(12.0)),
         ("MPC_ACC_DOWN_MAX", F(3.0)),

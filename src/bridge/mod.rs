@@ -19,6 +19,7 @@
 pub mod avoidance;
 pub mod cancel;
 pub mod clock;
+pub mod clock_watch;
 pub mod command;
 pub mod exchange;
 pub mod flight;
@@ -26,11 +27,13 @@ pub mod gazebo;
 pub mod link;
 pub mod mission_download;
 pub mod mission_upload;
+pub mod notices;
 pub mod offboard;
 pub mod params;
 pub mod plan_items;
 pub mod planner_steer;
 pub mod predict;
+pub mod ready;
 pub mod recorder;
 pub mod report;
 pub mod session;
@@ -93,6 +96,14 @@ pub struct FlyOptions {
     /// measure the flight timeout in the vehicle's reported time, and do not count the vehicle's silence
     /// while it waits for us as a lost link. `time_scale` is then an upper bound.
     pub lockstep: Option<Duration>,
+    /// Wait at most this long (vehicle seconds) for the vehicle to become ready to arm (estimator, GPS fix,
+    /// home, PX4's pre-arm checks); arming is retried within the same budget.
+    pub ready_timeout_s: f64,
+    /// Measure the vehicle's clock rate at connection and use it as `time_scale` (a pool of simulators at
+    /// unknown speed); `time_scale` is then only the assumption until measured.
+    pub detect_time_scale: bool,
+    /// Live notices (vehicle messages, readiness, clock warnings), e.g. printed by the CLI.
+    pub notices: Option<notices::NoticeSink>,
 }
 
 impl Default for FlyOptions {
@@ -109,6 +120,9 @@ impl Default for FlyOptions {
             target_system: None,
             lfs_min_distance: None,
             lockstep: None,
+            ready_timeout_s: 60.0,
+            detect_time_scale: false,
+            notices: None,
         }
     }
 }
@@ -162,6 +176,7 @@ impl FlyOptions {
             ("time scale", self.time_scale),
             ("heartbeat wait", self.heartbeat_wait_s),
             ("link-loss time", self.link_loss_s),
+            ("ready timeout", self.ready_timeout_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BridgeError::Invalid(format!("{name} {v} is not a positive number")));

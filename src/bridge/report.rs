@@ -8,7 +8,9 @@ use crate::judge::{ClosestApproach, ObstacleDistance, judge_flight};
 use crate::model::{Obstacle, Trajectory};
 
 use super::FlyMode;
+use super::clock_watch::ClockReport;
 use super::link::LinkStats;
+use super::notices::VehicleMessage;
 
 /// How a flight ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -95,6 +97,12 @@ pub struct FlightReport {
     pub fence_uploaded: bool,
     /// The vehicle's warnings (STATUSTEXT) and the bridge's own.
     pub warnings: Vec<String>,
+    /// Vehicle seconds waited for the vehicle to become ready to arm (`null` if it never was).
+    pub ready_wait_s: Option<f64>,
+    /// Every STATUSTEXT of severity WARNING or worse, with its time and severity.
+    pub vehicle_messages: Vec<VehicleMessage>,
+    /// The vehicle's clock rate against the time scale.
+    pub clock: Option<ClockReport>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -119,6 +127,12 @@ pub struct Ending {
     pub link: LinkStats,
     /// LFS prediction.
     pub lfs_min_distance: Option<f64>,
+    /// Readiness wait, vehicle seconds.
+    pub ready_wait_s: Option<f64>,
+    /// The vehicle's messages.
+    pub vehicle_messages: Vec<VehicleMessage>,
+    /// The clock.
+    pub clock: Option<ClockReport>,
 }
 
 impl FlightReport {
@@ -151,6 +165,9 @@ impl FlightReport {
             mode: end.mode,
             fence_uploaded: end.fence_uploaded,
             warnings: collapse(end.warnings),
+            ready_wait_s: end.ready_wait_s,
+            vehicle_messages: end.vehicle_messages,
+            clock: end.clock,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -185,6 +202,9 @@ mod tests {
             warnings: vec![],
             link: LinkStats::default(),
             lfs_min_distance: Some(1.0),
+            ready_wait_s: None,
+            vehicle_messages: vec![],
+            clock: None,
         }
     }
 

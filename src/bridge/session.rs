@@ -106,6 +106,10 @@ pub struct Session<'a> {
     pub tasks: Tasks,
     /// The avoidance companion's answer counts (avoidance mode).
     pub companion: Arc<super::avoidance::CompanionStats>,
+    /// The vehicle's STATUSTEXT of severity WARNING or worse, as they arrived.
+    pub messages: super::notices::Messages,
+    /// Readiness timing and the arming budget.
+    pub ready: super::ready::Readiness,
 }
 
 /// Runs one flight on `transport`.
@@ -124,8 +128,19 @@ pub async fn run(
     let mut tasks = Tasks::default();
     tasks.push(tokio::spawn(gcs_heartbeat(link.clone())));
     let mut rx = link.subscribe();
+    // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
+    let (texts_rx, mut probe_rx) = (link.subscribe(), link.subscribe());
     let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
+    let clock_report = super::clock_watch::start(&link, opts, &mut probe_rx, &mut tasks).await;
+    drop(probe_rx);
+    let messages = super::notices::Messages::default();
+    tasks.push(super::notices::spawn_collector(
+        texts_rx,
+        link.clock(),
+        messages.clone(),
+        opts.notices.clone(),
+    ));
     let mut s = Session {
         link,
         target,
@@ -139,6 +154,8 @@ pub async fn run(
         restore: Vec::new(),
         tasks,
         companion: Arc::default(),
+        messages,
+        ready: super::ready::Readiness::default(),
     };
     let mut recorder = recorder;
     let stop = match s.prepare().await {
@@ -154,7 +171,17 @@ pub async fn run(
     }
     let mut warnings = std::mem::take(&mut s.view.warnings);
     warnings.append(&mut s.warnings);
-    let reason = (stop.status != Status::Landed).then_some(stop.reason);
+    let mut reason = stop.reason;
+    // A refusal quotes the vehicle's own last words, if it said anything and they are not quoted yet.
+    if stop.status == Status::Rejected
+        && !reason.contains("vehicle")
+        && let Some(said) = super::notices::last_texts(&s.messages, 3)
+    {
+        reason = format!("{reason}; vehicle: {said}");
+    }
+    let reason = (stop.status != Status::Landed).then_some(reason);
+    let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
+    let clock = clock_report.lock().map(|c| c.clone()).ok();
     Ok(FlightReport::judge(
         recorder.trajectory(),
         &test.obstacles,
@@ -166,6 +193,9 @@ pub async fn run(
             warnings,
             link: s.link.stats(),
             lfs_min_distance: opts.lfs_min_distance,
+            ready_wait_s: s.ready.waited_s,
+            vehicle_messages,
+            clock,
         },
     ))
 }
@@ -262,7 +292,8 @@ impl Session<'_> {
         self.upload_mission().await?;
         self.upload_fence().await?;
         self.request_streams().await;
-        self.wait_home().await
+        let mut st = super::ready::ReadyState::default();
+        super::ready::wait_ready(self, &mut st).await
     }
 
     async fn set_params(&mut self) -> Result<(), Stop> {
@@ -291,6 +322,7 @@ impl Session<'_> {
             .exchange(up, &self.cancel)
             .await
             .map_err(|e| stop_for("uploading the mission", e))?;
+        self.ready.mission_uploaded_at = Some(self.link.clock().now());
         let down = MissionDownload::new(self.target, ty, Retry::MISSION);
         let got = self
             .link
@@ -359,36 +391,6 @@ impl Session<'_> {
                     .push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
             }
         }
-    }
-
-    /// Waits (bounded, 30 s vehicle time) for HOME_POSITION, asking for it once.
-    async fn wait_home(&mut self) -> Result<(), Stop> {
-        self.drain();
-        if self.view.home_known {
-            return Ok(());
-        }
-        let p = [242.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-        if let Err(e) = self.command(MavCmd::MAV_CMD_REQUEST_MESSAGE, p).await {
-            self.warnings.push(format!("requesting HOME_POSITION: {e}"));
-        }
-        let clock = self.link.clock();
-        let deadline = clock.now() + Duration::from_secs(30);
-        while !self.view.home_known {
-            let wait = clock.wall_until(deadline);
-            tokio::select! {
-                biased;
-                _ = self.cancel.cancelled() => return Err(Stop::new(Status::Aborted, "cancelled while waiting for home")),
-                r = self.rx.recv() => match r {
-                    Ok(inb) => self.view.update(&inb.msg, clock.now()),
-                    Err(broadcast::error::RecvError::Lagged(_)) => {}
-                    Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wait).await,
-                },
-                _ = tokio::time::sleep(wait) => {
-                    return Err(Stop::new(Status::Rejected, "no home position within 30 s (no GPS fix?)"));
-                }
-            }
-        }
-        Ok(())
     }
 
     /// Puts back changed parameters (bounded; a failure is a warning).

@@ -57,6 +57,16 @@ pub struct CampaignConfig {
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,
+    /// Clock rate of the MAVLink vehicles (`--hfs-time-scale`); `None`: measured on each vehicle at connection.
+    #[serde(default)]
+    pub hfs_time_scale: Option<f64>,
+    /// Give a flight up (LAND) after this many vehicle seconds.
+    #[serde(default = "default_flight_timeout_s")]
+    pub flight_timeout_s: f64,
+}
+
+fn default_flight_timeout_s() -> f64 {
+    crate::bridge::FlyOptions::default().timeout_s
 }
 
 fn default_screen() -> bool {

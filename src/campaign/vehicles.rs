@@ -56,12 +56,24 @@ pub struct LinkVehicle {
 }
 
 impl LinkVehicle {
-    /// A vehicle at `url` (rust-mavlink or MAVSDK address syntax), flown in `mode`.
-    pub fn new(handle: Handle, url: &str, mode: FlyMode, heartbeat_wait_s: f64) -> Self {
+    /// A vehicle at `url` (rust-mavlink or MAVSDK address syntax), flown in `mode`, each flight given up after
+    /// `timeout_s`. Its clock runs `time_scale` times real time, or, with `None`, as measured at each connection
+    /// (a pool of simulators faster than real time).
+    pub fn new(
+        handle: Handle,
+        url: &str,
+        mode: FlyMode,
+        heartbeat_wait_s: f64,
+        time_scale: Option<f64>,
+        timeout_s: f64,
+    ) -> Self {
         let opts = FlyOptions {
             connect: url.to_string(),
             mode,
             heartbeat_wait_s,
+            time_scale: time_scale.unwrap_or(1.0),
+            detect_time_scale: time_scale.is_none(),
+            timeout_s,
             ..FlyOptions::default()
         };
         Self { handle, opts }
@@ -95,6 +107,7 @@ pub struct MockVehicle {
     speed: f64,
     mode: FlyMode,
     lockstep: Option<Duration>,
+    timeout_s: f64,
 }
 
 /// Horizontal cruise speed (MPC_XY_CRUISE, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
@@ -129,7 +142,14 @@ impl MockVehicle {
             speed,
             mode,
             lockstep,
+            timeout_s: FlyOptions::default().timeout_s,
         }
+    }
+
+    /// Each flight is given up (LAND) after `timeout_s` vehicle seconds.
+    pub fn with_timeout(mut self, timeout_s: f64) -> Self {
+        self.timeout_s = timeout_s;
+        self
     }
 }
 
@@ -165,6 +185,7 @@ impl Vehicle for MockVehicle {
             trajectory_csv: Some(csv.to_path_buf()),
             heartbeat_wait_s: 20.0,
             lockstep: self.lockstep,
+            timeout_s: self.timeout_s,
             ..FlyOptions::default()
         };
         let result = fly_blocking(&self.handle, test, &opts, stop);

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::gazebo::world_sdf;
+use prgenuav::bridge::notices::NoticeSink;
 use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
 use prgenuav::io::write_atomic;
 use prgenuav::lfs::sim::MotionModel;
@@ -66,6 +67,13 @@ pub struct Args {
     /// pose this many milliseconds old (--time-scale is then the mock's upper bound).
     #[arg(long, value_name = "LATENCY_MS")]
     lockstep: Option<f64>,
+    /// Wait at most this many (vehicle) seconds for the vehicle to become ready to arm: estimator converged,
+    /// GPS fix, home, PX4's pre-arm checks.
+    #[arg(long, default_value_t = 60.0, value_name = "S")]
+    ready_timeout: f64,
+    /// Do not show the vehicle's messages, readiness and clock warnings on stderr as they arrive.
+    #[arg(long)]
+    quiet: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -107,6 +115,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
             Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
         },
+        ready_timeout_s: args.ready_timeout,
+        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
         ..FlyOptions::default()
     };
     opts.validate()?;
@@ -120,7 +130,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 on_ctrl_c.cancel();
             }
         });
-        if !args.json {
+        if !args.json && !args.quiet {
             eprintln!("waiting for a vehicle on {} ...", args.connect);
         }
         fly(&test, &opts, cancel).await
@@ -176,6 +186,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 "not uploaded"
             }
         );
+        if let Some(w) = report.ready_wait_s {
+            println!("ready after       {w:.1} s");
+        }
+        if let Some(w) = report.clock.as_ref().and_then(|c| c.warning.as_ref()) {
+            println!("clock             {w}");
+        }
         for w in &report.warnings {
             println!("warning           {w}");
         }

@@ -67,6 +67,12 @@ pub struct Args {
     /// clock, so more vehicles than cores can help while the planner keeps up.
     #[arg(long)]
     mock_vehicles: Option<usize>,
+    /// Clock rate of the --hfs vehicles (PX4_SIM_SPEED_FACTOR); default: measured on each vehicle as it connects.
+    #[arg(long, value_name = "K")]
+    hfs_time_scale: Option<f64>,
+    /// Give a flight up (LAND) after this many vehicle seconds.
+    #[arg(long, default_value_t = 500.0, value_name = "S")]
+    timeout: f64,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat.
     #[arg(long, default_value_t = 15.0)]
     connect_timeout: f64,
@@ -135,6 +141,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 mock_lockstep: !args.mock_free_running,
                 mock_latency_ms: args.mock_latency,
                 screen: !args.no_screen,
+                hfs_time_scale: args.hfs_time_scale,
+                flight_timeout_s: args.timeout,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
@@ -145,6 +153,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mode = parse_mode(&cfg.mode)?;
     if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
         bail!("--mock-speed must be at least 1");
+    }
+    if cfg.hfs_time_scale.is_some_and(|k| !(k.is_finite() && k > 0.0)) {
+        bail!("--hfs-time-scale must be a positive number");
+    }
+    if !(cfg.flight_timeout_s.is_finite() && cfg.flight_timeout_s > 0.0) {
+        bail!("--timeout must be a positive number of seconds");
     }
     if !(cfg.mock_latency_ms.is_finite() && (0.0..=1000.0).contains(&cfg.mock_latency_ms)) {
         bail!("--mock-latency {} must be between 0 and 1000 ms", cfg.mock_latency_ms);
@@ -172,13 +186,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         (0..count)
             .map(|i| {
-                Box::new(MockVehicle::new(
-                    runtime.handle().clone(),
-                    i,
-                    cfg.mock_speed,
-                    mode,
-                    lockstep,
-                )) as Box<dyn Vehicle>
+                Box::new(
+                    MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
+                        .with_timeout(cfg.flight_timeout_s),
+                ) as Box<dyn Vehicle>
             })
             .collect()
     } else {
@@ -193,6 +204,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     url,
                     mode,
                     args.connect_timeout,
+                    cfg.hfs_time_scale,
+                    cfg.flight_timeout_s,
                 )) as Box<dyn Vehicle>
             })
             .collect()

@@ -8,6 +8,7 @@ mod geometry_props;
 mod lfs;
 mod missions;
 mod pty;
+mod ready;
 mod rules;
 mod score;
 mod ulog;
