@@ -135,15 +135,11 @@ pub const DETECT_SPAN: Duration = Duration::from_millis(1500);
 
 /// At connection: measures the vehicle's clock and adopts it when `opts.detect_time_scale`, then watches it for
 /// the whole session (the task joins `tasks`). Returns the report the watch keeps up to date.
-pub async fn start(
-    link: &Link,
-    opts: &FlyOptions,
-    probe: &mut broadcast::Receiver<Arc<Inbound>>,
-    tasks: &mut Tasks,
-) -> Arc<Mutex<ClockReport>> {
+pub async fn start(link: &Link, opts: &FlyOptions, tasks: &mut Tasks) -> Arc<Mutex<ClockReport>> {
     let mut measured = None;
     if opts.detect_time_scale {
-        measured = measure(probe, DETECT_SPAN, 2 * DETECT_SPAN).await;
+        // A fresh subscription: messages buffered meanwhile would arrive in a burst and fake a fast clock.
+        measured = measure(&mut link.subscribe(), DETECT_SPAN, 2 * DETECT_SPAN).await;
         if let Some(r) = measured {
             link.set_time_scale(nice(r).max(0.1));
         }
@@ -154,7 +150,6 @@ pub async fn start(
         detected: measured.is_some(),
         warning: None,
     }));
-    // A fresh subscription: buffered messages would arrive in a burst and fake a fast clock.
     tasks.push(spawn_watch(
         link.subscribe(),
         opts.lockstep.is_some(),

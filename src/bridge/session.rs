@@ -129,11 +129,10 @@ pub async fn run(
     tasks.push(tokio::spawn(gcs_heartbeat(link.clone())));
     let mut rx = link.subscribe();
     // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
-    let (texts_rx, mut probe_rx) = (link.subscribe(), link.subscribe());
+    let texts_rx = link.subscribe();
     let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
-    let clock_report = super::clock_watch::start(&link, opts, &mut probe_rx, &mut tasks).await;
-    drop(probe_rx);
+    let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
     let messages = super::notices::Messages::default();
     tasks.push(super::notices::spawn_collector(
         texts_rx,
