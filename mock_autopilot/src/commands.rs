@@ -65,14 +65,22 @@ impl Vehicle {
                     );
                     return MAV_RESULT_DENIED;
                 }
+                // The current item again is "nothing to do" (PX4 v1.14 mission.cpp set_current_mission_index).
                 let first = p[0];
-                if first >= 0.0 && first.is_finite() && !self.nav.set_current(first as usize) {
+                if first >= 0.0
+                    && first.is_finite()
+                    && first as usize != self.nav.current()
+                    && !self.nav.set_current(first as usize)
+                {
                     return MAV_RESULT_DENIED;
                 }
                 if !self.armed && self.try_arm() != MAV_RESULT_ACCEPTED {
                     return MAV_RESULT_TEMPORARILY_REJECTED;
                 }
-                self.set_mode(FlightMode::Mission, self.nav_params.takeoff_alt_m);
+                // Already flying the mission (armed in AUTO.MISSION): the mode stays, nothing restarts.
+                if self.nav.mode() != FlightMode::Mission {
+                    self.set_mode(FlightMode::Mission, self.nav_params.takeoff_alt_m);
+                }
                 MAV_RESULT_ACCEPTED
             }
             MavCmd::MAV_CMD_NAV_TAKEOFF => {
@@ -144,11 +152,11 @@ impl Vehicle {
             );
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
         }
-        if self.params.f64("COM_OBS_AVOID") >= 1.0 && !self.avoidance.is_healthy(self.now) {
-            self.text(
-                MavSeverity::MAV_SEVERITY_CRITICAL,
-                "Preflight Fail: Avoidance system not ready",
-            );
+        // Commander answers a refused arming with TEMPORARILY_REJECTED (PX4 v1.14 Commander.cpp, ARM_DISARM).
+        if let Err(text) = self.arming_check(self.nav.mode()) {
+            if let Some(t) = text {
+                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, t);
+            }
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
         }
         if self.nav.mode() == FlightMode::Offboard && self.offboard.is_none() {
@@ -164,7 +172,8 @@ impl Vehicle {
 
     fn try_mode(&mut self, mode: FlightMode) -> MavResult {
         match mode {
-            FlightMode::Mission if self.nav.count() == 0 => {
+            // Disarmed, PX4 v1.14 allows every mode change (commander/UserModeIntention.cpp:47).
+            FlightMode::Mission if self.nav.count() == 0 && self.armed => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_CRITICAL,
                     "Switching to Mission is currently not possible",

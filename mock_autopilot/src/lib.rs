@@ -32,6 +32,7 @@ pub mod navigator;
 pub mod obstacles;
 pub mod offboard;
 pub mod params;
+pub mod preflight;
 pub mod scenarios;
 pub mod server;
 pub mod telemetry;

@@ -53,6 +53,10 @@ struct Args {
     /// Refuse every arming attempt.
     #[arg(long)]
     fail_arm: bool,
+    /// Simulated seconds after boot until the estimator has converged (arming refused, no GPS fix or home
+    /// before), as PX4 SITL after start.
+    #[arg(long, default_value_t = mock_autopilot::preflight::DEFAULT_ESTIMATOR_SETTLE.as_secs_f64())]
+    estimator_settle: f64,
     /// Reboot once after S simulated seconds.
     #[arg(long)]
     reboot_after: Option<f64>,
@@ -144,6 +148,7 @@ async fn run(args: Args) -> Result<()> {
         .faults(faults)
         .reject_mission(reject)
         .fail_arm(args.fail_arm)
+        .estimator_settle(secs("estimator-settle", args.estimator_settle)?)
         .lockstep(
             args.lockstep
                 .then(|| secs("lockstep-wait", args.lockstep_wait))

@@ -2,9 +2,9 @@
 
 use mavlink::dialects::common::{
     ATTITUDE_DATA, AUTOPILOT_VERSION_DATA, EXTENDED_SYS_STATE_DATA, GLOBAL_POSITION_INT_DATA, GPS_GLOBAL_ORIGIN_DATA,
-    HEARTBEAT_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA, MavAutopilot, MavMessage,
-    MavMissionType, MavProtocolCapability, MavSysStatusSensor, MavType, MavVtolState, MissionState, SYS_STATUS_DATA,
-    VFR_HUD_DATA,
+    GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, HOME_POSITION_DATA, LOCAL_POSITION_NED_DATA, MISSION_CURRENT_DATA,
+    MavAutopilot, MavMessage, MavMissionType, MavProtocolCapability, MavSysStatusSensor, MavType, MavVtolState,
+    MissionState, SYS_STATUS_DATA, VFR_HUD_DATA,
 };
 
 use crate::modes::FlightMode;
@@ -25,7 +25,9 @@ impl Vehicle {
             ids::GLOBAL_POSITION_INT => self.global_position(),
             ids::MISSION_CURRENT => self.mission_current(),
             ids::VFR_HUD => self.vfr_hud(),
-            ids::HOME_POSITION => self.home_position(),
+            // No home before the estimator has a global position (PX4 sets it once GPS is valid).
+            ids::HOME_POSITION if self.estimator_settled() => self.home_position(),
+            ids::GPS_RAW_INT => self.gps_raw(),
             ids::EXTENDED_SYS_STATE => MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
                 vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
                 landed_state: self.landed_state(),
@@ -56,12 +58,20 @@ impl Vehicle {
             | S::MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE
             | S::MAV_SYS_STATUS_SENSOR_GPS
             | S::MAV_SYS_STATUS_AHRS
-            | S::MAV_SYS_STATUS_SENSOR_BATTERY
-            | S::MAV_SYS_STATUS_PREARM_CHECK;
+            | S::MAV_SYS_STATUS_SENSOR_BATTERY;
+        // PX4 v1.14 (streams/SYS_STATUS.hpp): a component with an arming-check error is unhealthy, and the
+        // pre-arm bit is only ever set in `health`, for the current navigation state.
+        let mut health = sensors;
+        if !self.estimator_settled() {
+            health.remove(S::MAV_SYS_STATUS_AHRS | S::MAV_SYS_STATUS_SENSOR_GPS);
+        }
+        if self.prearm_ok() {
+            health |= S::MAV_SYS_STATUS_PREARM_CHECK;
+        }
         MavMessage::SYS_STATUS(SYS_STATUS_DATA {
             onboard_control_sensors_present: sensors,
             onboard_control_sensors_enabled: sensors,
-            onboard_control_sensors_health: sensors,
+            onboard_control_sensors_health: health,
             load: 200,
             voltage_battery: 16_200,
             current_battery: if self.armed { 1_000 } else { 0 },
@@ -135,6 +145,29 @@ impl Vehicle {
             climb: -v.z as f32,
             heading: self.body.yaw_rad.to_degrees().rem_euclid(360.0) as i16,
             throttle: if self.armed { 50 } else { 0 },
+        })
+    }
+
+    /// GPS_RAW_INT: a 3D fix once the estimator has settled, none before (SIH's GPS, at the home position).
+    fn gps_raw(&self) -> MavMessage {
+        let (lat, lon) = self.proj.unproject(self.body.pos_ned.x, self.body.pos_ned.y);
+        let fixed = self.estimator_settled();
+        MavMessage::GPS_RAW_INT(GPS_RAW_INT_DATA {
+            time_usec: u64::from(self.time_boot_ms()) * 1000,
+            lat: (lat * 1e7).round() as i32,
+            lon: (lon * 1e7).round() as i32,
+            alt: ((self.origin.alt_m - self.body.pos_ned.z) * 1000.0).round() as i32,
+            eph: if fixed { 70 } else { u16::MAX },
+            epv: if fixed { 100 } else { u16::MAX },
+            vel: (self.body.vel_ned.xy().norm() * 100.0).round() as u16,
+            cog: u16::MAX,
+            fix_type: if fixed {
+                GpsFixType::GPS_FIX_TYPE_3D_FIX
+            } else {
+                GpsFixType::GPS_FIX_TYPE_NO_FIX
+            },
+            satellites_visible: if fixed { 16 } else { 0 },
+            ..Default::default()
         })
     }
 

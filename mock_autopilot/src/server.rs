@@ -89,7 +89,10 @@ impl MockAutopilot {
             speed: SpeedFactor::default(),
             step: DEFAULT_STEP,
             faults: Faults::default(),
-            vehicle: VehicleConfig::default(),
+            vehicle: VehicleConfig {
+                estimator_settle: crate::preflight::DEFAULT_ESTIMATOR_SETTLE,
+                ..VehicleConfig::default()
+            },
             lockstep: None,
         }
     }
@@ -156,6 +159,13 @@ impl Builder {
     /// Crash (disarm, STATUSTEXT, on ground) when entering an obstacle.
     pub fn collision(mut self, world: Box<dyn CollisionWorld>) -> Self {
         self.vehicle.collision = Some(world);
+        self
+    }
+
+    /// Vehicle time after boot until arming, GPS fix and home are possible (default
+    /// [`crate::preflight::DEFAULT_ESTIMATOR_SETTLE`]; zero: ready at once).
+    pub fn estimator_settle(mut self, settle: Duration) -> Self {
+        self.vehicle.estimator_settle = settle;
         self
     }
 

@@ -10,6 +10,8 @@ pub mod ids {
     pub const HEARTBEAT: u32 = 0;
     /// SYS_STATUS.
     pub const SYS_STATUS: u32 = 1;
+    /// GPS_RAW_INT.
+    pub const GPS_RAW_INT: u32 = 24;
     /// ATTITUDE.
     pub const ATTITUDE: u32 = 30;
     /// LOCAL_POSITION_NED.
@@ -34,6 +36,7 @@ pub mod ids {
 const DEFAULT_RATES_HZ: &[(u32, f64)] = &[
     (ids::HEARTBEAT, 1.0),
     (ids::SYS_STATUS, 5.0),
+    (ids::GPS_RAW_INT, 5.0),
     (ids::ATTITUDE, 50.0),
     (ids::LOCAL_POSITION_NED, 30.0),
     (ids::GLOBAL_POSITION_INT, 50.0),

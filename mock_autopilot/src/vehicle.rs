@@ -47,6 +47,9 @@ pub struct VehicleConfig {
     pub collision: Option<Box<dyn CollisionWorld>>,
     /// Parameter overrides applied at boot.
     pub params: Vec<(String, ParamValue)>,
+    /// Vehicle time after each boot until the estimator has converged (no GPS fix, home or arming before);
+    /// zero here for sans-IO tests, [`crate::preflight::DEFAULT_ESTIMATOR_SETTLE`] in a spawned mock.
+    pub estimator_settle: Duration,
 }
 
 impl Default for VehicleConfig {
@@ -57,6 +60,7 @@ impl Default for VehicleConfig {
             fail_arm: false,
             collision: None,
             params: Vec::new(),
+            estimator_settle: Duration::ZERO,
         }
     }
 }
@@ -68,6 +72,7 @@ impl std::fmt::Debug for VehicleConfig {
             .field("reject_mission", &self.reject_mission)
             .field("fail_arm", &self.fail_arm)
             .field("collision", &self.collision.is_some())
+            .field("estimator_settle", &self.estimator_settle)
             .finish()
     }
 }
@@ -129,6 +134,8 @@ pub struct Vehicle {
     pub(crate) fail_arm: bool,
     collision: Option<Box<dyn CollisionWorld>>,
     due: Vec<u32>,
+    pub(crate) estimator_settle: Duration,
+    pub(crate) feasibility_pending: bool,
 }
 
 impl Vehicle {
@@ -170,6 +177,8 @@ impl Vehicle {
             fail_arm: cfg.fail_arm,
             collision: cfg.collision,
             due: Vec::new(),
+            estimator_settle: cfg.estimator_settle,
+            feasibility_pending: false,
         }
     }
 
@@ -324,6 +333,7 @@ impl Vehicle {
     fn reload_mission(&mut self) {
         let items = &self.missions.plan(MavMissionType::MAV_MISSION_TYPE_MISSION).items;
         self.nav.set_mission(nav_items(items, &self.proj, self.origin.alt_m));
+        self.check_feasibility();
         self.reload_fence();
     }
 
@@ -354,6 +364,8 @@ impl Vehicle {
             self.home_ned = self.body.pos_ned;
             self.text(MavSeverity::MAV_SEVERITY_INFO, "Armed by external command");
             self.outbox.push(self.home_position());
+            // Armed in AUTO.MISSION the flight starts here: streams in phase with it, as after a mode switch.
+            self.streams.rephase(self.now);
         }
     }
 
@@ -390,6 +402,7 @@ impl Vehicle {
         }
         let actions = self.missions.on_tick(self.now);
         self.apply_mission_actions(actions);
+        self.preflight_step();
         self.offboard_failsafe();
         let sp = self.navigate();
         // What the controller tracks this step: PX4's trajectory setpoint, which the land detector watches.

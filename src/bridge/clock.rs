@@ -29,6 +29,17 @@ impl VehicleClock {
         self.scale
     }
 
+    /// The same vehicle time now, running `scale` times wall time from here on (a bad scale keeps the old).
+    pub fn rescaled(&self, scale: f64) -> Self {
+        if !(scale.is_finite() && scale > 0.0) {
+            return *self;
+        }
+        let wall = Instant::now();
+        let vehicle = self.at(wall);
+        let start = wall.checked_sub(vehicle.div_f64(scale)).unwrap_or(self.start);
+        Self { start, scale }
+    }
+
     /// Vehicle time since the clock started.
     pub fn now(&self) -> Duration {
         self.at(Instant::now())
@@ -74,5 +85,15 @@ mod tests {
         assert_eq!(c.at(t0 - Duration::from_secs(1)), Duration::ZERO);
         assert_eq!(secs(-1.0), Duration::ZERO);
         assert_eq!(secs(f64::INFINITY), Duration::from_secs(1_000_000_000));
+    }
+
+    #[test]
+    fn rescaling_keeps_the_vehicle_time() {
+        let c = VehicleClock::starting_at(Instant::now() - Duration::from_secs(2), 1.0);
+        let r = c.rescaled(10.0);
+        assert_eq!(r.scale(), 10.0);
+        let (a, b) = (c.now(), r.now());
+        assert!(b >= a && b - a < Duration::from_millis(100), "{a:?} -> {b:?}");
+        assert_eq!(c.rescaled(f64::NAN), c);
     }
 }

@@ -219,7 +219,6 @@ async fn execute(
     progress: Option<&mut watch::Receiver<Progress>>,
 ) -> Result<(), Stop> {
     let nan = f32::NAN;
-    let arm = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
     match (action, s.opts.mode) {
         (Action::Start, FlyMode::Offboard) => {
             if let Some(p) = progress {
@@ -235,14 +234,10 @@ async fn execute(
             s.command(MavCmd::MAV_CMD_DO_SET_MODE, mode)
                 .await
                 .map_err(|e| stop_for("switching to OFFBOARD", e))?;
-            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
-                .await
-                .map_err(|e| stop_for("arming", e))
+            super::ready::arm(s).await
         }
         (Action::Start, _) => {
-            s.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
-                .await
-                .map_err(|e| stop_for("arming", e))?;
+            super::ready::arm(s).await?;
             let last = s.test.mission.items.len().saturating_sub(1) as f32;
             s.command(MavCmd::MAV_CMD_MISSION_START, [0.0, last, 0.0, 0.0, 0.0, 0.0, 0.0])
                 .await
@@ -256,10 +251,7 @@ async fn execute(
             .command(MavCmd::MAV_CMD_NAV_LAND, [0.0, 0.0, 0.0, nan, nan, nan, nan])
             .await
             .map_err(|e| stop_for("land", e)),
-        (Action::Arm, _) => s
-            .command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm)
-            .await
-            .map_err(|e| stop_for("arming", e)),
+        (Action::Arm, _) => super::ready::arm(s).await,
         (Action::Disarm, _) => s
             .command(
                 MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,

@@ -121,7 +121,7 @@ pub struct Link {
     counters: Arc<Counters>,
     /// 0 = not locked yet.
     locked: Arc<AtomicU32>,
-    clock: VehicleClock,
+    clock: std::sync::Mutex<VehicleClock>,
     rx_task: JoinHandle<()>,
 }
 
@@ -151,14 +151,21 @@ impl Link {
             fanout,
             counters,
             locked,
-            clock,
+            clock: std::sync::Mutex::new(clock),
             rx_task,
         }
     }
 
     /// The vehicle clock every timeout of this link uses.
     pub fn clock(&self) -> VehicleClock {
-        self.clock
+        *self.clock.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// From now on the vehicle's time runs `scale` times wall time (a measured rate), continuing from the
+    /// current vehicle time. Call before anything holds deadlines on the old scale.
+    pub fn set_time_scale(&self, scale: f64) {
+        let mut c = self.clock.lock().unwrap_or_else(|p| p.into_inner());
+        *c = c.rescaled(scale);
     }
 
     /// A receiver of every message from now on.
@@ -212,24 +219,25 @@ impl Link {
     pub async fn exchange<E: Exchange>(&self, mut ex: E, cancel: &CancelToken) -> Result<E::Output, ProtocolError> {
         let mut rx = self.subscribe();
         let mut counted = 0;
-        for m in ex.start(self.clock.now()) {
+        let clock = self.clock();
+        for m in ex.start(clock.now()) {
             let _ = self.send(Sender::Gcs, &m).await;
         }
         loop {
-            let wait = self.clock.wall_until(ex.deadline());
+            let wait = clock.wall_until(ex.deadline());
             let step = tokio::select! {
                 biased;
                 _ = cancel.cancelled() => return Err(ProtocolError::Cancelled),
                 r = rx.recv() => match r {
-                    Ok(inb) => ex.on_message(&inb.msg, self.clock.now()),
+                    Ok(inb) => ex.on_message(&inb.msg, clock.now()),
                     Err(broadcast::error::RecvError::Lagged(_)) => continue,
                     // The receive task ended (transport gone): only timeouts remain.
                     Err(broadcast::error::RecvError::Closed) => {
                         tokio::time::sleep(wait).await;
-                        ex.on_timeout(self.clock.now())
+                        ex.on_timeout(clock.now())
                     }
                 },
-                _ = tokio::time::sleep(wait) => ex.on_timeout(self.clock.now()),
+                _ = tokio::time::sleep(wait) => ex.on_timeout(clock.now()),
             };
             let r = ex.retries();
             self.counters

@@ -19,6 +19,7 @@
 pub mod avoidance;
 pub mod cancel;
 pub mod clock;
+pub mod clock_watch;
 pub mod command;
 pub mod exchange;
 pub mod flight;
@@ -28,6 +29,7 @@ pub mod geo_view;
 pub mod link;
 pub mod mission_download;
 pub mod mission_upload;
+pub mod notices;
 pub mod offboard;
 pub mod param_read;
 pub mod params;
@@ -35,6 +37,7 @@ pub mod placement;
 pub mod plan_items;
 pub mod planner_steer;
 pub mod predict;
+pub mod ready;
 pub mod recorder;
 pub mod report;
 pub mod session;
@@ -102,6 +105,14 @@ pub struct FlyOptions {
     /// Re-anchor the test (mission, obstacles, fence) at the vehicle's home instead of refusing a vehicle
     /// farther than MIS_DIST_1WP from the test's home ([`placement`]).
     pub anchor_at_vehicle_home: bool,
+    /// Wait at most this long (vehicle seconds) for the vehicle to become ready to arm (estimator, GPS fix,
+    /// home, PX4's pre-arm checks); arming is retried within the same budget.
+    pub ready_timeout_s: f64,
+    /// Measure the vehicle's clock rate at connection and use it as `time_scale` (a pool of simulators at
+    /// unknown speed); `time_scale` is then only the assumption until measured.
+    pub detect_time_scale: bool,
+    /// Live notices (vehicle messages, readiness, clock warnings), e.g. printed by the CLI.
+    pub notices: Option<notices::NoticeSink>,
 }
 
 impl Default for FlyOptions {
@@ -120,6 +131,9 @@ impl Default for FlyOptions {
             lockstep: None,
             judge: crate::judge::Judge::default(),
             anchor_at_vehicle_home: false,
+            ready_timeout_s: 60.0,
+            detect_time_scale: false,
+            notices: None,
         }
     }
 }
@@ -173,6 +187,7 @@ impl FlyOptions {
             ("time scale", self.time_scale),
             ("heartbeat wait", self.heartbeat_wait_s),
             ("link-loss time", self.link_loss_s),
+            ("ready timeout", self.ready_timeout_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(BridgeError::Invalid(format!("{name} {v} is not a positive number")));

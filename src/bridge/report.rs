@@ -8,8 +8,10 @@ use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
 use super::FlyMode;
+use super::clock_watch::ClockReport;
 use super::frame::{FRAME_NAME, FrameSource, TestFrame};
 use super::link::LinkStats;
+use super::notices::VehicleMessage;
 use super::placement::Placement;
 
 /// How a flight ended.
@@ -109,6 +111,12 @@ pub struct FlightReport {
     pub fence_uploaded: bool,
     /// The vehicle's warnings (STATUSTEXT) and the bridge's own.
     pub warnings: Vec<String>,
+    /// Vehicle seconds waited for the vehicle to become ready to arm (`null` if it never was).
+    pub ready_wait_s: Option<f64>,
+    /// Every STATUSTEXT of severity WARNING or worse, with its time and severity.
+    pub vehicle_messages: Vec<VehicleMessage>,
+    /// The vehicle's clock rate against the time scale.
+    pub clock: Option<ClockReport>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -139,6 +147,12 @@ pub struct Ending {
     pub frame: Option<TestFrame>,
     /// The vehicle against the test's home.
     pub placement: Option<Placement>,
+    /// Readiness wait, vehicle seconds.
+    pub ready_wait_s: Option<f64>,
+    /// The vehicle's messages.
+    pub vehicle_messages: Vec<VehicleMessage>,
+    /// The clock.
+    pub clock: Option<ClockReport>,
 }
 
 impl FlightReport {
@@ -177,6 +191,9 @@ impl FlightReport {
             mode: end.mode,
             fence_uploaded: end.fence_uploaded,
             warnings: collapse(end.warnings),
+            ready_wait_s: end.ready_wait_s,
+            vehicle_messages: end.vehicle_messages,
+            clock: end.clock,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -214,6 +231,9 @@ mod tests {
             judge: Judge::E2025,
             frame: None,
             placement: None,
+            ready_wait_s: None,
+            vehicle_messages: vec![],
+            clock: None,
         }
     }
 

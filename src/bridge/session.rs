@@ -110,6 +110,10 @@ pub struct Session<'a> {
     pub frame: Option<super::frame::TestFrame>,
     /// Where the vehicle stood against the test's home, once known.
     pub placement: Option<super::placement::Placement>,
+    /// The vehicle's STATUSTEXT of severity WARNING or worse, as they arrived.
+    pub messages: super::notices::Messages,
+    /// Readiness timing and the arming budget.
+    pub ready: super::ready::Readiness,
 }
 
 /// Runs one flight on `transport`.
@@ -128,10 +132,20 @@ pub async fn run(
     let mut tasks = Tasks::default();
     tasks.push(tokio::spawn(gcs_heartbeat(link.clone())));
     let mut rx = link.subscribe();
+    // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
+    let texts_rx = link.subscribe();
     let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
     // The test re-anchored at the vehicle's home, if asked (it must outlive the session that borrows it).
     let anchored = std::sync::OnceLock::new();
+    let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
+    let messages = super::notices::Messages::default();
+    tasks.push(super::notices::spawn_collector(
+        texts_rx,
+        link.clock(),
+        messages.clone(),
+        opts.notices.clone(),
+    ));
     let mut s = Session {
         link,
         target,
@@ -147,6 +161,8 @@ pub async fn run(
         companion: Arc::default(),
         frame: None,
         placement: None,
+        messages,
+        ready: super::ready::Readiness::default(),
     };
     let mut recorder = recorder;
     let stop = match s.place(&anchored).await {
@@ -165,7 +181,17 @@ pub async fn run(
     }
     let mut warnings = std::mem::take(&mut s.view.warnings);
     warnings.append(&mut s.warnings);
-    let reason = (stop.status != Status::Landed).then_some(stop.reason);
+    let mut reason = stop.reason;
+    // A refusal quotes the vehicle's own last words, if it said anything and they are not quoted yet.
+    if stop.status == Status::Rejected
+        && !reason.contains("vehicle")
+        && let Some(said) = super::notices::last_texts(&s.messages, 3)
+    {
+        reason = format!("{reason}; vehicle: {said}");
+    }
+    let reason = (stop.status != Status::Landed).then_some(reason);
+    let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
+    let clock = clock_report.lock().map(|c| c.clone()).ok();
     Ok(FlightReport::judge(
         recorder.trajectory(),
         &s.test.obstacles,
@@ -180,6 +206,9 @@ pub async fn run(
             warnings,
             link: s.link.stats(),
             lfs_min_distance: opts.lfs_min_distance,
+            ready_wait_s: s.ready.waited_s,
+            vehicle_messages,
+            clock,
         },
     ))
 }
@@ -276,7 +305,8 @@ impl Session<'_> {
         self.upload_mission().await?;
         self.upload_fence().await?;
         self.request_streams().await;
-        self.wait_home().await
+        let mut st = super::ready::ReadyState::default();
+        super::ready::wait_ready(self, &mut st).await
     }
 
     async fn set_params(&mut self) -> Result<(), Stop> {
@@ -305,6 +335,7 @@ impl Session<'_> {
             .exchange(up, &self.cancel)
             .await
             .map_err(|e| stop_for("uploading the mission", e))?;
+        self.ready.mission_uploaded_at = Some(self.link.clock().now());
         let down = MissionDownload::new(self.target, ty, Retry::MISSION);
         let got = self
             .link

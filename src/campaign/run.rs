@@ -64,10 +64,20 @@ pub struct CampaignConfig {
     /// Re-anchor each test at the vehicle's home (`--anchor-at-vehicle-home`).
     #[serde(default)]
     pub anchor_at_vehicle_home: bool,
+    /// Clock rate of the MAVLink vehicles (`--hfs-time-scale`); `None`: measured on each vehicle at connection.
+    #[serde(default)]
+    pub hfs_time_scale: Option<f64>,
+    /// Give a flight up (LAND) after this many vehicle seconds.
+    #[serde(default = "default_flight_timeout_s")]
+    pub flight_timeout_s: f64,
 }
 
 fn judge_before_editions() -> Judge {
     Judge::E2025
+}
+
+fn default_flight_timeout_s() -> f64 {
+    crate::bridge::FlyOptions::default().timeout_s
 }
 
 fn default_screen() -> bool {

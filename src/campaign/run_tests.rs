@@ -77,6 +77,8 @@ fn config(budget: usize) -> CampaignConfig {
         mock_lockstep: true,
         mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
         screen: true,
+        hfs_time_scale: None,
+        flight_timeout_s: 500.0,
     }
 }
 

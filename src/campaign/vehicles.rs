@@ -57,12 +57,24 @@ pub struct LinkVehicle {
 }
 
 impl LinkVehicle {
-    /// A vehicle at `url` (rust-mavlink or MAVSDK address syntax), flown in `mode`.
-    pub fn new(handle: Handle, url: &str, mode: FlyMode, heartbeat_wait_s: f64) -> Self {
+    /// A vehicle at `url` (rust-mavlink or MAVSDK address syntax), flown in `mode`, each flight given up after
+    /// `timeout_s`. Its clock runs `time_scale` times real time, or, with `None`, as measured at each connection
+    /// (a pool of simulators faster than real time).
+    pub fn new(
+        handle: Handle,
+        url: &str,
+        mode: FlyMode,
+        heartbeat_wait_s: f64,
+        time_scale: Option<f64>,
+        timeout_s: f64,
+    ) -> Self {
         let opts = FlyOptions {
             connect: url.to_string(),
             mode,
             heartbeat_wait_s,
+            time_scale: time_scale.unwrap_or(1.0),
+            detect_time_scale: time_scale.is_none(),
+            timeout_s,
             ..FlyOptions::default()
         };
         Self { handle, opts }
@@ -105,6 +117,7 @@ pub struct MockVehicle {
     lockstep: Option<Duration>,
     judge: Judge,
     anchor: bool,
+    timeout_s: f64,
 }
 
 /// Horizontal cruise speed (MPC_XY_CRUISE, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
@@ -141,6 +154,7 @@ impl MockVehicle {
             lockstep,
             judge: Judge::default(),
             anchor: false,
+            timeout_s: FlyOptions::default().timeout_s,
         }
     }
 
@@ -148,6 +162,12 @@ impl MockVehicle {
     pub fn judged(mut self, judge: Judge, anchor: bool) -> Self {
         self.judge = judge;
         self.anchor = anchor;
+        self
+    }
+
+    /// Each flight is given up (LAND) after `timeout_s` vehicle seconds.
+    pub fn with_timeout(mut self, timeout_s: f64) -> Self {
+        self.timeout_s = timeout_s;
         self
     }
 }
@@ -186,6 +206,7 @@ impl Vehicle for MockVehicle {
             lockstep: self.lockstep,
             judge: self.judge,
             anchor_at_vehicle_home: self.anchor,
+            timeout_s: self.timeout_s,
             ..FlyOptions::default()
         };
         let result = fly_blocking(&self.handle, test, &opts, stop);

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::gazebo::world_sdf;
+use prgenuav::bridge::notices::NoticeSink;
 use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::Judge;
@@ -80,6 +81,13 @@ pub struct Args {
     /// recorded flights of older editions need).
     #[arg(long)]
     strict: bool,
+    /// Wait at most this many (vehicle) seconds for the vehicle to become ready to arm: estimator converged,
+    /// GPS fix, home, PX4's pre-arm checks.
+    #[arg(long, default_value_t = 60.0, value_name = "S")]
+    ready_timeout: f64,
+    /// Do not show the vehicle's messages, readiness and clock warnings on stderr as they arrive.
+    #[arg(long)]
+    quiet: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -129,6 +137,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         },
         judge: args.judge,
         anchor_at_vehicle_home: args.anchor_at_vehicle_home,
+        ready_timeout_s: args.ready_timeout,
+        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
         ..FlyOptions::default()
     };
     opts.validate()?;
@@ -142,7 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 on_ctrl_c.cancel();
             }
         });
-        if !args.json {
+        if !args.json && !args.quiet {
             eprintln!("waiting for a vehicle on {} ...", args.connect);
         }
         fly(&test, &opts, cancel).await
@@ -218,6 +228,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 "not uploaded"
             }
         );
+        if let Some(w) = report.ready_wait_s {
+            println!("ready after       {w:.1} s");
+        }
+        if let Some(w) = report.clock.as_ref().and_then(|c| c.warning.as_ref()) {
+            println!("clock             {w}");
+        }
         for w in &report.warnings {
             println!("warning           {w}");
         }

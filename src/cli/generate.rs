@@ -68,6 +68,12 @@ pub struct Args {
     /// clock, so more vehicles than cores can help while the planner keeps up.
     #[arg(long)]
     mock_vehicles: Option<usize>,
+    /// Clock rate of the --hfs vehicles (PX4_SIM_SPEED_FACTOR); default: measured on each vehicle as it connects.
+    #[arg(long, value_name = "K")]
+    hfs_time_scale: Option<f64>,
+    /// Give a flight up (LAND) after this many vehicle seconds.
+    #[arg(long, default_value_t = 500.0, value_name = "S")]
+    timeout: f64,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat.
     #[arg(long, default_value_t = 15.0)]
     connect_timeout: f64,
@@ -146,6 +152,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 screen: !args.no_screen,
                 judge: args.judge,
                 anchor_at_vehicle_home: args.anchor_at_vehicle_home,
+                hfs_time_scale: args.hfs_time_scale,
+                flight_timeout_s: args.timeout,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
@@ -156,6 +164,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mode = parse_mode(&cfg.mode)?;
     if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
         bail!("--mock-speed must be at least 1");
+    }
+    if cfg.hfs_time_scale.is_some_and(|k| !(k.is_finite() && k > 0.0)) {
+        bail!("--hfs-time-scale must be a positive number");
+    }
+    if !(cfg.flight_timeout_s.is_finite() && cfg.flight_timeout_s > 0.0) {
+        bail!("--timeout must be a positive number of seconds");
     }
     if !(cfg.mock_latency_ms.is_finite() && (0.0..=1000.0).contains(&cfg.mock_latency_ms)) {
         bail!("--mock-latency {} must be between 0 and 1000 ms", cfg.mock_latency_ms);
@@ -185,7 +199,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .map(|i| {
                 Box::new(
                     MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
-                        .judged(cfg.judge, cfg.anchor_at_vehicle_home),
+                        .judged(cfg.judge, cfg.anchor_at_vehicle_home)
+                        .with_timeout(cfg.flight_timeout_s),
                 ) as Box<dyn Vehicle>
             })
             .collect()
@@ -197,8 +212,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .iter()
             .map(|url| {
                 Box::new(
-                    LinkVehicle::new(runtime.handle().clone(), url, mode, args.connect_timeout)
-                        .judged(cfg.judge, cfg.anchor_at_vehicle_home),
+                    LinkVehicle::new(
+                        runtime.handle().clone(),
+                        url,
+                        mode,
+                        args.connect_timeout,
+                        cfg.hfs_time_scale,
+                        cfg.flight_timeout_s,
+                    )
+                    .judged(cfg.judge, cfg.anchor_at_vehicle_home),
                 ) as Box<dyn Vehicle>
             })
             .collect()

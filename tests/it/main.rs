@@ -10,6 +10,7 @@ mod lfs;
 mod missions;
 mod pty;
 mod px4_sitl;
+mod ready;
 mod rules;
 mod score;
 mod ulog;

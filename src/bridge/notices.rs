@@ -1,0 +1,177 @@
+//! What the vehicle says and what the bridge notices while a flight runs, kept for the report and handed to
+//! an optional live sink (the `fly` CLI prints to stderr): the vehicle's STATUSTEXT of severity WARNING or
+//! worse, readiness progress, and clock warnings.
+#![allow(deprecated)]
+
+use std::sync::{Arc, Mutex};
+
+use mavlink::dialects::common::{MavMessage, MavSeverity};
+use serde::Serialize;
+use tokio::sync::broadcast;
+use tokio::task::JoinHandle;
+
+use super::clock::VehicleClock;
+use super::link::Inbound;
+
+/// One STATUSTEXT of severity WARNING or worse.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VehicleMessage {
+    /// Bridge session time when it arrived, vehicle seconds.
+    pub t_s: f64,
+    /// `emergency`, `alert`, `critical`, `error` or `warning`.
+    pub severity: &'static str,
+    /// The vehicle's words.
+    pub text: String,
+}
+
+/// Something to show the user as it happens.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Notice {
+    /// The vehicle said something (WARNING or worse).
+    Vehicle(VehicleMessage),
+    /// Waiting for the vehicle to become ready: what is missing, vehicle seconds waited.
+    Waiting {
+        /// What the vehicle still lacks, in words.
+        missing: String,
+        /// Vehicle seconds waited so far.
+        waited_s: f64,
+    },
+    /// The vehicle's clock disagrees with the time scale.
+    Clock(String),
+}
+
+impl std::fmt::Display for Notice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Notice::Vehicle(m) => write!(f, "vehicle {} [{:.1} s]: {}", m.severity, m.t_s, m.text),
+            Notice::Waiting { missing, waited_s } => {
+                write!(f, "waiting for the vehicle ({waited_s:.0} s): {missing}")
+            }
+            Notice::Clock(w) => write!(f, "warning: {w}"),
+        }
+    }
+}
+
+/// A live receiver of notices (e.g. the CLI printing them); shared, so cloning options is cheap.
+#[derive(Clone)]
+pub struct NoticeSink(pub Arc<dyn Fn(&Notice) + Send + Sync>);
+
+impl NoticeSink {
+    /// A sink calling `f`.
+    pub fn new(f: impl Fn(&Notice) + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl std::fmt::Debug for NoticeSink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("NoticeSink")
+    }
+}
+
+impl PartialEq for NoticeSink {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Sends `n` to the sink, if any.
+pub fn tell(sink: Option<&NoticeSink>, n: &Notice) {
+    if let Some(s) = sink {
+        (s.0)(n);
+    }
+}
+
+/// MAVLink severity as a word; `None` for NOTICE and milder.
+pub fn severity_word(s: MavSeverity) -> Option<&'static str> {
+    use MavSeverity::*;
+    Some(match s {
+        MAV_SEVERITY_EMERGENCY => "emergency",
+        MAV_SEVERITY_ALERT => "alert",
+        MAV_SEVERITY_CRITICAL => "critical",
+        MAV_SEVERITY_ERROR => "error",
+        MAV_SEVERITY_WARNING => "warning",
+        _ => return None,
+    })
+}
+
+/// The vehicle's messages so far, shared between the collecting task and the session.
+pub type Messages = Arc<Mutex<Vec<VehicleMessage>>>;
+
+/// The last `n` messages' texts joined with "; " (what a refusal's reason quotes).
+pub fn last_texts(messages: &Messages, n: usize) -> Option<String> {
+    let m = messages.lock().unwrap_or_else(|p| p.into_inner());
+    let start = m.len().saturating_sub(n);
+    let texts: Vec<&str> = m[start..].iter().map(|v| v.text.as_str()).collect();
+    (!texts.is_empty()).then(|| texts.join("; "))
+}
+
+/// Number of messages so far (to quote only those after some point).
+pub fn count(messages: &Messages) -> usize {
+    messages.lock().map_or(0, |m| m.len())
+}
+
+/// Texts of the messages from index `from` on, joined with "; ".
+pub fn texts_since(messages: &Messages, from: usize) -> Option<String> {
+    let m = messages.lock().unwrap_or_else(|p| p.into_inner());
+    let texts: Vec<&str> = m.iter().skip(from).map(|v| v.text.as_str()).collect();
+    (!texts.is_empty()).then(|| texts.join("; "))
+}
+
+/// Collects every STATUSTEXT of severity WARNING or worse from `rx` into `out` (and the sink) until aborted.
+pub fn spawn_collector(
+    mut rx: broadcast::Receiver<Arc<Inbound>>,
+    clock: VehicleClock,
+    out: Messages,
+    sink: Option<NoticeSink>,
+) -> JoinHandle<()> {
+    tokio::spawn(async move {
+        loop {
+            match rx.recv().await {
+                Ok(inb) => {
+                    let MavMessage::STATUSTEXT(t) = &inb.msg else { continue };
+                    let (Some(severity), Ok(text)) = (severity_word(t.severity), t.text.to_str()) else {
+                        continue;
+                    };
+                    let m = VehicleMessage {
+                        t_s: clock.now().as_secs_f64(),
+                        severity,
+                        text: text.trim_end().to_string(),
+                    };
+                    tell(sink.as_ref(), &Notice::Vehicle(m.clone()));
+                    out.lock().unwrap_or_else(|p| p.into_inner()).push(m);
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => return,
+            }
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn severities_and_texts() {
+        assert_eq!(severity_word(MavSeverity::MAV_SEVERITY_CRITICAL), Some("critical"));
+        assert_eq!(severity_word(MavSeverity::MAV_SEVERITY_INFO), None);
+        let m: Messages = Arc::default();
+        assert_eq!(last_texts(&m, 3), None);
+        for t in ["a", "b", "c"] {
+            m.lock().unwrap().push(VehicleMessage {
+                t_s: 0.0,
+                severity: "warning",
+                text: t.into(),
+            });
+        }
+        assert_eq!(last_texts(&m, 2).as_deref(), Some("b; c"));
+        assert_eq!(texts_since(&m, 1).as_deref(), Some("b; c"));
+        assert_eq!(texts_since(&m, 3), None);
+        let n = Notice::Vehicle(m.lock().unwrap()[0].clone());
+        assert_eq!(n.to_string(), "vehicle warning [0.0 s]: a");
+        let a = NoticeSink::new(|_| {});
+        assert_eq!(a, a.clone());
+        assert_ne!(a, NoticeSink::new(|_| {}));
+    }
+}
