@@ -117,6 +117,8 @@ pub struct Readiness {
     pub deadline: Duration,
     /// Vehicle time the mission upload finished.
     pub mission_uploaded_at: Option<Duration>,
+    /// Vehicle time the session began waiting for the vehicle (the placement's wait for home counts too).
+    pub started: Option<Duration>,
 }
 
 /// The flight starts with the mission (first action Start, not offboard): switch to AUTO.MISSION first.
@@ -137,7 +139,7 @@ enum Verdict {
 /// a mission the vehicle refuses ends the flight here, unarmed.
 pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), Stop> {
     let clock = s.link.clock();
-    let start = clock.now();
+    let start = s.ready.started.unwrap_or_else(|| clock.now());
     let deadline = start + secs(s.opts.ready_timeout_s);
     s.ready.deadline = deadline;
     let mission = starts_mission(s);

@@ -165,6 +165,7 @@ pub async fn run(
         ready: super::ready::Readiness::default(),
     };
     let mut recorder = recorder;
+    s.ready.started = Some(s.link.clock().now());
     let stop = match s.place(&anchored).await {
         Ok(()) => match s.prepare().await {
             Ok(()) => flight::follow(&mut s, &mut recorder).await,
@@ -406,7 +407,7 @@ impl Session<'_> {
         }
     }
 
-    /// Waits (bounded, 30 s vehicle time) for HOME_POSITION, asking for it once.
+    /// Waits (bounded by the readiness budget, at least 30 s vehicle time) for HOME_POSITION, asking for it once.
     pub(super) async fn wait_home(&mut self) -> Result<(), Stop> {
         self.drain();
         if self.view.home_known {
@@ -417,7 +418,9 @@ impl Session<'_> {
             self.warnings.push(format!("requesting HOME_POSITION: {e}"));
         }
         let clock = self.link.clock();
-        let deadline = clock.now() + Duration::from_secs(30);
+        // Home comes once the estimator has a fix: the readiness budget, not a fixed wait.
+        let budget = Duration::from_secs_f64(self.opts.ready_timeout_s.max(30.0));
+        let deadline = clock.now() + budget;
         while !self.view.home_known {
             let wait = clock.wall_until(deadline);
             tokio::select! {
@@ -429,7 +432,7 @@ impl Session<'_> {
                     Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wait).await,
                 },
                 _ = tokio::time::sleep(wait) => {
-                    return Err(Stop::new(Status::Rejected, "no home position within 30 s (no GPS fix?)"));
+                    return Err(Stop::new(Status::Rejected, format!("no home position within {} s (no GPS fix?)", budget.as_secs())));
                 }
             }
         }
