@@ -33,6 +33,7 @@ pub mod obstacles;
 pub mod offboard;
 pub mod params;
 pub mod preflight;
+pub mod safety;
 pub mod scenarios;
 pub mod server;
 pub mod telemetry;

@@ -122,8 +122,8 @@ pub struct Vehicle {
     pub(crate) home_ned: Ned,
     pub(crate) origin: GeoPoint,
     pub(crate) proj: LocalProjection,
-    fence: Fence,
-    fence_breached: bool,
+    pub(crate) fence: Fence,
+    pub(crate) fence_breached: bool,
     pub(crate) avoidance: Avoidance,
     pub(crate) offboard: Option<(Setpoint, Duration)>,
     pub(crate) streams: Streams,
@@ -132,7 +132,7 @@ pub struct Vehicle {
     pub(crate) crashed: bool,
     pub(crate) failsafe: bool,
     pub(crate) fail_arm: bool,
-    collision: Option<Box<dyn CollisionWorld>>,
+    pub(crate) collision: Option<Box<dyn CollisionWorld>>,
     due: Vec<u32>,
     pub(crate) estimator_settle: Duration,
     pub(crate) feasibility_pending: bool,
@@ -488,63 +488,6 @@ impl Vehicle {
             } else if !self.took_off && secs("COM_DISARM_PRFLT") > 0.0 && on_ground_for >= secs("COM_DISARM_PRFLT") {
                 self.disarm("auto preflight disarming");
             }
-        }
-    }
-
-    fn check_fence(&mut self) {
-        if self.fence.is_empty() || !self.armed || self.landed {
-            self.fence_breached = false;
-            return;
-        }
-        let p = self.body.pos_ned;
-        let breach = self.fence.check(p.x, p.y).is_some();
-        if breach && !self.fence_breached {
-            let action = self.params.f64("GF_ACTION") as i32;
-            let (mode, what) = match action {
-                0 => (None, "no action"),
-                1 => (None, "warning only"),
-                3 => (Some(FlightMode::Rtl), "Return"),
-                5 => (Some(FlightMode::Land), "Land"),
-                4 => (None, "Terminate"),
-                _ => (Some(FlightMode::Loiter), "Hold"),
-            };
-            if action != 0 {
-                self.text(
-                    MavSeverity::MAV_SEVERITY_CRITICAL,
-                    &format!("Geofence violated, {what} activated"),
-                );
-            }
-            if action == 4 {
-                self.crash_to_ground();
-                self.disarm("geofence termination");
-            } else if let Some(m) = mode {
-                self.failsafe = true;
-                let alt = self.nav_params.takeoff_alt_m;
-                self.set_mode(m, alt);
-            }
-        }
-        self.fence_breached = breach;
-    }
-
-    fn crash_to_ground(&mut self) {
-        self.body.pos_ned.z = 0.0;
-        self.body.vel_ned = Ned::zeros();
-        self.body.acc_ned = Ned::zeros();
-        self.landed = true;
-        self.landed_since = self.now;
-        self.land_detector.reset_landed();
-    }
-
-    fn check_collision(&mut self) {
-        if self.crashed || !self.armed {
-            return;
-        }
-        let hit = self.collision.as_ref().and_then(|c| c.collision(&self.body.pos_ned));
-        if let Some(what) = hit {
-            self.crashed = true;
-            self.crash_to_ground();
-            self.text(MavSeverity::MAV_SEVERITY_EMERGENCY, &format!("Crash detected: {what}"));
-            self.disarm("crash");
         }
     }
 

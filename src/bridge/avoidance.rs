@@ -517,6 +517,18 @@ mod tests {
         t
     }
 
+    /// PX4 1.14 landing at (50, 0): point 0 its land setpoint (z unset, 1.5 m/s down), point 1 the land item.
+    fn px4_land() -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
+        let nan = f32::NAN;
+        px4(
+            [50.0, 0.0, nan],
+            [nan, nan, 1.5],
+            MAV_CMD_NAV_LAND,
+            [50.0, 0.0, 0.0],
+            MAV_CMD_NAV_LAND,
+        )
+    }
+
     const UNSET: u16 = u16::MAX;
     const NAN3: [f32; 3] = [f32::NAN; 3];
 
@@ -537,13 +549,7 @@ mod tests {
         c.on_request(&px4([50.0, 0.0, -10.0], NAN3, UNSET, [50.0, 0.0, -10.0], UNSET), t0);
         assert_eq!(c.goal, Some([50.0, 0.0, -10.0]));
         // Land: point 0 is PX4's land setpoint (z unset, descent speed); the flag comes from command[0].
-        let land = px4(
-            [50.0, 0.0, f32::NAN],
-            [f32::NAN, f32::NAN, 1.5],
-            MAV_CMD_NAV_LAND,
-            [50.0, 0.0, 0.0],
-            MAV_CMD_NAV_LAND,
-        );
+        let land = px4_land();
         c.on_request(&land, t0);
         assert_eq!(c.nav, Some(Nav::Land));
         let g = c.goal.unwrap();
@@ -561,13 +567,7 @@ mod tests {
     #[test]
     fn landing_answer_is_a_descent_velocity_with_z_unset() {
         let mut c = Companion::default();
-        let land = px4(
-            [50.0, 0.0, f32::NAN],
-            [f32::NAN, f32::NAN, 1.5],
-            MAV_CMD_NAV_LAND,
-            [50.0, 0.0, 0.0],
-            MAV_CMD_NAV_LAND,
-        );
+        let land = px4_land();
         c.on_request(&land, Duration::ZERO);
         let sp = SteerOutput {
             pos_ned: [50.0, 0.0, f64::NAN],

@@ -197,13 +197,7 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             _ = s.cancel.cancelled() => return end(s, Stop::new(Status::Aborted, "cancelled (Ctrl-C)")).await,
             r = s.rx.recv() => match r {
                 Ok(inb) => {
-                    s.view.update(&inb.msg, clock.now());
-                    if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (&inb.msg, s.view.pose)
-                        && !s.view.rebooted
-                    {
-                        // Recorded (and judged) in the test's frame, where the obstacles are.
-                        rec.push(&s.frame.map_or(p, |f| f.pose_to_test(&p)));
-                    }
+                    take(s, rec, &inb.msg, clock.now());
                 }
                 Err(broadcast::error::RecvError::Lagged(n)) => s.warnings.push(format!("{n} messages lost (slow consumer)")),
                 Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(clock.wall(TICK)).await,
@@ -288,6 +282,16 @@ async fn end(s: &mut Session<'_>, stop: Stop) -> Stop {
     stop
 }
 
+/// Folds a message into the view and records a new position, in the test's frame where the obstacles are.
+fn take(s: &mut Session<'_>, rec: &mut Recorder, msg: &MavMessage, now: Duration) {
+    s.view.update(msg, now);
+    if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (msg, s.view.pose)
+        && !s.view.rebooted
+    {
+        rec.push(&s.frame.map_or(p, |f| f.pose_to_test(&p)));
+    }
+}
+
 /// How long (vehicle time) to follow a vehicle landing after a timeout: from the arena's 25 m ceiling at
 /// PX4's slowest default descent (0.7 m/s) with margin.
 const SETTLE_AFTER_LAND: Duration = Duration::from_secs(60);
@@ -310,10 +314,7 @@ async fn see_it_land(s: &mut Session<'_>, rec: &mut Recorder) {
         }
         match tokio::time::timeout(wait, s.rx.recv()).await {
             Ok(Ok(inb)) => {
-                s.view.update(&inb.msg, clock.now());
-                if let (MavMessage::LOCAL_POSITION_NED(_), Some(p)) = (&inb.msg, s.view.pose) {
-                    rec.push(&p);
-                }
+                take(s, rec, &inb.msg, clock.now());
             }
             Ok(Err(broadcast::error::RecvError::Lagged(_))) => {}
             Err(_) => {} // a tick without news: the deadline is checked above

@@ -60,6 +60,22 @@ impl Gcs {
         .ok()
     }
 
+    /// Wait (bounded) for SYS_STATUS's pre-arm bit, as a client of PX4 must before starting: the estimator
+    /// settles after boot. True when it came.
+    pub async fn wait_prearm(&self, timeout: Duration) -> bool {
+        self.wait(timeout, |msg| match msg {
+            MavMessage::SYS_STATUS(s)
+                if s.onboard_control_sensors_health
+                    .contains(MavSysStatusSensor::MAV_SYS_STATUS_PREARM_CHECK) =>
+            {
+                Some(())
+            }
+            _ => None,
+        })
+        .await
+        .is_some()
+    }
+
     /// Send `m` and wait for a reply, resending every 200 ms, at most `tries` times.
     pub async fn request<T>(
         &self,

@@ -27,19 +27,10 @@ async fn lossy_duplicating_slow_link_still_flies_mission2() {
         gcs.upload(MavMissionType::MAV_MISSION_TYPE_MISSION, &mission2()).await,
         Some(MavMissionResult::MAV_MISSION_ACCEPTED)
     );
-    // As a client of PX4 must: wait for the pre-arm bit (the estimator settles after boot) before starting.
-    let ready = gcs
-        .wait(Duration::from_secs(10), |msg| match msg {
-            MavMessage::SYS_STATUS(s)
-                if s.onboard_control_sensors_health
-                    .contains(MavSysStatusSensor::MAV_SYS_STATUS_PREARM_CHECK) =>
-            {
-                Some(())
-            }
-            _ => None,
-        })
-        .await;
-    assert!(ready.is_some(), "pre-arm checks pass once the estimator has settled");
+    assert!(
+        gcs.wait_prearm(Duration::from_secs(10)).await,
+        "pre-arm checks pass once the estimator has settled"
+    );
     assert_eq!(
         gcs.command(MavCmd::MAV_CMD_MISSION_START, [0.0; 7]).await,
         Some(MavResult::MAV_RESULT_ACCEPTED)
