@@ -10,10 +10,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionType};
 use mock_autopilot::{Faults, LinkSpec, MockAutopilot, MockHandle, SpeedFactor};
 use prgenuav::bridge::CancelToken;
-use prgenuav::bridge::clock::VehicleClock;
-use prgenuav::bridge::exchange::{Retry, Target};
-use prgenuav::bridge::link::{Link, MavTransport};
-use prgenuav::bridge::mission_upload::MissionUpload;
+use prgenuav::bridge::wire::clock::VehicleClock;
+use prgenuav::bridge::wire::exchange::{Retry, Target};
+use prgenuav::bridge::wire::link::{Link, MavTransport};
+use prgenuav::bridge::wire::mission_upload::MissionUpload;
 
 fn items(n: usize) -> Vec<MISSION_ITEM_INT_DATA> {
     (0..n)

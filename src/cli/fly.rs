@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use prgenuav::bridge::gazebo::world_sdf;
-use prgenuav::bridge::notices::NoticeSink;
+use prgenuav::bridge::session::gazebo::world_sdf;
+use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::Judge;

@@ -119,9 +119,9 @@ async fn mission_mode_missions_1_to_3() {
 /// GF_ACTION is warning-only during the flight and PX4's default (2, Hold) again afterwards.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn geofence_action_is_restored_after_the_flight() {
-    use prgenuav::bridge::exchange::{Retry, Target};
-    use prgenuav::bridge::link::{Link, MavTransport};
-    use prgenuav::bridge::params::ParamSet;
+    use prgenuav::bridge::wire::exchange::{Retry, Target};
+    use prgenuav::bridge::wire::link::{Link, MavTransport};
+    use prgenuav::bridge::wire::params::ParamSet;
     let test = generated(1);
     let (m, url) = mock(SPEED, |b| b).await;
     let r = fly_bounded(&test, &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
@@ -135,7 +135,7 @@ async fn geofence_action_is_restored_after_the_flight() {
     let t = MavTransport::open(&format!("udpout:{addr}")).await.expect("link");
     let link = Link::new(
         std::sync::Arc::new(t),
-        prgenuav::bridge::clock::VehicleClock::new(SPEED),
+        prgenuav::bridge::wire::clock::VehicleClock::new(SPEED),
     );
     let target = Target {
         system: 1,

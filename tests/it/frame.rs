@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use mock_autopilot::geo::{GeoPoint as MockGeo, LocalProjection as MockProjection};
 use mock_autopilot::{LinkSpec, MockAutopilot, MockHandle, SpeedFactor};
-use prgenuav::bridge::frame::FrameSource;
+use prgenuav::bridge::companion::frame::FrameSource;
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::judge::{Judge, judge_in_frame};
 use prgenuav::model::{GeoPoint, LocalProjection, Obstacle, SIM_HOME, Sample, TestCase, Trajectory};

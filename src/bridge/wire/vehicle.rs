@@ -6,25 +6,15 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MavAutopilot, MavLandedState, MavMessage, MavModeFlag, MavSeverity};
 
+use super::geo_view::GeoView;
+use super::pose::PoseNed;
+
 /// PX4 main mode AUTO.
 pub const PX4_MAIN_AUTO: u8 = 4;
 /// PX4 main mode OFFBOARD.
 pub const PX4_MAIN_OFFBOARD: u8 = 6;
 /// PX4 AUTO sub-mode MISSION.
 pub const PX4_SUB_MISSION: u8 = 4;
-
-/// Pose from LOCAL_POSITION_NED and ATTITUDE: local NED metres and m/s, yaw radians clockwise from North.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct PoseNed {
-    /// Vehicle boot time of the position, milliseconds.
-    pub time_boot_ms: u32,
-    /// North, East, Down position, metres.
-    pub pos_ned: [f64; 3],
-    /// North, East, Down velocity, m/s.
-    pub vel_ned: [f64; 3],
-    /// Yaw (heading), radians clockwise from North; `None` before the first ATTITUDE.
-    pub yaw_rad: Option<f64>,
-}
 
 /// The vehicle as last heard.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -50,7 +40,7 @@ pub struct VehicleView {
     /// STATUSTEXTs of severity warning or worse, in order.
     pub warnings: Vec<String>,
     /// Where the vehicle is placed on Earth (home, EKF origin, global position).
-    pub geo: super::geo_view::GeoView,
+    pub geo: GeoView,
     max_boot_ms: u32,
 }
 

@@ -1,6 +1,6 @@
 //! The vehicle's clock against wall time: every LOCAL_POSITION_NED, ATTITUDE and GLOBAL_POSITION_INT carries
 //! `time_boot_ms`, so the rate at which the vehicle's time runs is measured over a sliding window of wall time
-//! and compared with the time scale the bridge's timers assume ([`super::clock`]). A disagreement of more than
+//! and compared with the time scale the bridge's timers assume ([`crate::bridge::wire::clock`]). A disagreement of more than
 //! 20 % is said at once (a simulator at 10x flown with time scale 1 would otherwise wait 10x too long).
 
 use std::collections::VecDeque;
@@ -12,10 +12,10 @@ use serde::Serialize;
 use tokio::sync::broadcast;
 use tokio::task::JoinHandle;
 
-use super::FlyOptions;
-use super::link::{Inbound, Link};
-use super::notices::{Notice, NoticeSink, tell};
-use super::session::Tasks;
+use super::tasks::Tasks;
+use crate::bridge::options::FlyOptions;
+use crate::bridge::wire::link::{Inbound, Link};
+use crate::bridge::wire::notices::{Notice, NoticeSink, tell};
 
 /// Wall time the rate is measured over (the newest samples).
 pub const WINDOW: Duration = Duration::from_secs(5);

@@ -7,12 +7,12 @@ use serde::Serialize;
 use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
-use super::FlyMode;
 use super::clock_watch::ClockReport;
-use super::frame::{FRAME_NAME, FrameSource, TestFrame};
-use super::link::LinkStats;
-use super::notices::VehicleMessage;
 use super::placement::Placement;
+use crate::bridge::companion::frame::{FRAME_NAME, FrameSource, TestFrame};
+use crate::bridge::options::FlyMode;
+use crate::bridge::wire::link::LinkStats;
+use crate::bridge::wire::notices::VehicleMessage;
 
 /// How a flight ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -97,7 +97,7 @@ impl Drop for SteerWorker {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::steer::{Nav, Straight};
+    use crate::bridge::companion::steer::{Nav, Straight};
 
     #[tokio::test]
     async fn results_arrive_without_blocking() {

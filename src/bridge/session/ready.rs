@@ -13,14 +13,15 @@ use std::time::Duration;
 use mavlink::dialects::common::{GpsFixType, MavCmd, MavMessage, MavSysStatusSensor};
 use tokio::sync::broadcast;
 
-use super::clock::secs;
-use super::exchange::ProtocolError;
-use super::flight::Action;
-use super::notices::{Notice, last_texts, tell, texts_since};
+use super::context::{Session, Stop};
 use super::report::Status;
-use super::session::{Session, Stop};
-use super::vehicle::{PX4_MAIN_AUTO, PX4_SUB_MISSION};
-use super::{FlyMode, notices};
+use super::schedule::{Action, schedule};
+use crate::bridge::options::FlyMode;
+use crate::bridge::wire::clock::secs;
+use crate::bridge::wire::exchange::ProtocolError;
+use crate::bridge::wire::notices;
+use crate::bridge::wire::notices::{Notice, last_texts, tell, texts_since};
+use crate::bridge::wire::vehicle::{PX4_MAIN_AUTO, PX4_SUB_MISSION};
 
 /// PX4 reports a change of its arming checks at most every 2 s (HealthAndArmingChecks/Common.hpp:192), so a
 /// SYS_STATUS is only trusted about a mission uploaded this long before it.
@@ -108,23 +109,10 @@ impl ReadyState {
     }
 }
 
-/// Readiness as timed for the report and the arming budget.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Readiness {
-    /// Vehicle seconds waited before the vehicle was ready.
-    pub waited_s: Option<f64>,
-    /// Arming may be retried until this vehicle time.
-    pub deadline: Duration,
-    /// Vehicle time the mission upload finished.
-    pub mission_uploaded_at: Option<Duration>,
-    /// Vehicle time the session began waiting for the vehicle (the placement's wait for home counts too).
-    pub started: Option<Duration>,
-}
-
 /// The flight starts with the mission (first action Start, not offboard): switch to AUTO.MISSION first.
 pub fn starts_mission(s: &Session<'_>) -> bool {
     s.opts.mode != FlyMode::Offboard
-        && super::flight::schedule(&s.test.commands, &mut Vec::new())
+        && schedule(&s.test.commands, &mut Vec::new())
             .front()
             .is_some_and(|(_, a)| *a == Action::Start)
 }
@@ -289,7 +277,7 @@ pub async fn arm(s: &mut Session<'_>) -> Result<(), Stop> {
             Ok(()) => return Ok(()),
             Err(e @ ProtocolError::CommandRefused { .. }) if clock.now() + ARM_RETRY < deadline => e,
             Err(e) => {
-                let mut stop = super::session::stop_for("arming", e);
+                let mut stop = super::context::stop_for("arming", e);
                 if stop.status == Status::Rejected
                     && let Some(said) = texts_since(&s.messages, first_message).or_else(|| last_texts(&s.messages, 3))
                 {

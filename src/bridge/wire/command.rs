@@ -131,7 +131,7 @@ impl Exchange for Command {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::exchange::run_scripted;
+    use crate::bridge::wire::exchange::run_scripted;
     use mavlink::dialects::common::COMMAND_ACK_DATA;
 
     const T: Target = Target {

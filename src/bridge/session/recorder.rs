@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::model::{Sample, Trajectory};
 
-use super::vehicle::PoseNed;
+use crate::bridge::wire::pose::PoseNed;
 
 /// Records positions as they arrive.
 #[derive(Debug)]

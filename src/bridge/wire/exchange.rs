@@ -1,6 +1,6 @@
 //! The shape every request/response protocol takes here: a socket-free state machine fed messages and
 //! timeouts in vehicle time, returning what to send and, at the end, its outcome. One async driver
-//! ([`crate::bridge::link::Link::exchange`]) runs any of them; tests script them with a fake clock.
+//! ([`crate::bridge::wire::link::Link::exchange`]) runs any of them; tests script them with a fake clock.
 
 use std::time::Duration;
 

@@ -9,11 +9,11 @@ use mavlink::dialects::common::{MavFrame, MavMessage, PositionTargetTypemask, SE
 use tokio::sync::{broadcast, watch};
 use tokio::task::JoinHandle;
 
-use super::exchange::Target;
-use super::link::{Link, Sender};
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
-use super::vehicle::VehicleView;
+use crate::bridge::wire::exchange::Target;
+use crate::bridge::wire::link::{Link, Sender};
+use crate::bridge::wire::vehicle::VehicleView;
 use crate::model::{CMD_LAND, Mission};
 
 /// Setpoint period (20 Hz; PX4 leaves OFFBOARD after 0.5 s without one).

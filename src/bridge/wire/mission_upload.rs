@@ -159,7 +159,7 @@ impl Exchange for MissionUpload {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::exchange::run_scripted;
+    use crate::bridge::wire::exchange::run_scripted;
     use mavlink::dialects::common::{MISSION_ACK_DATA, MISSION_REQUEST_INT_DATA};
 
     const T: Target = Target {

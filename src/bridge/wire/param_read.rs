@@ -90,7 +90,7 @@ impl Exchange for ParamRead {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::exchange::run_scripted;
+    use crate::bridge::wire::exchange::run_scripted;
     use mavlink::dialects::common::{MavParamType, PARAM_VALUE_DATA};
 
     const T: Target = Target {

@@ -17,11 +17,12 @@ use mavlink::dialects::common::{
 use tokio::sync::broadcast;
 use tokio::task::JoinHandle;
 
-use super::exchange::Target;
-use super::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
-use super::vehicle::{PoseNed, VehicleView};
+use crate::bridge::wire::exchange::Target;
+use crate::bridge::wire::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
+use crate::bridge::wire::pose::PoseNed;
+use crate::bridge::wire::vehicle::VehicleView;
 
 /// Answer period (10 Hz, as PX4-Avoidance's waypoint generator).
 pub const ANSWER_PERIOD: Duration = Duration::from_millis(100);
@@ -443,8 +444,8 @@ mod tests {
         assert!(s.warning().is_some_and(|w| w.starts_with("40 of 740")));
     }
 
-    use crate::bridge::steer::{Mirror, Straight};
-    use crate::bridge::vehicle::PoseNed;
+    use crate::bridge::companion::steer::{Mirror, Straight};
+    use crate::bridge::wire::pose::PoseNed;
 
     fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
         let mut t = empty_trajectory(0, 3);

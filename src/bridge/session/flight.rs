@@ -2,74 +2,31 @@
 //! position, and end on landing, timeout, Ctrl-C, silence or reboot; on an abnormal end command LAND (RTL if
 //! LAND is refused), keeping the recording.
 
-use std::collections::VecDeque;
 use std::time::Duration;
 
 use mavlink::dialects::common::{MavCmd, MavMessage};
 use tokio::sync::{broadcast, watch};
 
-use super::FlyMode;
-use super::cancel::CancelToken;
-use super::clock::{VehicleClock, secs};
-use super::command::Command;
-use super::exchange::Retry;
-use super::frame::{FramedSteer, TestFrame};
-use super::offboard::{self, Pilot, Progress};
-use super::planner_steer::PlannerSteer;
+use super::context::{Session, Stop, stop_for};
 use super::recorder::Recorder;
 use super::report::Status;
-use super::session::{Session, Stop, stop_for};
-use super::steer::{Mirror, Steer, Straight};
-use super::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
-use super::{FlyMode as Mode, FlyOptions};
+use super::schedule::{Action, schedule};
+use crate::bridge::companion::frame::{FramedSteer, TestFrame};
+use crate::bridge::companion::offboard::{self, Pilot, Progress};
+use crate::bridge::companion::planner_steer::PlannerSteer;
+use crate::bridge::companion::steer::{Mirror, Steer, Straight};
+use crate::bridge::options::FlyMode;
+use crate::bridge::options::{FlyMode as Mode, FlyOptions};
+use crate::bridge::wire::cancel::CancelToken;
+use crate::bridge::wire::clock::{VehicleClock, secs};
+use crate::bridge::wire::command::Command;
+use crate::bridge::wire::exchange::Retry;
+use crate::bridge::wire::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
 use crate::lfs::camera::Camera;
-use crate::model::{Command as TestCommand, TestCase};
+use crate::model::TestCase;
 
 /// How often the end conditions are checked when nothing arrives (vehicle time).
 const TICK: Duration = Duration::from_millis(100);
-
-/// What a row of the commands table asks for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Action {
-    /// Mode 3: arm and start the mission (offboard: switch to OFFBOARD and arm).
-    Start,
-    /// Mode 10: AUTO.TAKEOFF.
-    Takeoff,
-    /// Mode 11: AUTO.LAND.
-    Land,
-    /// Mode 20: arm.
-    Arm,
-    /// Mode 21: disarm.
-    Disarm,
-}
-
-/// The commands table as timed actions (vehicle time after the flight starts); unsupported modes are warnings.
-/// Without any command the mission starts at once.
-pub fn schedule(commands: &[TestCommand], warnings: &mut Vec<String>) -> VecDeque<(Duration, Action)> {
-    let mut out: Vec<(Duration, Action)> = Vec::new();
-    for c in commands {
-        let action = match c.mode {
-            3 => Action::Start,
-            10 => Action::Takeoff,
-            11 => Action::Land,
-            20 => Action::Arm,
-            21 => Action::Disarm,
-            m => {
-                warnings.push(format!(
-                    "command mode {m} at {} us is not supported by the bridge; skipped",
-                    c.timestamp_us
-                ));
-                continue;
-            }
-        };
-        out.push((secs(c.timestamp_us / 1e6), action));
-    }
-    if out.is_empty() {
-        out.push((Duration::ZERO, Action::Start));
-    }
-    out.sort_by_key(|(t, _)| *t);
-    out.into()
-}
 
 /// The steering for `opts.mode`: the LFS planner over the test's boxes, planning in the test's frame and
 /// answering in the vehicle's (`frame`; `None` = the two coincide); if it cannot be built, the interface's
@@ -331,40 +288,5 @@ fn needs_landing(view: &VehicleView, status: Status) -> bool {
     match status {
         Status::Timeout | Status::Aborted | Status::LinkLost => view.armed || view.took_off,
         _ => view.armed,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn cmd(t_us: f64, mode: i64) -> TestCommand {
-        TestCommand {
-            timestamp_us: t_us,
-            mode,
-            x: 0.0,
-            y: 0.0,
-            z: 0.5,
-            r: 0.0,
-        }
-    }
-
-    #[test]
-    fn commands_table_schedule() {
-        let mut w = Vec::new();
-        let s = schedule(&[cmd(2e6, 11), cmd(1.0, 3), cmd(5.0, 7)], &mut w);
-        assert_eq!(
-            s,
-            VecDeque::from(vec![
-                (Duration::from_micros(1), Action::Start),
-                (Duration::from_secs(2), Action::Land)
-            ])
-        );
-        assert_eq!(w.len(), 1);
-        assert!(w[0].contains("mode 7"));
-        assert_eq!(
-            schedule(&[], &mut w),
-            VecDeque::from(vec![(Duration::ZERO, Action::Start)])
-        );
     }
 }

@@ -142,7 +142,7 @@ impl Exchange for MissionDownload {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::exchange::run_scripted;
+    use crate::bridge::wire::exchange::run_scripted;
     use mavlink::dialects::common::MISSION_COUNT_DATA;
 
     const T: Target = Target {

@@ -225,7 +225,7 @@ impl Exchange for ParamSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::exchange::run_scripted;
+    use crate::bridge::wire::exchange::run_scripted;
     use mavlink::dialects::common::{MavSeverity, PARAM_VALUE_DATA, STATUSTEXT_DATA};
     use std::collections::HashMap;
 

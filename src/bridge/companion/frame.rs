@@ -13,7 +13,7 @@
 use serde::Serialize;
 
 use super::steer::{Steer, SteerInput, SteerOutput};
-use super::vehicle::PoseNed;
+use crate::bridge::wire::pose::PoseNed;
 use crate::model::LocalProjection;
 
 /// The name of the frame every report and CSV uses.
@@ -124,7 +124,7 @@ impl Steer for FramedSteer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bridge::steer::Nav;
+    use crate::bridge::companion::steer::Nav;
     use crate::model::{GeoPoint, SIM_HOME};
 
     fn home() -> LocalProjection {

@@ -1,0 +1,11 @@
+//! Planning while flying: the avoidance companion (PX4's TRAJECTORY_REPRESENTATION_WAYPOINTS interface) and the
+//! offboard pilot, both steered by the LFS planner over the virtual boxes in the test's frame, and the LFS
+//! prediction reported beside the flight. Talks to the vehicle only through [`super::wire`].
+
+pub mod avoidance;
+pub mod frame;
+pub mod offboard;
+pub mod planner_steer;
+pub mod predict;
+pub mod steer;
+pub mod steer_worker;

@@ -1,0 +1,177 @@
+//! One flight from connection to report: find and lock onto the vehicle, heartbeat, set the parameters,
+//! upload and check the mission, upload the obstacles as a geofence, wait for home, then hand over to
+//! [`super::flight`] and finally restore what was changed. Vehicle refusals end in a report, not an error.
+#![allow(deprecated)]
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use mavlink::dialects::common::{HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType};
+use tokio::sync::broadcast;
+
+use super::context::{Readiness, Session};
+use super::flight;
+use super::recorder::Recorder;
+use super::report::{Ending, FlightReport, Status};
+use super::tasks::Tasks;
+use crate::bridge::options::{BridgeError, FlyOptions};
+use crate::bridge::wire::cancel::CancelToken;
+use crate::bridge::wire::clock::{VehicleClock, secs};
+use crate::bridge::wire::exchange::Target;
+use crate::bridge::wire::link::{Inbound, Link, Sender, Transport};
+use crate::bridge::wire::vehicle::VehicleView;
+use crate::model::TestCase;
+
+/// Runs one flight on `transport`.
+pub async fn run(
+    test: &TestCase,
+    opts: &FlyOptions,
+    transport: Arc<dyn Transport>,
+    cancel: CancelToken,
+) -> Result<FlightReport, BridgeError> {
+    let recorder = Recorder::create(opts.trajectory_csv.as_deref()).map_err(|source| BridgeError::Trajectory {
+        path: opts.trajectory_csv.clone().unwrap_or_default(),
+        source,
+    })?;
+    let clock = VehicleClock::new(opts.time_scale);
+    let link = Arc::new(Link::new(transport, clock));
+    let mut tasks = Tasks::default();
+    tasks.push(tokio::spawn(gcs_heartbeat(link.clone())));
+    let mut rx = link.subscribe();
+    // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
+    let texts_rx = link.subscribe();
+    let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
+    link.lock(target.system);
+    // The test re-anchored at the vehicle's home, if asked (it must outlive the session that borrows it).
+    let anchored = std::sync::OnceLock::new();
+    let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
+    let messages = crate::bridge::wire::notices::Messages::default();
+    tasks.push(crate::bridge::wire::notices::spawn_collector(
+        texts_rx,
+        link.clock(),
+        messages.clone(),
+        opts.notices.clone(),
+    ));
+    let mut s = Session {
+        link,
+        target,
+        opts,
+        test,
+        cancel,
+        rx,
+        view: VehicleView::default(),
+        warnings: Vec::new(),
+        fence_uploaded: false,
+        restore: Vec::new(),
+        tasks,
+        companion: Arc::default(),
+        frame: None,
+        placement: None,
+        messages,
+        ready: Readiness::default(),
+    };
+    let mut recorder = recorder;
+    s.ready.started = Some(s.link.clock().now());
+    let stop = match s.place(&anchored).await {
+        Ok(()) => match s.prepare().await {
+            Ok(()) => flight::follow(&mut s, &mut recorder).await,
+            Err(stop) => stop,
+        },
+        Err(stop) => stop,
+    };
+    s.restore_params().await;
+    if let Some(e) = recorder.write_error() {
+        s.warnings.push(format!("trajectory CSV incomplete: {e}"));
+    }
+    if let Some(w) = s.companion.warning() {
+        s.warnings.push(w);
+    }
+    let mut warnings = std::mem::take(&mut s.view.warnings);
+    warnings.append(&mut s.warnings);
+    let mut reason = stop.reason;
+    // A refusal quotes the vehicle's own last words, if it said anything and they are not quoted yet.
+    if stop.status == Status::Rejected
+        && !reason.contains("vehicle")
+        && let Some(said) = crate::bridge::wire::notices::last_texts(&s.messages, 3)
+    {
+        reason = format!("{reason}; vehicle: {said}");
+    }
+    let reason = (stop.status != Status::Landed).then_some(reason);
+    let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
+    let clock = clock_report.lock().map(|c| c.clone()).ok();
+    Ok(FlightReport::judge(
+        recorder.trajectory(),
+        &s.test.obstacles,
+        Ending {
+            judge: opts.judge,
+            frame: s.frame,
+            placement: s.placement.take(),
+            status: stop.status,
+            reason,
+            mode: opts.mode,
+            fence_uploaded: s.fence_uploaded,
+            warnings,
+            link: s.link.stats(),
+            lfs_min_distance: opts.lfs_min_distance,
+            ready_wait_s: s.ready.waited_s,
+            vehicle_messages,
+            clock,
+        },
+    ))
+}
+
+/// Our ground-station heartbeat at 1 Hz (vehicle time) for the whole session.
+async fn gcs_heartbeat(link: Arc<Link>) {
+    let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_GCS,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        base_mode: MavModeFlag::empty(),
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    });
+    loop {
+        // udpin cannot send before the vehicle spoke; that is fine, the next beat goes out.
+        let _ = link.send(Sender::Gcs, &hb).await;
+        tokio::time::sleep(link.clock().wall(Duration::from_secs(1))).await;
+    }
+}
+
+/// Waits (bounded) for an autopilot's heartbeat: the vehicle to fly.
+async fn wait_heartbeat(
+    link: &Link,
+    rx: &mut broadcast::Receiver<Arc<Inbound>>,
+    opts: &FlyOptions,
+    cancel: &CancelToken,
+) -> Result<Target, BridgeError> {
+    let deadline = link.clock().now() + secs(opts.heartbeat_wait_s);
+    loop {
+        let wait = link.clock().wall_until(deadline);
+        tokio::select! {
+            biased;
+            _ = cancel.cancelled() => return Err(BridgeError::Cancelled),
+            r = rx.recv() => match r {
+                Ok(inb) => {
+                    let system = inb.header.system_id.min(255) as u8;
+                    if let MavMessage::HEARTBEAT(h) = &inb.msg
+                        && h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
+                        && opts.target_system.is_none_or(|t| t == system)
+                    {
+                        return Ok(Target { system, component: inb.header.component_id });
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wait).await,
+            },
+            _ = tokio::time::sleep(wait) => {
+                return Err(BridgeError::NoHeartbeat { url: opts.connect.clone(), waited_s: opts.heartbeat_wait_s });
+            }
+        }
+        if link.clock().now() >= deadline {
+            return Err(BridgeError::NoHeartbeat {
+                url: opts.connect.clone(),
+                waited_s: opts.heartbeat_wait_s,
+            });
+        }
+    }
+}

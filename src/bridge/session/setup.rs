@@ -1,0 +1,162 @@
+//! Everything before the first command of the flight: the avoidance companion, the case study's parameters,
+//! the mission (uploaded and read back), the obstacles as a geofence, the position streams and readiness;
+//! and, after the flight, the parameters put back.
+#![allow(deprecated)]
+
+use std::time::Duration;
+
+use mavlink::dialects::common::{MavCmd, MavMissionType};
+
+use super::context::{Session, Stop, stop_for};
+use super::flight;
+use super::ready;
+use super::report::Status;
+use crate::bridge::companion::avoidance;
+use crate::bridge::options::FlyMode;
+use crate::bridge::wire::cancel::CancelToken;
+use crate::bridge::wire::exchange::{ProtocolError, Retry};
+use crate::bridge::wire::mission_download::MissionDownload;
+use crate::bridge::wire::mission_upload::MissionUpload;
+use crate::bridge::wire::params::ParamSet;
+use crate::bridge::wire::plan_items::{fence_items, first_difference, mission_items};
+use crate::model::LocalProjection;
+
+/// GF_ACTION = 1: the fence only warns, so it never steers the test.
+const GF_WARNING_ONLY: f64 = 1.0;
+/// LOCAL_POSITION_NED rate requested, Hz (the issue asks for at least 30).
+pub const POSITION_RATE_HZ: f64 = 50.0;
+
+impl Session<'_> {
+    /// Everything before the first command of the flight.
+    pub async fn prepare(&mut self) -> Result<(), Stop> {
+        if self.opts.mode == FlyMode::Avoidance {
+            let steer = flight::steer_for(self.test, self.opts, self.frame);
+            let pacing = match self.opts.lockstep {
+                Some(latency) => avoidance::Pacing::Lockstep { latency },
+                None => avoidance::Pacing::FreeRunning,
+            };
+            let companion = self.companion.clone();
+            for t in avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing) {
+                self.tasks.push(t);
+            }
+        }
+        self.set_params().await?;
+        self.upload_mission().await?;
+        self.upload_fence().await?;
+        self.request_streams().await;
+        let mut st = ready::ReadyState::default();
+        ready::wait_ready(self, &mut st).await
+    }
+
+    async fn set_params(&mut self) -> Result<(), Stop> {
+        let avoid = if self.opts.mode == FlyMode::Avoidance { 1.0 } else { 0.0 };
+        let mut wanted: Vec<(String, f64)> = self
+            .test
+            .params
+            .iter()
+            .filter(|p| p.name != "COM_OBS_AVOID")
+            .map(|p| (p.name.clone(), p.value))
+            .collect();
+        wanted.push(("COM_OBS_AVOID".into(), avoid));
+        let p = ParamSet::new(self.target, wanted, Retry::PARAM);
+        self.link
+            .exchange(p, &self.cancel)
+            .await
+            .map(|_| ())
+            .map_err(|e| stop_for("setting the case-study parameters", e))
+    }
+
+    async fn upload_mission(&mut self) -> Result<(), Stop> {
+        let items = mission_items(&self.test.mission).map_err(|e| Stop::new(Status::Rejected, e))?;
+        let ty = MavMissionType::MAV_MISSION_TYPE_MISSION;
+        let up = MissionUpload::new(self.target, ty, items.clone(), Retry::MISSION);
+        self.link
+            .exchange(up, &self.cancel)
+            .await
+            .map_err(|e| stop_for("uploading the mission", e))?;
+        self.ready.mission_uploaded_at = Some(self.link.clock().now());
+        let down = MissionDownload::new(self.target, ty, Retry::MISSION);
+        let got = self
+            .link
+            .exchange(down, &self.cancel)
+            .await
+            .map_err(|e| stop_for("reading the mission back", e))?;
+        match first_difference(&items, &got) {
+            None => Ok(()),
+            Some(d) => Err(stop_for("checking the mission", ProtocolError::MissionMismatch(d))),
+        }
+    }
+
+    /// The obstacles as exclusion polygons with GF_ACTION warning-only; a refusal is a warning, not a stop.
+    /// Without a fence, any stale fence from an earlier test is cleared so it cannot steer this one.
+    async fn upload_fence(&mut self) -> Result<(), Stop> {
+        let ty = MavMissionType::MAV_MISSION_TYPE_FENCE;
+        let wanted = self.opts.fence && !self.test.obstacles.is_empty();
+        let items = if wanted {
+            fence_items(&self.test.obstacles, &LocalProjection::new(self.test.home))
+        } else {
+            Vec::new()
+        };
+        let up = MissionUpload::new(self.target, ty, items, Retry::MISSION);
+        match self.link.exchange(up, &self.cancel).await {
+            Ok(_) if wanted => {}
+            Ok(_) => return Ok(()),
+            Err(ProtocolError::Cancelled) => return Err(Stop::new(Status::Aborted, "cancelled")),
+            Err(e) if wanted => {
+                self.warnings.push(format!("flying without the geofence: {e}"));
+                return Ok(());
+            }
+            Err(e) => {
+                self.warnings.push(format!("could not clear an old geofence: {e}"));
+                return Ok(());
+            }
+        }
+        let p = ParamSet::new(self.target, vec![("GF_ACTION".into(), GF_WARNING_ONLY)], Retry::PARAM);
+        match self.link.exchange(p, &self.cancel).await {
+            Ok(changes) => {
+                self.fence_uploaded = true;
+                self.restore
+                    .extend(changes.into_iter().filter(|c| c.old != c.new).map(|c| (c.name, c.old)));
+                Ok(())
+            }
+            Err(ProtocolError::Cancelled) => Err(Stop::new(Status::Aborted, "cancelled")),
+            Err(e) => {
+                // A fence that may act (e.g. Hold) would steer the test: take it away again.
+                self.warnings
+                    .push(format!("GF_ACTION not set to warning-only ({e}); fence removed"));
+                let clear = MissionUpload::new(self.target, ty, Vec::new(), Retry::MISSION);
+                if let Err(e) = self.link.exchange(clear, &self.cancel).await {
+                    return Err(stop_for("removing the geofence", e));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// LOCAL_POSITION_NED at [`POSITION_RATE_HZ`]; ATTITUDE as fast, for the heading. Refusals are warnings.
+    async fn request_streams(&mut self) {
+        let interval_us = (1e6 / POSITION_RATE_HZ) as f32;
+        for id in [32.0, 30.0] {
+            let p = [id, interval_us, 0.0, 0.0, 0.0, 0.0, 0.0];
+            if let Err(e) = self.command(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, p).await {
+                self.warnings
+                    .push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
+            }
+        }
+    }
+
+    /// Puts back changed parameters (bounded; a failure is a warning).
+    pub async fn restore_params(&mut self) {
+        if self.restore.is_empty() {
+            return;
+        }
+        let quick = Retry {
+            timeout: Duration::from_secs(1),
+            max_retries: 2,
+        };
+        let p = ParamSet::new(self.target, std::mem::take(&mut self.restore), quick);
+        if let Err(e) = self.link.exchange(p, &CancelToken::new()).await {
+            self.warnings.push(format!("could not restore parameters: {e}"));
+        }
+    }
+}
