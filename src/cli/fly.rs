@@ -234,6 +234,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if let Some(w) = report.clock.as_ref().and_then(|c| c.warning.as_ref()) {
             println!("clock             {w}");
         }
+        if let Some(t) = &report.companion_timing {
+            let q = |q: Option<prgenuav::bridge::companion::timing::Quantiles>| {
+                q.map_or("-".to_string(), |q| format!("{:.1}/{:.1}", q.median, q.p99))
+            };
+            println!(
+                "companion         request to answer {} ms, plan {} ms, plan age {} ms (median/p99, wall; {} answers)",
+                q(Some(t.request_to_answer_ms)),
+                q(t.plan_ms),
+                q(t.plan_age_ms),
+                t.request_to_answer_ms.n
+            );
+        }
         for w in &report.warnings {
             println!("warning           {w}");
         }

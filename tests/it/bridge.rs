@@ -105,6 +105,23 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
             r.reason
         );
     }
+    // Only the avoidance companion answers requests; in lockstep it answers every one with a fresh plan.
+    match (&r.companion_timing, mode) {
+        (Some(t), FlyMode::Avoidance) => {
+            let plans = t.plan_ms.expect("plans timed");
+            assert!(
+                t.request_to_answer_ms.n as f64 > r.flight_time_s,
+                "{mode:?} mission {n}: {t:?}"
+            );
+            assert!(plans.n >= t.request_to_answer_ms.n / 2, "{t:?}");
+            assert!(
+                t.request_to_answer_ms.median >= plans.median * 0.5,
+                "an answer waits for its plan: {t:?}"
+            );
+        }
+        (None, FlyMode::Avoidance) => panic!("avoidance mission {n}: no companion timing"),
+        (t, _) => assert!(t.is_none(), "{mode:?} has no companion: {t:?}"),
+    }
     r
 }
 
@@ -238,6 +255,9 @@ async fn loss_and_latency_give_the_same_status() {
     assert_eq!(clean.status, Status::Landed, "{:?}", clean.reason);
     assert_eq!(lossy.status, clean.status, "{:?} {:?}", lossy.reason, lossy.warnings);
     assert!(lossy.link.retries > 0, "20 % loss needs retries");
+    // Free-running, answers go out at 10 Hz with the latest plan: its age is reported beside the latency.
+    let t = clean.companion_timing.expect("companion timing");
+    assert!(t.plan_age_ms.is_some_and(|a| a.n > 10), "{t:?}");
     assert!(lossy.samples > 100);
 }
 

@@ -9,7 +9,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::{
     HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA,
@@ -19,6 +19,7 @@ use tokio::task::JoinHandle;
 
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
+use super::timing::AnswerTiming;
 use crate::bridge::wire::exchange::Target;
 use crate::bridge::wire::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
 use crate::bridge::wire::pose::PoseNed;
@@ -233,6 +234,8 @@ pub struct CompanionStats {
     pub planned: AtomicU64,
     /// Answers that mirrored PX4's setpoint.
     pub mirrored: AtomicU64,
+    /// Wall-time latencies of the answers.
+    pub timing: AnswerTiming,
 }
 
 impl CompanionStats {
@@ -283,21 +286,38 @@ pub fn spawn(
     [tokio::spawn(beat(link.clone())), answers]
 }
 
-/// Sends the companion's answer (if PX4 is asking) and publishes its answer counts.
+/// Sends the companion's answer (if PX4 is asking) and publishes its answer counts and timing: `asked` is
+/// the wall instant of the oldest request not answered yet (taken when an answer goes out), `worker` the
+/// planner whose latest result `planned` is.
+#[allow(clippy::too_many_arguments)]
 async fn answer(
     link: &Link,
     companion: &mut Companion,
     stats: &CompanionStats,
+    worker: &mut SteerWorker,
+    asked: &mut Option<Instant>,
     planned: Option<SteerOutput>,
     now: Duration,
     time_usec: u64,
 ) {
+    for t in worker.take_plan_times() {
+        stats.timing.plan(t);
+    }
     if let Some(a) = companion.answer_with(planned, now, time_usec) {
         stats.planned.store(companion.planned, Ordering::Relaxed);
         stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
         let _ = link
             .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
             .await;
+        let sent = Instant::now();
+        if let Some(at) = asked.take() {
+            stats.timing.request_to_answer(sent.saturating_duration_since(at));
+        }
+        if planned.is_some()
+            && let Some(input) = worker.latest_input_wall()
+        {
+            stats.timing.plan_age(sent.saturating_duration_since(input));
+        }
     }
 }
 
@@ -337,6 +357,7 @@ async fn run_lockstep(
         if !is_request(&inb.header, target) {
             continue;
         }
+        let mut asked = Some(Instant::now());
         // The vehicle's own time: the request was sent at it and the vehicle waits for the answer.
         let now = Duration::from_micros(t.time_usec);
         companion.on_request(t, now);
@@ -352,7 +373,17 @@ async fn run_lockstep(
             },
             None => None,
         };
-        answer(&link, &mut companion, &stats, planned, now, t.time_usec).await;
+        answer(
+            &link,
+            &mut companion,
+            &stats,
+            &mut worker,
+            &mut asked,
+            planned,
+            now,
+            t.time_usec,
+        )
+        .await;
     }
 }
 
@@ -370,6 +401,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
     let mut companion = Companion::default();
     let mut worker = SteerWorker::new(steer);
     let mut next_answer = clock.now();
+    let mut asked: Option<Instant> = None;
     loop {
         let now = clock.now();
         if now >= next_answer {
@@ -380,7 +412,17 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
             // A plan older than PX4's own patience (0.5 s) is not used: mirror instead.
             let planned = worker.latest(now, STALE_PLAN).flatten();
             let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
-            answer(&link, &mut companion, &stats, planned, now, usec).await;
+            answer(
+                &link,
+                &mut companion,
+                &stats,
+                &mut worker,
+                &mut asked,
+                planned,
+                now,
+                usec,
+            )
+            .await;
         }
         let wake = clock.wall_until(next_answer);
         tokio::select! {
@@ -389,6 +431,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
                     let now = clock.now();
                     match &inb.msg {
                         MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) if is_request(&inb.header, target) => {
+                            asked.get_or_insert_with(Instant::now);
                             companion.on_request(t, now)
                         }
                         m => view.update(m, now),

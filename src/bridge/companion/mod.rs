@@ -9,3 +9,4 @@ pub mod planner_steer;
 pub mod predict;
 pub mod steer;
 pub mod steer_worker;
+pub mod timing;

@@ -2,21 +2,38 @@
 //! 10-20 Hz message streams keep their rate even when the planner is slower than that (a debug build, a fast
 //! time scale): senders always use the latest finished result.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use tokio::task::JoinHandle;
 
 use super::steer::{Steer, SteerInput, SteerOutput};
 
-type Job = JoinHandle<(Box<dyn Steer>, Option<SteerOutput>)>;
+type Job = JoinHandle<(Box<dyn Steer>, Option<SteerOutput>, Duration)>;
+
+/// A finished computation: its result, the vehicle time and wall instant its input was taken at.
+#[derive(Clone, Copy)]
+struct Finished {
+    out: Option<SteerOutput>,
+    at: Duration,
+    wall: Instant,
+}
+
+/// Runs one computation on the calling thread, timed (wall).
+fn timed(steer: &mut Box<dyn Steer>, input: &SteerInput) -> (Option<SteerOutput>, Duration) {
+    let t0 = Instant::now();
+    let out = steer.steer(input);
+    (out, t0.elapsed())
+}
 
 /// The steering and its one computation in flight.
 pub struct SteerWorker {
     idle: Option<Box<dyn Steer>>,
-    running: Option<(Job, Duration)>,
-    latest: Option<(Option<SteerOutput>, Duration)>,
+    running: Option<(Job, Duration, Instant)>,
+    latest: Option<Finished>,
     /// Computations finished.
     pub finished: u64,
+    /// Wall time of each computation finished since the last [`SteerWorker::take_plan_times`].
+    plan_times: Vec<Duration>,
 }
 
 impl SteerWorker {
@@ -27,33 +44,36 @@ impl SteerWorker {
             running: None,
             latest: None,
             finished: 0,
+            plan_times: Vec::new(),
         }
     }
 
     /// Collects a finished computation and, when idle, starts one on `input` (vehicle time `now`).
     /// Returns false if the steering was lost (its task panicked or the runtime is stopping).
     pub async fn poll(&mut self, input: Option<SteerInput>, now: Duration) -> bool {
-        if let Some((job, at)) = self.running.take() {
+        if let Some((job, at, wall)) = self.running.take() {
             if !job.is_finished() {
-                self.running = Some((job, at));
+                self.running = Some((job, at, wall));
                 return true;
             }
             match job.await {
-                Ok((steer, out)) => {
+                Ok((steer, out, took)) => {
                     self.idle = Some(steer);
-                    self.latest = Some((out, at));
+                    self.latest = Some(Finished { out, at, wall });
                     self.finished += 1;
+                    self.plan_times.push(took);
                 }
                 Err(_) => return false,
             }
         }
         let Some(input) = input else { return true };
         if let Some(mut steer) = self.idle.take() {
+            let wall = Instant::now();
             let job = tokio::task::spawn_blocking(move || {
-                let out = steer.steer(&input);
-                (steer, out)
+                let (out, took) = timed(&mut steer, &input);
+                (steer, out, took)
             });
-            self.running = Some((job, now));
+            self.running = Some((job, now, wall));
         }
         true
     }
@@ -61,34 +81,46 @@ impl SteerWorker {
     /// Steers on `input` now and waits for the result (lockstep: the vehicle's clock stands still meanwhile).
     /// `None` if the steering was lost.
     pub async fn compute(&mut self, input: SteerInput, now: Duration) -> Option<Option<SteerOutput>> {
-        if let Some((job, _)) = self.running.take() {
-            let (steer, _) = job.await.ok()?;
+        if let Some((job, _, _)) = self.running.take() {
+            let (steer, _, _) = job.await.ok()?;
             self.idle = Some(steer);
         }
         let mut steer = self.idle.take()?;
-        let (steer, out) = tokio::task::spawn_blocking(move || {
-            let out = steer.steer(&input);
-            (steer, out)
+        let wall = Instant::now();
+        let (steer, out, took) = tokio::task::spawn_blocking(move || {
+            let (out, took) = timed(&mut steer, &input);
+            (steer, out, took)
         })
         .await
         .ok()?;
         self.idle = Some(steer);
-        self.latest = Some((out, now));
+        self.latest = Some(Finished { out, at: now, wall });
         self.finished += 1;
+        self.plan_times.push(took);
         Some(out)
     }
 
     /// The latest result whose input is at most `max_age` old: `Some(None)` means "cannot plan".
     pub fn latest(&self, now: Duration, max_age: Duration) -> Option<Option<SteerOutput>> {
         self.latest
-            .filter(|(_, at)| now.saturating_sub(*at) <= max_age)
-            .map(|(out, _)| out)
+            .filter(|f| now.saturating_sub(f.at) <= max_age)
+            .map(|f| f.out)
+    }
+
+    /// The wall instant the latest result's input was taken at.
+    pub fn latest_input_wall(&self) -> Option<Instant> {
+        self.latest.map(|f| f.wall)
+    }
+
+    /// The wall time of each computation finished since the last call.
+    pub fn take_plan_times(&mut self) -> Vec<Duration> {
+        std::mem::take(&mut self.plan_times)
     }
 }
 
 impl Drop for SteerWorker {
     fn drop(&mut self) {
-        if let Some((job, _)) = &self.running {
+        if let Some((job, _, _)) = &self.running {
             job.abort();
         }
     }

@@ -10,6 +10,7 @@ use crate::model::{Obstacle, Trajectory};
 use super::clock_watch::ClockReport;
 use super::placement::Placement;
 use crate::bridge::companion::frame::{FRAME_NAME, FrameSource, TestFrame};
+use crate::bridge::companion::timing::TimingReport;
 use crate::bridge::options::FlyMode;
 use crate::bridge::wire::link::LinkStats;
 use crate::bridge::wire::notices::VehicleMessage;
@@ -117,6 +118,8 @@ pub struct FlightReport {
     pub vehicle_messages: Vec<VehicleMessage>,
     /// The vehicle's clock rate against the time scale.
     pub clock: Option<ClockReport>,
+    /// How fast the avoidance companion answered (wall milliseconds; avoidance mode only).
+    pub companion_timing: Option<TimingReport>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -153,6 +156,8 @@ pub struct Ending {
     pub vehicle_messages: Vec<VehicleMessage>,
     /// The clock.
     pub clock: Option<ClockReport>,
+    /// The companion's answer timing.
+    pub companion_timing: Option<TimingReport>,
 }
 
 impl FlightReport {
@@ -194,6 +199,7 @@ impl FlightReport {
             ready_wait_s: end.ready_wait_s,
             vehicle_messages: end.vehicle_messages,
             clock: end.clock,
+            companion_timing: end.companion_timing,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -234,6 +240,7 @@ mod tests {
             ready_wait_s: None,
             vehicle_messages: vec![],
             clock: None,
+            companion_timing: None,
         }
     }
 

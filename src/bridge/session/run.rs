@@ -116,6 +116,7 @@ pub async fn run(
             ready_wait_s: s.ready.waited_s,
             vehicle_messages,
             clock,
+            companion_timing: s.companion.timing.report(),
         },
     ))
 }
