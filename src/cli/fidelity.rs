@@ -1,10 +1,12 @@
-//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N]`: simulated vs real minimum distances.
+//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N] [--cv K [--cv-seed S]]`: simulated vs real
+//! minimum distances; with `--cv`, the cross-validated figure of the fitted constants beside the in-sample one.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use prgenuav::lfs::fidelity::{Aggregates, evaluate, load_dir};
+use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_set_key, predict_grid};
+use prgenuav::lfs::fidelity::{Aggregates, FlightCase, evaluate, load_dir};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
 /// Arguments of `fidelity`.
@@ -21,6 +23,13 @@ pub struct Args {
     /// Simulations to run at once (default: 1).
     #[arg(long, default_value_t = 1)]
     jobs: usize,
+    /// Cross-validate the motion model's fitted constants with K folds by obstacle set (and leave one tier
+    /// out): simulates every flight once per grid point (12 for paper, 6 for px4; minutes).
+    #[arg(long, value_name = "K")]
+    cv: Option<usize>,
+    /// Seed of the fold assignment.
+    #[arg(long, default_value_t = 0, requires = "cv")]
+    cv_seed: u64,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -29,7 +38,7 @@ fn opt(v: Option<f64>) -> String {
 
 fn line(name: &str, a: &Aggregates) -> String {
     format!(
-        "{name:<8} n {:>3}  MAE {:>6} m  Spearman {:>6}  precision(<1.5) {:>6}  recall(<1.5) {:>6}",
+        "{name:<20} n {:>3}  MAE {:>6} m  Spearman {:>6}  precision(<1.5) {:>6}  recall(<1.5) {:>6}",
         a.n,
         opt(a.mae),
         opt(a.spearman),
@@ -51,6 +60,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "{}: no flight JSON with obstacles and a recorded distance",
             args.dir.display()
         );
+    }
+    if let Some(k) = args.cv {
+        return run_cv(&args, &cases, k);
     }
     let config = SimConfig {
         motion,
@@ -98,4 +110,67 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn run_cv(args: &Args, cases: &[FlightCase], k: usize) -> anyhow::Result<ExitCode> {
+    let Some(grid) = default_grid(&args.motion) else {
+        bail!("unknown motion model {:?} (use paper or px4)", args.motion);
+    };
+    let mut sets: Vec<String> = cases.iter().map(obstacle_set_key).collect();
+    sets.sort();
+    sets.dedup();
+    let Some(folds) = assign_folds(cases, k, args.cv_seed) else {
+        bail!(
+            "--cv {k}: needs at least 2 folds and no more folds than obstacle sets ({} in {})",
+            sets.len(),
+            args.dir.display()
+        );
+    };
+    eprintln!(
+        "cross-validating {} grid points x {} flights ({} obstacle sets, {k} folds)...",
+        grid.len(),
+        cases.len(),
+        sets.len()
+    );
+    let preds = predict_grid(cases, &grid, args.jobs);
+    let truth = Truth::of(cases);
+    let Some(report) = cross_validate(&grid, &preds, &truth, &folds, k, args.cv_seed, sets.len()) else {
+        bail!("no grid point predicted the training flights of every fold (every simulation failed?)");
+    };
+    if args.json {
+        super::print_json(&report)?;
+    } else {
+        print_cv(&report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_cv(r: &CvReport) {
+    println!(
+        "{}-fold cross-validation by obstacle set ({} sets, seed {}), choosing the {}:",
+        r.k, r.obstacle_sets, r.seed, r.criterion
+    );
+    println!("{}", line("cross-validated", &r.cross_validated));
+    for (t, a) in &r.cross_validated_tiers {
+        println!("{}", line(&format!("  cv tier {t}"), a));
+    }
+    println!("{}", line("in-sample", &r.in_sample));
+    for (t, a) in &r.in_sample_tiers {
+        println!("{}", line(&format!("  in-sample tier {t}"), a));
+    }
+    println!("in-sample choice: {}", r.in_sample_chosen);
+    for f in r.folds.iter().chain(&r.leave_one_tier_out) {
+        println!(
+            "{:<8} (n {:>3}) chose {:<48} held out: MAE {} m, Spearman {}",
+            f.held_out,
+            f.n_held_out,
+            f.chosen,
+            opt(f.held_out_figure.mae),
+            opt(f.held_out_figure.spearman)
+        );
+    }
+    println!("grid (in-sample):");
+    for (label, a) in &r.grid {
+        println!("  {}", line(label, a));
+    }
 }

@@ -179,6 +179,39 @@ fn fidelity_over_a_few_flights() {
         assert!(v.get(k).is_some(), "{k}");
     }
     assert_eq!(v["tiers"]["B"]["n"], 1);
+
+    // Cross-validated: each held-out flight predicted with constants chosen on the others.
+    let (code, out, err) = prgenuav(&[
+        "fidelity",
+        dir.path().to_str().unwrap(),
+        "--cv",
+        "2",
+        "--motion",
+        "px4",
+        "--json",
+        "--jobs",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["k"], 2);
+    assert_eq!(v["cross_validated"]["n"], 3);
+    assert_eq!(v["in_sample"]["n"], 3);
+    assert_eq!(v["grid"].as_array().map(Vec::len), Some(6));
+    let folds = v["folds"].as_array().unwrap();
+    assert_eq!(folds.iter().map(|f| f["n_held_out"].as_u64().unwrap()).sum::<u64>(), 3);
+    assert_eq!(
+        v["leave_one_tier_out"].as_array().map(Vec::len),
+        Some(3),
+        "tiers A, B, C"
+    );
+    // Too many folds for three obstacle sets, or a seed without --cv: clear errors.
+    let (code, _, err) = prgenuav(&["fidelity", dir.path().to_str().unwrap(), "--cv", "4"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--cv 4") && err.contains("3 in"), "{err}");
+    let (code, _, err) = prgenuav(&["fidelity", dir.path().to_str().unwrap(), "--cv-seed", "3"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--cv"), "{err}");
 }
 
 #[test]

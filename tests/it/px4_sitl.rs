@@ -129,27 +129,60 @@ async fn fly_on(px4: &Px4, test: &TestCase, mode: FlyMode, what: &str) -> Flight
         .await
         .expect("flight within 5 min of wall time")
         .expect("flight runs");
+    let timing = r.companion_timing.map_or("-".into(), |t| {
+        let q = t.request_to_answer_ms;
+        let p = |q: Option<prgenuav::bridge::companion::timing::Quantiles>| {
+            q.map_or("-".into(), |q| format!("{:.1}/{:.1}", q.median, q.p99))
+        };
+        format!(
+            "answer {:.1}/{:.1} ms, plan {} ms, plan age {} ms (median/p99 of {})",
+            q.median,
+            q.p99,
+            p(t.plan_ms),
+            p(t.plan_age_ms),
+            q.n
+        )
+    });
     eprintln!(
-        "px4_sitl: {what} | {} | {} | {} m | {:.0} s vehicle | {:.0} s wall | {:?}",
+        "px4_sitl: {what} | {} | {} | {} m | ready {} s | {:.0} s vehicle | {:.0} s wall | clock {} | {timing} | {:?}",
         serde_json::to_value(mode).unwrap_or_default(),
         r.status.as_str(),
         r.min_distance.map_or("-".into(), |d| format!("{d:.2}")),
+        r.ready_wait_s.map_or("-".into(), |w| format!("{w:.1}")),
         r.flight_time_s,
         wall.elapsed().as_secs_f64(),
+        r.clock
+            .as_ref()
+            .and_then(|c| c.measured_rate)
+            .map_or("-".into(), |c| format!("{c:.2}")),
         r.warnings
     );
     r
 }
 
-/// Landed and disarmed at the mission's land point, judged in the test's frame.
-fn assert_landed_at_the_land_point(r: &FlightReport, test: &TestCase, what: &str) {
-    assert_eq!(r.status, Status::Landed, "{what}: {:?} {:?}", r.reason, r.warnings);
+/// Landed and disarmed at the mission's land point, judged in the test's frame. Mission mode flies straight
+/// through the boxes the generator put on its path, so it ends `collision` (still landed and disarmed).
+fn assert_landed_at_the_land_point(r: &FlightReport, test: &TestCase, mode: FlyMode, what: &str) {
+    let expected = match mode {
+        FlyMode::Mission => Status::Collision,
+        _ => Status::Landed,
+    };
+    assert_eq!(r.status, expected, "{what}: {:?} {:?}", r.reason, r.warnings);
     assert!(r.min_distance.is_some(), "{what}: no distance");
     let land = test.mission.flight_path().last().copied().expect("land item");
     let end = r.trajectory.samples.last().copied().expect("samples");
     let off = (end.x - land.north_m).hypot(end.y - land.east_m);
     assert!(off < 3.0, "{what}: ended {off:.1} m from the land point (test frame)");
-    assert!(end.z < 0.5, "{what}: ended {:.2} m above ground", end.z);
+    // Heights are PX4's own estimate, which drifts at rest on SIH (-1.2 to +1.2 m seen after a flight): the
+    // landing is PX4's land detector's verdict (status landed, disarmed); the height only has to be back
+    // near where this flight's recording began, on the ground.
+    let start = r.trajectory.samples.first().copied().expect("samples");
+    assert!(
+        (end.z - start.z).abs() < 1.5,
+        "{what}: ended at height {:.2} m, started at {:.2} m",
+        end.z,
+        start.z
+    );
 }
 
 async fn all_modes(instance: u8, mission: u32) {
@@ -160,7 +193,7 @@ async fn all_modes(instance: u8, mission: u32) {
         let px4 = Px4::start(&bin, instance);
         let what = format!("mission {mission}");
         let r = fly_on(&px4, &test, mode, &what).await;
-        assert_landed_at_the_land_point(&r, &test, &format!("{what} {mode:?}"));
+        assert_landed_at_the_land_point(&r, &test, mode, &format!("{what} {mode:?}"));
         let start = r.trajectory.samples.first().copied().expect("samples");
         assert!(
             start.x.hypot(start.y) < 1.5,
@@ -196,11 +229,11 @@ async fn px4_sitl_two_flights_in_a_row() {
     let px4 = Px4::start(&bin, 4);
     let first = generated(2, 1);
     let r1 = fly_on(&px4, &first, FlyMode::Avoidance, "row 1/2 mission 2").await;
-    assert_landed_at_the_land_point(&r1, &first, "first flight");
+    assert_landed_at_the_land_point(&r1, &first, FlyMode::Avoidance, "first flight");
     let landed_at = r1.trajectory.samples.last().copied().expect("samples");
     let second = generated(2, 2);
     let r2 = fly_on(&px4, &second, FlyMode::Offboard, "row 2/2 mission 2").await;
-    assert_landed_at_the_land_point(&r2, &second, "second flight");
+    assert_landed_at_the_land_point(&r2, &second, FlyMode::Offboard, "second flight");
     let start = r2.trajectory.samples.first().copied().expect("samples");
     let moved = (start.x - landed_at.x).hypot(start.y - landed_at.y);
     assert!(
