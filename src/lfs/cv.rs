@@ -125,7 +125,7 @@ pub fn predict_grid(cases: &[FlightCase], grid: &[GridPoint], jobs: usize) -> Ve
     grid.iter()
         .map(|g| {
             let config = SimConfig {
-                motion: g.motion.clone(),
+                motion: g.motion,
                 ..SimConfig::default()
             };
             evaluate(cases, Vec::new(), &config, jobs)
