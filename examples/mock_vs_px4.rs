@@ -3,7 +3,8 @@
 //! `prgenuav fly TEST --json` wrote for the same test on PX4 (`PX4_DIR/<test>.json`): minimum distance (MAE,
 //! Spearman) and flight time (median ratio mock / PX4). Tests without a landed PX4 report are listed, not paired.
 //!
-//! `cargo run --release --example mock_vs_px4 -- TESTS PX4_DIR [PARALLEL=2]`
+//! `cargo run --release --example mock_vs_px4 -- TESTS PX4_DIR [PARALLEL=2]` (env `MOCK_PX4_DEFAULTS=1`: the mock
+//! with PX4's own defaults instead of the campaign's calibrated avoidance speed limit)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -24,7 +25,12 @@ const SPEED: f64 = 100.0;
 type Flown = (String, Option<f64>, f64);
 
 async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
-    let mock = mock_builder(FlyMode::Avoidance)
+    let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
+        mock_autopilot::MockAutopilot::builder()
+    } else {
+        mock_builder(FlyMode::Avoidance)
+    };
+    let mock = builder
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
         .speed_factor(SpeedFactor::Times(SPEED))
         .lockstep(Some(DEFAULT_LOCKSTEP_WAIT))

@@ -120,22 +120,26 @@ pub struct MockVehicle {
     timeout_s: f64,
 }
 
-/// Horizontal cruise speed (MPC_XY_CRUISE, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
+/// Horizontal speed limit (MPC_XY_VEL_MAX, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
 /// recorded competition flights flew (not on their distances): the median over the 37 trajectory-carrying flights
 /// of `tests/data/hfs-flights` of the 95th-percentile horizontal speed is 1.40 m/s (their median maximum 1.54,
 /// 29 of 37 between 1.2 and 1.63). PX4 v1.12's defaults (MPC_XY_CRUISE 5, jerk-limited braking towards the
 /// avoidance setpoint about 5 m ahead) would fly about 2.6 m/s; why the recorded stack flew slower is not known
-/// (see README, *Mock autopilot fidelity*). It acts as a vehicle-side cap only: our companion does not read
-/// MPC_XY_CRUISE and keeps planning with 5 m/s (PX4-Avoidance would read it and shorten its carrot). Measured with `examples/mock_fidelity.rs`: MAE 1.21 m at 5 m/s,
-/// 0.86 m at 1.5 m/s, 0.72 m at 1.3 m/s.
-pub const MOCK_AVOIDANCE_CRUISE_M_S: f64 = 1.4;
+/// (see README, *Mock autopilot fidelity*). It is a vehicle-side limit the companion does not read: the companion
+/// reads MPC_XY_CRUISE as PX4-Avoidance does, and that stays PX4's 5 m/s. (Set as MPC_XY_CRUISE instead, the
+/// companion would plan at 1.4 m/s: `examples/mock_fidelity.rs` MAE 0.61 m but Spearman 0.744 and, against real
+/// PX4 on 20 mission-2 tests, 7 flights stuck until the timeout where PX4 landed.)
+pub const MOCK_AVOIDANCE_SPEED_LIMIT_M_S: f64 = 1.4;
 
-/// The embedded mock for `mode`: PX4's defaults, except the avoidance cruise speed (see
-/// [`MOCK_AVOIDANCE_CRUISE_M_S`]).
+/// The embedded mock for `mode`: PX4's defaults, except the avoidance speed limit (see
+/// [`MOCK_AVOIDANCE_SPEED_LIMIT_M_S`]).
 pub fn mock_builder(mode: FlyMode) -> mock_autopilot::Builder {
     let b = MockAutopilot::builder();
     if mode == FlyMode::Avoidance {
-        b.param("MPC_XY_CRUISE", ParamValue::Float(MOCK_AVOIDANCE_CRUISE_M_S as f32))
+        b.param(
+            "MPC_XY_VEL_MAX",
+            ParamValue::Float(MOCK_AVOIDANCE_SPEED_LIMIT_M_S as f32),
+        )
     } else {
         b
     }

@@ -198,6 +198,16 @@ fn f32v(v: &Vector3<f64>) -> Vector3<f32> {
     Vector3::new(v.x as f32, v.y as f32, v.z as f32)
 }
 
+/// MPC_XY_CRUISE among the case's PX4 parameters, if set to a usable speed (m/s).
+pub fn cruise_param(px4_params: &[Param]) -> Option<f32> {
+    px4_params
+        .iter()
+        .rev()
+        .find(|p| p.name == "MPC_XY_CRUISE")
+        .map(|p| p.value as f32)
+        .filter(|v| v.is_finite() && *v > 0.0)
+}
+
 impl World {
     /// A vehicle on the ground at home, facing North, ready to fly `test`'s mission among its obstacles.
     pub fn new(test: &TestCase, config: SimConfig) -> Result<Self, SimError> {
@@ -219,6 +229,10 @@ impl World {
         }
         let mut params = config.planner.clone();
         params.fovs = vec![config.camera.fov()];
+        // PX4-Avoidance reads MPC_XY_CRUISE from the vehicle; the case's parameters are what the vehicle has.
+        if let Some(v) = cruise_param(px4_params) {
+            params.mpc_xy_cruise_m_s = v;
+        }
         let planner = Planner::new(params.clone())?;
         let mission_params = config.mission.unwrap_or_else(|| MissionParams::from_params(px4_params));
         let mission = MissionRunner::new(mission, mission_params).ok_or(SimError::EmptyMission)?;

@@ -45,9 +45,21 @@ fn v3(a: [f64; 3]) -> Vector3<f32> {
 impl PlannerSteer {
     /// A planner seeing `obstacles` through `camera`, with default planner parameters.
     pub fn new(obstacles: &[Obstacle], camera: Camera) -> Result<Self, LfsError> {
+        Self::with_cruise(obstacles, camera, None)
+    }
+
+    /// As [`PlannerSteer::new`], planning with the vehicle's MPC_XY_CRUISE (m/s) where known, as PX4-Avoidance
+    /// reads it from PX4: the waypoint generator's cruise speed and the line-pull distance.
+    pub fn with_cruise(
+        obstacles: &[Obstacle],
+        camera: Camera,
+        mpc_xy_cruise_m_s: Option<f64>,
+    ) -> Result<Self, LfsError> {
+        let defaults = PlannerParams::default();
         let params = PlannerParams {
             fovs: vec![camera.fov()],
-            ..PlannerParams::default()
+            mpc_xy_cruise_m_s: mpc_xy_cruise_m_s.map_or(defaults.mpc_xy_cruise_m_s, |v| v as f32),
+            ..defaults
         };
         Ok(Self {
             scene: Scene::new(obstacles),

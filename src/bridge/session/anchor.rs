@@ -13,8 +13,6 @@ use super::context::{Session, Stop};
 use super::placement::{LatLonAlt, MIS_DIST_1WP_DEFAULT_M, Placement, too_far, too_far_reason};
 use super::report::Status;
 use crate::bridge::companion::frame::TestFrame;
-use crate::bridge::wire::exchange::{ProtocolError, Retry};
-use crate::bridge::wire::param_read::ParamRead;
 use crate::bridge::wire::vehicle::VehicleView;
 use crate::model::{LocalProjection, TestCase};
 
@@ -72,24 +70,8 @@ impl<'a> Session<'a> {
 
     /// MIS_DIST_1WP; a vehicle without it (not PX4) gets PX4's default and a warning.
     async fn read_mis_dist_1wp(&mut self) -> Result<Option<f64>, Stop> {
-        let quick = Retry {
-            timeout: Duration::from_secs(1),
-            max_retries: 3,
-        };
-        match self
-            .link
-            .exchange(ParamRead::new(self.target, "MIS_DIST_1WP", quick), &self.cancel)
-            .await
-        {
-            Ok(v) => Ok(Some(v)),
-            Err(ProtocolError::Cancelled) => Err(Stop::new(Status::Aborted, "cancelled")),
-            Err(e) => {
-                self.warnings.push(format!(
-                    "MIS_DIST_1WP not readable ({e}); assuming PX4's default {MIS_DIST_1WP_DEFAULT_M} m"
-                ));
-                Ok(None)
-            }
-        }
+        let otherwise = format!("assuming PX4's default {MIS_DIST_1WP_DEFAULT_M} m");
+        self.read_param("MIS_DIST_1WP", &otherwise).await
     }
 
     /// The EKF origin's offset in the test's frame, from GPS_GLOBAL_ORIGIN or else GLOBAL_POSITION_INT.

@@ -20,6 +20,7 @@ use crate::bridge::wire::command::Command;
 use crate::bridge::wire::exchange::{ProtocolError, Retry, Target};
 use crate::bridge::wire::link::{Inbound, Link};
 use crate::bridge::wire::notices::Messages;
+use crate::bridge::wire::param_read::ParamRead;
 use crate::bridge::wire::vehicle::VehicleView;
 use crate::model::TestCase;
 
@@ -84,6 +85,8 @@ pub struct Session<'a> {
     pub placement: Option<Placement>,
     /// The vehicle's STATUSTEXT of severity WARNING or worse, as they arrived.
     pub messages: Messages,
+    /// The vehicle's MPC_XY_CRUISE (m/s) the planner uses, once read (avoidance and offboard modes).
+    pub mpc_xy_cruise_m_s: Option<f64>,
     /// Readiness timing and the arming budget.
     pub ready: Readiness,
 }
@@ -150,5 +153,26 @@ impl Session<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Reads the vehicle's parameter `name` (bounded: 4 tries of 1 s); when it does not answer, `Ok(None)` and a
+    /// warning saying what is assumed instead (`otherwise`). Only a cancel stops the flight.
+    pub async fn read_param(&mut self, name: &str, otherwise: &str) -> Result<Option<f64>, Stop> {
+        let quick = Retry {
+            timeout: Duration::from_secs(1),
+            max_retries: 3,
+        };
+        match self
+            .link
+            .exchange(ParamRead::new(self.target, name, quick), &self.cancel)
+            .await
+        {
+            Ok(v) => Ok(Some(v)),
+            Err(ProtocolError::Cancelled) => Err(Stop::new(Status::Aborted, "cancelled")),
+            Err(e) => {
+                self.warnings.push(format!("{name} not readable ({e}); {otherwise}"));
+                Ok(None)
+            }
+        }
     }
 }

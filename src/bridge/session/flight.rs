@@ -31,8 +31,14 @@ const TICK: Duration = Duration::from_millis(100);
 /// The steering for `opts.mode`: the LFS planner over the test's boxes, planning in the test's frame and
 /// answering in the vehicle's (`frame`; `None` = the two coincide); if it cannot be built, the interface's
 /// fallbacks (mirror PX4's setpoint; fly straight in offboard).
-pub fn steer_for(test: &TestCase, opts: &FlyOptions, frame: Option<TestFrame>) -> Box<dyn Steer> {
-    let planned: Box<dyn Steer> = match (PlannerSteer::new(&test.obstacles, Camera::hfs()), opts.mode) {
+pub fn steer_for(
+    test: &TestCase,
+    opts: &FlyOptions,
+    frame: Option<TestFrame>,
+    mpc_xy_cruise_m_s: Option<f64>,
+) -> Box<dyn Steer> {
+    let steer = PlannerSteer::with_cruise(&test.obstacles, Camera::hfs(), mpc_xy_cruise_m_s);
+    let planned: Box<dyn Steer> = match (steer, opts.mode) {
         (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
         (_, Mode::Avoidance) => return Box::new(Mirror),
         _ => Box::new(Straight),
@@ -84,7 +90,7 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             None => goals,
         };
         let pilot = Pilot::new(goals, acc);
-        let steer = steer_for(s.test, s.opts, s.frame);
+        let steer = steer_for(s.test, s.opts, s.frame, s.mpc_xy_cruise_m_s);
         let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer);
         s.tasks.push(task);
         Some(rx)

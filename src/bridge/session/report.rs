@@ -120,6 +120,8 @@ pub struct FlightReport {
     pub clock: Option<ClockReport>,
     /// How fast the avoidance companion answered (wall milliseconds; avoidance mode only).
     pub companion_timing: Option<TimingReport>,
+    /// The vehicle's MPC_XY_CRUISE the planner used, m/s (`null`: not read, PX4's default 5 m/s).
+    pub planner_cruise_m_s: Option<f64>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -158,6 +160,8 @@ pub struct Ending {
     pub clock: Option<ClockReport>,
     /// The companion's answer timing.
     pub companion_timing: Option<TimingReport>,
+    /// The planner's cruise speed as read from the vehicle.
+    pub planner_cruise_m_s: Option<f64>,
 }
 
 impl FlightReport {
@@ -200,6 +204,7 @@ impl FlightReport {
             vehicle_messages: end.vehicle_messages,
             clock: end.clock,
             companion_timing: end.companion_timing,
+            planner_cruise_m_s: end.planner_cruise_m_s,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -241,6 +246,7 @@ mod tests {
             vehicle_messages: vec![],
             clock: None,
             companion_timing: None,
+            planner_cruise_m_s: None,
         }
     }
 

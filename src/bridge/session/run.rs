@@ -68,6 +68,7 @@ pub async fn run(
         frame: None,
         placement: None,
         messages,
+        mpc_xy_cruise_m_s: None,
         ready: Readiness::default(),
     };
     let mut recorder = recorder;
@@ -117,6 +118,7 @@ pub async fn run(
             vehicle_messages,
             clock,
             companion_timing: s.companion.timing.report(),
+            planner_cruise_m_s: s.mpc_xy_cruise_m_s,
         },
     ))
 }

@@ -29,8 +29,18 @@ pub const POSITION_RATE_HZ: f64 = 50.0;
 impl Session<'_> {
     /// Everything before the first command of the flight.
     pub async fn prepare(&mut self) -> Result<(), Stop> {
+        self.set_params().await?;
+        if self.opts.mode != FlyMode::Mission {
+            // PX4-Avoidance plans with the vehicle's cruise speed (its waypoint speed and line-pull distance);
+            // read after the case's parameters are set, since they may change it.
+            let otherwise = "the planner keeps PX4's default 5 m/s";
+            self.mpc_xy_cruise_m_s = self
+                .read_param("MPC_XY_CRUISE", otherwise)
+                .await?
+                .filter(|v| v.is_finite() && *v > 0.0);
+        }
         if self.opts.mode == FlyMode::Avoidance {
-            let steer = flight::steer_for(self.test, self.opts, self.frame);
+            let steer = flight::steer_for(self.test, self.opts, self.frame, self.mpc_xy_cruise_m_s);
             let pacing = match self.opts.lockstep {
                 Some(latency) => avoidance::Pacing::Lockstep { latency },
                 None => avoidance::Pacing::FreeRunning,
@@ -40,7 +50,6 @@ impl Session<'_> {
                 self.tasks.push(t);
             }
         }
-        self.set_params().await?;
         self.upload_mission().await?;
         self.upload_fence().await?;
         self.request_streams().await;
