@@ -286,31 +286,45 @@ pub fn spawn(
     [tokio::spawn(beat(link.clone())), answers]
 }
 
-/// Sends the companion's answer (if PX4 is asking) and publishes its answer counts and timing: `asked` is
-/// the wall instant of the oldest request not answered yet (taken when an answer goes out), `worker` the
-/// planner whose latest result `planned` is.
-#[allow(clippy::too_many_arguments)]
-async fn answer(
-    link: &Link,
-    companion: &mut Companion,
-    stats: &CompanionStats,
-    worker: &mut SteerWorker,
-    asked: &mut Option<Instant>,
-    planned: Option<SteerOutput>,
-    now: Duration,
-    time_usec: u64,
-) {
-    for t in worker.take_plan_times() {
-        stats.timing.plan(t);
+/// Sends the companion's answers and publishes their counts and timing.
+struct Answers {
+    link: Arc<Link>,
+    stats: Arc<CompanionStats>,
+    /// Wall instant of the oldest request not answered yet.
+    asked: Option<Instant>,
+}
+
+impl Answers {
+    /// A request arrived now (only the oldest unanswered one is timed).
+    fn asked(&mut self) {
+        self.asked.get_or_insert_with(Instant::now);
     }
-    if let Some(a) = companion.answer_with(planned, now, time_usec) {
+
+    /// Sends the answer to PX4's latest request (if it is still asking) with `planned`, the latest result of
+    /// `worker`, at vehicle time `now`.
+    async fn send(
+        &mut self,
+        companion: &mut Companion,
+        worker: &mut SteerWorker,
+        planned: Option<SteerOutput>,
+        now: Duration,
+        time_usec: u64,
+    ) {
+        let stats = &self.stats;
+        for t in worker.take_plan_times() {
+            stats.timing.plan(t);
+        }
+        let Some(a) = companion.answer_with(planned, now, time_usec) else {
+            return;
+        };
         stats.planned.store(companion.planned, Ordering::Relaxed);
         stats.mirrored.store(companion.mirrored, Ordering::Relaxed);
-        let _ = link
+        let _ = self
+            .link
             .send(Sender::Companion, &MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(a))
             .await;
         let sent = Instant::now();
-        if let Some(at) = asked.take() {
+        if let Some(at) = self.asked.take() {
             stats.timing.request_to_answer(sent.saturating_duration_since(at));
         }
         if planned.is_some()
@@ -341,6 +355,11 @@ async fn run_lockstep(
     let mut history = PoseHistory::default();
     let mut companion = Companion::default();
     let mut worker = SteerWorker::new(steer);
+    let mut answers = Answers {
+        link: link.clone(),
+        stats,
+        asked: None,
+    };
     loop {
         let inb = match rx.recv().await {
             Ok(inb) => inb,
@@ -357,7 +376,7 @@ async fn run_lockstep(
         if !is_request(&inb.header, target) {
             continue;
         }
-        let mut asked = Some(Instant::now());
+        answers.asked();
         // The vehicle's own time: the request was sent at it and the vehicle waits for the answer.
         let now = Duration::from_micros(t.time_usec);
         companion.on_request(t, now);
@@ -373,17 +392,9 @@ async fn run_lockstep(
             },
             None => None,
         };
-        answer(
-            &link,
-            &mut companion,
-            &stats,
-            &mut worker,
-            &mut asked,
-            planned,
-            now,
-            t.time_usec,
-        )
-        .await;
+        answers
+            .send(&mut companion, &mut worker, planned, now, t.time_usec)
+            .await;
     }
 }
 
@@ -401,7 +412,11 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
     let mut companion = Companion::default();
     let mut worker = SteerWorker::new(steer);
     let mut next_answer = clock.now();
-    let mut asked: Option<Instant> = None;
+    let mut answers = Answers {
+        link: link.clone(),
+        stats,
+        asked: None,
+    };
     loop {
         let now = clock.now();
         if now >= next_answer {
@@ -412,17 +427,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
             // A plan older than PX4's own patience (0.5 s) is not used: mirror instead.
             let planned = worker.latest(now, STALE_PLAN).flatten();
             let usec = view.pose.map_or(0, |p| u64::from(p.time_boot_ms) * 1000);
-            answer(
-                &link,
-                &mut companion,
-                &stats,
-                &mut worker,
-                &mut asked,
-                planned,
-                now,
-                usec,
-            )
-            .await;
+            answers.send(&mut companion, &mut worker, planned, now, usec).await;
         }
         let wake = clock.wall_until(next_answer);
         tokio::select! {
@@ -431,7 +436,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
                     let now = clock.now();
                     match &inb.msg {
                         MavMessage::TRAJECTORY_REPRESENTATION_WAYPOINTS(t) if is_request(&inb.header, target) => {
-                            asked.get_or_insert_with(Instant::now);
+                            answers.asked();
                             companion.on_request(t, now)
                         }
                         m => view.update(m, now),
@@ -474,166 +479,5 @@ impl PoseHistory {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn mirrored_answers_warn_above_one_percent() {
-        let s = CompanionStats::default();
-        s.planned.store(700, Ordering::Relaxed);
-        s.mirrored.store(1, Ordering::Relaxed);
-        assert_eq!(s.warning(), None, "the first answer before any plan");
-        s.mirrored.store(40, Ordering::Relaxed);
-        assert!(s.warning().is_some_and(|w| w.starts_with("40 of 740")));
-    }
-
-    use crate::bridge::companion::steer::{Mirror, Straight};
-    use crate::bridge::wire::pose::PoseNed;
-
-    fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        let mut t = empty_trajectory(0, 3);
-        (t.pos_x[0], t.pos_y[0], t.pos_z[0]) = (p0[0], p0[1], p0[2]);
-        (t.pos_x[1], t.pos_y[1], t.pos_z[1]) = (p1[0], p1[1], p1[2]);
-        t.command[1] = cmd1;
-        t
-    }
-
-    fn flying() -> VehicleView {
-        let mut v = VehicleView::default();
-        v.armed = true;
-        v.pose = Some(PoseNed {
-            time_boot_ms: 1,
-            pos_ned: [0.0, 0.0, -5.0],
-            vel_ned: [0.0; 3],
-            yaw_rad: Some(0.0),
-        });
-        v
-    }
-
-    #[test]
-    fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
-        let mut c = Companion::default();
-        let t0 = Duration::ZERO;
-        assert!(c.answer(&flying(), &mut Mirror, t0, 0).is_none(), "nobody asked");
-        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], u16::MAX), t0);
-        let a = c.answer(&flying(), &mut Mirror, t0, 7).unwrap();
-        assert_eq!(
-            (a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points),
-            (1.0, 2.0, -3.0, 1)
-        );
-        assert_eq!(a.time_usec, 7);
-        assert!(a.pos_x[1].is_nan());
-        assert_eq!(c.mirrored, 1);
-        assert!(
-            c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(),
-            "stale request"
-        );
-    }
-
-    #[test]
-    fn pose_history_gives_the_pose_a_latency_ago() {
-        let pose = |ms: u32| PoseNed {
-            time_boot_ms: ms,
-            pos_ned: [f64::from(ms), 0.0, 0.0],
-            vel_ned: [0.0; 3],
-            yaw_rad: None,
-        };
-        let mut h = PoseHistory::default();
-        assert_eq!(h.at(Duration::from_secs(1)), None);
-        for ms in (1000..=3000).step_by(20) {
-            h.push(Some(pose(ms)));
-        }
-        assert_eq!(h.0.len(), POSE_HISTORY, "bounded");
-        let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
-        assert_eq!(at(3000), Some(3000));
-        assert_eq!(at(2999), Some(2980), "the newest at or before");
-        assert_eq!(at(100), Some(1020), "older than kept: the oldest");
-        h.push(Some(pose(40)));
-        let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
-        assert_eq!(at(3000), Some(40), "a reboot forgets the old boot's poses");
-    }
-
-    /// A PX4 1.14 request: point 0 = PX4's setpoint (type `cmd0`), point 1 = current item (type `cmd1`).
-    fn px4(p0: [f32; 3], v0: [f32; 3], cmd0: u16, p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        let mut t = request(p0, p1, cmd1);
-        (t.vel_x[0], t.vel_y[0], t.vel_z[0]) = (v0[0], v0[1], v0[2]);
-        t.command[0] = cmd0;
-        t
-    }
-
-    /// PX4 1.14 landing at (50, 0): point 0 its land setpoint (z unset, 1.5 m/s down), point 1 the land item.
-    fn px4_land() -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        let nan = f32::NAN;
-        px4(
-            [50.0, 0.0, nan],
-            [nan, nan, 1.5],
-            MAV_CMD_NAV_LAND,
-            [50.0, 0.0, 0.0],
-            MAV_CMD_NAV_LAND,
-        )
-    }
-
-    const UNSET: u16 = u16::MAX;
-    const NAN3: [f32; 3] = [f32::NAN; 3];
-
-    #[test]
-    fn goals_follow_px4_avoidance_through_takeoff_cruise_and_land() {
-        let mut c = Companion::default();
-        let t0 = Duration::ZERO;
-        // Takeoff item: point 0 is the takeoff target, typed TAKEOFF.
-        let tko = [0.0, 0.0, -10.0];
-        c.on_request(&px4(tko, NAN3, MAV_CMD_NAV_TAKEOFF, tko, MAV_CMD_NAV_TAKEOFF), t0);
-        assert_eq!((c.goal, c.nav), (Some([0.0, 0.0, -10.0]), Some(Nav::Takeoff)));
-        // A plain waypoint as current item: it is the goal, whatever point 0 says.
-        c.on_request(&px4([3.0, 0.0, -10.0], NAN3, UNSET, [30.0, 5.0, -10.0], UNSET), t0);
-        assert_eq!(c.goal, Some([30.0, 5.0, -10.0]));
-        assert_eq!(c.prev_goal, Some([0.0, 0.0, -10.0]));
-        assert_eq!(c.nav, Some(Nav::Mission));
-        // Move-to-land: PX4 makes the current item a plain position above the land point.
-        c.on_request(&px4([50.0, 0.0, -10.0], NAN3, UNSET, [50.0, 0.0, -10.0], UNSET), t0);
-        assert_eq!(c.goal, Some([50.0, 0.0, -10.0]));
-        // Land: point 0 is PX4's land setpoint (z unset, descent speed); the flag comes from command[0].
-        let land = px4_land();
-        c.on_request(&land, t0);
-        assert_eq!(c.nav, Some(Nav::Land));
-        let g = c.goal.unwrap();
-        assert_eq!((g[0], g[1]), (50.0, 0.0));
-        assert!(g[2].is_nan(), "land goal has no height");
-        let v = c.desired_vel.unwrap();
-        assert!(v[0].is_nan() && v[2] == 1.5, "descent speed latched: {v:?}");
-        // The same item again with another point 0: the goal stays (PX4-Avoidance updates on a new item only).
-        let mut later = land.clone();
-        later.vel_z[0] = 0.7;
-        c.on_request(&later, t0);
-        assert_eq!(c.desired_vel.unwrap()[2], 1.5);
-    }
-
-    #[test]
-    fn landing_answer_is_a_descent_velocity_with_z_unset() {
-        let mut c = Companion::default();
-        let land = px4_land();
-        c.on_request(&land, Duration::ZERO);
-        let sp = SteerOutput {
-            pos_ned: [50.0, 0.0, f64::NAN],
-            vel_ned: [None, None, Some(1.5)],
-            yaw_rad: None,
-        };
-        assert!(sp.is_complete());
-        let a = c.answer_with(Some(sp), Duration::ZERO, 0).unwrap();
-        assert_eq!((a.pos_x[0], a.vel_z[0]), (50.0, 1.5));
-        assert!(a.pos_z[0].is_nan() && a.vel_x[0].is_nan());
-        // Mirroring PX4's own land setpoint carries its velocity too.
-        let m = c.answer_with(None, Duration::ZERO, 0).unwrap();
-        assert!(m.pos_z[0].is_nan() && m.vel_z[0] == 1.5);
-        assert!(!SteerOutput::position([0.0, 0.0, f64::NAN], None).is_complete());
-    }
-
-    #[test]
-    fn plans_towards_the_current_waypoint() {
-        let mut c = Companion::default();
-        c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], UNSET), Duration::ZERO);
-        let a = c.answer(&flying(), &mut Straight, Duration::ZERO, 0).unwrap();
-        assert_eq!((a.pos_x[0], a.pos_z[0]), (10.0, -5.0));
-        assert_eq!(c.planned, 1);
-    }
-}
+#[path = "avoidance_tests.rs"]
+mod tests;
