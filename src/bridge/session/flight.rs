@@ -51,6 +51,20 @@ pub fn steer_for(
 
 /// In lockstep, silence shorter than this (wall time) is the vehicle waiting for the companion.
 const LOCKSTEP_SILENCE: Duration = Duration::from_secs(2);
+/// A lost link is also this much wall time of silence: a simulator K times faster than real time stalls in wall
+/// time when its machine is busy (PX4 SIH at speed factor 5 on a loaded 2-core machine went 1 s without a word,
+/// which is 5 s of its time), and such a stall is not a lost link.
+const MIN_WALL_SILENCE: Duration = Duration::from_secs(3);
+
+/// Whether `silence` (vehicle time since the vehicle was last heard) means the link is lost: longer than `loss`
+/// in vehicle time and than [`MIN_WALL_SILENCE`] in wall time; in lockstep (the vehicle silent while it waits
+/// for our answer) only wall-time silence beyond [`LOCKSTEP_SILENCE`] counts at all.
+fn link_lost(silence: Option<Duration>, loss: Duration, clock: &VehicleClock, lockstep: bool) -> bool {
+    silence.is_some_and(|d| {
+        let wall = clock.wall(d);
+        (!lockstep || wall > LOCKSTEP_SILENCE) && d > loss && wall >= MIN_WALL_SILENCE
+    })
+}
 
 /// Vehicle time since the flight started. In lockstep the scaled wall clock runs ahead of the vehicle, so the
 /// vehicle's own `time_boot_ms` counts, bounded by real time (never slower than 1x) so a flight always ends.
@@ -113,13 +127,12 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
         if s.view.rebooted {
             return end(s, Stop::new(Status::LinkLost, "the autopilot rebooted mid-flight")).await;
         }
-        // In lockstep the vehicle is silent while it waits for our answer; only wall-time silence counts.
-        let silence = s
-            .view
-            .silent_for(now)
-            .filter(|d| s.opts.lockstep.is_none() || clock.wall(*d) > LOCKSTEP_SILENCE);
-        if silence.is_some_and(|d| d > loss) {
-            let why = format!("no message from the vehicle for {:.1} s", loss.as_secs_f64());
+        if link_lost(s.view.silent_for(now), loss, &clock, s.opts.lockstep.is_some()) {
+            let why = format!(
+                "no message from the vehicle for {:.1} s (and at least {} s of wall time)",
+                loss.as_secs_f64(),
+                MIN_WALL_SILENCE.as_secs()
+            );
             return end(s, Stop::new(Status::LinkLost, why)).await;
         }
         if s.view.landed_after_flight() {
@@ -294,5 +307,29 @@ fn needs_landing(view: &VehicleView, status: Status) -> bool {
     match status {
         Status::Timeout | Status::Aborted | Status::LinkLost => view.armed || view.took_off,
         _ => view.armed,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lost_link_is_silence_in_vehicle_and_wall_time() {
+        let loss = Duration::from_secs(5);
+        let s = Duration::from_secs_f64;
+        // A real vehicle (1x): 5 s of silence.
+        let real = VehicleClock::new(1.0);
+        assert!(!link_lost(Some(s(4.9)), loss, &real, false));
+        assert!(link_lost(Some(s(5.1)), loss, &real, false));
+        assert!(!link_lost(None, loss, &real, false));
+        // SITL at 5x: 6 s of its time is 1.2 s of wall time, a stall of a busy machine, not a lost link.
+        let sitl = VehicleClock::new(5.0);
+        assert!(!link_lost(Some(s(6.0)), loss, &sitl, false));
+        assert!(link_lost(Some(s(15.5)), loss, &sitl, false));
+        // Lockstep: the vehicle waits for us; only wall-time silence beyond LOCKSTEP_SILENCE counts.
+        let fast = VehicleClock::new(100.0);
+        assert!(!link_lost(Some(s(150.0)), loss, &fast, true), "1.5 s of wall time");
+        assert!(link_lost(Some(s(350.0)), loss, &fast, true), "3.5 s of wall time");
     }
 }
