@@ -8,6 +8,7 @@ pub mod attitude;
 pub mod camera;
 pub mod cloud;
 pub mod cost;
+pub mod ensemble;
 pub mod fidelity;
 pub mod fov;
 pub mod frames;
