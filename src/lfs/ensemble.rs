@@ -11,7 +11,8 @@
 //!
 //! Members share the flight up to the last tick at which no box can be within sensor range even after the
 //! perturbations (takeoff and the approach); each is then forked from a clone of that state. Every member is
-//! judged against the test's own obstacles (the jitter models the flight, not the test).
+//! judged against the test's own obstacles (the jitter models the flight, not the test). A member ends once it
+//! descends straight down off every box for a second (its judged distance can no longer change).
 //!
 //! Seeds: member `k` of seed `s` draws from ChaCha8 stream `k` of seed `s`, so the members do not depend on
 //! the number of threads or on `n`.
@@ -20,6 +21,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::fidelity::FAIL_BELOW_M;
+use super::mission::Phase;
 use super::sim::{MotionModel, SimConfig, SimError, World, step};
 use crate::geometry::P2;
 use crate::judge::judge_in_frame;
@@ -223,6 +225,26 @@ fn out_of_sight(world: &World, obstacles: &[Obstacle], params: &EnsembleParams) 
     })
 }
 
+/// Whether the member is descending straight down, at one spot for a second, off every box: every later
+/// sample (and 0.5 s bin mean) repeats a point already judged, so the judged distance can no longer change
+/// (up to the rounding of a bin's mean). Spares the landing's ticks. `since` = where and when the spot began.
+fn descent_settled(w: &World, since: &mut Option<(f64, f64, f64)>, obstacles: &[Obstacle]) -> bool {
+    if w.mission().phase() != Phase::Descend {
+        *since = None;
+        return false;
+    }
+    let p = w.vehicle.position_enu;
+    match *since {
+        Some((x, y, t0)) if x == p.x && y == p.y => {
+            w.time_s - t0 >= 1.0 - 1e-9 && obstacles.iter().all(|o| !o.footprint().contains(P2::new(p.y, p.x)))
+        }
+        _ => {
+            *since = Some((p.x, p.y, w.time_s));
+            false
+        }
+    }
+}
+
 /// Runs `n` members of the flight of `mission` among `obstacles` (members on up to `jobs` threads; the result
 /// does not depend on `jobs`).
 #[allow(clippy::too_many_arguments)]
@@ -260,7 +282,8 @@ pub fn run_ensemble(
             w.set_motion(draw.motion)?;
         }
         w.shift_phase(draw.phase);
-        while step(&mut w, dt).is_none() {}
+        let mut since = None;
+        while step(&mut w, dt).is_none() && !descent_settled(&w, &mut since, obstacles) {}
         let d = judge_in_frame(&w.trajectory(), obstacles, config.judge).ok_or(EnsembleError::NoObstacles)?;
         Ok(d.min_distance)
     };

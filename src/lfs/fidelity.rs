@@ -362,13 +362,19 @@ pub fn probability_scores(pairs: &[(f64, f64)]) -> (Option<f64>, Option<f64>) {
 /// the other: a hash (FNV-1a) of the repeat group, or of the id without one, so that repeats of one obstacle set
 /// never straddle the halves and the split does not depend on file order.
 pub fn split_half(case: &FlightCase) -> usize {
+    fold_of(case, 2)
+}
+
+/// Which of `k` folds (0..k) a case belongs to for k-fold cross-validation: the same hash as [`split_half`],
+/// so repeats of one obstacle set always share a fold.
+pub fn fold_of(case: &FlightCase, k: usize) -> usize {
     let key = case.repeat_group.as_deref().unwrap_or(&case.id);
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in key.bytes() {
         h ^= u64::from(b);
         h = h.wrapping_mul(0x100_0000_01b3);
     }
-    ((h >> 7) % 2) as usize
+    ((h >> 7) % k.max(1) as u64) as usize
 }
 
 /// Aggregates of `report` over the cases of half `half` (see [`split_half`]); `cases` are the evaluated cases

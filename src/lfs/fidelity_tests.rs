@@ -99,3 +99,19 @@ fn probability_scores_of_pairs() {
     // (0.1^2 + 0.2^2 + 0.4^2) / 3
     assert!((brier.unwrap() - 0.21 / 3.0).abs() < 1e-15);
 }
+
+#[test]
+fn folds_keep_repeats_of_one_obstacle_set_together() {
+    let (cases, _) = load_dir(std::path::Path::new("tests/data/hfs-flights")).unwrap();
+    let mut fold_of_group = std::collections::BTreeMap::new();
+    let mut sizes = [0usize; 5];
+    for c in &cases {
+        let f = fold_of(c, 5);
+        sizes[f] += 1;
+        if let Some(g) = &c.repeat_group {
+            assert_eq!(*fold_of_group.entry(g.clone()).or_insert(f), f, "{g} straddles folds");
+        }
+    }
+    assert!(!fold_of_group.is_empty());
+    assert!(sizes.iter().all(|s| *s >= 10), "unbalanced folds {sizes:?}");
+}
