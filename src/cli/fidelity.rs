@@ -1,12 +1,14 @@
-//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N] [--cv K [--cv-seed S]]`: simulated vs real
-//! minimum distances; with `--cv`, the cross-validated figure of the fitted constants beside the in-sample one.
+//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N] [--ensemble N [--seed S]] [--cv K [--cv-seed S]]`:
+//! simulated vs real minimum distances; with `--ensemble`, a failure probability per case (AUC, Brier); with
+//! `--cv`, the cross-validated figure of the fitted constants beside the in-sample one.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
 use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_set_key, predict_grid};
-use prgenuav::lfs::fidelity::{Aggregates, FlightCase, evaluate, load_dir};
+use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
+use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FlightCase, evaluate_with, load_dir};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
 /// Arguments of `fidelity`.
@@ -24,12 +26,19 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     jobs: usize,
     /// Cross-validate the motion model's fitted constants with K folds by obstacle set (and leave one tier
-    /// out): simulates every flight once per grid point (12 for paper, 6 for px4; minutes).
-    #[arg(long, value_name = "K")]
+    /// out): simulates every flight once per grid point (12 for paper, 6 for px4; minutes). The ensemble's
+    /// scales are cross-validated by `examples/fit_ensemble.rs`.
+    #[arg(long, value_name = "K", conflicts_with = "ensemble")]
     cv: Option<usize>,
     /// Seed of the fold assignment.
     #[arg(long, default_value_t = 0, requires = "cv")]
     cv_seed: u64,
+    /// Also run N perturbed members per case: `p_fail` per case, ROC AUC and Brier score overall and per tier.
+    #[arg(long, value_name = "N")]
+    ensemble: Option<usize>,
+    /// Seed of the ensembles' perturbations.
+    #[arg(long, default_value_t = 0, requires = "ensemble")]
+    seed: u64,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -37,14 +46,18 @@ fn opt(v: Option<f64>) -> String {
 }
 
 fn line(name: &str, a: &Aggregates) -> String {
-    format!(
+    let mut s = format!(
         "{name:<20} n {:>3}  MAE {:>6} m  Spearman {:>6}  precision(<1.5) {:>6}  recall(<1.5) {:>6}",
         a.n,
         opt(a.mae),
         opt(a.spearman),
         opt(a.precision),
         opt(a.recall)
-    )
+    );
+    if a.auc.is_some() || a.brier.is_some() {
+        s += &format!("  p_fail AUC {:>6}  Brier {:>6}", opt(a.auc), opt(a.brier));
+    }
+    s
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -54,6 +67,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.jobs == 0 {
         bail!("--jobs must be at least 1");
     }
+    if let Some(n) = args.ensemble
+        && !(1..=MAX_MEMBERS).contains(&n)
+    {
+        bail!("--ensemble {n}: the number of members must be 1 to {MAX_MEMBERS}");
+    }
+    let spec = args.ensemble.map(|n| EnsembleSpec {
+        params: EnsembleParams::default(),
+        n,
+        seed: args.seed,
+    });
     let (cases, skipped) = load_dir(&args.dir)?;
     if cases.is_empty() {
         bail!(
@@ -68,24 +91,25 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         motion,
         ..Default::default()
     };
-    let report = evaluate(&cases, skipped, &config, args.jobs);
+    let report = evaluate_with(&cases, skipped, &config, spec.as_ref(), args.jobs);
     if args.json {
         super::print_json(&report)?;
         return Ok(ExitCode::SUCCESS);
     }
     println!(
-        "{:<28} {:<5} {:<9} {:>8} {:>9} {:>7}  status",
-        "case", "tier", "mission", "real", "predicted", "error"
+        "{:<28} {:<5} {:<9} {:>8} {:>9} {:>7} {:>7}  status",
+        "case", "tier", "mission", "real", "predicted", "error", "p_fail"
     );
     for c in &report.cases {
         println!(
-            "{:<28} {:<5} {:<9} {:>8.3} {:>9} {:>7}  {}",
+            "{:<28} {:<5} {:<9} {:>8.3} {:>9} {:>7} {:>7}  {}",
             c.id,
             c.tier,
             c.mission,
             c.real,
             opt(c.predicted),
             opt(c.abs_error),
+            opt(c.p_fail),
             c.status.map_or("failed".into(), |s| format!("{s:?}").to_lowercase())
         );
     }
@@ -95,6 +119,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         spearman: report.spearman,
         precision: report.precision,
         recall: report.recall,
+        auc: report.auc,
+        brier: report.brier,
     };
     println!("{}", line("overall", &overall));
     for (t, a) in &report.tiers {

@@ -1,4 +1,5 @@
-//! `prgenuav simulate TEST.yaml [--motion paper|px4] [--camera NAME] [--json] [--trajectory out.csv] [--plot out.svg]`.
+//! `prgenuav simulate TEST.yaml [--motion paper|px4] [--camera NAME] [--json] [--trajectory out.csv] [--plot out.svg]
+//! [--ensemble N [--seed S]]`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,6 +8,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::{Judge, ObstacleDistance};
+use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS, run_ensemble};
+use prgenuav::lfs::fidelity::FAIL_BELOW_M;
 use prgenuav::lfs::sim::{MotionModel, SimConfig, Status, simulate};
 use prgenuav::plot::{FlightPlot, PathStyle};
 
@@ -21,7 +24,8 @@ pub struct Args {
     /// Depth camera preset: hfs (default), 2019, d455.
     #[arg(long, default_value = "hfs")]
     camera: String,
-    /// Print `{"min_distance", "min_distance_raw", "per_obstacle", "status", "flight_time_s", "cycles", "wall_ms"}`.
+    /// Print `{"min_distance", "min_distance_raw", "per_obstacle", "status", "flight_time_s", "cycles", "wall_ms"}`, with
+    /// `"ensemble": {"n", "seed", "p_fail", "member_min_distances"}` under `--ensemble`.
     #[arg(long)]
     json: bool,
     /// Write the simulated trajectory as an Aerialist CSV (`timestamp,x,y,z,r`).
@@ -37,6 +41,21 @@ pub struct Args {
     /// Refuse a test that breaks the current competition rules (default: warn and simulate it anyway).
     #[arg(long)]
     strict: bool,
+    /// Also fly N perturbed members (tick phase, latency, speed, box jitter) and print `p_fail`, the
+    /// probability of a minimum distance below 1.5 m, and the members' spread.
+    #[arg(long, value_name = "N")]
+    ensemble: Option<usize>,
+    /// Seed of the ensemble's perturbations (same seed, same members).
+    #[arg(long, default_value_t = 0, requires = "ensemble")]
+    seed: u64,
+}
+
+#[derive(serde::Serialize)]
+struct EnsembleReport {
+    n: usize,
+    seed: u64,
+    p_fail: Option<f64>,
+    member_min_distances: Vec<f64>,
 }
 
 #[derive(serde::Serialize)]
@@ -50,6 +69,8 @@ struct Report {
     flight_time_s: f64,
     cycles: u64,
     wall_ms: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ensemble: Option<EnsembleReport>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -60,6 +81,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
+    if let Some(n) = args.ensemble
+        && !(1..=MAX_MEMBERS).contains(&n)
+    {
+        bail!("--ensemble {n}: the number of members must be 1 to {MAX_MEMBERS}");
+    }
+    if args.ensemble.is_some() && test.obstacles.is_empty() {
+        bail!(
+            "--ensemble: {} has no obstacles, so there is no failure to predict",
+            args.test.display()
+        );
+    }
     let config = SimConfig {
         motion,
         camera,
@@ -85,6 +117,29 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
     }
+    let ensemble = match args.ensemble {
+        Some(n) => {
+            let params = EnsembleParams::default();
+            let jobs = std::thread::available_parallelism().map_or(1, |j| j.get());
+            let e = run_ensemble(
+                &test.mission,
+                &test.obstacles,
+                &test.params,
+                &config,
+                &params,
+                n,
+                args.seed,
+                jobs,
+            )?;
+            Some(EnsembleReport {
+                n,
+                seed: args.seed,
+                p_fail: e.p_fail(&params),
+                member_min_distances: e.member_min_distances,
+            })
+        }
+        None => None,
+    };
     let d = result.distance.as_ref();
     let report = Report {
         judge: args.judge,
@@ -96,6 +151,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         flight_time_s: result.flight_time_s,
         cycles: result.cycles,
         wall_ms,
+        ensemble,
     };
     if args.json {
         super::print_json(&report)?;
@@ -123,6 +179,33 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             wall_ms,
             motion.name()
         );
+        if let Some(e) = &report.ensemble {
+            let mut v = e.member_min_distances.clone();
+            v.sort_by(f64::total_cmp);
+            let below = v.iter().filter(|d| **d < FAIL_BELOW_M).count();
+            println!(
+                "p_fail            {} ({below} of {} members below {FAIL_BELOW_M} m, seed {}; Beta prior)",
+                e.p_fail.map_or("-".into(), |p| format!("{p:.3}")),
+                e.n,
+                e.seed
+            );
+            println!(
+                "members           min {:.3} m, median {:.3} m, max {:.3} m",
+                v[0],
+                median(&v),
+                v[v.len() - 1]
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Median of sorted, non-empty values.
+fn median(sorted: &[f64]) -> f64 {
+    let m = sorted.len() / 2;
+    if sorted.len() % 2 == 1 {
+        sorted[m]
+    } else {
+        0.5 * (sorted[m - 1] + sorted[m])
+    }
 }

@@ -12,6 +12,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 use serde_json::Value;
 
+use super::calibration::{brier, roc_auc};
+use super::ensemble::{Ensemble, EnsembleError, EnsembleParams, run_ensemble};
 use super::sim::{SimConfig, Status, simulate_parts};
 use crate::model::{GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, Param, Position, SIM_HOME, Size};
 
@@ -239,6 +241,9 @@ pub struct CaseResult {
     pub status: Option<Status>,
     /// |predicted - real|, metres.
     pub abs_error: Option<f64>,
+    /// Probability of "below 1.5 m" (tier's definition) from the ensemble, when one ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p_fail: Option<f64>,
 }
 
 /// Agreement over a set of cases.
@@ -254,6 +259,12 @@ pub struct Aggregates {
     pub precision: Option<f64>,
     /// Of the cases really below 1.5 m, the fraction predicted below 1.5 m.
     pub recall: Option<f64>,
+    /// ROC AUC of `p_fail` against "really below 1.5 m" (with an ensemble and both outcomes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auc: Option<f64>,
+    /// Brier score of `p_fail` (with an ensemble).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub brier: Option<f64>,
 }
 
 /// The whole comparison.
@@ -269,6 +280,12 @@ pub struct FidelityReport {
     pub precision: Option<f64>,
     /// Overall recall of "below 1.5 m".
     pub recall: Option<f64>,
+    /// Overall ROC AUC of `p_fail` (with an ensemble).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auc: Option<f64>,
+    /// Overall Brier score of `p_fail` (with an ensemble).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub brier: Option<f64>,
     /// Per tier.
     pub tiers: BTreeMap<String, Aggregates>,
     /// How much the real simulator disagrees with itself: mean |d_i - d_j| over pairs of flights of the same
@@ -329,20 +346,35 @@ pub fn aggregate(pairs: &[(f64, f64)]) -> Aggregates {
         spearman: spearman(&p, &r),
         precision: (pred_pos > 0).then(|| tp as f64 / pred_pos as f64),
         recall: (real_pos > 0).then(|| tp as f64 / real_pos as f64),
+        auc: None,
+        brier: None,
     }
+}
+
+/// ROC AUC and Brier score of `(p_fail, real)` pairs against "really below 1.5 m".
+pub fn probability_scores(pairs: &[(f64, f64)]) -> (Option<f64>, Option<f64>) {
+    let (p, real): (Vec<f64>, Vec<f64>) = pairs.iter().copied().unzip();
+    let fail: Vec<bool> = real.iter().map(|r| *r < FAIL_BELOW_M).collect();
+    (roc_auc(&p, &fail), brier(&p, &fail))
 }
 
 /// Which of two fixed halves (0 or 1) a case belongs to, for fitting constants on one half and checking them on
 /// the other: a hash (FNV-1a) of the repeat group, or of the id without one, so that repeats of one obstacle set
 /// never straddle the halves and the split does not depend on file order.
 pub fn split_half(case: &FlightCase) -> usize {
+    fold_of(case, 2)
+}
+
+/// Which of `k` folds (0..k) a case belongs to for k-fold cross-validation: the same hash as [`split_half`],
+/// so repeats of one obstacle set always share a fold.
+pub fn fold_of(case: &FlightCase, k: usize) -> usize {
     let key = case.repeat_group.as_deref().unwrap_or(&case.id);
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in key.bytes() {
         h ^= u64::from(b);
         h = h.wrapping_mul(0x100_0000_01b3);
     }
-    ((h >> 7) % 2) as usize
+    ((h >> 7) % k.max(1) as u64) as usize
 }
 
 /// Aggregates of `report` over the cases of half `half` (see [`split_half`]); `cases` are the evaluated cases
@@ -377,15 +409,60 @@ fn repeat_mae(cases: &[FlightCase]) -> Option<f64> {
     (!diffs.is_empty()).then(|| diffs.iter().sum::<f64>() / diffs.len() as f64)
 }
 
+/// An ensemble to run for every case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnsembleSpec {
+    /// Perturbation scales and prior.
+    pub params: EnsembleParams,
+    /// Members per case.
+    pub n: usize,
+    /// Seed (every case uses the same seed: its members draw streams 0..n).
+    pub seed: u64,
+}
+
+/// The recorded distances are the 2025 edition's (bare path), so predictions are judged by it too.
+fn recorded_judge(config: &SimConfig) -> SimConfig {
+    SimConfig {
+        judge: crate::judge::Judge::E2025,
+        ..config.clone()
+    }
+}
+
+/// The ensemble of one case (members judged by the 2025 edition, centre-line distances).
+pub fn case_ensemble(case: &FlightCase, config: &SimConfig, spec: &EnsembleSpec) -> Result<Ensemble, EnsembleError> {
+    let c = recorded_judge(config);
+    run_ensemble(
+        &case.mission,
+        &case.obstacles,
+        &case.params,
+        &c,
+        &spec.params,
+        spec.n,
+        spec.seed,
+        1,
+    )
+}
+
+/// `p_fail` of a case's ensemble in the tier's definition (`max(0, d - offset) < 1.5`).
+pub fn case_p_fail(case: &FlightCase, ensemble: &Ensemble, params: &EnsembleParams) -> Option<f64> {
+    ensemble.p_fail_below(params, FAIL_BELOW_M + case.definition_offset_m)
+}
+
 /// Simulates one case and compares.
 ///
 /// The recorded distances are the 2025 edition's (bare path), so the prediction is judged by it too, whatever
 /// `config.judge` says.
 pub fn evaluate_case(case: &FlightCase, config: &SimConfig) -> CaseResult {
-    let config = &SimConfig {
-        judge: crate::judge::Judge::E2025,
-        ..config.clone()
-    };
+    evaluate_case_with(case, config, None)
+}
+
+/// As [`evaluate_case`], with `p_fail` from `ensemble` when given.
+pub fn evaluate_case_with(case: &FlightCase, config: &SimConfig, ensemble: Option<&EnsembleSpec>) -> CaseResult {
+    let p_fail = ensemble.and_then(|spec| {
+        let e = case_ensemble(case, config, spec).ok()?;
+        case_p_fail(case, &e, &spec.params)
+    });
+    let config = &recorded_judge(config);
     let sim = simulate_parts(&case.mission, &case.obstacles, &case.params, config).ok();
     let predicted = sim
         .as_ref()
@@ -399,11 +476,23 @@ pub fn evaluate_case(case: &FlightCase, config: &SimConfig) -> CaseResult {
         predicted,
         status: sim.map(|s| s.status),
         abs_error: predicted.map(|p| (p - case.real_m).abs()),
+        p_fail,
     }
 }
 
 /// Simulates every case on up to `jobs` threads (in input order) and aggregates.
 pub fn evaluate(cases: &[FlightCase], skipped: Vec<String>, config: &SimConfig, jobs: usize) -> FidelityReport {
+    evaluate_with(cases, skipped, config, None, jobs)
+}
+
+/// As [`evaluate`], with `p_fail`, AUC and Brier from `ensemble` when given.
+pub fn evaluate_with(
+    cases: &[FlightCase],
+    skipped: Vec<String>,
+    config: &SimConfig,
+    ensemble: Option<&EnsembleSpec>,
+    jobs: usize,
+) -> FidelityReport {
     let jobs = jobs.clamp(1, cases.len().max(1));
     let mut results: Vec<Option<CaseResult>> = vec![None; cases.len()];
     std::thread::scope(|s| {
@@ -414,7 +503,7 @@ pub fn evaluate(cases: &[FlightCase], skipped: Vec<String>, config: &SimConfig, 
             start += chunk.len();
             s.spawn(move || {
                 for (k, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(evaluate_case(&cases[from + k], config));
+                    *slot = Some(evaluate_case_with(&cases[from + k], config, ensemble));
                 }
             });
         }
@@ -431,18 +520,30 @@ fn report(results: Vec<CaseResult>, cases: &[FlightCase], skipped: Vec<String>) 
             .filter_map(|c| c.predicted.map(|p| (p, c.real)))
             .collect()
     };
-    let all = aggregate(&pairs(None));
+    let with_probability = |tier: Option<&str>| {
+        let mut a = aggregate(&pairs(tier));
+        let p: Vec<(f64, f64)> = results
+            .iter()
+            .filter(|c| tier.is_none_or(|t| c.tier == t))
+            .filter_map(|c| c.p_fail.map(|p| (p, c.real)))
+            .collect();
+        (a.auc, a.brier) = probability_scores(&p);
+        a
+    };
+    let all = with_probability(None);
     let mut tiers = BTreeMap::new();
     for c in &results {
         tiers
             .entry(c.tier.clone())
-            .or_insert_with(|| aggregate(&pairs(Some(&c.tier))));
+            .or_insert_with(|| with_probability(Some(&c.tier)));
     }
     FidelityReport {
         mae: all.mae,
         spearman: all.spearman,
         precision: all.precision,
         recall: all.recall,
+        auc: all.auc,
+        brier: all.brier,
         tiers,
         hfs_repeat_mae: repeat_mae(cases),
         skipped,

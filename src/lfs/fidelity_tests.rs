@@ -67,3 +67,51 @@ fn evaluates_a_real_case_end_to_end() {
     assert_eq!(report.mae, r.abs_error);
     assert_eq!(report.tiers["A"].n, 1);
 }
+
+#[test]
+fn an_unperturbed_ensemble_agrees_with_the_point_prediction() {
+    let flight = std::path::Path::new("tests/data/hfs-flights/case_sefbk_001.json");
+    let case = load_flight(flight).unwrap().unwrap();
+    let spec = EnsembleSpec {
+        params: EnsembleParams::none(),
+        n: 2,
+        seed: 0,
+    };
+    let config = SimConfig::default();
+    let r = evaluate_case_with(&case, &config, Some(&spec));
+    let below = r.predicted.unwrap() < FAIL_BELOW_M;
+    assert_eq!(r.p_fail, Some(if below { 1.0 } else { 0.0 }));
+    // Two cases, one a fail and one a pass by the record: AUC and Brier from the two p_fail.
+    let mut pass = case.clone();
+    pass.real_m = 9.0;
+    let mut fail = case;
+    fail.real_m = 0.5;
+    let report = evaluate_with(&[fail, pass], vec![], &config, Some(&spec), 1);
+    assert_eq!(report.auc, Some(0.5), "equal p_fail ties");
+    assert_eq!(report.brier, Some(0.5), "one of two outcomes missed with certainty");
+    assert_eq!(report.tiers["A"].brier, report.brier);
+}
+
+#[test]
+fn probability_scores_of_pairs() {
+    let (auc, brier) = probability_scores(&[(0.9, 1.0), (0.2, 2.0), (0.4, 3.0)]);
+    assert_eq!(auc, Some(1.0));
+    // (0.1^2 + 0.2^2 + 0.4^2) / 3
+    assert!((brier.unwrap() - 0.21 / 3.0).abs() < 1e-15);
+}
+
+#[test]
+fn folds_keep_repeats_of_one_obstacle_set_together() {
+    let (cases, _) = load_dir(std::path::Path::new("tests/data/hfs-flights")).unwrap();
+    let mut fold_of_group = std::collections::BTreeMap::new();
+    let mut sizes = [0usize; 5];
+    for c in &cases {
+        let f = fold_of(c, 5);
+        sizes[f] += 1;
+        if let Some(g) = &c.repeat_group {
+            assert_eq!(*fold_of_group.entry(g.clone()).or_insert(f), f, "{g} straddles folds");
+        }
+    }
+    assert!(!fold_of_group.is_empty());
+    assert!(sizes.iter().all(|s| *s >= 10), "unbalanced folds {sizes:?}");
+}

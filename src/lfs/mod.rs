@@ -5,10 +5,12 @@
 //! metres, m/s); [`frames`] converts from and to our local NED. Angles are degrees unless named `_rad`.
 
 pub mod attitude;
+pub mod calibration;
 pub mod camera;
 pub mod cloud;
 pub mod cost;
 pub mod cv;
+pub mod ensemble;
 pub mod fidelity;
 pub mod fov;
 pub mod frames;

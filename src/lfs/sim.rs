@@ -416,8 +416,20 @@ impl World {
                 Command::Hold
             };
         }
+        self.move_vehicle(self.command, dt);
+        if let Some(p) = &self.config.tilt {
+            self.tilt
+                .update(p, &self.vehicle.velocity_enu, self.vehicle.yaw_enu_rad, dt);
+        }
+        self.cycles += 1;
+        // From the tick count (not summed), so no rounding drift over thousands of ticks.
+        self.time_s = self.cycles as f64 * dt;
+    }
+
+    /// Moves the vehicle by `command` for `dt` seconds with the motion model.
+    fn move_vehicle(&mut self, command: Command, dt: f64) {
         let v = &mut self.vehicle;
-        match (self.command, &self.motion) {
+        match (command, &self.motion) {
             (Command::Hold, _) => {
                 v.velocity_enu = Vector3::zeros();
                 v.acceleration_enu = Vector3::zeros();
@@ -431,12 +443,6 @@ impl World {
             (Command::Track { setpoint, .. }, MotionState::Paper(p)) => p.step(v, &setpoint, dt),
         }
         v.position_enu.z = v.position_enu.z.max(0.0);
-        if let Some(p) = &self.config.tilt {
-            self.tilt.update(p, &v.velocity_enu, v.yaw_enu_rad, dt);
-        }
-        self.cycles += 1;
-        // From the tick count (not summed), so no rounding drift over thousands of ticks.
-        self.time_s = self.cycles as f64 * dt;
     }
 
     /// Stage `record`: sample the trajectory and decide whether the flight is over.
@@ -470,6 +476,62 @@ impl World {
             } else if self.time_s - self.last_progress_s > self.config.stuck_s {
                 self.status = Some(Status::Stuck);
             }
+        }
+    }
+
+    /// The obstacles the flight is among.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
+    }
+
+    /// The settings the flight runs with.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// Replaces the obstacles from the next tick on (an ensemble member's jittered set; the point memory keeps
+    /// what it saw, so call it before any box is within sensor range).
+    pub fn set_obstacles(&mut self, obstacles: &[Obstacle]) {
+        self.scene = Scene::new(obstacles);
+        self.obstacles = obstacles.to_vec();
+    }
+
+    /// Replaces the motion model's constants from the next tick on (same kind, or the call is refused). A
+    /// longer delay repeats the oldest queued command and a shorter one drops the oldest, so the vehicle never
+    /// holds still for the change.
+    pub fn set_motion(&mut self, motion: MotionModel) -> Result<(), SimError> {
+        match (&mut self.motion, motion) {
+            (MotionState::Paper(p), MotionModel::Paper(q)) => *p = q,
+            (MotionState::Px4(p, _), MotionModel::Px4(q)) => *p = q,
+            _ => return Err(SimError::Setting("motion model kind cannot change in flight")),
+        }
+        let (old, new) = (self.config.motion.delay_ticks(), motion.delay_ticks());
+        self.config.motion = motion;
+        if old == new {
+            return Ok(());
+        }
+        if old == 0 {
+            // No queue yet: the command acted on last is what the vehicle keeps doing.
+            self.pending = std::iter::repeat_n(self.command, new).collect();
+        } else if new == 0 {
+            self.pending.clear();
+        } else {
+            while self.pending.len() > new {
+                self.pending.pop_front();
+            }
+            while self.pending.len() < new {
+                let first = self.pending.front().copied().unwrap_or(self.command);
+                self.pending.push_front(first);
+            }
+        }
+        Ok(())
+    }
+
+    /// Moves the vehicle `fraction` of a tick further with the command it acted on last, without sensing,
+    /// planning or counting a tick: shifts every later camera frame and planner tick along the path.
+    pub fn shift_phase(&mut self, fraction: f64) {
+        if fraction > 0.0 && fraction.is_finite() {
+            self.move_vehicle(self.command, fraction * self.config.dt_s);
         }
     }
 
