@@ -70,6 +70,17 @@ def command(m, cmd, params):
     return None
 
 
+def wait_prearm(m, timeout):
+    """PX4 v1.14 sets MAV_SYS_STATUS_PREARM_CHECK in SYS_STATUS health once its arming checks pass (estimator
+    settled); before that it refuses to start a mission, so a client waits, as QGroundControl's "Ready to fly"."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        st = recv(m, ["SYS_STATUS"], max(0.01, deadline - time.time()))
+        if st is not None and st.onboard_control_sensors_health & M.MAV_SYS_STATUS_PREARM_CHECK:
+            return True
+    return False
+
+
 def fly(m):
     # Parameters come typed as PX4 sends them (INT32 bytewise).
     m.mav.param_request_read_send(1, 1, b"GF_ACTION", -1)
@@ -81,6 +92,8 @@ def fly(m):
     code = upload(m)
     if code != M.MAV_MISSION_ACCEPTED:
         fail("upload result %s" % code)
+    if not wait_prearm(m, 30):
+        fail("pre-arm checks never passed (SYS_STATUS)")
     if command(m, M.MAV_CMD_MISSION_START, [0] * 7) != M.MAV_RESULT_ACCEPTED:
         fail("MISSION_START not accepted")
     reached, landed_states, max_rel_alt, texts = set(), [], 0.0, []
