@@ -1,7 +1,8 @@
 //! Conformance against real PX4 (ignored by default; CI does not run it). Needs a PX4 v1.14 SITL binary the
 //! user built:
 //!
-//! `PX4_SITL_BIN=/path/to/build/px4_sitl_default/bin/px4 cargo test --release -- --ignored px4_sitl --nocapture`
+//! `PX4_SITL_BIN=/path/to/build/px4_sitl_default/bin/px4 cargo test --release -- --ignored px4_sitl --nocapture
+//! --test-threads=1` (one instance at a time on a 2-core machine)
 //!
 //! Each test starts its own headless SIH instance (rootfs in a temp dir, the competition's home, speed factor
 //! 5, a distinct instance number so the tests can run in parallel), flies generated tests through the bridge
