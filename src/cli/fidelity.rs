@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_set_key, predict_grid};
+use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_sets, predict_grid};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
 use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FlightCase, evaluate_with, load_dir};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
@@ -142,13 +142,10 @@ fn run_cv(args: &Args, cases: &[FlightCase], k: usize) -> anyhow::Result<ExitCod
     let Some(grid) = default_grid(&args.motion) else {
         bail!("unknown motion model {:?} (use paper or px4)", args.motion);
     };
-    let mut sets: Vec<String> = cases.iter().map(obstacle_set_key).collect();
-    sets.sort();
-    sets.dedup();
+    let sets = obstacle_sets(cases);
     let Some(folds) = assign_folds(cases, k, args.cv_seed) else {
         bail!(
-            "--cv {k}: needs at least 2 folds and no more folds than obstacle sets ({} in {})",
-            sets.len(),
+            "--cv {k}: needs at least 2 folds and no more folds than obstacle sets ({sets} in {})",
             args.dir.display()
         );
     };
@@ -156,11 +153,11 @@ fn run_cv(args: &Args, cases: &[FlightCase], k: usize) -> anyhow::Result<ExitCod
         "cross-validating {} grid points x {} flights ({} obstacle sets, {k} folds)...",
         grid.len(),
         cases.len(),
-        sets.len()
+        sets
     );
     let preds = predict_grid(cases, &grid, args.jobs);
     let truth = Truth::of(cases);
-    let Some(report) = cross_validate(&grid, &preds, &truth, &folds, k, args.cv_seed, sets.len()) else {
+    let Some(report) = cross_validate(&grid, &preds, &truth, &folds, k, args.cv_seed, sets) else {
         bail!("no grid point predicted the training flights of every fold (every simulation failed?)");
     };
     if args.json {

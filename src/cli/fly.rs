@@ -235,16 +235,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             println!("clock             {w}");
         }
         if let Some(t) = &report.companion_timing {
-            let q = |q: Option<prgenuav::bridge::companion::timing::Quantiles>| {
-                q.map_or("-".to_string(), |q| format!("{:.1}/{:.1}", q.median, q.p99))
-            };
-            println!(
-                "companion         request to answer {} ms, plan {} ms, plan age {} ms (median/p99, wall; {} answers)",
-                q(Some(t.request_to_answer_ms)),
-                q(t.plan_ms),
-                q(t.plan_age_ms),
-                t.request_to_answer_ms.n
-            );
+            println!("companion         {t}");
         }
         for w in &report.warnings {
             println!("warning           {w}");

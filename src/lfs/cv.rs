@@ -103,6 +103,14 @@ fn fnv(s: &str, seed: u64) -> u64 {
     h
 }
 
+/// Distinct obstacle sets among `cases` (see [`obstacle_set_key`]): at most this many folds.
+pub fn obstacle_sets(cases: &[FlightCase]) -> usize {
+    let mut keys: Vec<String> = cases.iter().map(obstacle_set_key).collect();
+    keys.sort();
+    keys.dedup();
+    keys.len()
+}
+
 /// Fold (0..k) of each case: the obstacle sets are shuffled by a seeded hash and dealt round-robin, so folds
 /// hold about the same number of sets and a set never straddles two folds. `None` if there are fewer sets
 /// than folds or `k < 2`. (The ensemble's scales were fitted with [`super::fidelity::fold_of`], an unbalanced

@@ -24,6 +24,7 @@ pub mod render;
 pub mod render_fast;
 pub mod select;
 pub mod sim;
+pub mod sim_config;
 pub mod smoothing;
 pub mod tree;
 pub mod waypoint;

@@ -130,20 +130,7 @@ async fn fly_on(px4: &Px4, test: &TestCase, mode: FlyMode, what: &str) -> Flight
         .await
         .expect("flight within 5 min of wall time")
         .expect("flight runs");
-    let timing = r.companion_timing.map_or("-".into(), |t| {
-        let q = t.request_to_answer_ms;
-        let p = |q: Option<prgenuav::bridge::companion::timing::Quantiles>| {
-            q.map_or("-".into(), |q| format!("{:.1}/{:.1}", q.median, q.p99))
-        };
-        format!(
-            "answer {:.1}/{:.1} ms, plan {} ms, plan age {} ms (median/p99 of {})",
-            q.median,
-            q.p99,
-            p(t.plan_ms),
-            p(t.plan_age_ms),
-            q.n
-        )
-    });
+    let timing = r.companion_timing.map_or("-".into(), |t| t.to_string());
     eprintln!(
         "px4_sitl: {what} | {} | {} | {} m | ready {} s | {:.0} s vehicle | {:.0} s wall | clock {} | {timing} | {:?}",
         serde_json::to_value(mode).unwrap_or_default(),

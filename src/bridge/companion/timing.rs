@@ -102,6 +102,28 @@ impl Quantiles {
     }
 }
 
+impl std::fmt::Display for Quantiles {
+    /// `median/p99`, one decimal.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.1}/{:.1}", self.median, self.p99)
+    }
+}
+
+impl std::fmt::Display for TimingReport {
+    /// One line: request to answer, plan, plan age (median/p99 ms) and the number of answers.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let q = |q: Option<Quantiles>| q.map_or("-".to_string(), |q| q.to_string());
+        write!(
+            f,
+            "request to answer {} ms, plan {} ms, plan age {} ms (median/p99, wall; {} answers)",
+            self.request_to_answer_ms,
+            q(self.plan_ms),
+            q(self.plan_age_ms),
+            self.request_to_answer_ms.n
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,5 +149,9 @@ mod tests {
         assert!((r.request_to_answer_ms.median - 7.0).abs() < 1e-3);
         assert!((r.plan_ms.expect("a plan").max - 4.0).abs() < 1e-3);
         assert!(r.plan_age_ms.is_none());
+        assert_eq!(
+            r.to_string(),
+            "request to answer 7.0/7.0 ms, plan 4.0/4.0 ms, plan age - ms (median/p99, wall; 1 answers)"
+        );
     }
 }
