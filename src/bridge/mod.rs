@@ -28,6 +28,7 @@ pub mod companion;
 pub mod fly;
 pub mod options;
 pub mod session;
+pub mod sitl;
 pub mod wire;
 
 pub use companion::predict::{Prediction, predict};

@@ -20,6 +20,9 @@ pub struct FlightRecord {
     pub predicted_min_distance: f64,
     /// The LFS's predicted flight time, seconds.
     pub predicted_flight_time_s: f64,
+    /// The LFS ensemble's probability of a flight below 1.5 m (absent without an ensemble).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub predicted_p_fail: Option<f64>,
     /// The flown minimum distance (competition definition), metres; `None` if nothing usable was recorded.
     pub min_distance: Option<f64>,
     /// The flown un-binned minimum distance, metres.
@@ -130,6 +133,7 @@ mod tests {
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
             predicted_min_distance: 0.5,
             predicted_flight_time_s: 40.0,
+            predicted_p_fail: None,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
             status: "landed".into(),

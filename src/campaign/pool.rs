@@ -140,6 +140,7 @@ pub fn fly_all(
                                 obstacles: job.test.obstacles.clone(),
                                 predicted_min_distance: job.screened.min_distance,
                                 predicted_flight_time_s: job.screened.flight_time_s,
+                                predicted_p_fail: job.screened.p_fail,
                                 min_distance: flown.min_distance,
                                 min_distance_raw: flown.min_distance_raw,
                                 status: flown.status,
@@ -251,12 +252,7 @@ mod tests {
         let base = test_case();
         (0..n)
             .map(|i| Job {
-                screened: Screened {
-                    candidate: i,
-                    min_distance: 0.5,
-                    flight_time_s: 40.0,
-                    status: "landed".into(),
-                },
+                screened: Screened::point(i, 0.5, 40.0, "landed".into()),
                 test: base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
             })
             .collect()

@@ -1,4 +1,5 @@
-//! Ranking screened candidates: most severe predicted flights first, near-duplicates skipped.
+//! Ranking screened candidates: the most expected competition points per minute of flight first (from the
+//! LFS ensemble), else the most severe point prediction first; near-duplicates skipped.
 
 use serde::{Deserialize, Serialize};
 
@@ -15,10 +16,37 @@ pub struct Screened {
     pub flight_time_s: f64,
     /// How the simulated flight ended.
     pub status: String,
+    /// The ensemble's probability of a flight below 1.5 m (`None`: no ensemble ran for it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub p_fail: Option<f64>,
+    /// The ensemble's expected competition points of one flight.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expected_points: Option<f64>,
 }
 
-/// Orders candidates by predicted distance (then shorter flight, then index), keeping only those predicted
-/// below `threshold_m` whose footprints overlap every already chosen one by at most `max_iou`; at most `limit`.
+impl Screened {
+    /// A point prediction without an ensemble.
+    pub fn point(candidate: u64, min_distance: f64, flight_time_s: f64, status: String) -> Self {
+        Screened {
+            candidate,
+            min_distance,
+            flight_time_s,
+            status,
+            p_fail: None,
+            expected_points: None,
+        }
+    }
+
+    /// Expected points per minute of predicted flight: what a flight adds to the competition's test score
+    /// (points x 10 / (obstacles^2 x minutes), the obstacle count being the same for every candidate).
+    pub fn points_per_minute(&self) -> Option<f64> {
+        self.expected_points.map(|p| p / (self.flight_time_s.max(1.0) / 60.0))
+    }
+}
+
+/// Orders candidates with an ensemble by expected points per minute (most first), then those without by
+/// predicted distance (then shorter flight, then index), keeping only those predicted below `threshold_m`
+/// whose footprints overlap every already chosen one by at most `max_iou`; at most `limit`.
 ///
 /// `footprints(candidate)` gives a candidate's obstacle footprints.
 pub fn rank(
@@ -30,8 +58,10 @@ pub fn rank(
 ) -> Vec<Screened> {
     let mut order: Vec<&Screened> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
     order.sort_by(|a, b| {
-        a.min_distance
-            .total_cmp(&b.min_distance)
+        let rate = |s: &Screened| s.points_per_minute().map_or(f64::INFINITY, |r| -r);
+        rate(a)
+            .total_cmp(&rate(b))
+            .then(a.min_distance.total_cmp(&b.min_distance))
             .then(a.flight_time_s.total_cmp(&b.flight_time_s))
             .then(a.candidate.cmp(&b.candidate))
     });
@@ -53,12 +83,31 @@ mod tests {
     use super::*;
 
     fn s(candidate: u64, d: f64, t: f64) -> Screened {
+        Screened::point(candidate, d, t, "landed".into())
+    }
+
+    fn with_points(candidate: u64, d: f64, t: f64, points: f64) -> Screened {
         Screened {
-            candidate,
-            min_distance: d,
-            flight_time_s: t,
-            status: "landed".into(),
+            expected_points: Some(points),
+            p_fail: Some(points.min(1.0)),
+            ..s(candidate, d, t)
         }
+    }
+
+    #[test]
+    fn ensemble_candidates_go_first_by_points_per_minute() {
+        let screened = [
+            s(0, 0.2, 40.0),
+            // 1 point in 60 s beats 2 points in 180 s; both beat a point prediction without an ensemble.
+            with_points(1, 1.4, 60.0, 1.0),
+            with_points(2, 0.3, 180.0, 2.0),
+            // Above the threshold: never flown, however promising its ensemble.
+            with_points(3, 3.5, 30.0, 5.0),
+        ];
+        let fp = |c: u64| vec![Footprint::from_aerialist(c as f64 * 20.0, 20.0, 4.0, 2.0, 0.0)];
+        let r = rank(&screened, 3.0, 0.5, 10, fp);
+        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![1, 2, 0]);
+        assert_eq!(with_points(1, 1.4, 30.0, 1.0).points_per_minute(), Some(2.0));
     }
 
     #[test]

@@ -21,6 +21,8 @@ pub struct StageTimes {
     pub sample_s: f64,
     /// Low-fidelity screening.
     pub screen_s: f64,
+    /// The LFS ensemble on the shortlisted candidates.
+    pub ensemble_s: f64,
     /// High-fidelity flights.
     pub fly_s: f64,
     /// Writing the outputs.
@@ -34,6 +36,8 @@ pub struct FlownTest {
     pub candidate: u64,
     /// LFS prediction, metres.
     pub predicted_min_distance: f64,
+    /// The LFS ensemble's probability of a flight below 1.5 m.
+    pub predicted_p_fail: Option<f64>,
     /// Flown minimum distance (competition definition), metres.
     pub min_distance: Option<f64>,
     /// Flown un-binned minimum distance, metres.
@@ -69,6 +73,9 @@ pub struct SuiteSummary {
     pub lfs_precision: Option<f64>,
     /// Mean |predicted - flown| minimum distance over flown tests, metres.
     pub lfs_mean_abs_error_m: Option<f64>,
+    /// Brier score of the ensemble's `p_fail` against the flown outcome (below 1.5 m), over the flown tests
+    /// that had an ensemble (the flown tests are the ranking's top, so this is not a random sample).
+    pub lfs_p_fail_brier: Option<f64>,
     /// Candidates screened per second of screening wall time.
     pub screening_per_s: f64,
 }
@@ -154,6 +161,7 @@ pub fn write_outputs(
             FlownTest {
                 candidate: r.candidate,
                 predicted_min_distance: r.predicted_min_distance,
+                predicted_p_fail: r.predicted_p_fail,
                 min_distance: r.min_distance,
                 min_distance_raw: r.min_distance_raw,
                 status: r.status.clone(),
@@ -184,6 +192,10 @@ pub fn write_outputs(
         .iter()
         .filter_map(|r| r.min_distance.map(|d| (d - r.predicted_min_distance).abs()))
         .collect();
+    let (p_fail, failed): (Vec<f64>, Vec<bool>) = records
+        .iter()
+        .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_DISTANCE_M)))
+        .unzip();
     let suite = SuiteSummary {
         candidates_screened,
         flown: records.len(),
@@ -197,6 +209,7 @@ pub fn write_outputs(
         lfs_precision: precision.filter(|_| screened),
         lfs_mean_abs_error_m: (screened && !errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
+        lfs_p_fail_brier: crate::lfs::calibration::brier(&p_fail, &failed),
         screening_per_s: if stages.screen_s > 0.0 {
             candidates_screened as f64 / stages.screen_s
         } else {
@@ -260,24 +273,30 @@ pub fn markdown(r: &Report) -> String {
         opt(s.lfs_precision)
     );
     let _ = writeln!(md, "| LFS mean absolute error | {} m |", opt(s.lfs_mean_abs_error_m));
+    let _ = writeln!(
+        md,
+        "| LFS ensemble p_fail Brier (flown tests) | {} |",
+        opt(s.lfs_p_fail_brier)
+    );
     let _ = writeln!(md, "| screening throughput | {:.1} candidates/s |", s.screening_per_s);
     let st = &r.stages;
     let _ = writeln!(
         md,
-        "| wall time: sample / screen / fly / report | {:.2} / {:.2} / {:.2} / {:.2} s |\n",
-        st.sample_s, st.screen_s, st.fly_s, st.report_s
+        "| wall time: sample / screen / ensemble / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
+        st.sample_s, st.screen_s, st.ensemble_s, st.fly_s, st.report_s
     );
     let _ = writeln!(
         md,
-        "## Flights\n\n| candidate | predicted m | flown m | raw m | status | time s | points | score | reported as |"
+        "## Flights\n\n| candidate | predicted m | p_fail | flown m | raw m | status | time s | points | score | reported as |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
     for f in &r.flights {
         let _ = writeln!(
             md,
-            "| {} | {:.3} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
+            "| {} | {:.3} | {} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
             f.candidate,
             f.predicted_min_distance,
+            opt(f.predicted_p_fail),
             opt(f.min_distance),
             opt(f.min_distance_raw),
             f.status,

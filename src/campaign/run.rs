@@ -70,6 +70,10 @@ pub struct CampaignConfig {
     /// Give a flight up (LAND) after this many vehicle seconds.
     #[serde(default = "default_flight_timeout_s")]
     pub flight_timeout_s: f64,
+    /// Members of the LFS ensemble run on the shortlisted candidates to rank them by expected points per
+    /// minute; 0 ranks by the point prediction (campaign files written before ensembles existed).
+    #[serde(default)]
+    pub ensemble: usize,
 }
 
 fn judge_before_editions() -> Judge {
@@ -113,6 +117,12 @@ pub trait Screener: Sync {
 
     /// The predicted path, for plots (`None` if the screener has none).
     fn path(&self, _test: &TestCase) -> Option<crate::model::Trajectory> {
+        None
+    }
+
+    /// `(p_fail, expected points)` of one flight from an ensemble of `n` perturbed simulations drawn from
+    /// `seed` (`None` if the screener has no ensemble or the test cannot be simulated).
+    fn ensemble(&self, _test: &TestCase, _n: usize, _seed: u64) -> Option<(f64, f64)> {
         None
     }
 }
@@ -185,12 +195,7 @@ pub fn run_campaign(
     } else {
         // Every candidate "predicted" at 0 m: the ranking then keeps the order they were drawn in.
         (0..candidates.len() as u64)
-            .map(|candidate| Screened {
-                candidate,
-                min_distance: 0.0,
-                flight_time_s: 0.0,
-                status: "unscreened".into(),
-            })
+            .map(|candidate| Screened::point(candidate, 0.0, 0.0, "unscreened".into()))
             .collect()
     };
     stages.screen_s = t.elapsed().as_secs_f64();
@@ -199,7 +204,21 @@ pub fn run_campaign(
     let done = Journal::read(&journal_path)?;
     let remaining = cfg.budget.saturating_sub(done.len());
     let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
-    let fresh: Vec<Screened> = screened.into_iter().filter(|s| !flown.contains(&s.candidate)).collect();
+    let mut fresh: Vec<Screened> = screened.into_iter().filter(|s| !flown.contains(&s.candidate)).collect();
+    if cfg.screen && cfg.ensemble > 0 {
+        let t = Instant::now();
+        let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
+        let ctx = EnsembleStage {
+            case: &case,
+            candidates: &candidates,
+            folder,
+            screener,
+            progress,
+            cancel,
+        };
+        ensemble_shortlist(&ctx, &mut fresh, cfg, shortlist)?;
+        stages.ensemble_s = t.elapsed().as_secs_f64();
+    }
     let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
     // Diversity against what was already flown: start the ranking from the journal's tests.
     let mut ranked = rank(&fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
@@ -289,6 +308,93 @@ pub fn run_campaign(
     )?)
 }
 
+/// Ensembles are run on at most this many of the most severe point predictions per flight left in the budget
+/// (the near-duplicate filter thins the ranking, so it needs more than one candidate per flight).
+pub const ENSEMBLE_SHORTLIST_PER_FLIGHT: usize = 3;
+
+/// What the ensemble stage reads.
+struct EnsembleStage<'a> {
+    case: &'a TestCase,
+    candidates: &'a [Vec<Obstacle>],
+    folder: &'a Path,
+    screener: &'a dyn Screener,
+    progress: &'a dyn Progress,
+    cancel: &'a AtomicBool,
+}
+
+/// Runs the ensemble on the `shortlist` most severe candidates predicted below the threshold and stores
+/// `p_fail` and expected points in them. Results are cached in `ensemble.json` (candidate -> verdict) for a
+/// resume; member seeds depend on the campaign's seed and the candidate only.
+fn ensemble_shortlist(
+    ctx: &EnsembleStage,
+    fresh: &mut [Screened],
+    cfg: &CampaignConfig,
+    shortlist: usize,
+) -> Result<(), CampaignError> {
+    let cache_path = ctx.folder.join("ensemble.json");
+    let mut cache: std::collections::BTreeMap<u64, (f64, f64)> = std::fs::read_to_string(&cache_path)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    let mut order: Vec<usize> = (0..fresh.len())
+        .filter(|&i| fresh[i].min_distance < cfg.threshold_m)
+        .collect();
+    order.sort_by(|&a, &b| {
+        fresh[a]
+            .min_distance
+            .total_cmp(&fresh[b].min_distance)
+            .then(fresh[a].candidate.cmp(&fresh[b].candidate))
+    });
+    order.truncate(shortlist);
+    let todo: Vec<u64> = order
+        .iter()
+        .map(|&i| fresh[i].candidate)
+        .filter(|c| !cache.contains_key(c))
+        .collect();
+    if !todo.is_empty() {
+        ctx.progress.stage("ensemble", todo.len());
+        let results = parallel_map(
+            &todo,
+            available_threads(),
+            ctx.cancel,
+            &|n| ctx.progress.tick(n),
+            |&c| {
+                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].clone());
+                (c, ctx.screener.ensemble(&test, cfg.ensemble, member_seed(cfg.seed, c)))
+            },
+        );
+        if results.iter().any(Option::is_none) {
+            return Err(CampaignError::Config(
+                "interrupted during the ensemble screening".into(),
+            ));
+        }
+        cache.extend(results.into_iter().flatten().filter_map(|(c, v)| Some((c, v?))));
+        let json = serde_json::to_string(&cache).unwrap_or_default();
+        write_atomic(&cache_path, json.as_bytes())?;
+    }
+    for &i in &order {
+        if let Some(&(p_fail, points)) = cache.get(&fresh[i].candidate) {
+            fresh[i].p_fail = Some(p_fail);
+            fresh[i].expected_points = Some(points);
+        }
+    }
+    ctx.progress.note(&format!(
+        "ensemble of {}: {} candidates ranked by expected points per minute",
+        cfg.ensemble,
+        order.len()
+    ));
+    Ok(())
+}
+
+/// The ensemble seed of candidate `c`: a SplitMix64 step of the campaign seed and the index, so candidates'
+/// members are independent and the same for the same campaign seed.
+fn member_seed(seed: u64, c: u64) -> u64 {
+    let mut z = seed ^ c.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
     let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
     let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
@@ -321,12 +427,7 @@ fn screen_all(
         &|n| progress.tick(n),
         |(i, obstacles)| {
             let (min_distance, flight_time_s, status) = screener.screen(&case.with_obstacles((*obstacles).clone()));
-            Screened {
-                candidate: *i,
-                min_distance,
-                flight_time_s,
-                status,
-            }
+            Screened::point(*i, min_distance, flight_time_s, status)
         },
     );
     let screened: Vec<Screened> = results.into_iter().flatten().collect();

@@ -79,6 +79,7 @@ fn config(budget: usize) -> CampaignConfig {
         screen: true,
         hfs_time_scale: None,
         flight_timeout_s: 500.0,
+        ensemble: 0,
     }
 }
 
@@ -210,4 +211,77 @@ fn bad_settings_are_errors() {
     bad.case = "missions/does-not-exist.yaml".into();
     let e = run_campaign(&bad, dir.path(), &ScriptedLfs, vehicle(&flown, None), &Quiet, &quiet).unwrap_err();
     assert!(e.to_string().contains("does-not-exist.yaml"), "{e}");
+}
+
+/// The scripted screener with an ensemble that favours the *least* severe point predictions, so the ranking
+/// visibly follows the ensemble; counts its ensemble runs and keeps the seeds it was given.
+struct EnsembleLfs {
+    runs: AtomicUsize,
+    seeds: Mutex<Vec<(f64, u64)>>,
+}
+
+impl Screener for EnsembleLfs {
+    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+        ScriptedLfs.screen(test)
+    }
+    fn ensemble(&self, test: &TestCase, n: usize, seed: u64) -> Option<(f64, f64)> {
+        assert_eq!(n, 8);
+        self.runs.fetch_add(1, Ordering::SeqCst);
+        let (d, _, _) = ScriptedLfs.screen(test);
+        self.seeds.lock().unwrap().push((d, seed));
+        Some(((d / 5.0).min(1.0), d))
+    }
+}
+
+#[test]
+fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resumes_from_its_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let lfs = EnsembleLfs {
+        runs: AtomicUsize::new(0),
+        seeds: Mutex::new(Vec::new()),
+    };
+    let cfg = CampaignConfig {
+        ensemble: 8,
+        ..config(4)
+    };
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &lfs,
+        vehicle(&flown, Some(2)),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(r.suite.flown, 2);
+    // At most 3 candidates per flight of the budget get an ensemble.
+    let runs = lfs.runs.load(Ordering::SeqCst);
+    assert!((1..=12).contains(&runs), "{runs} ensembles");
+    // Every flight carries its p_fail; the flights go most expected points (here: largest prediction) first.
+    assert!(r.flights.iter().all(|f| f.predicted_p_fail.is_some()));
+    let predicted: Vec<f64> = r.flights.iter().map(|f| f.predicted_min_distance).collect();
+    assert!(predicted.windows(2).all(|w| w[0] >= w[1]), "{predicted:?}");
+    assert!(r.suite.lfs_p_fail_brier.is_some());
+    assert!(dir.path().join("ensemble.json").is_file());
+    // The resume flies the rest without re-running a cached ensemble.
+    let r2 = run_campaign(
+        &cfg,
+        dir.path(),
+        &lfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(r2.suite.flown, 4);
+    assert_eq!(lfs.runs.load(Ordering::SeqCst), runs, "cached ensembles are reused");
+    // Seeds depend on the campaign seed and the candidate: distinct candidates, distinct seeds.
+    let seeds = lfs.seeds.lock().unwrap().clone();
+    let mut distinct: Vec<u64> = seeds.iter().map(|s| s.1).collect();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert_eq!(distinct.len(), seeds.len());
+    assert_ne!(super::member_seed(3, 0), super::member_seed(4, 0));
+    assert_eq!(super::member_seed(3, 7), super::member_seed(3, 7));
 }

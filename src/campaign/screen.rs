@@ -1,6 +1,8 @@
-//! The low-fidelity screener: one simulated flight per candidate with the 3DVFH* LFS.
+//! The low-fidelity screener: one simulated flight per candidate with the 3DVFH* LFS, and an ensemble of
+//! perturbed flights for the shortlisted ones.
 
 use super::run::Screener;
+use crate::lfs::ensemble::{EnsembleParams, run_ensemble};
 use crate::lfs::sim::{SimConfig, Status, simulate};
 use crate::model::TestCase;
 
@@ -12,6 +14,8 @@ pub const NO_PREDICTION_M: f64 = 1e9;
 pub struct LfsScreener {
     /// Simulation settings (motion model, camera, limits).
     pub config: SimConfig,
+    /// Perturbation scales and prior of the ensemble.
+    pub ensemble: EnsembleParams,
 }
 
 impl Screener for LfsScreener {
@@ -37,5 +41,21 @@ impl Screener for LfsScreener {
 
     fn path(&self, test: &TestCase) -> Option<crate::model::Trajectory> {
         simulate(test, &self.config).ok().map(|r| r.trajectory)
+    }
+
+    fn ensemble(&self, test: &TestCase, n: usize, seed: u64) -> Option<(f64, f64)> {
+        // One thread per candidate: the campaign already runs a candidate per core.
+        let e = run_ensemble(
+            &test.mission,
+            &test.obstacles,
+            &test.params,
+            &self.config,
+            &self.ensemble,
+            n,
+            seed,
+            1,
+        )
+        .ok()?;
+        Some((e.p_fail(&self.ensemble)?, e.expected_points(&self.ensemble)?))
     }
 }

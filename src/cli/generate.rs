@@ -16,6 +16,7 @@ use prgenuav::campaign::run::{CampaignConfig, run_campaign};
 use prgenuav::campaign::screen::LfsScreener;
 use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
 use prgenuav::judge::Judge;
+use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
 use super::progress::Reporter;
@@ -80,6 +81,11 @@ pub struct Args {
     /// Skip the LFS: fly candidates in the order drawn (the baseline that shows what screening buys).
     #[arg(long)]
     no_screen: bool,
+    /// Members of the LFS ensemble run on the 3 x budget most severe candidates, which are then flown in order
+    /// of expected competition points per minute (p_fail x points per failure / predicted minutes); 0 ranks
+    /// by the point prediction alone.
+    #[arg(long, default_value_t = 8, value_name = "N")]
+    ensemble: usize,
     /// Continue a killed campaign in this folder (its campaign.json holds the settings).
     #[arg(long, value_name = "FOLDER")]
     resume: Option<PathBuf>,
@@ -154,6 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 anchor_at_vehicle_home: args.anchor_at_vehicle_home,
                 hfs_time_scale: args.hfs_time_scale,
                 flight_timeout_s: args.timeout,
+                ensemble: args.ensemble,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }
@@ -229,12 +236,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bail!("--hfs names no vehicle");
     }
     let progress = Reporter::new(args.quiet || args.json);
+    if cfg.ensemble > MAX_MEMBERS {
+        bail!("--ensemble {}: at most {MAX_MEMBERS} members", cfg.ensemble);
+    }
     let screener = LfsScreener {
         config: SimConfig {
             motion,
             judge: cfg.judge,
             ..SimConfig::default()
         },
+        ensemble: EnsembleParams::default(),
     };
     let report = run_campaign(&cfg, &folder, &screener, vehicles, &progress, &stop)?;
     if args.json {

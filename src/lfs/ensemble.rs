@@ -196,6 +196,24 @@ impl Ensemble {
     pub fn p_fail(&self, params: &EnsembleParams) -> Option<f64> {
         self.p_fail_below(params, FAIL_BELOW_M)
     }
+
+    /// Expected competition points of one flight ([`crate::judge::points`]): `p_fail` times the mean points
+    /// of the failing members. Without a failing member (the prior's failures alone) a failure is taken to
+    /// earn the least a failure earns, 1 point: the members say nothing about how deep it would go.
+    pub fn expected_points(&self, params: &EnsembleParams) -> Option<f64> {
+        let failing: Vec<u32> = self
+            .member_min_distances
+            .iter()
+            .filter(|d| **d < FAIL_BELOW_M)
+            .map(|d| crate::judge::points(*d))
+            .collect();
+        let per_failure = if failing.is_empty() {
+            1.0
+        } else {
+            f64::from(failing.iter().sum::<u32>()) / failing.len() as f64
+        };
+        self.p_fail(params).map(|p| p * per_failure)
+    }
 }
 
 /// Why an ensemble cannot run.

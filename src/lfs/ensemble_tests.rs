@@ -82,6 +82,27 @@ fn p_fail_is_the_beta_posterior_mean() {
 }
 
 #[test]
+fn expected_points_weigh_p_fail_by_the_failing_members_points() {
+    // Members at 0.1 m (5 points) and 1.2 m (1 point) fail, two pass: p_fail 0.5, 3 points per failure.
+    let e = Ensemble {
+        member_min_distances: vec![0.1, 1.2, 1.5, 3.0],
+        fork_cycle: 0,
+    };
+    assert_eq!(e.expected_points(&EnsembleParams::none()), Some(1.5));
+    // No failing member: only the prior fails, each failure worth the least a failure earns.
+    let passing = Ensemble {
+        member_min_distances: vec![2.0, 3.0],
+        fork_cycle: 0,
+    };
+    let prior = EnsembleParams {
+        prior_fail: 2.0,
+        ..EnsembleParams::none()
+    };
+    assert_eq!(passing.expected_points(&prior), Some(0.5));
+    assert_eq!(passing.expected_points(&EnsembleParams::none()), Some(0.0));
+}
+
+#[test]
 fn a_longer_delay_set_in_flight_does_not_stop_the_vehicle() {
     let test = two_box_test();
     let mut w = World::new(&test, SimConfig::default()).unwrap();

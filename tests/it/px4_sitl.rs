@@ -9,11 +9,10 @@
 //! and stops every process it started, also when an assertion fails. One line per flight goes to stderr
 //! (mode, status, minimum distance, vehicle and wall time): README's conformance table is made from them.
 
-use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use prgenuav::bridge::sitl::{Px4Sitl, SitlSpec};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::generator::{Generator, GeneratorConfig};
 use prgenuav::model::TestCase;
@@ -22,9 +21,6 @@ use super::case;
 
 /// PX4_SIM_SPEED_FACTOR of every instance.
 const SPEED: f64 = 5.0;
-/// The competition's home (PX4 1.14's SIH reads these integer parameters in 1e-7 degrees).
-const HOME_LAT_E7: &str = "473977420";
-const HOME_LON_E7: &str = "85455940";
 
 /// The user's PX4 binary, or `None` (the caller skips with a message).
 fn px4_bin() -> Option<PathBuf> {
@@ -39,74 +35,9 @@ fn px4_bin() -> Option<PathBuf> {
     }
 }
 
-/// One running SIH instance; killed (and its working directory removed) when dropped.
-struct Px4 {
-    child: Child,
-    instance: u8,
-    _dir: tempfile::TempDir,
-}
-
-impl Px4 {
-    /// Starts instance `instance` of `bin` (its API link sends to UDP 14540 + instance).
-    fn start(bin: &PathBuf, instance: u8) -> Px4 {
-        let etc = bin
-            .parent()
-            .and_then(|b| b.parent())
-            .map(|b| b.join("etc"))
-            .expect("PX4_SITL_BIN is BUILD/bin/px4");
-        assert!(
-            etc.is_dir(),
-            "{} missing (PX4_SITL_BIN must be BUILD/bin/px4)",
-            etc.display()
-        );
-        let dir = tempfile::tempdir().expect("temp dir");
-        let mut child = Command::new(bin)
-            .args(["-d", "-i", &instance.to_string(), "-w"])
-            .arg(dir.path())
-            .arg(&etc)
-            .env("PX4_SIM_MODEL", "sihsim_quadx")
-            .env("PX4_SIMULATOR", "sihsim")
-            .env("PX4_SIM_SPEED_FACTOR", SPEED.to_string())
-            .env("PX4_HOME_LAT", HOME_LAT_E7)
-            .env("PX4_HOME_LON", HOME_LON_E7)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start PX4_SITL_BIN");
-        // Wait (bounded) until its startup script ran, so the first flight does not race the boot.
-        let out = child.stdout.take().expect("stdout");
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(out).lines().map_while(Result::ok) {
-                if line.contains("Startup script returned") {
-                    let _ = tx.send(());
-                }
-            }
-        });
-        let started = rx.recv_timeout(Duration::from_secs(60)).is_ok();
-        let px4 = Px4 {
-            child,
-            instance,
-            _dir: dir,
-        };
-        assert!(
-            started,
-            "PX4 instance {instance} did not finish its startup script within 60 s"
-        );
-        px4
-    }
-
-    fn url(&self) -> String {
-        format!("udpin:0.0.0.0:{}", 14540 + u16::from(self.instance))
-    }
-}
-
-impl Drop for Px4 {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// Starts instance `instance` (its API link sends to UDP 14540 + instance), stopped when dropped.
+fn start(bin: &Path, instance: u8) -> Px4Sitl {
+    Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED)).expect("PX4 SITL starts")
 }
 
 /// Mission `n` with generated obstacles (seed 1, test `k`).
@@ -116,7 +47,7 @@ fn generated(n: u32, k: u64) -> TestCase {
     c.with_obstacles(g.sample(k).expect("sample").obstacles.to_vec())
 }
 
-async fn fly_on(px4: &Px4, test: &TestCase, mode: FlyMode, what: &str) -> FlightReport {
+async fn fly_on(px4: &Px4Sitl, test: &TestCase, mode: FlyMode, what: &str) -> FlightReport {
     let opts = FlyOptions {
         connect: px4.url(),
         mode,
@@ -178,7 +109,7 @@ async fn all_modes(instance: u8, mission: u32) {
     let test = generated(mission, 0);
     for mode in [FlyMode::Mission, FlyMode::Avoidance, FlyMode::Offboard] {
         // A fresh instance per mode: every flight starts at home.
-        let px4 = Px4::start(&bin, instance);
+        let px4 = start(&bin, instance);
         let what = format!("mission {mission}");
         let r = fly_on(&px4, &test, mode, &what).await;
         assert_landed_at_the_land_point(&r, &test, mode, &format!("{what} {mode:?}"));
@@ -214,7 +145,7 @@ async fn px4_sitl_mission_3_all_modes() {
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_two_flights_in_a_row() {
     let Some(bin) = px4_bin() else { return };
-    let px4 = Px4::start(&bin, 4);
+    let px4 = start(&bin, 4);
     let first = generated(2, 1);
     let r1 = fly_on(&px4, &first, FlyMode::Avoidance, "row 1/2 mission 2").await;
     assert_landed_at_the_land_point(&r1, &first, FlyMode::Avoidance, "first flight");

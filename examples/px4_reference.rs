@@ -1,0 +1,155 @@
+//! Real PX4 as a second reference: flies every recorded case of DIR (the competition's own flights) on a fresh
+//! PX4 SITL instance (SIH quadrotor, the competition's home, speed factor 5) with our companion in `avoidance`
+//! mode, and appends one row per flight to OUT/flights.csv: the recorded minimum distance, PX4's, status, times and the companion's answer latency. Each
+//! flown trajectory is kept as OUT/traj/<id>.csv (Aerialist columns, 0.5 s bins, the test's frame).
+//!
+//! Resumable: cases already in OUT/flights.csv are skipped, so an interrupted run goes on where it stopped.
+//! Distances are in the case's own definition (a tier-B case subtracts half the vehicle width), as `fidelity`
+//! compares them.
+//!
+//! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
+//! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases)
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use prgenuav::bridge::sitl::{Px4Sitl, SitlSpec};
+use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use prgenuav::lfs::fidelity::{FlightCase, load_dir};
+use prgenuav::model::TestCase;
+
+/// PX4_SIM_SPEED_FACTOR.
+const SPEED: f64 = 5.0;
+/// Vehicle seconds before the bridge lands the vehicle (the competition's limit is 300 s of wall time at x1).
+const TIMEOUT_S: f64 = 400.0;
+const HEADER: &str = "id,tier,mission,real_m,px4_m,status,reason,flight_time_s,wall_s,answer_p99_ms,clock_rate";
+
+fn test_of(case: &FlightCase) -> anyhow::Result<TestCase> {
+    let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
+    let mut test = base.with_obstacles(case.obstacles.clone());
+    test.params = case.params.clone();
+    Ok(test)
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> anyhow::Result<String> {
+    let test = test_of(case)?;
+    let px4 = tokio::task::block_in_place(|| Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED)))?;
+    let opts = FlyOptions {
+        connect: px4.url(),
+        mode: FlyMode::Avoidance,
+        time_scale: SPEED,
+        timeout_s: TIMEOUT_S,
+        heartbeat_wait_s: 60.0,
+        ..FlyOptions::default()
+    };
+    let wall = Instant::now();
+    let r = tokio::time::timeout(Duration::from_secs(600), fly(&test, &opts, CancelToken::new()))
+        .await
+        .context("flight within 10 min of wall time")??;
+    let wall_s = wall.elapsed().as_secs_f64();
+    drop(px4);
+    let traj = r.trajectory.binned(0.5);
+    let tmp = out.join("traj").join(format!("{}.csv.tmp", case.id));
+    std::fs::write(&tmp, traj.to_csv())?;
+    std::fs::rename(&tmp, out.join("traj").join(format!("{}.csv", case.id)))?;
+    let adjust = |d: Option<f64>| {
+        d.map_or(String::new(), |d| {
+            format!("{:.3}", (d - case.definition_offset_m).max(0.0))
+        })
+    };
+    Ok(format!(
+        "{},{},{},{:.3},{},{},{},{:.1},{:.1},{},{}",
+        case.id,
+        case.tier,
+        case.mission_name,
+        case.real_m,
+        adjust(r.min_distance),
+        r.status.as_str(),
+        csv_field(r.reason.as_deref().unwrap_or("")),
+        r.flight_time_s,
+        wall_s,
+        r.companion_timing
+            .map_or(String::new(), |t| format!("{:.1}", t.request_to_answer_ms.p99)),
+        r.clock
+            .and_then(|c| c.measured_rate)
+            .map_or(String::new(), |c| format!("{c:.2}")),
+    ))
+}
+
+fn main() -> anyhow::Result<()> {
+    let bin = PathBuf::from(
+        std::env::var_os("PX4_SITL_BIN").context("set PX4_SITL_BIN=BUILD/bin/px4 (a PX4 v1.14 SITL you built)")?,
+    );
+    let mut args = std::env::args().skip(1);
+    let dir = PathBuf::from(args.next().unwrap_or_else(|| "tests/data/hfs-flights".into()));
+    let out = PathBuf::from(args.next().unwrap_or_else(|| "tests/data/px4-flights".into()));
+    let instances: u8 = args.next().map_or(Ok(1), |a| a.parse())?;
+    std::fs::create_dir_all(out.join("traj"))?;
+    let table = out.join("flights.csv");
+    let done: Vec<String> = std::fs::read_to_string(&table)
+        .unwrap_or_default()
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next().map(str::to_string))
+        .collect();
+    if done.is_empty() {
+        std::fs::write(&table, format!("{HEADER}\n"))?;
+    }
+    let only: Option<Vec<String>> = std::env::var("ONLY")
+        .ok()
+        .map(|s| s.split(',').map(str::to_string).collect());
+    let (cases, _) = load_dir(&dir)?;
+    let todo: Vec<FlightCase> = cases
+        .into_iter()
+        .filter(|c| !c.obstacles.is_empty() && !done.contains(&c.id))
+        .filter(|c| only.as_ref().is_none_or(|o| o.contains(&c.id)))
+        .collect();
+    eprintln!(
+        "{} cases to fly ({} already in {})",
+        todo.len(),
+        done.len(),
+        table.display()
+    );
+    let queue = Arc::new(Mutex::new(todo));
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    rt.block_on(async {
+        let mut workers = Vec::new();
+        for instance in 0..instances.max(1) {
+            let (queue, bin, out, table) = (queue.clone(), bin.clone(), out.clone(), table.clone());
+            workers.push(tokio::spawn(async move {
+                loop {
+                    let next = queue.lock().map_err(|_| anyhow::anyhow!("queue poisoned"))?.pop();
+                    let Some(case) = next else { break };
+                    match fly_case(&case, &bin, instance, &out).await {
+                        Ok(row) => {
+                            eprintln!("{row}");
+                            let mut f = std::fs::OpenOptions::new().append(true).open(&table)?;
+                            writeln!(f, "{row}")?;
+                        }
+                        // Not recorded: a resumed run tries it again.
+                        Err(e) => eprintln!("{}: not flown: {e:#}", case.id),
+                    }
+                }
+                anyhow::Ok(())
+            }));
+        }
+        for w in workers {
+            w.await??;
+        }
+        anyhow::Ok(())
+    })
+}
