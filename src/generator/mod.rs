@@ -1,10 +1,12 @@
 //! The pseudo-random test generator (paper, section II): two box obstacles placed on the mission's segment
 //! of interest so that the drone must fly an S-shape.
 
+pub mod adaptive;
 mod config;
 mod placement;
 mod soi;
 
+pub use adaptive::DrawDistribution;
 pub use config::GeneratorConfig;
 pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
 pub use soi::{Soi, SoiKind, segment_of_interest};
@@ -64,6 +66,7 @@ pub struct Generator {
     soi: Soi,
     mirror: Mirror,
     a_side: Side,
+    distribution: DrawDistribution,
 }
 
 impl Generator {
@@ -92,7 +95,19 @@ impl Generator {
             soi,
             mirror,
             a_side,
+            distribution: DrawDistribution::uniform(),
         })
+    }
+
+    /// The same generator drawing from `distribution` (an adaptive campaign's learnt one).
+    pub fn with_distribution(mut self, distribution: DrawDistribution) -> Self {
+        self.distribution = distribution;
+        self
+    }
+
+    /// The distribution of the draws.
+    pub fn distribution(&self) -> &DrawDistribution {
+        &self.distribution
     }
 
     /// The segment of interest.
@@ -115,9 +130,14 @@ impl Generator {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(index);
         for attempt in 1..=self.config.max_attempts {
-            let Some((draw, obstacles)) =
-                placement::draw_pair(&mut rng, &self.soi, self.mirror, &self.arena, &self.config)
-            else {
+            let Some((draw, obstacles)) = placement::draw_pair(
+                &mut rng,
+                &self.soi,
+                self.mirror,
+                &self.arena,
+                &self.config,
+                &self.distribution,
+            ) else {
                 continue;
             };
             if check_obstacles(&obstacles, &self.mission, &self.arena).is_empty() {

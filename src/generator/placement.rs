@@ -2,6 +2,7 @@
 
 use rand::Rng;
 
+use super::adaptive::{DIMS, DrawDistribution};
 use super::config::GeneratorConfig;
 use super::soi::{Soi, SoiKind};
 use crate::geometry::{P2, V2};
@@ -98,6 +99,8 @@ pub struct Draw {
     /// Where the SoI crosses obstacle 1's long axis (world frame, `x` North, `y` East).
     #[serde(serialize_with = "ser_p2")]
     pub crossing: P2,
+    /// The five draws in [0, 1] as used (after the [`DrawDistribution`]): what an adaptive campaign learns from.
+    pub unit: [f64; DIMS],
 }
 
 fn ser_p2<S: serde::Serializer>(p: &P2, s: S) -> Result<S::Ok, S::Error> {
@@ -106,15 +109,21 @@ fn ser_p2<S: serde::Serializer>(p: &P2, s: S) -> Result<S::Ok, S::Error> {
 
 /// Draws one candidate pair of obstacles; `None` when the draw cannot fit (the caller draws again).
 ///
-/// Always makes exactly five draws from `rng`, so a test's numbers do not depend on earlier rejections' paths.
+/// Always makes exactly five draws from `rng`, so a test's numbers do not depend on earlier rejections' paths;
+/// `dist` shapes where in their ranges they fall (uniform: the paper's generator).
 pub fn draw_pair(
     rng: &mut impl Rng,
     soi: &Soi,
     mirror: Mirror,
     arena: &Arena,
     cfg: &GeneratorConfig,
+    dist: &DrawDistribution,
 ) -> Option<(Draw, [Obstacle; 2])> {
-    let u = [0; 5].map(|_| rng.random::<f64>());
+    let raw = [0; DIMS].map(|_| rng.random::<f64>());
+    let mut u = raw;
+    for (d, x) in u.iter_mut().enumerate() {
+        *x = dist.map(d, *x);
+    }
     let lerp = |r: crate::model::Range, t: f64| r.min + (r.max - r.min) * t;
     let w = cfg.width_m;
     // Obstacle 2 (length_factor x obstacle 1) must respect the length rule too.
@@ -180,6 +189,7 @@ pub fn draw_pair(
         gap_m: gap,
         overhang,
         crossing: mirror.point(crossing, arena),
+        unit: u,
     };
     Some((draw, [o1, o2]))
 }

@@ -1,0 +1,168 @@
+//! An adaptable distribution over the generator's five unit draws (obstacle 1's diagonal, its place along
+//! the segment of interest, the angle, the gap, obstacle 2's overhang): the paper's construction stays the
+//! family, only where in its ranges the draws fall changes.
+//!
+//! Each draw has its own histogram density on [0, 1] with [`BINS`] equal bins (a univariate marginal
+//! distribution algorithm, UMDA, with histogram marginals, the estimation-of-distribution relative of the
+//! cross-entropy method). A draw maps a uniform number through the histogram's inverse CDF, so a test still
+//! takes exactly one random number per draw and depends only on the seed, its index and the distribution.
+//! [`DrawDistribution::fitted`] moves each histogram towards the draws of the best candidates; a floor of
+//! uniform mass keeps every part of every range reachable (and the suite diverse).
+
+use serde::{Deserialize, Serialize};
+
+/// Number of draws a test takes.
+pub const DIMS: usize = 5;
+/// Bins per draw.
+pub const BINS: usize = 10;
+/// Names of the draws, in order (for reports).
+pub const DRAW_NAMES: [&str; DIMS] = ["diagonal", "position", "angle", "gap", "overhang"];
+
+/// Histogram densities of the five draws; each row holds bin probabilities summing to 1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DrawDistribution {
+    /// `weights[d][k]`: probability that draw `d` falls in `[k / BINS, (k + 1) / BINS)`.
+    pub weights: [[f64; BINS]; DIMS],
+}
+
+impl Default for DrawDistribution {
+    fn default() -> Self {
+        Self::uniform()
+    }
+}
+
+impl DrawDistribution {
+    /// The paper's generator: every draw uniform.
+    pub fn uniform() -> Self {
+        Self {
+            weights: [[1.0 / BINS as f64; BINS]; DIMS],
+        }
+    }
+
+    /// Whether every draw is uniform (draws then pass through unchanged, bit for bit).
+    pub fn is_uniform(&self) -> bool {
+        self.weights
+            .iter()
+            .all(|row| row.iter().all(|w| (w - 1.0 / BINS as f64).abs() < 1e-12))
+    }
+
+    /// Refuses rows that are not probability vectors (a hand-edited prior file), naming the draw.
+    pub fn validate(&self) -> Result<(), String> {
+        for (d, row) in self.weights.iter().enumerate() {
+            let sum: f64 = row.iter().sum();
+            if row.iter().any(|w| !w.is_finite() || *w < 0.0) || (sum - 1.0).abs() > 1e-6 {
+                return Err(format!(
+                    "weights of draw {} ({}) must be non-negative and sum to 1 (they sum to {sum})",
+                    d, DRAW_NAMES[d]
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Maps a uniform `u` in [0, 1) to draw `dim` (the inverse CDF of its histogram).
+    pub fn map(&self, dim: usize, u: f64) -> f64 {
+        if self.weights[dim].iter().all(|w| (w - 1.0 / BINS as f64).abs() < 1e-12) {
+            return u;
+        }
+        let mut below = 0.0;
+        for (k, w) in self.weights[dim].iter().enumerate() {
+            if *w > 0.0 && (u < below + w || k == BINS - 1) {
+                let within = ((u - below) / w).clamp(0.0, 1.0);
+                return ((k as f64 + within) / BINS as f64).min(1.0 - f64::EPSILON);
+            }
+            below += w;
+        }
+        u
+    }
+
+    /// The distribution moved towards `elites` (draws in [0, 1], each with a weight): each row becomes
+    /// `(1 - rate) * old + rate * histogram(elites)`, then mixed with `floor` of uniform mass.
+    pub fn fitted(&self, elites: &[([f64; DIMS], f64)], rate: f64, floor: f64) -> Self {
+        let total: f64 = elites.iter().map(|(_, w)| w.max(0.0)).sum();
+        if total <= 0.0 {
+            return self.clone();
+        }
+        let mut out = self.clone();
+        for d in 0..DIMS {
+            let mut hist = [0.0; BINS];
+            for (x, w) in elites {
+                let k = ((x[d].clamp(0.0, 1.0) * BINS as f64) as usize).min(BINS - 1);
+                hist[k] += w.max(0.0) / total;
+            }
+            for (k, h) in hist.iter().enumerate() {
+                let moved = (1.0 - rate) * self.weights[d][k] + rate * h;
+                out.weights[d][k] = (1.0 - floor) * moved + floor / BINS as f64;
+            }
+        }
+        out
+    }
+
+    /// Mean of draw `dim` (for reports).
+    pub fn mean(&self, dim: usize) -> f64 {
+        self.weights[dim]
+            .iter()
+            .enumerate()
+            .map(|(k, w)| w * (k as f64 + 0.5) / BINS as f64)
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    #[test]
+    fn uniform_passes_draws_through_bit_for_bit() {
+        let d = DrawDistribution::uniform();
+        assert!(d.is_uniform());
+        for u in [0.0, 0.123_456_789, 0.5, 0.999_999] {
+            assert_eq!(d.map(2, u).to_bits(), u.to_bits());
+        }
+    }
+
+    #[test]
+    fn fitting_moves_mass_towards_the_elites_and_keeps_the_floor() {
+        let d = DrawDistribution::uniform();
+        let elites = vec![([0.05, 0.95, 0.5, 0.5, 0.5], 1.0); 4];
+        let f = d.fitted(&elites, 1.0, 0.1);
+        f.validate().unwrap();
+        // All the elite mass in bin 0 of draw 0, plus the floor's share.
+        assert!((f.weights[0][0] - (0.9 + 0.01)).abs() < 1e-12, "{:?}", f.weights[0]);
+        assert!((f.weights[0][5] - 0.01).abs() < 1e-12);
+        assert!(f.mean(0) < 0.2 && f.mean(1) > 0.8);
+        // Draws now land mostly in the elite bin.
+        let low = (0..1000).filter(|i| f.map(0, *i as f64 / 1000.0) < 0.1).count();
+        assert!((900..=920).contains(&low), "{low}");
+        // No elites, no change.
+        assert_eq!(d.fitted(&[], 1.0, 0.1), d);
+    }
+
+    #[test]
+    fn a_bad_prior_names_the_draw() {
+        let mut d = DrawDistribution::uniform();
+        d.weights[3][0] = 0.5;
+        assert!(d.validate().unwrap_err().contains("gap"));
+    }
+
+    proptest! {
+        #[test]
+        fn map_is_monotone_and_stays_in_the_unit_interval(
+            raw in proptest::collection::vec(0.0f64..1.0, BINS),
+            a in 0.0f64..1.0,
+            b in 0.0f64..1.0,
+        ) {
+            let sum: f64 = raw.iter().sum::<f64>() + 1e-9;
+            let mut d = DrawDistribution::uniform();
+            for (k, w) in raw.iter().enumerate() {
+                d.weights[0][k] = (w + 1e-9 / BINS as f64) / sum;
+            }
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            let (x, y) = (d.map(0, lo), d.map(0, hi));
+            prop_assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+            prop_assert!(x <= y + 1e-12, "{x} > {y}");
+        }
+    }
+}
