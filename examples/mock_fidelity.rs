@@ -58,6 +58,8 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
         mode: FlyMode::Avoidance,
         time_scale: speed,
         lockstep: latency,
+        // The recorded flights' definition (the case's offset is subtracted below), as `fidelity` judges.
+        judge: prgenuav::judge::Judge::E2025,
         // TRAJ_DIR=DIR keeps each flown trajectory as DIR/<id>.csv, to compare paths with the recorded ones.
         trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
         ..FlyOptions::default()

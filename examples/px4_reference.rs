@@ -8,7 +8,8 @@
 //! compares them.
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
-//! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases)
+//! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters)
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -31,6 +32,21 @@ fn test_of(case: &FlightCase) -> anyhow::Result<TestCase> {
     let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
     let mut test = base.with_obstacles(case.obstacles.clone());
     test.params = case.params.clone();
+    // EXTRA_PARAMS=NAME=VALUE,...: more vehicle parameters (experiments on what moves PX4 towards the recorded flights).
+    for kv in std::env::var("EXTRA_PARAMS")
+        .unwrap_or_default()
+        .split(',')
+        .filter(|s| !s.is_empty())
+    {
+        let (name, value) = kv
+            .split_once('=')
+            .ok_or_else(|| anyhow::anyhow!("EXTRA_PARAMS: {kv:?} is not NAME=VALUE"))?;
+        test.params.retain(|p| p.name != name);
+        test.params.push(prgenuav::model::Param {
+            name: name.to_string(),
+            value: value.parse()?,
+        });
+    }
     Ok(test)
 }
 
@@ -51,6 +67,8 @@ async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> an
         time_scale: SPEED,
         timeout_s: TIMEOUT_S,
         heartbeat_wait_s: 60.0,
+        // The recorded flights' definition (fidelity compares like for like).
+        judge: prgenuav::judge::Judge::E2025,
         ..FlyOptions::default()
     };
     let wall = Instant::now();
@@ -114,6 +132,7 @@ fn main() -> anyhow::Result<()> {
         .into_iter()
         .filter(|c| !c.obstacles.is_empty() && !done.contains(&c.id))
         .filter(|c| only.as_ref().is_none_or(|o| o.contains(&c.id)))
+        .filter(|c| std::env::var("TIER").map_or(true, |t| t == c.tier))
         .collect();
     eprintln!(
         "{} cases to fly ({} already in {})",

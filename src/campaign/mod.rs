@@ -1,6 +1,7 @@
 //! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
 
 pub mod journal;
+pub mod learn;
 pub mod parallel;
 pub mod pool;
 pub mod rank;

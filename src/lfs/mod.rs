@@ -20,6 +20,7 @@ pub mod motion;
 pub mod params;
 pub mod planner;
 pub mod polar;
+pub mod px4_flights;
 pub mod render;
 pub mod render_fast;
 pub mod select;

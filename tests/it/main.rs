@@ -10,6 +10,7 @@ mod layering;
 mod lfs;
 mod missions;
 mod pty;
+mod px4_reference;
 mod px4_sitl;
 mod ready;
 mod rules;
