@@ -9,4 +9,5 @@ pub mod report;
 pub mod run;
 pub mod score;
 pub mod screen;
+pub mod stages;
 pub mod vehicles;

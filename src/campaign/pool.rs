@@ -78,9 +78,10 @@ struct Ledger {
 /// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
 ///
 /// A vehicle that turns out unreachable gives its job back; the others wait for that (rather than stopping
-/// at a budget that is only reserved) so the job is still flown.
+/// at a budget that is only reserved) so the job is still flown. Unreachable vehicles are removed from
+/// `vehicles`; the others stay for the next call (a learning campaign flies in rounds).
 pub fn fly_all(
-    vehicles: Vec<Box<dyn Vehicle>>,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
     jobs: Vec<Job>,
     budget: usize,
     folder: &Path,
@@ -98,9 +99,10 @@ pub fn fly_all(
     let outcome = Mutex::new(PoolOutcome::default());
     let stop = AtomicBool::new(false);
     let lock = || ledger.lock().unwrap_or_else(|p| p.into_inner());
+    let dead: Mutex<Vec<usize>> = Mutex::new(Vec::new());
     std::thread::scope(|scope| {
-        for mut vehicle in vehicles {
-            let (journal, outcome, stop, changed, lock) = (&journal, &outcome, &stop, &changed, &lock);
+        for (index, vehicle) in vehicles.iter_mut().enumerate() {
+            let (journal, outcome, stop, changed, lock, dead) = (&journal, &outcome, &stop, &changed, &lock, &dead);
             scope.spawn(move || {
                 loop {
                     // Take the next job, or learn there will be none.
@@ -178,12 +180,19 @@ pub fn fly_all(
                                 .unwrap_or_else(|p| p.into_inner())
                                 .dropped
                                 .push(e.to_string());
+                            dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
                             return;
                         }
                     }
                 }
             });
         }
+    });
+    let dead = dead.into_inner().unwrap_or_else(|p| p.into_inner());
+    let mut index = 0;
+    vehicles.retain(|_| {
+        index += 1;
+        !dead.contains(&(index - 1))
     });
     outcome.into_inner().unwrap_or_else(|p| p.into_inner())
 }
@@ -272,7 +281,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let log = Arc::new(Mutex::new(Vec::new()));
         let dead_tried = wait_for_dead.then(|| Arc::new(AtomicBool::new(false)));
-        let v: Vec<Box<dyn Vehicle>> = vehicles
+        let mut v: Vec<Box<dyn Vehicle>> = vehicles
             .into_iter()
             .map(|(name, reachable)| {
                 Box::new(Fake {
@@ -285,7 +294,7 @@ mod tests {
             .collect();
         let journal = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
         let out = fly_all(
-            v,
+            &mut v,
             jobs(n),
             budget,
             dir.path(),
@@ -317,6 +326,28 @@ mod tests {
         let mut ids: Vec<u64> = flown.iter().map(|f| f.1).collect();
         ids.sort();
         assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn unreachable_vehicles_leave_the_fleet_and_the_others_fly_the_next_round() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let fake = |name, reachable| {
+            Box::new(Fake {
+                name,
+                reachable,
+                log: log.clone(),
+                dead_tried: None,
+            }) as Box<dyn Vehicle>
+        };
+        let mut fleet = vec![fake("dead", false), fake("ok", true)];
+        let journal = || Journal::open(&dir.path().join("journal.jsonl")).unwrap();
+        let no_stop = AtomicBool::new(false);
+        let first = fly_all(&mut fleet, jobs(2), 2, dir.path(), journal(), &no_stop, &|_| {});
+        assert_eq!((first.flown, fleet.len()), (2, 1));
+        assert_eq!(fleet[0].name(), "ok");
+        let second = fly_all(&mut fleet, jobs(1), 1, dir.path(), journal(), &no_stop, &|_| {});
+        assert_eq!((second.flown, second.dropped.len()), (1, 0));
     }
 
     #[test]

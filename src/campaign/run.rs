@@ -8,13 +8,14 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::journal::{FlightRecord, Journal};
-use super::parallel::{available_threads, parallel_map};
 use super::pool::{Job, Vehicle, fly_all};
 use super::rank::{Screened, rank};
 use super::report::{Report, StageTimes, write_outputs};
-use crate::generator::{GenerateError, Generator, GeneratorConfig};
+use super::stages::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
+use crate::generator::{DrawDistribution, GenerateError, Generator, GeneratorConfig};
 use crate::io::write_atomic;
 use crate::judge::Judge;
+use crate::lfs::ensemble::EnsembleParams;
 use crate::model::{ModelError, Obstacle, Spelling, TestCase};
 
 /// Everything that defines a campaign; saved as `campaign.json` so `--resume` continues the same one.
@@ -120,10 +121,15 @@ pub trait Screener: Sync {
         None
     }
 
-    /// `(p_fail, expected points)` of one flight from an ensemble of `n` perturbed simulations drawn from
-    /// `seed` (`None` if the screener has no ensemble or the test cannot be simulated).
-    fn ensemble(&self, _test: &TestCase, _n: usize, _seed: u64) -> Option<(f64, f64)> {
+    /// The minimum distances of an ensemble of `n` perturbed simulations drawn from `seed` (`None` if the
+    /// screener has no ensemble or the test cannot be simulated).
+    fn ensemble(&self, _test: &TestCase, _n: usize, _seed: u64) -> Option<Vec<f64>> {
         None
+    }
+
+    /// The prior of `p_fail` over the members.
+    fn ensemble_params(&self) -> EnsembleParams {
+        EnsembleParams::default()
     }
 }
 
@@ -159,7 +165,7 @@ pub fn run_campaign(
     cfg: &CampaignConfig,
     folder: &Path,
     screener: &dyn Screener,
-    vehicles: Vec<Box<dyn Vehicle>>,
+    mut vehicles: Vec<Box<dyn Vehicle>>,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<Report, CampaignError> {
@@ -191,7 +197,20 @@ pub fn run_campaign(
 
     let t = Instant::now();
     let screened = if cfg.screen {
-        screen_all(&case, &candidates, folder, screener, progress, cancel)?
+        let ctx = Stage {
+            case: &case,
+            candidates: &candidates,
+            folder,
+            screener,
+            progress,
+            cancel,
+        };
+        screen_all(
+            &ctx,
+            0..candidates.len() as u64,
+            "screening.json",
+            &DrawDistribution::uniform(),
+        )?
     } else {
         // Every candidate "predicted" at 0 m: the ranking then keeps the order they were drawn in.
         (0..candidates.len() as u64)
@@ -208,7 +227,7 @@ pub fn run_campaign(
     if cfg.screen && cfg.ensemble > 0 {
         let t = Instant::now();
         let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
-        let ctx = EnsembleStage {
+        let ctx = Stage {
             case: &case,
             candidates: &candidates,
             folder,
@@ -216,7 +235,8 @@ pub fn run_campaign(
             progress,
             cancel,
         };
-        ensemble_shortlist(&ctx, &mut fresh, cfg, shortlist)?;
+        let members = ensemble_shortlist(&ctx, &fresh, cfg, shortlist)?;
+        apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), 0.0);
         stages.ensemble_s = t.elapsed().as_secs_f64();
     }
     let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
@@ -272,7 +292,7 @@ pub fn run_campaign(
         Default::default()
     } else {
         fly_all(
-            vehicles,
+            &mut vehicles,
             jobs,
             remaining,
             folder,
@@ -308,135 +328,10 @@ pub fn run_campaign(
     )?)
 }
 
-/// Ensembles are run on at most this many of the most severe point predictions per flight left in the budget
-/// (the near-duplicate filter thins the ranking, so it needs more than one candidate per flight).
-pub const ENSEMBLE_SHORTLIST_PER_FLIGHT: usize = 3;
-
-/// What the ensemble stage reads.
-struct EnsembleStage<'a> {
-    case: &'a TestCase,
-    candidates: &'a [Vec<Obstacle>],
-    folder: &'a Path,
-    screener: &'a dyn Screener,
-    progress: &'a dyn Progress,
-    cancel: &'a AtomicBool,
-}
-
-/// Runs the ensemble on the `shortlist` most severe candidates predicted below the threshold and stores
-/// `p_fail` and expected points in them. Results are cached in `ensemble.json` (candidate -> verdict) for a
-/// resume; member seeds depend on the campaign's seed and the candidate only.
-fn ensemble_shortlist(
-    ctx: &EnsembleStage,
-    fresh: &mut [Screened],
-    cfg: &CampaignConfig,
-    shortlist: usize,
-) -> Result<(), CampaignError> {
-    let cache_path = ctx.folder.join("ensemble.json");
-    let mut cache: std::collections::BTreeMap<u64, (f64, f64)> = std::fs::read_to_string(&cache_path)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or_default();
-    let mut order: Vec<usize> = (0..fresh.len())
-        .filter(|&i| fresh[i].min_distance < cfg.threshold_m)
-        .collect();
-    order.sort_by(|&a, &b| {
-        fresh[a]
-            .min_distance
-            .total_cmp(&fresh[b].min_distance)
-            .then(fresh[a].candidate.cmp(&fresh[b].candidate))
-    });
-    order.truncate(shortlist);
-    let todo: Vec<u64> = order
-        .iter()
-        .map(|&i| fresh[i].candidate)
-        .filter(|c| !cache.contains_key(c))
-        .collect();
-    if !todo.is_empty() {
-        ctx.progress.stage("ensemble", todo.len());
-        let results = parallel_map(
-            &todo,
-            available_threads(),
-            ctx.cancel,
-            &|n| ctx.progress.tick(n),
-            |&c| {
-                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].clone());
-                (c, ctx.screener.ensemble(&test, cfg.ensemble, member_seed(cfg.seed, c)))
-            },
-        );
-        if results.iter().any(Option::is_none) {
-            return Err(CampaignError::Config(
-                "interrupted during the ensemble screening".into(),
-            ));
-        }
-        cache.extend(results.into_iter().flatten().filter_map(|(c, v)| Some((c, v?))));
-        let json = serde_json::to_string(&cache).unwrap_or_default();
-        write_atomic(&cache_path, json.as_bytes())?;
-    }
-    for &i in &order {
-        if let Some(&(p_fail, points)) = cache.get(&fresh[i].candidate) {
-            fresh[i].p_fail = Some(p_fail);
-            fresh[i].expected_points = Some(points);
-        }
-    }
-    ctx.progress.note(&format!(
-        "ensemble of {}: {} candidates ranked by expected points per minute",
-        cfg.ensemble,
-        order.len()
-    ));
-    Ok(())
-}
-
-/// The ensemble seed of candidate `c`: a SplitMix64 step of the campaign seed and the index, so candidates'
-/// members are independent and the same for the same campaign seed.
-fn member_seed(seed: u64, c: u64) -> u64 {
-    let mut z = seed ^ c.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
     let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
     let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
     crate::geometry::union_iou(&fa, &fb) > max_iou
-}
-
-/// Screens every candidate on every core; results are cached in `screening.json` for a resume.
-fn screen_all(
-    case: &TestCase,
-    candidates: &[Vec<Obstacle>],
-    folder: &Path,
-    screener: &dyn Screener,
-    progress: &dyn Progress,
-    cancel: &AtomicBool,
-) -> Result<Vec<Screened>, CampaignError> {
-    let cache = folder.join("screening.json");
-    if let Ok(text) = std::fs::read_to_string(&cache)
-        && let Ok(cached) = serde_json::from_str::<Vec<Screened>>(&text)
-        && cached.len() == candidates.len()
-    {
-        progress.note(&format!("screening: reusing {} cached predictions", cached.len()));
-        return Ok(cached);
-    }
-    progress.stage("screen", candidates.len());
-    let indexed: Vec<(u64, &Vec<Obstacle>)> = candidates.iter().enumerate().map(|(i, o)| (i as u64, o)).collect();
-    let results = parallel_map(
-        &indexed,
-        available_threads(),
-        cancel,
-        &|n| progress.tick(n),
-        |(i, obstacles)| {
-            let (min_distance, flight_time_s, status) = screener.screen(&case.with_obstacles((*obstacles).clone()));
-            Screened::point(*i, min_distance, flight_time_s, status)
-        },
-    );
-    let screened: Vec<Screened> = results.into_iter().flatten().collect();
-    if screened.len() < candidates.len() {
-        return Err(CampaignError::Config("interrupted during screening".into()));
-    }
-    let json = serde_json::to_string(&screened).unwrap_or_default();
-    write_atomic(&cache, json.as_bytes())?;
-    Ok(screened)
 }
 
 #[cfg(test)]

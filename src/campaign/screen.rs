@@ -43,7 +43,7 @@ impl Screener for LfsScreener {
         simulate(test, &self.config).ok().map(|r| r.trajectory)
     }
 
-    fn ensemble(&self, test: &TestCase, n: usize, seed: u64) -> Option<(f64, f64)> {
+    fn ensemble(&self, test: &TestCase, n: usize, seed: u64) -> Option<Vec<f64>> {
         // One thread per candidate: the campaign already runs a candidate per core.
         let e = run_ensemble(
             &test.mission,
@@ -56,6 +56,10 @@ impl Screener for LfsScreener {
             1,
         )
         .ok()?;
-        Some((e.p_fail(&self.ensemble)?, e.expected_points(&self.ensemble)?))
+        Some(e.member_min_distances)
+    }
+
+    fn ensemble_params(&self) -> EnsembleParams {
+        self.ensemble
     }
 }
