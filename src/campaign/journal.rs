@@ -23,6 +23,9 @@ pub struct FlightRecord {
     /// The LFS ensemble's probability of a flight below 1.5 m (absent without an ensemble).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub predicted_p_fail: Option<f64>,
+    /// The LFS's own prediction when `predicted_min_distance` is calibrated (a learning campaign), metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub predicted_raw_min_distance: Option<f64>,
     /// The flown minimum distance (competition definition), metres; `None` if nothing usable was recorded.
     pub min_distance: Option<f64>,
     /// The flown un-binned minimum distance, metres.
@@ -134,6 +137,7 @@ mod tests {
             predicted_min_distance: 0.5,
             predicted_flight_time_s: 40.0,
             predicted_p_fail: None,
+            predicted_raw_min_distance: None,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
             status: "landed".into(),

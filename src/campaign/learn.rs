@@ -10,6 +10,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::generator::adaptive::{DIMS, DrawDistribution};
+
 /// Residuals are clipped to this many metres: one flight stuck far from the boxes must not swing the bias.
 pub const MAX_RESIDUAL_M: f64 = 3.0;
 
@@ -98,6 +100,34 @@ impl Calibration {
         }
         Ok(())
     }
+}
+
+/// What a campaign learnt; written as `learnt.json`, read back by `--prior FOLDER`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Learnt {
+    /// The calibration after the last flight.
+    pub calibration: Calibration,
+    /// The draw distribution the next round would have used (uniform without `adapt`).
+    pub distribution: DrawDistribution,
+    /// One entry per round.
+    pub rounds: Vec<RoundLog>,
+}
+
+/// One round.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RoundLog {
+    /// 0-based.
+    pub round: usize,
+    /// Index of its first candidate.
+    pub first_candidate: u64,
+    /// Candidates drawn in it.
+    pub candidates: usize,
+    /// Flights made in it (by this run; a resumed run counts only its own).
+    pub flights: usize,
+    /// The learnt bias used to rank its flights, metres.
+    pub bias_m: f64,
+    /// Mean of each unit draw of its distribution (0.5 = uniform).
+    pub draw_means: [f64; DIMS],
 }
 
 /// Mean absolute error of a prequential run: each truth predicted with the bias learnt from those before it

@@ -6,6 +6,7 @@ pub mod parallel;
 pub mod pool;
 pub mod rank;
 pub mod report;
+pub mod rounds;
 pub mod run;
 pub mod score;
 pub mod screen;

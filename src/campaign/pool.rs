@@ -143,6 +143,7 @@ pub fn fly_all(
                                 predicted_min_distance: job.screened.min_distance,
                                 predicted_flight_time_s: job.screened.flight_time_s,
                                 predicted_p_fail: job.screened.p_fail,
+                                predicted_raw_min_distance: job.screened.raw_min_distance,
                                 min_distance: flown.min_distance,
                                 min_distance_raw: flown.min_distance_raw,
                                 status: flown.status,

@@ -22,6 +22,9 @@ pub struct Screened {
     /// The ensemble's expected competition points of one flight.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub expected_points: Option<f64>,
+    /// The LFS's own prediction when `min_distance` is a calibrated one (a learning campaign).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw_min_distance: Option<f64>,
 }
 
 impl Screened {
@@ -34,6 +37,7 @@ impl Screened {
             status,
             p_fail: None,
             expected_points: None,
+            raw_min_distance: None,
         }
     }
 

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::journal::FlightRecord;
+use super::learn::Learnt;
+use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::write_atomic;
 use crate::judge::{Judge, diversity, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
@@ -23,6 +25,8 @@ pub struct StageTimes {
     pub screen_s: f64,
     /// The LFS ensemble on the shortlisted candidates.
     pub ensemble_s: f64,
+    /// Online learning: calibrating the LFS on the flights, re-ranking, adapting the generator.
+    pub learn_s: f64,
     /// High-fidelity flights.
     pub fly_s: f64,
     /// Writing the outputs.
@@ -76,6 +80,11 @@ pub struct SuiteSummary {
     /// Brier score of the ensemble's `p_fail` against the flown outcome (below 1.5 m), over the flown tests
     /// that had an ensemble (the flown tests are the ranking's top, so this is not a random sample).
     pub lfs_p_fail_brier: Option<f64>,
+    /// Mean |predicted - flown| over the first quarter of the flights (in flight order), with the prediction
+    /// the campaign ranked by (calibrated in a learning campaign), metres.
+    pub lfs_error_first_quarter_m: Option<f64>,
+    /// The same over the last quarter.
+    pub lfs_error_last_quarter_m: Option<f64>,
     /// Candidates screened per second of screening wall time.
     pub screening_per_s: f64,
 }
@@ -99,6 +108,22 @@ pub struct Report {
     pub suite: SuiteSummary,
     /// Wall time per stage.
     pub stages: StageTimes,
+    /// What a learning campaign learnt (`None` with `--no-learn`).
+    pub learning: Option<Learnt>,
+}
+
+/// Mean |predicted - flown| of the first (or last) quarter of the flights with a flown distance.
+fn quarter_error(records: &[FlightRecord], last: bool) -> Option<f64> {
+    let e: Vec<f64> = records
+        .iter()
+        .filter_map(|r| r.min_distance.map(|d| (d - r.predicted_min_distance).abs()))
+        .collect();
+    let q = e.len().div_ceil(4);
+    if q == 0 {
+        return None;
+    }
+    let part = if last { &e[e.len() - q..] } else { &e[..q] };
+    Some(part.iter().sum::<f64>() / q as f64)
 }
 
 /// Records of flights that failed (below 1.5 m), best first: smallest distance, then shorter flight.
@@ -134,6 +159,7 @@ pub fn write_outputs(
     screened: bool,
     lfs_path: &(dyn Fn(&TestCase) -> Option<Trajectory> + Sync),
     judge: Judge,
+    learning: Option<&Learnt>,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let failing = failing_best_first(records);
@@ -210,6 +236,8 @@ pub fn write_outputs(
         lfs_mean_abs_error_m: (screened && !errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
         lfs_p_fail_brier: crate::lfs::calibration::brier(&p_fail, &failed),
+        lfs_error_first_quarter_m: quarter_error(records, false).filter(|_| screened),
+        lfs_error_last_quarter_m: quarter_error(records, true).filter(|_| screened),
         screening_per_s: if stages.screen_s > 0.0 {
             candidates_screened as f64 / stages.screen_s
         } else {
@@ -226,6 +254,7 @@ pub fn write_outputs(
         flights,
         suite,
         stages,
+        learning: learning.cloned(),
     };
     let json = serde_json::to_string_pretty(&report).unwrap_or_default();
     write_atomic(&folder.join("report.json"), json.as_bytes())?;
@@ -282,9 +311,38 @@ pub fn markdown(r: &Report) -> String {
     let st = &r.stages;
     let _ = writeln!(
         md,
-        "| wall time: sample / screen / ensemble / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
-        st.sample_s, st.screen_s, st.ensemble_s, st.fly_s, st.report_s
+        "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
+        st.sample_s, st.screen_s, st.ensemble_s, st.learn_s, st.fly_s, st.report_s
     );
+    if let Some(l) = &r.learning {
+        let _ = writeln!(
+            md,
+            "## Learning\n\nLFS bias learnt: {:+.3} m from {} flights (prior {:+.3} m weighing {} flights).\n",
+            l.calibration.bias_m(),
+            l.calibration.flights,
+            l.calibration.prior_bias_m,
+            l.calibration.prior_flights
+        );
+        let _ = writeln!(
+            md,
+            "| round | candidates | flights | bias used m | draw means ({}) |",
+            DRAW_NAMES.join(", ")
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|");
+        for round in &l.rounds {
+            let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {:+.3} | {} |",
+                round.round + 1,
+                round.candidates,
+                round.flights,
+                round.bias_m,
+                means.join(", ")
+            );
+        }
+        let _ = writeln!(md);
+    }
     let _ = writeln!(
         md,
         "## Flights\n\n| candidate | predicted m | p_fail | flown m | raw m | status | time s | points | score | reported as |"

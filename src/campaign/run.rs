@@ -11,6 +11,7 @@ use super::journal::{FlightRecord, Journal};
 use super::pool::{Job, Vehicle, fly_all};
 use super::rank::{Screened, rank};
 use super::report::{Report, StageTimes, write_outputs};
+use super::rounds::{RoundsInput, run_rounds};
 use super::stages::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
 use crate::generator::{DrawDistribution, GenerateError, Generator, GeneratorConfig};
 use crate::io::write_atomic;
@@ -75,6 +76,22 @@ pub struct CampaignConfig {
     /// minute; 0 ranks by the point prediction (campaign files written before ensembles existed).
     #[serde(default)]
     pub ensemble: usize,
+    /// Learn the vehicle as the campaign flies (online calibration of the LFS, flights in rounds).
+    #[serde(default)]
+    pub learn: bool,
+    /// With `learn`, also adapt the generator's draw distribution towards failures.
+    #[serde(default)]
+    pub adapt: bool,
+    /// A previous campaign's folder whose `learnt.json` seeds this one.
+    #[serde(default)]
+    pub prior: Option<PathBuf>,
+    /// The adapted generator backs off when the failing tests' diversity falls below this.
+    #[serde(default = "default_min_diversity")]
+    pub min_diversity: f64,
+}
+
+fn default_min_diversity() -> f64 {
+    0.8
 }
 
 fn judge_before_editions() -> Judge {
@@ -185,6 +202,32 @@ pub fn run_campaign(
     let config_json = serde_json::to_string_pretty(cfg).unwrap_or_default();
     write_atomic(&folder.join("campaign.json"), config_json.as_bytes())?;
     let mut stages = StageTimes::default();
+    if cfg.learn && cfg.screen {
+        let input = RoundsInput {
+            cfg,
+            folder,
+            case: &case,
+            screener,
+            progress,
+            cancel,
+        };
+        let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
+        let records = Journal::read(&folder.join("journal.jsonl"))?;
+        return Ok(write_outputs(
+            folder,
+            &case,
+            cfg.seed,
+            cfg.budget,
+            drawn,
+            &records,
+            stages,
+            spelling,
+            cfg.screen,
+            &|t: &TestCase| screener.path(t),
+            cfg.judge,
+            Some(&learnt),
+        )?);
+    }
 
     let t = Instant::now();
     let generator = Generator::new(&case, cfg.generator.clone(), cfg.seed)?;
@@ -325,10 +368,12 @@ pub fn run_campaign(
         cfg.screen,
         &|t: &TestCase| screener.path(t),
         cfg.judge,
+        None,
     )?)
 }
 
-fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
+/// Whether two tests' footprints overlap by more than `max_iou`.
+pub(super) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
     let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
     let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
     crate::geometry::union_iou(&fa, &fb) > max_iou

@@ -80,6 +80,10 @@ fn config(budget: usize) -> CampaignConfig {
         hfs_time_scale: None,
         flight_timeout_s: 500.0,
         ensemble: 0,
+        learn: false,
+        adapt: false,
+        prior: None,
+        min_diversity: 0.8,
     }
 }
 
@@ -261,9 +265,9 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
     )
     .unwrap();
     assert_eq!(r.suite.flown, 2);
-    // At most 3 candidates per flight of the budget get an ensemble.
+    // At most 2 candidates per flight of the budget get an ensemble.
     let runs = lfs.runs.load(Ordering::SeqCst);
-    assert!((1..=12).contains(&runs), "{runs} ensembles");
+    assert!((1..=8).contains(&runs), "{runs} ensembles");
     // Every flight carries its p_fail; the flights go most expected points (equal flight times: highest
     // p_fail) first, whatever the point prediction says.
     let p: Vec<f64> = r.flights.iter().map(|f| f.predicted_p_fail.unwrap()).collect();
@@ -297,4 +301,82 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
         crate::campaign::stages::member_seed(3, 7),
         crate::campaign::stages::member_seed(3, 7)
     );
+}
+
+#[test]
+fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_next_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let cfg = CampaignConfig {
+        learn: true,
+        adapt: true,
+        ..config(12)
+    };
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(r.suite.flown, 12);
+    let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
+    assert_eq!(learnt.rounds.len(), crate::campaign::rounds::ROUNDS);
+    // The scripted vehicle flies 0.2 m farther than predicted: the bias goes there, shrunk by the prior.
+    let bias = learnt.calibration.bias_m();
+    assert!((bias - 0.2 * 12.0 / 13.0).abs() < 1e-9, "{bias}");
+    assert_eq!(learnt.rounds[0].bias_m, 0.0, "the first round knows nothing yet");
+    // Calibrated predictions make the last quarter's error smaller than the first's.
+    let (first, last) = (
+        r.suite.lfs_error_first_quarter_m.unwrap(),
+        r.suite.lfs_error_last_quarter_m.unwrap(),
+    );
+    assert!(last < first, "{first} -> {last}");
+    // The draws moved towards the elites.
+    assert!(!learnt.distribution.is_uniform());
+    assert!(learnt.rounds[1].draw_means != [0.5; 5]);
+    assert!(dir.path().join("learnt.json").is_file());
+    // Every test flown still obeys the rules.
+    for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
+        let t = TestCase::load(&cfg.case).unwrap().with_obstacles(rec.obstacles);
+        assert!(crate::rules::check(&t, &crate::model::Arena::default()).is_empty());
+    }
+    // The next campaign starts from it: the first round already uses the learnt bias.
+    let next_dir = tempfile::tempdir().unwrap();
+    let next_cfg = CampaignConfig {
+        prior: Some(dir.path().to_path_buf()),
+        ..cfg.clone()
+    };
+    let r2 = run_campaign(
+        &next_cfg,
+        next_dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    let l2 = r2.learning.unwrap();
+    assert!((l2.rounds[0].bias_m - bias).abs() < 1e-12);
+    assert_eq!(
+        l2.rounds[0].draw_means,
+        std::array::from_fn(|d| learnt.distribution.mean(d))
+    );
+    // A missing prior is an error naming the file.
+    let bad = CampaignConfig {
+        prior: Some(next_dir.path().join("nowhere")),
+        ..cfg
+    };
+    let e = run_campaign(
+        &bad,
+        tempfile::tempdir().unwrap().path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("learnt.json"), "{e}");
 }

@@ -19,7 +19,7 @@ use crate::model::{Obstacle, TestCase};
 
 /// Ensembles are run on at most this many of the most severe point predictions per flight left in the budget
 /// (the near-duplicate filter thins the ranking, so it needs more than one candidate per flight).
-pub const ENSEMBLE_SHORTLIST_PER_FLIGHT: usize = 3;
+pub const ENSEMBLE_SHORTLIST_PER_FLIGHT: usize = 2;
 
 /// What the stages read.
 pub struct Stage<'a> {

@@ -81,11 +81,25 @@ pub struct Args {
     /// Skip the LFS: fly candidates in the order drawn (the baseline that shows what screening buys).
     #[arg(long)]
     no_screen: bool,
-    /// Members of the LFS ensemble run on the 3 x budget most severe candidates, which are then flown in order
+    /// Members of the LFS ensemble run on the 2 x budget most severe candidates, which are then flown in order
     /// of expected competition points per minute (p_fail x points per failure / predicted minutes); 0 ranks
-    /// by the point prediction alone.
-    #[arg(long, default_value_t = 8, value_name = "N")]
-    ensemble: usize,
+    /// by the point prediction alone. Default: 8 for MAVLink vehicles, 0 for the embedded mock (an ensemble
+    /// costs about 1 s of CPU per candidate, more than a mock flight; a PX4 or hardware flight costs far more).
+    #[arg(long, value_name = "N")]
+    ensemble: Option<usize>,
+    /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in 4
+    /// rounds, calibrating the LFS on every flight and adapting the generator's draws towards failures.
+    #[arg(long)]
+    no_learn: bool,
+    /// Learn the LFS's calibration but keep the paper's uniform draws.
+    #[arg(long, conflicts_with = "no_learn")]
+    no_adapt: bool,
+    /// Start from what an earlier campaign learnt (its output folder's learnt.json).
+    #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
+    prior: Option<PathBuf>,
+    /// The adapted generator backs off when the failing tests' diversity (1 - mean pairwise IoU) falls below this.
+    #[arg(long, default_value_t = 0.8, value_name = "D")]
+    min_diversity: f64,
     /// Continue a killed campaign in this folder (its campaign.json holds the settings).
     #[arg(long, value_name = "FOLDER")]
     resume: Option<PathBuf>,
@@ -132,6 +146,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             if budget == 0 {
                 bail!("BUDGET must be at least 1 flight");
             }
+            if !(0.0..=1.0).contains(&args.min_diversity) {
+                bail!("--min-diversity must be within 0..1");
+            }
+            if let Some(p) = &args.prior {
+                // Refuse a bad prior before anything is sampled or flown.
+                prgenuav::campaign::rounds::load_prior(p)?;
+            }
             if !(args.threshold.is_finite() && args.threshold > 0.0 && (0.0..=1.0).contains(&args.max_iou)) {
                 bail!("--threshold must be positive and --max-iou within 0..1");
             }
@@ -160,7 +181,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 anchor_at_vehicle_home: args.anchor_at_vehicle_home,
                 hfs_time_scale: args.hfs_time_scale,
                 flight_timeout_s: args.timeout,
-                ensemble: args.ensemble,
+                ensemble: args.ensemble.unwrap_or(if args.hfs.trim() == "mock" { 0 } else { 8 }),
+                learn: !args.no_learn && !args.no_screen,
+                adapt: !args.no_learn && !args.no_adapt && !args.no_screen,
+                prior: args.prior.clone(),
+                min_diversity: args.min_diversity,
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }

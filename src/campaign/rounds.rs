@@ -1,0 +1,352 @@
+//! The learning campaign: flights in [`ROUNDS`] rounds. Before each round the LFS is calibrated on every
+//! flight so far ([`super::learn`]), the unflown candidates are re-ranked with the calibrated predictions and
+//! ensembles, and (with `adapt`) the round's new candidates come from a draw distribution moved towards the
+//! best candidates so far: the calibrated LFS as the surrogate, the flights as the truth.
+//!
+//! The adaptation is a univariate marginal distribution algorithm ([`crate::generator::adaptive`]): elites are
+//! the best [`ELITE_SHARE`] of the screened candidates by calibrated prediction, plus the closest quarter of the
+//! flights and every flown failure at [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
+//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor, the next
+//! fit backs off (more uniform mass, a smaller step).
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use super::journal::{FlightRecord, Journal};
+use super::learn::{Calibration, Learnt, RoundLog};
+use super::pool::{Job, Vehicle, fly_all};
+use super::rank::{Screened, rank};
+use super::report::StageTimes;
+use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
+use super::stages::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
+use crate::generator::Generator;
+use crate::generator::adaptive::{DIMS, DrawDistribution};
+use crate::io::write_atomic;
+use crate::judge::diversity;
+use crate::model::{ModelError, Obstacle, TestCase};
+
+/// Rounds of a learning campaign (the budget and the candidates are split evenly).
+pub const ROUNDS: usize = 4;
+/// Share of the screened candidates that are elites.
+pub const ELITE_SHARE: f64 = 0.2;
+/// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
+/// a prediction.
+pub const FLOWN_FAILURE_WEIGHT: f64 = 3.0;
+/// How far each fit moves the distribution towards the elites'.
+pub const FIT_RATE: f64 = 0.7;
+/// Uniform mass every fitted draw keeps.
+pub const UNIFORM_FLOOR: f64 = 0.2;
+/// The backed-off fit when diversity is below the floor.
+const BACKOFF: (f64, f64) = (0.3, 0.5);
+/// Below this, a flown test failed.
+const FAIL_M: f64 = 1.5;
+
+/// Reads `folder/learnt.json` (a previous campaign's), naming the file and the field on error.
+pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
+    let path = folder.join("learnt.json");
+    let text = std::fs::read_to_string(&path).map_err(|source| ModelError::Io {
+        path: path.clone(),
+        action: "cannot read the prior",
+        source,
+    })?;
+    let learnt: Learnt =
+        serde_json::from_str(&text).map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
+    learnt
+        .calibration
+        .validate()
+        .and_then(|()| learnt.distribution.validate())
+        .map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
+    Ok(learnt)
+}
+
+/// The campaign's inputs that stay the same over the rounds.
+pub struct RoundsInput<'a> {
+    /// Settings.
+    pub cfg: &'a CampaignConfig,
+    /// The campaign folder.
+    pub folder: &'a Path,
+    /// The case study.
+    pub case: &'a TestCase,
+    /// The LFS.
+    pub screener: &'a dyn Screener,
+    /// Progress output.
+    pub progress: &'a dyn Progress,
+    /// Stops the campaign.
+    pub cancel: &'a AtomicBool,
+}
+
+/// Runs every round; returns what was learnt and the number of candidates drawn.
+pub fn run_rounds(
+    input: &RoundsInput,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    stages: &mut StageTimes,
+) -> Result<(Learnt, usize), CampaignError> {
+    let RoundsInput {
+        cfg,
+        folder,
+        case,
+        screener,
+        progress,
+        cancel,
+    } = *input;
+    let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
+    let start_calibration = prior
+        .as_ref()
+        .map_or_else(Calibration::default, |p| p.calibration.carried());
+    let mut distribution = match &prior {
+        Some(p) if cfg.adapt => p.distribution.clone(),
+        _ => DrawDistribution::uniform(),
+    };
+    let journal_path = folder.join("journal.jsonl");
+    let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
+    let mut units: Vec<[f64; DIMS]> = Vec::new();
+    let mut screened: Vec<Screened> = Vec::new();
+    let mut rounds = Vec::new();
+    let mut backoff = false;
+    let mut calibration = start_calibration.clone();
+    for round in 0..ROUNDS {
+        let (lo, hi) = (
+            (cfg.candidates * round / ROUNDS) as u64,
+            (cfg.candidates * (round + 1) / ROUNDS) as u64,
+        );
+        let t = Instant::now();
+        let generator = Generator::new(case, cfg.generator.clone(), cfg.seed)?.with_distribution(distribution.clone());
+        for i in lo..hi {
+            let p = generator.sample(i)?;
+            candidates.push(p.obstacles.to_vec());
+            units.push(p.draw.unit);
+        }
+        stages.sample_s += t.elapsed().as_secs_f64();
+        let ctx = Stage {
+            case,
+            candidates: &candidates,
+            folder,
+            screener,
+            progress,
+            cancel,
+        };
+        let t = Instant::now();
+        screened.extend(screen_all(
+            &ctx,
+            lo..hi,
+            &format!("screening_round{round}.json"),
+            &distribution,
+        )?);
+        stages.screen_s += t.elapsed().as_secs_f64();
+
+        // Learn from every flight so far, then rank the unflown candidates with the calibrated LFS.
+        let t = Instant::now();
+        let done = Journal::read(&journal_path)?;
+        calibration = calibrated(&start_calibration, &done);
+        let bias = calibration.bias_m();
+        let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
+        let mut fresh: Vec<Screened> = screened
+            .iter()
+            .filter(|s| !flown.contains(&s.candidate))
+            .map(|s| Screened {
+                min_distance: calibration.predict(s.min_distance),
+                raw_min_distance: Some(s.min_distance),
+                ..s.clone()
+            })
+            .collect();
+        stages.learn_s += t.elapsed().as_secs_f64();
+        let remaining = (cfg.budget * (round + 1) / ROUNDS).saturating_sub(done.len());
+        if cfg.ensemble > 0 && remaining > 0 {
+            let t = Instant::now();
+            let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
+            apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), bias);
+            stages.ensemble_s += t.elapsed().as_secs_f64();
+        }
+        let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
+        let mut ranked = rank(&fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+        ranked.retain(|s| {
+            !done
+                .iter()
+                .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
+        });
+        ranked.truncate(remaining);
+        progress.note(&format!(
+            "round {}/{ROUNDS}: {} candidates, LFS bias {bias:+.2} m learnt from {} flights; flying {}",
+            round + 1,
+            hi - lo,
+            done.len(),
+            ranked.len()
+        ));
+        let t = Instant::now();
+        let jobs: Vec<Job> = ranked
+            .into_iter()
+            .map(|s| Job {
+                test: case.with_obstacles(candidates[s.candidate as usize].clone()),
+                screened: s,
+            })
+            .collect();
+        let flights = if jobs.is_empty() {
+            0
+        } else {
+            let outcome = fly_all(
+                vehicles,
+                jobs,
+                remaining,
+                folder,
+                Journal::open(&journal_path)?,
+                cancel,
+                &|r: &FlightRecord| {
+                    progress.note(&format!(
+                        "flight: candidate {} predicted {:.2} m, flew {} ({})",
+                        r.candidate,
+                        r.predicted_min_distance,
+                        r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
+                        r.status
+                    ))
+                },
+            );
+            for d in &outcome.dropped {
+                progress.note(&format!("dropped {d}"));
+            }
+            if let Some(e) = outcome.errors.first() {
+                return Err(CampaignError::Config(format!("journal: {e}")));
+            }
+            if outcome.flown == 0 && vehicles.is_empty() {
+                return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
+            }
+            outcome.flown
+        };
+        stages.fly_s += t.elapsed().as_secs_f64();
+        rounds.push(RoundLog {
+            round,
+            first_candidate: lo,
+            candidates: (hi - lo) as usize,
+            flights,
+            bias_m: bias,
+            draw_means: std::array::from_fn(|d| distribution.mean(d)),
+        });
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            break;
+        }
+        let t = Instant::now();
+        let done = Journal::read(&journal_path)?;
+        calibration = calibrated(&start_calibration, &done);
+        if cfg.adapt {
+            let (rate, floor) = if backoff { BACKOFF } else { (FIT_RATE, UNIFORM_FLOOR) };
+            distribution = distribution.fitted(&elites(&screened, &done, &units, &calibration), rate, floor);
+            let failing: Vec<Vec<Obstacle>> = done
+                .iter()
+                .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_M))
+                .map(|r| r.obstacles.clone())
+                .collect();
+            backoff = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
+        }
+        stages.learn_s += t.elapsed().as_secs_f64();
+    }
+    let learnt = Learnt {
+        calibration,
+        distribution,
+        rounds,
+    };
+    let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
+    write_atomic(&folder.join("learnt.json"), json.as_bytes())?;
+    Ok((learnt, candidates.len()))
+}
+
+/// The prior calibration updated with every journaled flight's raw prediction and flown distance, in order.
+fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
+    let mut c = prior.clone();
+    for r in done {
+        if let (Some(raw), Some(flown)) = (r.predicted_raw_min_distance, r.min_distance) {
+            c.observe(raw, flown);
+        }
+    }
+    c
+}
+
+/// The elites: the best share of the screened candidates by calibrated prediction, and the flown failures.
+fn elites(
+    screened: &[Screened],
+    done: &[FlightRecord],
+    units: &[[f64; DIMS]],
+    calibration: &Calibration,
+) -> Vec<([f64; DIMS], f64)> {
+    let mut order: Vec<&Screened> = screened.iter().collect();
+    order.sort_by(|a, b| {
+        calibration
+            .predict(a.min_distance)
+            .total_cmp(&calibration.predict(b.min_distance))
+            .then(a.candidate.cmp(&b.candidate))
+    });
+    let take = ((order.len() as f64 * ELITE_SHARE).ceil() as usize).max(1);
+    let mut out: Vec<([f64; DIMS], f64)> = order
+        .iter()
+        .take(take)
+        .filter_map(|s| units.get(s.candidate as usize).map(|u| (*u, 1.0)))
+        .collect();
+    // The flights are the truth: the closest quarter of them (and every failure) weigh more than a prediction.
+    let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.min_distance?))).collect();
+    flown.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
+    let closest = flown.len().div_ceil(4);
+    for (k, (r, d)) in flown.iter().enumerate() {
+        if (k < closest || *d < FAIL_M)
+            && let Some(u) = units.get(r.candidate as usize)
+        {
+            out.push((*u, FLOWN_FAILURE_WEIGHT));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(candidate: u64, raw: f64, flown: f64) -> FlightRecord {
+        FlightRecord {
+            candidate,
+            obstacles: Vec::new(),
+            predicted_min_distance: raw,
+            predicted_flight_time_s: 60.0,
+            predicted_p_fail: None,
+            predicted_raw_min_distance: Some(raw),
+            min_distance: Some(flown),
+            min_distance_raw: Some(flown),
+            status: "landed".into(),
+            flight_time_s: 60.0,
+            warnings: Vec::new(),
+            vehicle: "x".into(),
+            trajectory: "t.csv".into(),
+            wall_s: 1.0,
+        }
+    }
+
+    #[test]
+    fn calibration_replays_the_journal_and_elites_weigh_flown_failures() {
+        let done = vec![record(0, 1.0, 2.0), record(1, 1.0, 1.2)];
+        let c = calibrated(&Calibration::with_prior(0.0, 1.0), &done);
+        // (0 + 1.0 + 0.2) / (1 + 2)
+        assert!((c.bias_m() - 0.4).abs() < 1e-12);
+        let screened: Vec<Screened> = (0..10)
+            .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
+            .collect();
+        let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
+        let e = elites(&screened, &done, &units, &c);
+        // The best 20 % (candidates 0 and 1), then the closest quarter of the flights, which is also the one
+        // failure (candidate 1, 1.2 m), at weight 3.
+        assert_eq!(e.len(), 3);
+        assert_eq!(e[0], ([0.0; DIMS], 1.0));
+        assert_eq!(e[2], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
+    }
+
+    #[test]
+    fn a_bad_prior_file_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(load_prior(dir.path()).unwrap_err().to_string().contains("learnt.json"));
+        let mut l = Learnt {
+            calibration: Calibration::default(),
+            distribution: DrawDistribution::uniform(),
+            rounds: Vec::new(),
+        };
+        l.calibration.prior_flights = -3.0;
+        std::fs::write(dir.path().join("learnt.json"), serde_json::to_string(&l).unwrap()).unwrap();
+        let e = load_prior(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("learnt.json") && e.contains("prior_flights"), "{e}");
+    }
+}
