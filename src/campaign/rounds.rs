@@ -1,4 +1,5 @@
-//! The learning campaign: flights in [`ROUNDS`] rounds. Before each round the LFS is calibrated on every
+//! The learning campaign: flights in [`ROUNDS`] rounds (and up to [`EXTRA_ROUNDS`] more while near-duplicates
+//! left budget unflown). Before each round the LFS is calibrated on every
 //! flight so far ([`super::learn`]), the unflown candidates are re-ranked with the calibrated predictions and
 //! ensembles, and (with `adapt`) the round's new candidates come from a draw distribution moved towards the
 //! best candidates so far: the calibrated LFS as the surrogate, the flights as the truth.
@@ -27,12 +28,15 @@ use crate::judge::diversity;
 use crate::model::{ModelError, Obstacle, TestCase};
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
-pub const ROUNDS: usize = 4;
+pub const ROUNDS: usize = 8;
+/// Rounds added (each drawing as many candidates as a planned one) while the budget is not yet flown because
+/// the near-duplicate filter rejected the ranking's tail.
+pub const EXTRA_ROUNDS: usize = 2;
 /// Share of the screened candidates that are elites.
-pub const ELITE_SHARE: f64 = 0.2;
+pub const ELITE_SHARE: f64 = 0.1;
 /// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
 /// a prediction.
-pub const FLOWN_FAILURE_WEIGHT: f64 = 3.0;
+pub const FLOWN_FAILURE_WEIGHT: f64 = 5.0;
 /// How far each fit moves the distribution towards the elites'.
 pub const FIT_RATE: f64 = 0.7;
 /// Uniform mass every fitted draw keeps.
@@ -105,11 +109,21 @@ pub fn run_rounds(
     let mut rounds = Vec::new();
     let mut backoff = false;
     let mut calibration = start_calibration.clone();
-    for round in 0..ROUNDS {
-        let (lo, hi) = (
-            (cfg.candidates * round / ROUNDS) as u64,
-            (cfg.candidates * (round + 1) / ROUNDS) as u64,
-        );
+    let per_round = cfg.candidates.div_ceil(ROUNDS);
+    for round in 0..ROUNDS + EXTRA_ROUNDS {
+        // Past the planned rounds only while the near-duplicate filter left budget unflown.
+        if round >= ROUNDS && Journal::read(&journal_path)?.len() >= cfg.budget {
+            break;
+        }
+        let (lo, hi) = if round < ROUNDS {
+            (
+                (cfg.candidates * round / ROUNDS) as u64,
+                (cfg.candidates * (round + 1) / ROUNDS) as u64,
+            )
+        } else {
+            let lo = (cfg.candidates + (round - ROUNDS) * per_round) as u64;
+            (lo, lo + per_round as u64)
+        };
         let t = Instant::now();
         let generator = Generator::new(case, cfg.generator.clone(), cfg.seed)?.with_distribution(distribution.clone());
         for i in lo..hi {
@@ -151,7 +165,7 @@ pub fn run_rounds(
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = (cfg.budget * (round + 1) / ROUNDS).saturating_sub(done.len());
+        let remaining = (cfg.budget * (round + 1).min(ROUNDS) / ROUNDS).saturating_sub(done.len());
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
@@ -167,7 +181,7 @@ pub fn run_rounds(
         });
         ranked.truncate(remaining);
         progress.note(&format!(
-            "round {}/{ROUNDS}: {} candidates, LFS bias {bias:+.2} m learnt from {} flights; flying {}",
+            "round {} of {ROUNDS}: {} candidates, LFS bias {bias:+.2} m learnt from {} flights; flying {}",
             round + 1,
             hi - lo,
             done.len(),
@@ -328,11 +342,11 @@ mod tests {
             .collect();
         let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
         let e = elites(&screened, &done, &units, &c);
-        // The best 20 % (candidates 0 and 1), then the closest quarter of the flights, which is also the one
-        // failure (candidate 1, 1.2 m), at weight 3.
-        assert_eq!(e.len(), 3);
+        // The best 10 % (candidate 0), then the closest quarter of the flights, which is also the one failure
+        // (candidate 1, 1.2 m), at the flights' weight.
+        assert_eq!(e.len(), 2);
         assert_eq!(e[0], ([0.0; DIMS], 1.0));
-        assert_eq!(e[2], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
+        assert_eq!(e[1], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
     }
 
     #[test]

@@ -323,7 +323,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     .unwrap();
     assert_eq!(r.suite.flown, 12);
     let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
-    assert_eq!(learnt.rounds.len(), crate::campaign::rounds::ROUNDS);
+    assert!(learnt.rounds.len() >= crate::campaign::rounds::ROUNDS);
     // The scripted vehicle flies 0.2 m farther than predicted: the bias goes there, shrunk by the prior.
     let bias = learnt.calibration.bias_m();
     assert!((bias - 0.2 * 12.0 / 13.0).abs() < 1e-9, "{bias}");
