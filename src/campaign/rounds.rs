@@ -16,11 +16,14 @@ use std::time::Instant;
 
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
-use super::pool::{Job, Vehicle, fly_all};
-use super::rank::{Screened, rank};
+use super::pool::Vehicle;
+use super::rank::Screened;
 use super::report::StageTimes;
-use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
-use super::stages::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
+use super::run::{CampaignConfig, CampaignError, Progress, Screener};
+use super::stages::{
+    ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
+    screen_all,
+};
 use crate::generator::Generator;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::io::write_atomic;
@@ -172,14 +175,7 @@ pub fn run_rounds(
             apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), bias);
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
-        let mut ranked = rank(&fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
-        ranked.retain(|s| {
-            !done
-                .iter()
-                .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
-        });
-        ranked.truncate(remaining);
+        let ranked = rank_unflown(&fresh, &done, &candidates, cfg, remaining);
         progress.note(&format!(
             "round {} of {ROUNDS}: {} candidates, LFS bias {bias:+.2} m learnt from {} flights; flying {}",
             round + 1,
@@ -188,44 +184,14 @@ pub fn run_rounds(
             ranked.len()
         ));
         let t = Instant::now();
-        let jobs: Vec<Job> = ranked
-            .into_iter()
-            .map(|s| Job {
-                test: case.with_obstacles(candidates[s.candidate as usize].clone()),
-                screened: s,
-            })
-            .collect();
-        let flights = if jobs.is_empty() {
-            0
-        } else {
-            let outcome = fly_all(
-                vehicles,
-                jobs,
-                remaining,
-                folder,
-                Journal::open(&journal_path)?,
-                cancel,
-                &|r: &FlightRecord| {
-                    progress.note(&format!(
-                        "flight: candidate {} predicted {:.2} m, flew {} ({})",
-                        r.candidate,
-                        r.predicted_min_distance,
-                        r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
-                        r.status
-                    ))
-                },
-            );
-            for d in &outcome.dropped {
-                progress.note(&format!("dropped {d}"));
-            }
-            if let Some(e) = outcome.errors.first() {
-                return Err(CampaignError::Config(format!("journal: {e}")));
-            }
-            if outcome.flown == 0 && vehicles.is_empty() {
-                return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
-            }
-            outcome.flown
+        let flight = FlightStage {
+            case,
+            candidates: &candidates,
+            folder,
+            progress,
+            cancel,
         };
+        let flights = fly_ranked(&flight, ranked, vehicles, remaining)?;
         stages.fly_s += t.elapsed().as_secs_f64();
         rounds.push(RoundLog {
             round,

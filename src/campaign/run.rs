@@ -7,12 +7,15 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::journal::{FlightRecord, Journal};
-use super::pool::{Job, Vehicle, fly_all};
-use super::rank::{Screened, rank};
+use super::journal::Journal;
+use super::pool::Vehicle;
+use super::rank::Screened;
 use super::report::{Report, StageTimes, write_outputs};
 use super::rounds::{RoundsInput, run_rounds};
-use super::stages::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
+use super::stages::{
+    ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
+    screen_all,
+};
 use crate::generator::{DrawDistribution, GenerateError, Generator, GeneratorConfig};
 use crate::io::write_atomic;
 use crate::judge::Judge;
@@ -282,15 +285,7 @@ pub fn run_campaign(
         apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), 0.0);
         stages.ensemble_s = t.elapsed().as_secs_f64();
     }
-    let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
-    // Diversity against what was already flown: start the ranking from the journal's tests.
-    let mut ranked = rank(&fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
-    ranked.retain(|s| {
-        !done
-            .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
-    });
-    ranked.truncate(remaining);
+    let ranked = rank_unflown(&fresh, &done, &candidates, cfg, remaining);
     if !done.is_empty() {
         progress.note(&format!(
             "resuming: {} flights already journaled, {} left in the budget",
@@ -307,52 +302,14 @@ pub fn run_campaign(
     ));
 
     let t = Instant::now();
-    let jobs: Vec<Job> = ranked
-        .into_iter()
-        .map(|s| Job {
-            test: case.with_obstacles(candidates[s.candidate as usize].clone()),
-            screened: s,
-        })
-        .collect();
-    progress.stage("fly", jobs.len());
-    let count = std::sync::atomic::AtomicUsize::new(0);
-    let on_flight = |r: &FlightRecord| {
-        let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        progress.tick(n);
-        progress.note(&format!(
-            "flight {n}: candidate {} predicted {:.2} m, flew {} ({})",
-            r.candidate,
-            r.predicted_min_distance,
-            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
-            r.status
-        ));
-        for w in &r.warnings {
-            progress.note(&format!("  warning: {w}"));
-        }
+    let flight = FlightStage {
+        case: &case,
+        candidates: &candidates,
+        folder,
+        progress,
+        cancel,
     };
-    let want = jobs.len();
-    let outcome = if want == 0 {
-        Default::default()
-    } else {
-        fly_all(
-            &mut vehicles,
-            jobs,
-            remaining,
-            folder,
-            Journal::open(&journal_path)?,
-            cancel,
-            &on_flight,
-        )
-    };
-    for d in &outcome.dropped {
-        progress.note(&format!("dropped {d}"));
-    }
-    if let Some(e) = outcome.errors.first() {
-        return Err(CampaignError::Config(format!("journal: {e}")));
-    }
-    if want > 0 && outcome.flown == 0 && !outcome.dropped.is_empty() {
-        return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
-    }
+    fly_ranked(&flight, ranked, &mut vehicles, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
 
     let records = Journal::read(&journal_path)?;

@@ -9,9 +9,11 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::journal::{FlightRecord, Journal};
 use super::parallel::{available_threads, parallel_map};
-use super::rank::Screened;
-use super::run::{CampaignConfig, CampaignError, Progress, Screener};
+use super::pool::{Job, Vehicle, fly_all};
+use super::rank::{Screened, rank};
+use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
 use crate::generator::DrawDistribution;
 use crate::io::write_atomic;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
@@ -177,4 +179,95 @@ pub fn member_seed(seed: u64, c: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
+/// most `remaining`.
+pub fn rank_unflown(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Vec<Obstacle>],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Vec<Screened> {
+    let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
+    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
+    });
+    ranked.truncate(remaining);
+    ranked
+}
+
+/// What the flight stage reads.
+pub struct FlightStage<'a> {
+    /// The case study.
+    pub case: &'a TestCase,
+    /// Every candidate drawn so far, by index.
+    pub candidates: &'a [Vec<Obstacle>],
+    /// The campaign folder (journal, trajectories).
+    pub folder: &'a Path,
+    /// Progress output.
+    pub progress: &'a dyn Progress,
+    /// Stops the flights (vehicles in the air land).
+    pub cancel: &'a AtomicBool,
+}
+
+/// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made.
+/// A journal error stops the campaign; so does a fleet that flew nothing because every vehicle was dropped.
+pub fn fly_ranked(
+    ctx: &FlightStage,
+    ranked: Vec<Screened>,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    remaining: usize,
+) -> Result<usize, CampaignError> {
+    let jobs: Vec<Job> = ranked
+        .into_iter()
+        .map(|s| Job {
+            test: ctx.case.with_obstacles(ctx.candidates[s.candidate as usize].clone()),
+            screened: s,
+        })
+        .collect();
+    if jobs.is_empty() {
+        return Ok(0);
+    }
+    let progress = ctx.progress;
+    progress.stage("fly", jobs.len());
+    let count = std::sync::atomic::AtomicUsize::new(0);
+    let on_flight = |r: &FlightRecord| {
+        let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress.tick(n);
+        progress.note(&format!(
+            "flight {n}: candidate {} predicted {:.2} m, flew {} ({})",
+            r.candidate,
+            r.predicted_min_distance,
+            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
+            r.status
+        ));
+        for w in &r.warnings {
+            progress.note(&format!("  warning: {w}"));
+        }
+    };
+    let journal_path = ctx.folder.join("journal.jsonl");
+    let outcome = fly_all(
+        vehicles,
+        jobs,
+        remaining,
+        ctx.folder,
+        Journal::open(&journal_path)?,
+        ctx.cancel,
+        &on_flight,
+    );
+    for d in &outcome.dropped {
+        progress.note(&format!("dropped {d}"));
+    }
+    if let Some(e) = outcome.errors.first() {
+        return Err(CampaignError::Config(format!("journal: {e}")));
+    }
+    if outcome.flown == 0 && !outcome.dropped.is_empty() {
+        return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
+    }
+    Ok(outcome.flown)
 }

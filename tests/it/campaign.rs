@@ -243,6 +243,18 @@ fn bad_input_fails_fast_and_clearly() {
     ]);
     assert_eq!(code, 2);
     assert!(err.contains("nope.yaml"), "{err}");
+    // A prior folder without learnt.json: refused before anything is sampled, naming the file.
+    let (code, _, err) = prgenuav(&[
+        "generate",
+        "missions/mission2.yaml",
+        "2",
+        "--prior",
+        out.path().to_str().unwrap(),
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("learnt.json"), "{err}");
     // Nobody sends to this port: no reachable vehicle, a clear error within the connect timeout.
     let dead = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
