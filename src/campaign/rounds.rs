@@ -7,8 +7,9 @@
 //! The adaptation is a univariate marginal distribution algorithm ([`crate::generator::adaptive`]): elites are
 //! the best [`ELITE_SHARE`] of the screened candidates by calibrated prediction, plus the closest quarter of the
 //! flights and every flown failure at [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
-//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor, the next
-//! fit backs off (more uniform mass, a smaller step).
+//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor, or a round
+//! could not fill its share of the budget (its candidates were near-duplicates of flown tests), the fit backs off
+//! (more uniform mass, a smaller step).
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -34,7 +35,7 @@ use crate::model::{ModelError, Obstacle, TestCase};
 pub const ROUNDS: usize = 8;
 /// Rounds added (each drawing as many candidates as a planned one) while the budget is not yet flown because
 /// the near-duplicate filter rejected the ranking's tail.
-pub const EXTRA_ROUNDS: usize = 2;
+pub const EXTRA_ROUNDS: usize = 4;
 /// Share of the screened candidates that are elites.
 pub const ELITE_SHARE: f64 = 0.1;
 /// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
@@ -44,7 +45,8 @@ pub const FLOWN_FAILURE_WEIGHT: f64 = 5.0;
 pub const FIT_RATE: f64 = 0.7;
 /// Uniform mass every fitted draw keeps.
 pub const UNIFORM_FLOOR: f64 = 0.2;
-/// The backed-off fit when diversity is below the floor.
+/// The backed-off fit (rate, uniform floor) when the failures' diversity is below the user's floor or a round
+/// could not fill its share of the budget.
 const BACKOFF: (f64, f64) = (0.3, 0.5);
 /// Below this, a flown test failed.
 const FAIL_M: f64 = 1.5;
@@ -110,7 +112,6 @@ pub fn run_rounds(
     let mut units: Vec<[f64; DIMS]> = Vec::new();
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
-    let mut backoff = false;
     let mut calibration = start_calibration.clone();
     let per_round = cfg.candidates.div_ceil(ROUNDS);
     for round in 0..ROUNDS + EXTRA_ROUNDS {
@@ -208,14 +209,17 @@ pub fn run_rounds(
         let done = Journal::read(&journal_path)?;
         calibration = calibrated(&start_calibration, &done);
         if cfg.adapt {
-            let (rate, floor) = if backoff { BACKOFF } else { (FIT_RATE, UNIFORM_FLOOR) };
-            distribution = distribution.fitted(&elites(&screened, &done, &units, &calibration), rate, floor);
+            // Back off when the failures grow alike, or when the round could not fill its share of the budget
+            // (a narrow distribution's candidates are near-duplicates of the flown tests).
             let failing: Vec<Vec<Obstacle>> = done
                 .iter()
                 .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_M))
                 .map(|r| r.obstacles.clone())
                 .collect();
-            backoff = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
+            let starved = flights < remaining;
+            let backoff = starved || diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
+            let (rate, floor) = if backoff { BACKOFF } else { (FIT_RATE, UNIFORM_FLOOR) };
+            distribution = distribution.fitted(&elites(&screened, &done, &units, &calibration), rate, floor);
         }
         stages.learn_s += t.elapsed().as_secs_f64();
     }
