@@ -285,7 +285,12 @@ mod tests {
 
     #[test]
     fn empty_memory_keeps_the_previous_path() {
-        let mut p = Planner::new(PlannerParams::default()).unwrap();
+        // The fixed camera FOV: an estimate from the wall alone would be 0 deg tall, and the wall remembered.
+        let mut p = Planner::new(PlannerParams {
+            fov_estimate: FovEstimate::Fixed,
+            ..Default::default()
+        })
+        .unwrap();
         let goal = Vector3::new(0.0, 30.0, 5.0);
         let input = PlanInput {
             state: state(Vector3::new(0.0, 0.0, 5.0)),
@@ -315,7 +320,11 @@ mod tests {
 
     #[test]
     fn estimated_fov_starts_at_zero_and_grows_from_frames() {
-        let fixed = Planner::new(PlannerParams::default()).unwrap();
+        let fixed = Planner::new(PlannerParams {
+            fov_estimate: FovEstimate::Fixed,
+            ..Default::default()
+        })
+        .unwrap();
         assert_eq!(fixed.fovs(), PlannerParams::default().fovs.as_slice());
         let mut p = Planner::new(PlannerParams {
             fov_estimate: FovEstimate::FromMaxima,
