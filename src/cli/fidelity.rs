@@ -1,4 +1,5 @@
-//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N] [--ensemble N [--seed S]] [--cv K [--cv-seed S]]`:
+//! `prgenuav fidelity DIR [--motion paper|px4] [--json] [--jobs N] [--ensemble N [--seed S]] [--cv K [--cv-seed S]]
+//! [--fov-estimate fixed|maxima]`:
 //! simulated vs real minimum distances; with `--ensemble`, a failure probability per case (AUC, Brier); with
 //! `--cv`, the cross-validated figure of the fitted constants beside the in-sample one.
 
@@ -9,6 +10,7 @@ use anyhow::bail;
 use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_sets, predict_grid};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
 use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FlightCase, evaluate_with, load_dir};
+use prgenuav::lfs::fov_estimate::FovEstimate;
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 
 /// Arguments of `fidelity`.
@@ -39,6 +41,10 @@ pub struct Args {
     /// Seed of the ensembles' perturbations.
     #[arg(long, default_value_t = 0, requires = "ensemble")]
     seed: u64,
+    /// Camera FOV of the planner: fixed (the pinhole span) or maxima (estimated from each frame's extreme points,
+    /// as PX4-Avoidance does). Default: the planner's default.
+    #[arg(long, value_name = "fixed|maxima")]
+    fov_estimate: Option<String>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -77,6 +83,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         n,
         seed: args.seed,
     });
+    let mut base = SimConfig::default();
+    if let Some(name) = &args.fov_estimate {
+        let Some(e) = FovEstimate::by_name(name) else {
+            bail!("--fov-estimate {name:?}: use fixed or maxima");
+        };
+        base.planner.fov_estimate = e;
+    }
     let (cases, skipped) = load_dir(&args.dir)?;
     if cases.is_empty() {
         bail!(
@@ -85,12 +98,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     if let Some(k) = args.cv {
-        return run_cv(&args, &cases, k);
+        return run_cv(&args, &cases, &base, k);
     }
-    let config = SimConfig {
-        motion,
-        ..Default::default()
-    };
+    let config = SimConfig { motion, ..base };
     let report = evaluate_with(&cases, skipped, &config, spec.as_ref(), args.jobs);
     if args.json {
         super::print_json(&report)?;
@@ -138,7 +148,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn run_cv(args: &Args, cases: &[FlightCase], k: usize) -> anyhow::Result<ExitCode> {
+fn run_cv(args: &Args, cases: &[FlightCase], base: &SimConfig, k: usize) -> anyhow::Result<ExitCode> {
     let Some(grid) = default_grid(&args.motion) else {
         bail!("unknown motion model {:?} (use paper or px4)", args.motion);
     };
@@ -155,7 +165,7 @@ fn run_cv(args: &Args, cases: &[FlightCase], k: usize) -> anyhow::Result<ExitCod
         cases.len(),
         sets
     );
-    let preds = predict_grid(cases, &grid, args.jobs);
+    let preds = predict_grid(cases, &grid, base, args.jobs);
     let truth = Truth::of(cases);
     let Some(report) = cross_validate(&grid, &preds, &truth, &folds, k, args.cv_seed, sets) else {
         bail!("no grid point predicted the training flights of every fold (every simulation failed?)");

@@ -130,12 +130,12 @@ pub fn assign_folds(cases: &[FlightCase], k: usize, seed: u64) -> Option<Vec<usi
 
 /// Predictions of every grid point for every case (`[point][case]`, the tier's definition; `None` where the
 /// simulation could not run), simulated on up to `jobs` threads.
-pub fn predict_grid(cases: &[FlightCase], grid: &[GridPoint], jobs: usize) -> Vec<Vec<Option<f64>>> {
+pub fn predict_grid(cases: &[FlightCase], grid: &[GridPoint], base: &SimConfig, jobs: usize) -> Vec<Vec<Option<f64>>> {
     grid.iter()
         .map(|g| {
             let config = SimConfig {
                 motion: g.motion,
-                ..SimConfig::default()
+                ..base.clone()
             };
             evaluate(cases, Vec::new(), &config, jobs)
                 .cases

@@ -6,7 +6,7 @@
 use super::polar::{PolarDeg, wrap_180};
 
 /// One camera's field of view in the body frame (degrees).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Fov {
     /// Azimuth of the optical axis, counter-clockwise from body forward, degrees.
     pub yaw_deg: f32,

@@ -13,6 +13,7 @@ pub mod cv;
 pub mod ensemble;
 pub mod fidelity;
 pub mod fov;
+pub mod fov_estimate;
 pub mod frames;
 pub mod histogram;
 pub mod mission;

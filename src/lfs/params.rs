@@ -2,6 +2,7 @@
 
 use super::LfsError;
 use super::fov::Fov;
+use super::fov_estimate::FovEstimate;
 
 /// Weights of the per-direction cost function (3dvfh.md §5.2). Defaults are the dynamic-reconfigure (cfg) values,
 /// which overwrite the C++ struct defaults at start-up.
@@ -63,8 +64,11 @@ pub struct PlannerParams {
     pub tree_node_distance_m: f32,
     /// Heuristic weight per metre to the goal (35).
     pub tree_heuristic_weight: f32,
-    /// Camera FOVs in the body frame (one per camera).
+    /// Camera FOVs in the body frame (one per camera); with [`FovEstimate::FromMaxima`] the planner starts them
+    /// at zero and widens the first from each frame.
     pub fovs: Vec<Fov>,
+    /// Whether `fovs` stay fixed or are estimated from the clouds as the original does.
+    pub fov_estimate: FovEstimate,
     /// PX4 MPC_XY_CRUISE in m/s (5 in PX4 and the competition's `iris_obs_avoid` airframe).
     pub mpc_xy_cruise_m_s: f32,
     /// PX4 MPC_ACC_HOR in m/s^2 (PX4 default 3), for the sensor-range speed limit.
@@ -90,6 +94,7 @@ impl Default for PlannerParams {
             tree_heuristic_weight: 35.0,
             // The competition's HFS camera: 640 x 480 at 59 deg (1.02974 rad) horizontal FOV.
             fovs: vec![Fov::from_pinhole(640, 480, 59.0)],
+            fov_estimate: FovEstimate::default(),
             mpc_xy_cruise_m_s: 5.0,
             mpc_acc_hor_m_s2: 3.0,
             mpc_jerk_max_m_s3: 8.0,

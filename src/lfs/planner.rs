@@ -5,6 +5,8 @@ use nalgebra::{Vector2, Vector3};
 
 use super::LfsError;
 use super::cloud::{CloudPose, PointMemory};
+use super::fov::Fov;
+use super::fov_estimate::{BodyPose, FovEstimate, update_from_cloud};
 use super::histogram::{Histogram, HistogramScratch};
 use super::params::PlannerParams;
 use super::polar::RAD_TO_DEG;
@@ -81,12 +83,17 @@ pub struct Planner {
     hist_scratch: HistogramScratch,
     plan: Plan,
     closest_pt: Option<Vector3<f32>>,
+    optical_scratch: Vec<Vector3<f32>>,
 }
 
 impl Planner {
     /// A planner with validated parameters.
-    pub fn new(params: PlannerParams) -> Result<Self, LfsError> {
+    pub fn new(mut params: PlannerParams) -> Result<Self, LfsError> {
         params.validate()?;
+        if params.fov_estimate == FovEstimate::FromMaxima {
+            // The original's FOV() before the first cloud: nothing is inside it.
+            params.fovs.iter_mut().for_each(|f| *f = Fov::default());
+        }
         let cruise = params.cruise_speed_m_s();
         Ok(Self {
             params,
@@ -99,7 +106,13 @@ impl Planner {
                 ..Plan::default()
             },
             closest_pt: None,
+            optical_scratch: Vec::new(),
         })
+    }
+
+    /// The camera FOVs in use (the current estimate with [`FovEstimate::FromMaxima`]).
+    pub fn fovs(&self) -> &[Fov] {
+        &self.params.fovs
     }
 
     /// The parameters in use.
@@ -121,6 +134,18 @@ impl Planner {
                 name: "elapsed_s",
                 detail: format!("{elapsed_s} is not >= 0"),
             });
+        }
+        // The original widens the FOV in the cloud's transform thread, before the planner processes that cloud.
+        // One merged cloud comes in, so only a single camera's FOV can be estimated.
+        if self.params.fov_estimate == FovEstimate::FromMaxima
+            && let [fov] = self.params.fovs.as_mut_slice()
+        {
+            let body = BodyPose {
+                position_enu: state.position_enu,
+                yaw_enu_rad: state.yaw_enu_rad,
+                pitch_rad: state.pitch_rad,
+            };
+            update_from_cloud(fov, points_enu, &body, &mut self.optical_scratch);
         }
         let pose = CloudPose {
             position_enu: state.position_enu,
@@ -260,7 +285,12 @@ mod tests {
 
     #[test]
     fn empty_memory_keeps_the_previous_path() {
-        let mut p = Planner::new(PlannerParams::default()).unwrap();
+        // The fixed camera FOV: an estimate from the wall alone would be 0 deg tall, and the wall remembered.
+        let mut p = Planner::new(PlannerParams {
+            fov_estimate: FovEstimate::Fixed,
+            ..Default::default()
+        })
+        .unwrap();
         let goal = Vector3::new(0.0, 30.0, 5.0);
         let input = PlanInput {
             state: state(Vector3::new(0.0, 0.0, 5.0)),
@@ -286,6 +316,44 @@ mod tests {
         assert!(!again.replanned);
         assert_eq!(again.path_enu, plan.path_enu);
         assert_eq!(again.path_time_s, Some(1.1));
+    }
+
+    #[test]
+    fn estimated_fov_starts_at_zero_and_grows_from_frames() {
+        let fixed = Planner::new(PlannerParams {
+            fov_estimate: FovEstimate::Fixed,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(fixed.fovs(), PlannerParams::default().fovs.as_slice());
+        let mut p = Planner::new(PlannerParams {
+            fov_estimate: FovEstimate::FromMaxima,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(p.fovs(), &[Fov::default()]);
+        // Facing North at 5 m: a point 10 m ahead level, one 10 m ahead and 10 m East (45 deg right), one on
+        // the ground straight ahead (26.6 deg below).
+        let s = state(Vector3::new(0.0, 0.0, 5.0));
+        let pts = [
+            Vector3::new(0.0, 10.0, 5.0),
+            Vector3::new(10.0, 10.0, 5.0),
+            Vector3::new(0.0, 10.0, 0.0),
+        ];
+        p.update_cloud(&pts, &s, 0.1).unwrap();
+        let f = p.fovs()[0];
+        assert!(
+            (f.h_fov_deg - 45.0).abs() < 1e-3 && (f.yaw_deg + 22.5).abs() < 1e-3,
+            "{f:?}"
+        );
+        let below = 0.5f32.atan().to_degrees();
+        assert!(
+            (f.v_fov_deg - below).abs() < 1e-3 && (f.pitch_deg - below / 2.0).abs() < 1e-3,
+            "{f:?}"
+        );
+        // An empty frame leaves it as it is.
+        p.update_cloud(&[], &s, 0.1).unwrap();
+        assert_eq!(p.fovs()[0], f);
     }
 
     #[test]

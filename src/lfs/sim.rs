@@ -96,6 +96,7 @@ impl World {
         }
         let mut params = config.planner.clone();
         params.fovs = vec![config.camera.fov()];
+        // With the data-driven FOV the planner starts it at zero and widens it from each rendered frame.
         // PX4-Avoidance reads MPC_XY_CRUISE from the vehicle; the case's parameters are what the vehicle has.
         if let Some(v) = cruise_param(px4_params) {
             params.mpc_xy_cruise_m_s = v;
@@ -247,6 +248,7 @@ impl World {
                         }
                     }
                     MotionState::Px4(_, wg) => {
+                        wg.set_fovs(self.planner.fovs());
                         let input = WaypointInput {
                             state,
                             goal_enu: f32v(&goal),

@@ -70,7 +70,8 @@ pub struct SimConfig {
     pub camera: Camera,
     /// Camera pitch from the vehicle's acceleration and drag ([`super::attitude`]); `None` = level camera.
     pub tilt: Option<TiltParams>,
-    /// Planner parameters (its FOV is replaced by the camera's).
+    /// Planner parameters (its FOV is replaced by the camera's; with `fov_estimate` `FromMaxima` the planner then
+    /// starts it at zero and widens it from the frames).
     pub planner: PlannerParams,
     /// Mission parameters; `None` = PX4 defaults overridden by the test's parameters.
     pub mission: Option<MissionParams>,

@@ -144,3 +144,24 @@ fn tilted_camera_keeps_the_fast_render_and_passes_the_pitch_on() {
     assert!(max_pitch > 1f64.to_radians(), "{}", max_pitch.to_degrees());
     assert_eq!(w.full_renders(), 0);
 }
+
+#[test]
+fn estimated_fov_is_narrow_and_low_after_a_ground_only_takeoff() {
+    let config = SimConfig {
+        motion: MotionModel::by_name("px4").unwrap(),
+        planner: crate::lfs::PlannerParams {
+            fov_estimate: crate::lfs::fov_estimate::FovEstimate::FromMaxima,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut w = World::new(&mission(1), config).unwrap();
+    while w.mission().phase() != crate::lfs::mission::Phase::Cruise {
+        assert!(step(&mut w, 0.1).is_none());
+    }
+    let f = w.planner().fovs()[0];
+    assert!((f.h_fov_deg - 58.9).abs() < 0.3, "{f:?}");
+    assert!(f.v_fov_deg < 25.0 && f.pitch_deg > 8.0, "{f:?}");
+    let r = simulate(&mission(1), w.config()).unwrap();
+    assert_eq!(r.status, Status::Landed);
+}

@@ -219,6 +219,12 @@ impl WaypointGenerator {
         Self::new(fovs, 10.0, 3.0)
     }
 
+    /// Replaces the camera FOVs (the original hands the planner's estimate over every planner cycle).
+    pub fn set_fovs(&mut self, fovs: &[Fov]) {
+        self.fovs.clear();
+        self.fovs.extend_from_slice(fovs);
+    }
+
     /// Current state.
     pub fn state(&self) -> WaypointState {
         self.state

@@ -122,6 +122,7 @@ impl Steer for PlannerSteer {
             Nav::Offboard => NavState::Offboard,
             Nav::Other => NavState::AutoLoiter,
         };
+        self.generator.set_fovs(self.planner.fovs());
         let out = self.generator.step(
             &WaypointInput {
                 state,
