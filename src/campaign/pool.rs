@@ -333,12 +333,14 @@ mod tests {
     fn unreachable_vehicles_leave_the_fleet_and_the_others_fly_the_next_round() {
         let dir = tempfile::tempdir().unwrap();
         let log = Arc::new(Mutex::new(Vec::new()));
+        // The live vehicle waits until the dead one was tried, so the dead one surely gets a job.
+        let dead_tried = Some(Arc::new(AtomicBool::new(false)));
         let fake = |name, reachable| {
             Box::new(Fake {
                 name,
                 reachable,
                 log: log.clone(),
-                dead_tried: None,
+                dead_tried: dead_tried.clone(),
             }) as Box<dyn Vehicle>
         };
         let mut fleet = vec![fake("dead", false), fake("ok", true)];

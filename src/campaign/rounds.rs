@@ -108,6 +108,13 @@ pub fn run_rounds(
         _ => DrawDistribution::uniform(),
     };
     let journal_path = folder.join("journal.jsonl");
+    let resumed = Journal::read(&journal_path)?.len();
+    if resumed > 0 {
+        progress.note(&format!(
+            "resuming: {resumed} flights already journaled, {} left in the budget",
+            cfg.budget.saturating_sub(resumed)
+        ));
+    }
     let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
     let mut units: Vec<[f64; DIMS]> = Vec::new();
     let mut screened: Vec<Screened> = Vec::new();
