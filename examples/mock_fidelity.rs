@@ -29,20 +29,8 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
     let mut test = base.with_obstacles(case.obstacles.clone());
     test.params = case.params.clone();
     // EXTRA_PARAMS=NAME=VALUE,... sets more vehicle parameters (experiments: what would move the mock closer).
-    for kv in std::env::var("EXTRA_PARAMS")
-        .unwrap_or_default()
-        .split(',')
-        .filter(|s| !s.is_empty())
-    {
-        let (name, value) = kv
-            .split_once('=')
-            .ok_or_else(|| anyhow::anyhow!("EXTRA_PARAMS: {kv:?} is not NAME=VALUE"))?;
-        test.params.retain(|p| p.name != name);
-        test.params.push(prgenuav::model::Param {
-            name: name.to_string(),
-            value: value.parse()?,
-        });
-    }
+    prgenuav::model::Param::override_from_list(&mut test.params, &std::env::var("EXTRA_PARAMS").unwrap_or_default())
+        .map_err(|e| anyhow::anyhow!("EXTRA_PARAMS: {e}"))?;
     let mock = mock_builder(FlyMode::Avoidance)
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
         .speed_factor(SpeedFactor::Times(speed))

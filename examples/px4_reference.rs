@@ -33,20 +33,8 @@ fn test_of(case: &FlightCase) -> anyhow::Result<TestCase> {
     let mut test = base.with_obstacles(case.obstacles.clone());
     test.params = case.params.clone();
     // EXTRA_PARAMS=NAME=VALUE,...: more vehicle parameters (experiments on what moves PX4 towards the recorded flights).
-    for kv in std::env::var("EXTRA_PARAMS")
-        .unwrap_or_default()
-        .split(',')
-        .filter(|s| !s.is_empty())
-    {
-        let (name, value) = kv
-            .split_once('=')
-            .ok_or_else(|| anyhow::anyhow!("EXTRA_PARAMS: {kv:?} is not NAME=VALUE"))?;
-        test.params.retain(|p| p.name != name);
-        test.params.push(prgenuav::model::Param {
-            name: name.to_string(),
-            value: value.parse()?,
-        });
-    }
+    prgenuav::model::Param::override_from_list(&mut test.params, &std::env::var("EXTRA_PARAMS").unwrap_or_default())
+        .map_err(|e| anyhow::anyhow!("EXTRA_PARAMS: {e}"))?;
     Ok(test)
 }
 

@@ -242,15 +242,15 @@ pub fn run_campaign(
     stages.sample_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
+    let ctx = Stage {
+        case: &case,
+        candidates: &candidates,
+        folder,
+        screener,
+        progress,
+        cancel,
+    };
     let screened = if cfg.screen {
-        let ctx = Stage {
-            case: &case,
-            candidates: &candidates,
-            folder,
-            screener,
-            progress,
-            cancel,
-        };
         screen_all(
             &ctx,
             0..candidates.len() as u64,
@@ -273,14 +273,6 @@ pub fn run_campaign(
     if cfg.screen && cfg.ensemble > 0 {
         let t = Instant::now();
         let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
-        let ctx = Stage {
-            case: &case,
-            candidates: &candidates,
-            folder,
-            screener,
-            progress,
-            cancel,
-        };
         let members = ensemble_shortlist(&ctx, &fresh, cfg, shortlist)?;
         apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), 0.0);
         stages.ensemble_s = t.elapsed().as_secs_f64();

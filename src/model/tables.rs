@@ -15,6 +15,24 @@ pub struct Param {
     pub value: f64,
 }
 
+impl Param {
+    /// Overrides (or adds) parameters from `NAME=VALUE,NAME=VALUE` (an experiment's command-line list);
+    /// the error names the item that is not `NAME=number`.
+    pub fn override_from_list(params: &mut Vec<Param>, list: &str) -> std::result::Result<(), String> {
+        for kv in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let (name, value) = kv.split_once('=').ok_or_else(|| format!("{kv:?} is not NAME=VALUE"))?;
+            let value: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| format!("{kv:?}: the value is not a number"))?;
+            let name = name.trim().to_string();
+            params.retain(|p| p.name != name);
+            params.push(Param { name, value });
+        }
+        Ok(())
+    }
+}
+
 /// One Aerialist command: at `timestamp_us` switch to `mode` (3 = Mission: arm and start the mission).
 ///
 /// `x, y, z, r` are Aerialist's manual-setpoint fields (stick units, used only by `mode` 100).
@@ -149,6 +167,24 @@ pub(crate) fn command_from(v: [f64; 6]) -> std::result::Result<Command, String> 
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_parameter_list_overrides_and_adds_and_names_a_bad_item() {
+        let mut p = vec![Param {
+            name: "MPC_XY_VEL_MAX".into(),
+            value: 12.0,
+        }];
+        Param::override_from_list(&mut p, "MPC_XY_VEL_MAX=1.0, COM_OBS_AVOID=1").unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].name, "MPC_XY_VEL_MAX");
+        assert_eq!(p[0].value, 1.0);
+        assert!(Param::override_from_list(&mut p, "X").unwrap_err().contains("\"X\""));
+        assert!(
+            Param::override_from_list(&mut p, "X=fast")
+                .unwrap_err()
+                .contains("number")
+        );
+    }
     use super::*;
 
     #[test]
