@@ -258,6 +258,17 @@ mod tests {
         .unwrap()
     }
 
+    type Log = Arc<Mutex<Vec<(String, u64)>>>;
+
+    fn fake(name: &'static str, reachable: bool, log: &Log, dead_tried: &Option<Arc<AtomicBool>>) -> Box<dyn Vehicle> {
+        Box::new(Fake {
+            name,
+            reachable,
+            log: log.clone(),
+            dead_tried: dead_tried.clone(),
+        })
+    }
+
     fn jobs(n: u64) -> Vec<Job> {
         let base = test_case();
         (0..n)
@@ -284,14 +295,7 @@ mod tests {
         let dead_tried = wait_for_dead.then(|| Arc::new(AtomicBool::new(false)));
         let mut v: Vec<Box<dyn Vehicle>> = vehicles
             .into_iter()
-            .map(|(name, reachable)| {
-                Box::new(Fake {
-                    name,
-                    reachable,
-                    log: log.clone(),
-                    dead_tried: dead_tried.clone(),
-                }) as Box<dyn Vehicle>
-            })
+            .map(|(name, reachable)| fake(name, reachable, &log, &dead_tried))
             .collect();
         let journal = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
         let out = fly_all(
@@ -335,15 +339,10 @@ mod tests {
         let log = Arc::new(Mutex::new(Vec::new()));
         // The live vehicle waits until the dead one was tried, so the dead one surely gets a job.
         let dead_tried = Some(Arc::new(AtomicBool::new(false)));
-        let fake = |name, reachable| {
-            Box::new(Fake {
-                name,
-                reachable,
-                log: log.clone(),
-                dead_tried: dead_tried.clone(),
-            }) as Box<dyn Vehicle>
-        };
-        let mut fleet = vec![fake("dead", false), fake("ok", true)];
+        let mut fleet = vec![
+            fake("dead", false, &log, &dead_tried),
+            fake("ok", true, &log, &dead_tried),
+        ];
         let journal = || Journal::open(&dir.path().join("journal.jsonl")).unwrap();
         let no_stop = AtomicBool::new(false);
         let first = fly_all(&mut fleet, jobs(2), 2, dir.path(), journal(), &no_stop, &|_| {});

@@ -8,6 +8,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::journal::Journal;
+use super::learn::Learnt;
 use super::pool::Vehicle;
 use super::rank::Screened;
 use super::report::{Report, StageTimes, write_outputs};
@@ -205,18 +206,10 @@ pub fn run_campaign(
     let config_json = serde_json::to_string_pretty(cfg).unwrap_or_default();
     write_atomic(&folder.join("campaign.json"), config_json.as_bytes())?;
     let mut stages = StageTimes::default();
-    if cfg.learn && cfg.screen {
-        let input = RoundsInput {
-            cfg,
-            folder,
-            case: &case,
-            screener,
-            progress,
-            cancel,
-        };
-        let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
+    // Both campaigns end the same way: the journal's flights written out as tests and reports.
+    let finish = |drawn: usize, stages: StageTimes, learning: Option<&Learnt>| -> Result<Report, CampaignError> {
         let records = Journal::read(&folder.join("journal.jsonl"))?;
-        return Ok(write_outputs(
+        Ok(write_outputs(
             folder,
             &case,
             cfg.seed,
@@ -228,8 +221,20 @@ pub fn run_campaign(
             cfg.screen,
             &|t: &TestCase| screener.path(t),
             cfg.judge,
-            Some(&learnt),
-        )?);
+            learning,
+        )?)
+    };
+    if cfg.learn && cfg.screen {
+        let input = RoundsInput {
+            cfg,
+            folder,
+            case: &case,
+            screener,
+            progress,
+            cancel,
+        };
+        let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
+        return finish(drawn, stages, Some(&learnt));
     }
 
     let t = Instant::now();
@@ -303,22 +308,7 @@ pub fn run_campaign(
     };
     fly_ranked(&flight, ranked, &mut vehicles, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
-
-    let records = Journal::read(&journal_path)?;
-    Ok(write_outputs(
-        folder,
-        &case,
-        cfg.seed,
-        cfg.budget,
-        cfg.candidates,
-        &records,
-        stages,
-        spelling,
-        cfg.screen,
-        &|t: &TestCase| screener.path(t),
-        cfg.judge,
-        None,
-    )?)
+    finish(cfg.candidates, stages, None)
 }
 
 /// Whether two tests' footprints overlap by more than `max_iou`.
