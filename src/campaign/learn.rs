@@ -10,6 +10,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::fail_model::FailModel;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 
 /// Residuals are clipped to this many metres: one flight stuck far from the boxes must not swing the bias.
@@ -111,6 +112,9 @@ pub struct Learnt {
     pub distribution: DrawDistribution,
     /// One entry per round.
     pub rounds: Vec<RoundLog>,
+    /// The flights' failure counts per draw bin (carried, at most [`MAX_CARRIED_FLIGHTS`], by `--prior`).
+    #[serde(default)]
+    pub fail_model: FailModel,
 }
 
 /// One round.
