@@ -16,10 +16,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::generator::adaptive::{BINS, DIMS};
 
+/// Bins per draw: coarser than the generator's distribution ([`BINS`]), since a campaign sees few failures
+/// (each failure counts in a fifth of the range, not a tenth).
+pub const FAIL_BINS: usize = 5;
 /// Pseudo-flights at the campaign's overall rate that every bin starts with.
 pub const PRIOR_FLIGHTS_PER_BIN: f64 = 4.0;
 /// Failures at which the flights' targets and the LFS's elites weigh the same in the generator's fit.
-pub const HALF_WEIGHT_FAILURES: f64 = 2.0;
+pub const HALF_WEIGHT_FAILURES: f64 = 1.0;
+/// A carried fail model weighs at most this many flights: counts of where a stack fails keep their meaning from
+/// one campaign to the next on the same mission and vehicle, so they may weigh more than a carried bias.
+pub const MAX_CARRIED_FLIGHTS: f64 = 300.0;
 /// Upper edges (metres) of the bins of the LFS's own (uncalibrated) prediction; the last bin is open. Most
 /// candidates a campaign flies are predicted 0.9-1.3 m by the `px4` model (the bias shifts every bin alike).
 pub const PREDICTION_EDGES_M: [f64; 5] = [0.95, 1.05, 1.15, 1.25, 1.5];
@@ -37,8 +43,8 @@ pub struct BinCount {
 /// Failure counts per bin of each draw and of the LFS's prediction.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FailModel {
-    /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / BINS, (k + 1) / BINS)`.
-    pub draws: [[BinCount; BINS]; DIMS],
+    /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`.
+    pub draws: [[BinCount; FAIL_BINS]; DIMS],
     /// Flights per bin of the LFS's prediction ([`PREDICTION_EDGES_M`]).
     pub prediction: [BinCount; PRED_BINS],
     /// All flights.
@@ -46,7 +52,7 @@ pub struct FailModel {
 }
 
 fn bin_of_unit(u: f64) -> usize {
-    ((u.clamp(0.0, 1.0) * BINS as f64) as usize).min(BINS - 1)
+    ((u.clamp(0.0, 1.0) * FAIL_BINS as f64) as usize).min(FAIL_BINS - 1)
 }
 
 fn bin_of_prediction(d: f64) -> usize {
@@ -96,7 +102,8 @@ impl FailModel {
     /// how the flown candidates were drawn). Repeated over rounds it sharpens where failures keep coming from.
     pub fn draw_targets(&self, current: &[[f64; BINS]; DIMS]) -> [[f64; BINS]; DIMS] {
         std::array::from_fn(|d| {
-            let mass: [f64; BINS] = std::array::from_fn(|k| current[d][k] * self.shrunk(self.draws[d][k]));
+            let mass: [f64; BINS] =
+                std::array::from_fn(|k| current[d][k] * self.shrunk(self.draws[d][k * FAIL_BINS / BINS]));
             let sum: f64 = mass.iter().sum();
             if sum > 0.0 { mass.map(|m| m / sum) } else { current[d] }
         })
@@ -167,9 +174,9 @@ mod tests {
     #[test]
     fn failures_in_one_angle_band_lift_that_band_only() {
         let mut m = FailModel::default();
-        // 40 flights: the angle draw (index 2) in bin 5 fails 5 of 10, elsewhere 1 of 30.
+        // 40 flights: the angle draw (index 2) in 0.4-0.6 (bin 2) fails 5 of 10, below 0.35 1 of 30.
         for i in 0..40 {
-            let angle = if i < 10 { 0.55 } else { (i % 10) as f64 / 10.0 * 0.5 };
+            let angle = if i < 10 { 0.55 } else { (i % 10) as f64 / 10.0 * 0.35 };
             let failed = if i < 10 { i % 2 == 0 } else { i == 10 };
             let u = [(i % 10) as f64 / 10.0 + 0.05, 0.5, angle, 0.5, 0.5];
             m.observe(&u, 1.1, failed);
@@ -186,15 +193,15 @@ mod tests {
         assert!(inside > outside + 1.0, "{inside} vs {outside}");
         let uniform = [[0.1; BINS]; DIMS];
         let t = m.draw_targets(&uniform);
-        assert!(t[2][5] > 0.25 && t[2][5] > 3.0 * t[2][1], "{:?}", t[2]);
+        assert!(t[2][4] + t[2][5] > 0.45 && t[2][5] > 3.0 * t[2][1], "{:?}", t[2]);
         // From a distribution already leaning to bin 5, the target leans further.
         let mut leaning = uniform;
         leaning[2] = [0.05, 0.05, 0.05, 0.05, 0.05, 0.55, 0.05, 0.05, 0.05, 0.05];
         assert!(m.draw_targets(&leaning)[2][5] > t[2][5]);
-        // Shrinkage: bin 5 of the angle is (5 + 4 r) / 14 with r = 6.5 / 41.
+        // Shrinkage: bin 2 of the angle is (5 + 4 r) / 14 with r = 6.5 / 41.
         let r = 6.5 / 41.0;
-        assert!((m.shrunk(m.draws[2][5]) - (5.0 + 4.0 * r) / 14.0).abs() < 1e-12);
-        assert!((m.weight() - 6.0 / 8.0).abs() < 1e-12);
+        assert!((m.shrunk(m.draws[2][2]) - (5.0 + 4.0 * r) / 14.0).abs() < 1e-12);
+        assert!((m.weight() - 6.0 / 7.0).abs() < 1e-12);
     }
 
     #[test]

@@ -112,7 +112,8 @@ pub struct Learnt {
     pub distribution: DrawDistribution,
     /// One entry per round.
     pub rounds: Vec<RoundLog>,
-    /// The flights' failure counts per draw bin (carried, at most [`MAX_CARRIED_FLIGHTS`], by `--prior`).
+    /// The flights' failure counts per draw bin (carried by `--prior`, at most
+    /// [`super::fail_model::MAX_CARRIED_FLIGHTS`]).
     #[serde(default)]
     pub fail_model: FailModel,
 }

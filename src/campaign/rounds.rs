@@ -20,9 +20,9 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::fail_model::FailModel;
+use super::fail_model::{self, FailModel};
 use super::journal::{FlightRecord, Journal};
-use super::learn::{Calibration, Learnt, MAX_CARRIED_FLIGHTS, RoundLog};
+use super::learn::{Calibration, Learnt, RoundLog};
 use super::pool::Vehicle;
 use super::rank::Screened;
 use super::report::StageTimes;
@@ -124,9 +124,9 @@ pub fn run_rounds(
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
-    let start_fail_model = prior
-        .as_ref()
-        .map_or_else(FailModel::default, |p| p.fail_model.carried(MAX_CARRIED_FLIGHTS));
+    let start_fail_model = prior.as_ref().map_or_else(FailModel::default, |p| {
+        p.fail_model.carried(fail_model::MAX_CARRIED_FLIGHTS)
+    });
     let mut fail_model = start_fail_model.clone();
     let per_round = cfg.candidates.div_ceil(ROUNDS);
     for round in 0..ROUNDS + EXTRA_ROUNDS {
@@ -353,22 +353,24 @@ mod tests {
         let screened: Vec<Screened> = (0..10)
             .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
             .collect();
-        let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0 + 0.05; DIMS]).collect();
+        let mut units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0 + 0.05; DIMS]).collect();
+        units[1] = [0.55; DIMS];
         // No failure yet: the target is the best 10 % by prediction (candidate 0, bin 0).
         let uniform = DrawDistribution::uniform();
         let none = target(&screened, &units, &c, &FailModel::default(), &uniform);
         assert_eq!(none[0][0], 1.0);
-        // Candidate 1 flew 1.2 m: the fail model counts it in bin 1 and weighs 1 / (1 + 2) against the LFS.
+        // Candidate 1 flew 1.2 m: the fail model counts it in bin 2 (0.4-0.6) and weighs 1 / (1 + 1) against
+        // the LFS.
         let m = learnt_fail_model(&FailModel::default(), &done, &units);
         assert_eq!((m.total.flights, m.total.failures), (2.0, 1.0));
-        assert_eq!(m.draws[2][1].failures, 1.0);
+        assert_eq!(m.draws[2][2].failures, 1.0);
         let t = target(&screened, &units, &c, &m, &uniform);
-        let w = 1.0 / 3.0;
+        let w = 1.0 / 2.0;
         let flights = m.draw_targets(&uniform.weights);
         assert!((t[0][0] - ((1.0 - w) + w * flights[0][0])).abs() < 1e-12);
-        assert!((t[0][1] - w * flights[0][1]).abs() < 1e-12);
+        assert!((t[0][5] - w * flights[0][5]).abs() < 1e-12);
         assert!(
-            flights[0][1] > flights[0][0] && flights[0][0] < flights[0][5],
+            flights[0][5] > flights[0][3] && flights[0][3] > flights[0][0],
             "{:?}",
             flights[0]
         );
