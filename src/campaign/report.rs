@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::fail_model::FAIL_BINS;
 use super::journal::FlightRecord;
 use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
@@ -340,6 +341,28 @@ pub fn markdown(r: &Report) -> String {
                 round.bias_m,
                 means.join(", ")
             );
+        }
+        let fm = &l.fail_model;
+        let _ = writeln!(
+            md,
+            "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall, \
+             carried prior included):\n",
+            fm.total.failures, fm.total.flights
+        );
+        let edges: Vec<String> = (0..FAIL_BINS)
+            .map(|k| {
+                format!(
+                    "{:.1}-{:.1}",
+                    k as f64 / FAIL_BINS as f64,
+                    (k + 1) as f64 / FAIL_BINS as f64
+                )
+            })
+            .collect();
+        let _ = writeln!(md, "| draw | {} |", edges.join(" | "));
+        let _ = writeln!(md, "|---|{}", "---|".repeat(FAIL_BINS));
+        for (name, row) in DRAW_NAMES.iter().zip(&fm.draws) {
+            let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
+            let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
         }
         let _ = writeln!(md);
     }

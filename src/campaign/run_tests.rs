@@ -338,6 +338,13 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     assert!(!learnt.distribution.is_uniform());
     assert!(learnt.rounds[1].draw_means != [0.5; 5]);
     assert!(dir.path().join("learnt.json").is_file());
+    // Every flight counts in the failure model, under each draw.
+    assert_eq!(learnt.fail_model.total.flights, 12.0);
+    for row in &learnt.fail_model.draws {
+        assert_eq!(row.iter().map(|c| c.flights).sum::<f64>(), 12.0);
+    }
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("Where the flights failed"), "{md}");
     // Every test flown still obeys the rules.
     for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
         let t = TestCase::load(&cfg.case).unwrap().with_obstacles(rec.obstacles);
@@ -360,6 +367,8 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     .unwrap();
     let l2 = r2.learning.unwrap();
     assert!((l2.rounds[0].bias_m - bias).abs() < 1e-12);
+    // The failure counts carry over and grow with the new flights.
+    assert_eq!(l2.fail_model.total.flights, 24.0);
     assert_eq!(
         l2.rounds[0].draw_means,
         std::array::from_fn(|d| learnt.distribution.mean(d))
