@@ -13,7 +13,7 @@
 //! or without its 4 m/s^3 jerk limit) instead of the fitted 0.3 did not rank the mock's flights better:
 //! Spearman 0.31 (fitted) against 0.01-0.33, AUC for a failure 0.71 against 0.47-0.72, each variant costing
 //! 10-23 s of CPU for 100 flights. A constant that does not reorder the candidates is not worth re-screening
-//! them for; the flights' failure rates per draw ([`super::fail_model`]) are learnt instead.
+//! them for.
 
 use serde::{Deserialize, Serialize};
 
@@ -119,8 +119,7 @@ pub struct Learnt {
     pub distribution: DrawDistribution,
     /// One entry per round.
     pub rounds: Vec<RoundLog>,
-    /// The flights' failure counts per draw bin (carried by `--prior`, at most
-    /// [`super::fail_model::MAX_CARRIED_FLIGHTS`]).
+    /// Where the flights failed, per draw bin (a diagnostic for the report; not carried by `--prior`).
     #[serde(default)]
     pub fail_model: FailModel,
 }

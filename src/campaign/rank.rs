@@ -25,10 +25,6 @@ pub struct Screened {
     /// The LFS's own prediction when `min_distance` is a calibrated one (a learning campaign).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raw_min_distance: Option<f64>,
-    /// The flights' failure log-odds for this candidate relative to the campaign's rate (a learning campaign,
-    /// [`super::fail_model`]); ranks before the predicted distance.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub learnt_log_odds: Option<f64>,
 }
 
 impl Screened {
@@ -42,22 +38,7 @@ impl Screened {
             p_fail: None,
             expected_points: None,
             raw_min_distance: None,
-            learnt_log_odds: None,
         }
-    }
-
-    /// This candidate with the flights' failure log-odds `lift`: the ensemble's `p_fail` (and the expected
-    /// points with it) moves by the same odds ratio.
-    pub fn with_learnt_odds(mut self, lift: f64) -> Self {
-        if let (Some(p), Some(points)) = (self.p_fail, self.expected_points) {
-            let p0 = p.clamp(1e-3, 1.0 - 1e-3);
-            let odds = p0 / (1.0 - p0) * lift.exp();
-            let p1 = odds / (1.0 + odds);
-            self.p_fail = Some(p1);
-            self.expected_points = Some(points * p1 / p0);
-        }
-        self.learnt_log_odds = Some(lift);
-        self
     }
 
     /// Expected points per minute of predicted flight: what a flight adds to the competition's test score
@@ -67,9 +48,8 @@ impl Screened {
     }
 }
 
-/// Orders candidates with an ensemble by expected points per minute (most first), then those without by the
-/// flights' failure log-odds (highest first; none counts as 0), then by predicted distance (then shorter
-/// flight, then index), keeping only those predicted below `threshold_m`
+/// Orders candidates with an ensemble by expected points per minute (most first), then those without by
+/// predicted distance (then shorter flight, then index), keeping only those predicted below `threshold_m`
 /// whose footprints overlap every already chosen one by at most `max_iou`; at most `limit`.
 ///
 /// `footprints(candidate)` gives a candidate's obstacle footprints.
@@ -83,10 +63,8 @@ pub fn rank(
     let mut order: Vec<&Screened> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
     order.sort_by(|a, b| {
         let rate = |s: &Screened| s.points_per_minute().map_or(f64::INFINITY, |r| -r);
-        let odds = |s: &Screened| -s.learnt_log_odds.unwrap_or(0.0);
         rate(a)
             .total_cmp(&rate(b))
-            .then(odds(a).total_cmp(&odds(b)))
             .then(a.min_distance.total_cmp(&b.min_distance))
             .then(a.flight_time_s.total_cmp(&b.flight_time_s))
             .then(a.candidate.cmp(&b.candidate))
@@ -134,22 +112,6 @@ mod tests {
         let r = rank(&screened, 3.0, 0.5, 10, fp);
         assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![1, 2, 0]);
         assert_eq!(with_points(1, 1.4, 30.0, 1.0).points_per_minute(), Some(2.0));
-    }
-
-    #[test]
-    fn learnt_failure_odds_rank_before_the_predicted_distance() {
-        let screened = [
-            s(0, 0.5, 40.0).with_learnt_odds(-1.0),
-            s(1, 1.4, 40.0).with_learnt_odds(2.0),
-            s(2, 1.0, 40.0),
-        ];
-        let fp = |c: u64| vec![Footprint::from_aerialist(c as f64 * 20.0, 20.0, 4.0, 2.0, 0.0)];
-        let r = rank(&screened, 3.0, 0.5, 10, fp);
-        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![1, 2, 0]);
-        // With an ensemble, p_fail moves by the odds ratio and the expected points with it.
-        let e = with_points(3, 1.0, 60.0, 0.5).with_learnt_odds(3.0_f64.ln());
-        assert!((e.p_fail.unwrap() - 0.75).abs() < 1e-12);
-        assert!((e.expected_points.unwrap() - 0.75).abs() < 1e-12);
     }
 
     #[test]

@@ -345,8 +345,7 @@ pub fn markdown(r: &Report) -> String {
         let fm = &l.fail_model;
         let _ = writeln!(
             md,
-            "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall, \
-             carried prior included):\n",
+            "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",
             fm.total.failures, fm.total.flights
         );
         let edges: Vec<String> = (0..FAIL_BINS)

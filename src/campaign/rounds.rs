@@ -4,23 +4,18 @@
 //! ensembles, and (with `adapt`) the round's new candidates come from a draw distribution moved towards the
 //! best candidates so far: the calibrated LFS as the surrogate, the flights as the truth.
 //!
-//! What the flights say is learnt as failure rates per bin of each draw and of the calibrated prediction
-//! ([`super::fail_model`], naive Bayes with Beta shrinkage). Once a flight has failed, the unflown candidates are
-//! ranked by their failure log-odds from it before their predicted distance.
-//!
-//! The adaptation is a univariate marginal distribution algorithm ([`crate::generator::adaptive`]): each draw's
-//! histogram moves [`FIT_RATE`] of the way to a target and keeps [`UNIFORM_FLOOR`] of uniform mass. The target
-//! mixes the histogram of the best [`ELITE_SHARE`] of the screened candidates by calibrated prediction (the
-//! surrogate) with the flights' per-bin failure rates (the truth), the latter weighing more as failures come in.
-//! When the failing tests' diversity falls below the user's floor, or a round could not fill its share of the
-//! budget (its candidates were near-duplicates of flown tests), the fit backs off (more uniform mass, a smaller
-//! step).
+//! The adaptation is a univariate marginal distribution algorithm ([`crate::generator::adaptive`]): elites are
+//! the best [`ELITE_SHARE`] of the screened candidates by calibrated prediction, plus the closest quarter of the
+//! flights and every flown failure at [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
+//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor, or a round
+//! could not fill its share of the budget (its candidates were near-duplicates of flown tests), the fit backs off
+//! (more uniform mass, a smaller step).
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::fail_model::{self, FailModel};
+use super::fail_model::FailModel;
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::pool::Vehicle;
@@ -32,7 +27,7 @@ use super::stages::{
     screen_all,
 };
 use crate::generator::Generator;
-use crate::generator::adaptive::{BINS, DIMS, DrawDistribution, histogram};
+use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::io::write_atomic;
 use crate::judge::diversity;
 use crate::model::{ModelError, Obstacle, TestCase};
@@ -44,7 +39,10 @@ pub const ROUNDS: usize = 8;
 pub const EXTRA_ROUNDS: usize = 4;
 /// Share of the screened candidates that are elites.
 pub const ELITE_SHARE: f64 = 0.1;
-/// How far each fit moves the distribution towards the target.
+/// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
+/// a prediction.
+pub const FLOWN_FAILURE_WEIGHT: f64 = 5.0;
+/// How far each fit moves the distribution towards the elites'.
 pub const FIT_RATE: f64 = 0.7;
 /// Uniform mass every fitted draw keeps.
 pub const UNIFORM_FLOOR: f64 = 0.2;
@@ -68,7 +66,6 @@ pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
         .calibration
         .validate()
         .and_then(|()| learnt.distribution.validate())
-        .and_then(|()| learnt.fail_model.validate())
         .map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
     Ok(learnt)
 }
@@ -124,10 +121,6 @@ pub fn run_rounds(
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
-    let start_fail_model = prior.as_ref().map_or_else(FailModel::default, |p| {
-        p.fail_model.carried(fail_model::MAX_CARRIED_FLIGHTS)
-    });
-    let mut fail_model = start_fail_model.clone();
     let per_round = cfg.candidates.div_ceil(ROUNDS);
     for round in 0..ROUNDS + EXTRA_ROUNDS {
         // Past the planned rounds only while the near-duplicate filter left budget unflown.
@@ -172,7 +165,6 @@ pub fn run_rounds(
         let t = Instant::now();
         let done = Journal::read(&journal_path)?;
         calibration = calibrated(&start_calibration, &done);
-        fail_model = learnt_fail_model(&start_fail_model, &done, &units);
         let bias = calibration.bias_m();
         let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
         let mut fresh: Vec<Screened> = screened
@@ -191,14 +183,6 @@ pub fn run_rounds(
             let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
             apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), bias);
             stages.ensemble_s += t.elapsed().as_secs_f64();
-        }
-        // Until a flight fails, the counts only say where the campaign has not flown yet: rank by the LFS.
-        if fail_model.total.failures > 0.0 {
-            for s in &mut fresh {
-                let raw = s.raw_min_distance.unwrap_or(s.min_distance);
-                let lift = fail_model.log_odds_lift(&units[s.candidate as usize], raw);
-                *s = s.clone().with_learnt_odds(lift);
-            }
         }
         let ranked = rank_unflown(&fresh, &done, &candidates, cfg, remaining);
         progress.note(&format!(
@@ -232,7 +216,6 @@ pub fn run_rounds(
         let t = Instant::now();
         let done = Journal::read(&journal_path)?;
         calibration = calibrated(&start_calibration, &done);
-        fail_model = learnt_fail_model(&start_fail_model, &done, &units);
         if cfg.adapt {
             // Back off when the failures grow alike, or when the round could not fill its share of the budget
             // (a narrow distribution's candidates are near-duplicates of the flown tests).
@@ -244,14 +227,11 @@ pub fn run_rounds(
             let starved = flights < remaining;
             let backoff = starved || diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
             let (rate, floor) = if backoff { BACKOFF } else { (FIT_RATE, UNIFORM_FLOOR) };
-            distribution = distribution.moved_towards(
-                &target(&screened, &units, &calibration, &fail_model, &distribution),
-                rate,
-                floor,
-            );
+            distribution = distribution.fitted(&elites(&screened, &done, &units, &calibration), rate, floor);
         }
         stages.learn_s += t.elapsed().as_secs_f64();
     }
+    let fail_model = counted_failures(&Journal::read(&journal_path)?, &units);
     let learnt = Learnt {
         calibration,
         distribution,
@@ -274,32 +254,25 @@ fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
     c
 }
 
-/// The flights' failure model after the prior: every journaled flight's draws, the LFS's prediction and
-/// outcome (flights of candidates not drawn in this run, e.g. a journal from a longer resumed run, are skipped).
-fn learnt_fail_model(prior: &FailModel, done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailModel {
-    let mut m = prior.clone();
+/// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
+/// longer resumed run, are skipped).
+fn counted_failures(done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailModel {
+    let mut m = FailModel::default();
     for r in done {
         if let (Some(u), Some(flown)) = (units.get(r.candidate as usize), r.min_distance) {
-            m.observe(
-                u,
-                r.predicted_raw_min_distance.unwrap_or(r.predicted_min_distance),
-                flown < FAIL_M,
-            );
+            m.observe(u, flown < FAIL_M);
         }
     }
     m
 }
 
-/// Where the next round should draw: the histogram of the best [`ELITE_SHARE`] of the screened candidates by
-/// calibrated prediction (the surrogate), mixed with the flights' per-bin failure rates (the truth) at the
-/// fail model's weight, which grows with the failures seen.
-fn target(
+/// The elites: the best share of the screened candidates by calibrated prediction, and the flown failures.
+fn elites(
     screened: &[Screened],
+    done: &[FlightRecord],
     units: &[[f64; DIMS]],
     calibration: &Calibration,
-    fail_model: &FailModel,
-    current: &DrawDistribution,
-) -> [[f64; BINS]; DIMS] {
+) -> Vec<([f64; DIMS], f64)> {
     let mut order: Vec<&Screened> = screened.iter().collect();
     order.sort_by(|a, b| {
         calibration
@@ -308,17 +281,23 @@ fn target(
             .then(a.candidate.cmp(&b.candidate))
     });
     let take = ((order.len() as f64 * ELITE_SHARE).ceil() as usize).max(1);
-    let elites: Vec<([f64; DIMS], f64)> = order
+    let mut out: Vec<([f64; DIMS], f64)> = order
         .iter()
         .take(take)
         .filter_map(|s| units.get(s.candidate as usize).map(|u| (*u, 1.0)))
         .collect();
-    let flights = fail_model.draw_targets(&current.weights);
-    let Some(lfs) = histogram(&elites) else {
-        return flights;
-    };
-    let w = fail_model.weight();
-    std::array::from_fn(|d| std::array::from_fn(|k| (1.0 - w) * lfs[d][k] + w * flights[d][k]))
+    // The flights are the truth: the closest quarter of them (and every failure) weigh more than a prediction.
+    let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.min_distance?))).collect();
+    flown.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
+    let closest = flown.len().div_ceil(4);
+    for (k, (r, d)) in flown.iter().enumerate() {
+        if (k < closest || *d < FAIL_M)
+            && let Some(u) = units.get(r.candidate as usize)
+        {
+            out.push((*u, FLOWN_FAILURE_WEIGHT));
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -345,7 +324,7 @@ mod tests {
     }
 
     #[test]
-    fn calibration_replays_the_journal_and_the_target_follows_the_failures() {
+    fn calibration_replays_the_journal_and_elites_weigh_flown_failures() {
         let done = vec![record(0, 1.0, 2.0), record(1, 1.0, 1.2)];
         let c = calibrated(&Calibration::with_prior(0.0, 1.0), &done);
         // (0 + 1.0 + 0.2) / (1 + 2)
@@ -353,28 +332,17 @@ mod tests {
         let screened: Vec<Screened> = (0..10)
             .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
             .collect();
-        let mut units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0 + 0.05; DIMS]).collect();
-        units[1] = [0.55; DIMS];
-        // No failure yet: the target is the best 10 % by prediction (candidate 0, bin 0).
-        let uniform = DrawDistribution::uniform();
-        let none = target(&screened, &units, &c, &FailModel::default(), &uniform);
-        assert_eq!(none[0][0], 1.0);
-        // Candidate 1 flew 1.2 m: the fail model counts it in bin 2 (0.4-0.6) and weighs 1 / (1 + 1) against
-        // the LFS.
-        let m = learnt_fail_model(&FailModel::default(), &done, &units);
+        let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
+        let e = elites(&screened, &done, &units, &c);
+        // The best 10 % (candidate 0), then the closest quarter of the flights, which is also the one failure
+        // (candidate 1, 1.2 m), at the flights' weight.
+        assert_eq!(e.len(), 2);
+        assert_eq!(e[0], ([0.0; DIMS], 1.0));
+        assert_eq!(e[1], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
+        // The report's failure counts: candidate 1 failed in bin 0 of every draw.
+        let m = counted_failures(&done, &units);
         assert_eq!((m.total.flights, m.total.failures), (2.0, 1.0));
-        assert_eq!(m.draws[2][2].failures, 1.0);
-        let t = target(&screened, &units, &c, &m, &uniform);
-        let w = 1.0 / 2.0;
-        let flights = m.draw_targets(&uniform.weights);
-        assert!((t[0][0] - ((1.0 - w) + w * flights[0][0])).abs() < 1e-12);
-        assert!((t[0][5] - w * flights[0][5]).abs() < 1e-12);
-        assert!(
-            flights[0][5] > flights[0][3] && flights[0][3] > flights[0][0],
-            "{:?}",
-            flights[0]
-        );
-        assert!((t[0].iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert_eq!(m.draws[4][0].failures, 1.0);
     }
 
     #[test]

@@ -367,8 +367,8 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     .unwrap();
     let l2 = r2.learning.unwrap();
     assert!((l2.rounds[0].bias_m - bias).abs() < 1e-12);
-    // The failure counts carry over and grow with the new flights.
-    assert_eq!(l2.fail_model.total.flights, 24.0);
+    // The failure counts are this campaign's own.
+    assert_eq!(l2.fail_model.total.flights, 12.0);
     assert_eq!(
         l2.rounds[0].draw_means,
         std::array::from_fn(|d| learnt.distribution.mean(d))
