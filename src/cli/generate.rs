@@ -87,8 +87,9 @@ pub struct Args {
     /// costs about 1 s of CPU per candidate, more than a mock flight; a PX4 or hardware flight costs far more).
     #[arg(long, value_name = "N")]
     ensemble: Option<usize>,
-    /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in 4
-    /// rounds, calibrating the LFS on every flight and adapting the generator's draws towards failures.
+    /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in 8
+    /// rounds (up to 12 while near-duplicates leave budget unflown), calibrating the LFS on every flight and
+    /// adapting the generator's draws towards failures.
     #[arg(long)]
     no_learn: bool,
     /// Learn the LFS's calibration but keep the paper's uniform draws.
