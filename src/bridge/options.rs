@@ -54,7 +54,8 @@ pub struct FlyOptions {
     /// farther than MIS_DIST_1WP from the test's home ([`super::session::placement`]).
     pub anchor_at_vehicle_home: bool,
     /// Wait at most this long (vehicle seconds) for the vehicle to become ready to arm (estimator, GPS fix,
-    /// home, PX4's pre-arm checks); arming is retried within the same budget.
+    /// home, PX4's pre-arm checks); arming is retried within the same budget. The wait lasts at least
+    /// [`MIN_READY_WALL_S`] of wall time however fast the vehicle's clock runs ([`Self::ready_budget_s`]).
     pub ready_timeout_s: f64,
     /// Measure the vehicle's clock rate at connection and use it as `time_scale` (a pool of simulators at
     /// unknown speed); `time_scale` is then only the assumption until measured.
@@ -127,7 +128,17 @@ pub enum BridgeError {
     Cancelled,
 }
 
+/// The readiness wait's floor in wall seconds: at 100x a 60 s budget is 0.6 s of wall time, which a busy
+/// machine can spend before the bridge runs at all (seen in CI with four campaigns on 2 cores).
+pub const MIN_READY_WALL_S: f64 = 5.0;
+
 impl FlyOptions {
+    /// The readiness budget in vehicle seconds for a clock running `time_scale` times real time:
+    /// `ready_timeout_s`, but at least [`MIN_READY_WALL_S`] of wall time.
+    pub fn ready_budget_s(&self, time_scale: f64) -> f64 {
+        self.ready_timeout_s.max(MIN_READY_WALL_S * time_scale)
+    }
+
     /// Checks the numbers.
     pub fn validate(&self) -> Result<(), BridgeError> {
         for (name, v) in [
@@ -143,5 +154,20 @@ impl FlyOptions {
         }
         LinkAddress::parse(&self.connect)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_readiness_budget_lasts_at_least_the_wall_floor() {
+        let o = FlyOptions::default();
+        // Real time and PX4 SITL at 5x: the vehicle-time budget rules.
+        assert_eq!(o.ready_budget_s(1.0), o.ready_timeout_s);
+        assert_eq!(o.ready_budget_s(5.0), o.ready_timeout_s.max(5.0 * MIN_READY_WALL_S));
+        // A mock at 100x: 60 vehicle seconds would be 0.6 s of wall time.
+        assert_eq!(o.ready_budget_s(100.0), 100.0 * MIN_READY_WALL_S);
     }
 }

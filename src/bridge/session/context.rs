@@ -135,7 +135,7 @@ impl Session<'_> {
         }
         let clock = self.link.clock();
         // Home comes once the estimator has a fix: the readiness budget, not a fixed wait.
-        let budget = Duration::from_secs_f64(self.opts.ready_timeout_s.max(30.0));
+        let budget = Duration::from_secs_f64(self.opts.ready_budget_s(clock.scale()).max(30.0));
         let deadline = clock.now() + budget;
         while !self.view.home_known {
             let wait = clock.wall_until(deadline);

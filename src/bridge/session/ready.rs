@@ -128,7 +128,8 @@ enum Verdict {
 pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), Stop> {
     let clock = s.link.clock();
     let start = s.ready.started.unwrap_or_else(|| clock.now());
-    let deadline = start + secs(s.opts.ready_timeout_s);
+    let budget_s = s.opts.ready_budget_s(clock.scale());
+    let deadline = start + secs(budget_s);
     s.ready.deadline = deadline;
     let mission = starts_mission(s);
     // (switch time, health at the switch) once in AUTO.MISSION on our request.
@@ -197,8 +198,7 @@ pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), 
             return Err(Stop::new(
                 Status::Rejected,
                 format!(
-                    "not ready to arm within {} s (missing: {}); vehicle: {said}",
-                    s.opts.ready_timeout_s,
+                    "not ready to arm within {budget_s:.0} s (missing: {}); vehicle: {said}",
                     if missing.is_empty() {
                         "PX4's pre-arm checks in AUTO.MISSION".into()
                     } else {
