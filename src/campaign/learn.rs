@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::fail_model::FailModel;
+use super::failure_counts::FailureCounts;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 
 /// Residuals are clipped to this many metres: one flight stuck far from the boxes must not swing the bias.
@@ -121,7 +121,7 @@ pub struct Learnt {
     pub rounds: Vec<RoundLog>,
     /// Where the flights failed, per draw bin (a diagnostic for the report; not carried by `--prior`).
     #[serde(default)]
-    pub fail_model: FailModel,
+    pub failure_counts: FailureCounts,
 }
 
 /// One round.

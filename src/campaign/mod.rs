@@ -1,6 +1,6 @@
 //! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
 
-pub mod fail_model;
+pub mod failure_counts;
 pub mod journal;
 pub mod learn;
 pub mod parallel;

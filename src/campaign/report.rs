@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::fail_model::FAIL_BINS;
+use super::failure_counts::FAIL_BINS;
 use super::journal::FlightRecord;
 use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
@@ -342,7 +342,7 @@ pub fn markdown(r: &Report) -> String {
                 means.join(", ")
             );
         }
-        let fm = &l.fail_model;
+        let fm = &l.failure_counts;
         let _ = writeln!(
             md,
             "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",

@@ -15,7 +15,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::fail_model::FailModel;
+use super::failure_counts::FailureCounts;
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::pool::Vehicle;
@@ -231,12 +231,12 @@ pub fn run_rounds(
         }
         stages.learn_s += t.elapsed().as_secs_f64();
     }
-    let fail_model = counted_failures(&Journal::read(&journal_path)?, &units);
+    let failure_counts = counted_failures(&Journal::read(&journal_path)?, &units);
     let learnt = Learnt {
         calibration,
         distribution,
         rounds,
-        fail_model,
+        failure_counts,
     };
     let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
     write_atomic(&folder.join("learnt.json"), json.as_bytes())?;
@@ -256,8 +256,8 @@ fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
 
 /// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
 /// longer resumed run, are skipped).
-fn counted_failures(done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailModel {
-    let mut m = FailModel::default();
+fn counted_failures(done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailureCounts {
+    let mut m = FailureCounts::default();
     for r in done {
         if let (Some(u), Some(flown)) = (units.get(r.candidate as usize), r.min_distance) {
             m.observe(u, flown < FAIL_M);
@@ -341,8 +341,8 @@ mod tests {
         assert_eq!(e[1], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
         // The report's failure counts: candidate 1 failed in bin 0 of every draw.
         let m = counted_failures(&done, &units);
-        assert_eq!((m.total.flights, m.total.failures), (2.0, 1.0));
-        assert_eq!(m.draws[4][0].failures, 1.0);
+        assert_eq!((m.total.flights, m.total.failures), (2, 1));
+        assert_eq!(m.draws[4][0].failures, 1);
     }
 
     #[test]
@@ -353,7 +353,7 @@ mod tests {
             calibration: Calibration::default(),
             distribution: DrawDistribution::uniform(),
             rounds: Vec::new(),
-            fail_model: FailModel::default(),
+            failure_counts: FailureCounts::default(),
         };
         l.calibration.prior_flights = -3.0;
         std::fs::write(dir.path().join("learnt.json"), serde_json::to_string(&l).unwrap()).unwrap();

@@ -339,9 +339,9 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     assert!(learnt.rounds[1].draw_means != [0.5; 5]);
     assert!(dir.path().join("learnt.json").is_file());
     // Every flight counts in the failure model, under each draw.
-    assert_eq!(learnt.fail_model.total.flights, 12.0);
-    for row in &learnt.fail_model.draws {
-        assert_eq!(row.iter().map(|c| c.flights).sum::<f64>(), 12.0);
+    assert_eq!(learnt.failure_counts.total.flights, 12);
+    for row in &learnt.failure_counts.draws {
+        assert_eq!(row.iter().map(|c| c.flights).sum::<u32>(), 12);
     }
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("Where the flights failed"), "{md}");
@@ -368,7 +368,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     let l2 = r2.learning.unwrap();
     assert!((l2.rounds[0].bias_m - bias).abs() < 1e-12);
     // The failure counts are this campaign's own.
-    assert_eq!(l2.fail_model.total.flights, 12.0);
+    assert_eq!(l2.failure_counts.total.flights, 12);
     assert_eq!(
         l2.rounds[0].draw_means,
         std::array::from_fn(|d| learnt.distribution.mean(d))

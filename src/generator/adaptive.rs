@@ -79,19 +79,20 @@ impl DrawDistribution {
     /// The distribution moved towards `elites` (draws in [0, 1], each with a weight): each row becomes
     /// `(1 - rate) * old + rate * histogram(elites)`, then mixed with `floor` of uniform mass.
     pub fn fitted(&self, elites: &[([f64; DIMS], f64)], rate: f64, floor: f64) -> Self {
-        match histogram(elites) {
-            Some(target) => self.moved_towards(&target, rate, floor),
-            None => self.clone(),
+        let total: f64 = elites.iter().map(|(_, w)| w.max(0.0)).sum();
+        if total <= 0.0 {
+            return self.clone();
         }
-    }
-
-    /// Each row becomes `(1 - rate) * old + rate * target`, then mixed with `floor` of uniform mass.
-    pub fn moved_towards(&self, target: &[[f64; BINS]; DIMS], rate: f64, floor: f64) -> Self {
         let mut out = self.clone();
-        for (row, t_row) in out.weights.iter_mut().zip(target) {
-            for (w, t) in row.iter_mut().zip(t_row) {
-                let moved = (1.0 - rate) * *w + rate * t;
-                *w = (1.0 - floor) * moved + floor / BINS as f64;
+        for d in 0..DIMS {
+            let mut hist = [0.0; BINS];
+            for (x, w) in elites {
+                let k = bin_of(x[d], BINS);
+                hist[k] += w.max(0.0) / total;
+            }
+            for (k, h) in hist.iter().enumerate() {
+                let moved = (1.0 - rate) * self.weights[d][k] + rate * h;
+                out.weights[d][k] = (1.0 - floor) * moved + floor / BINS as f64;
             }
         }
         out
@@ -107,20 +108,9 @@ impl DrawDistribution {
     }
 }
 
-/// Per draw, the weighted histogram of `elites` (rows sum to 1); `None` without positive weight.
-pub fn histogram(elites: &[([f64; DIMS], f64)]) -> Option<[[f64; BINS]; DIMS]> {
-    let total: f64 = elites.iter().map(|(_, w)| w.max(0.0)).sum();
-    if total <= 0.0 {
-        return None;
-    }
-    let mut hist = [[0.0; BINS]; DIMS];
-    for (x, w) in elites {
-        for (d, row) in hist.iter_mut().enumerate() {
-            let k = ((x[d].clamp(0.0, 1.0) * BINS as f64) as usize).min(BINS - 1);
-            row[k] += w.max(0.0) / total;
-        }
-    }
-    Some(hist)
+/// The bin of `u` (clamped to [0, 1]) among `bins` equal bins; 1.0 falls in the last.
+pub fn bin_of(u: f64, bins: usize) -> usize {
+    ((u.clamp(0.0, 1.0) * bins as f64) as usize).min(bins.saturating_sub(1))
 }
 
 #[cfg(test)]

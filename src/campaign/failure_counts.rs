@@ -1,4 +1,4 @@
-//! Where a learning campaign's flights failed: flights and failures per bin of each generator draw, for the
+//! Where a learning campaign's flights failed (a diagnostic): flights and failures per bin of each generator draw, for the
 //! report and `learnt.json` (a diagnostic; the campaign does not rank or draw by it).
 //!
 //! Why only a diagnostic: ranking the unflown candidates by these counts (a naive Bayes model of the failure
@@ -11,7 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::generator::adaptive::DIMS;
+use crate::generator::adaptive::{DIMS, bin_of};
 
 /// Bins per draw (coarser than the generator's distribution: a campaign sees few failures).
 pub const FAIL_BINS: usize = 5;
@@ -20,34 +20,30 @@ pub const FAIL_BINS: usize = 5;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct BinCount {
     /// Flights whose draw fell in the bin.
-    pub flights: f64,
+    pub flights: u32,
     /// Of them, flights below 1.5 m.
-    pub failures: f64,
+    pub failures: u32,
 }
 
 /// Failure counts per bin of each draw.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct FailModel {
+pub struct FailureCounts {
     /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`.
     pub draws: [[BinCount; FAIL_BINS]; DIMS],
     /// All flights.
     pub total: BinCount,
 }
 
-fn bin_of_unit(u: f64) -> usize {
-    ((u.clamp(0.0, 1.0) * FAIL_BINS as f64) as usize).min(FAIL_BINS - 1)
-}
-
-impl FailModel {
+impl FailureCounts {
     /// Counts one flight: its generator draws and whether it failed.
     pub fn observe(&mut self, unit: &[f64; DIMS], failed: bool) {
-        let f = if failed { 1.0 } else { 0.0 };
+        let f = u32::from(failed);
         let add = |c: &mut BinCount| {
-            c.flights += 1.0;
+            c.flights += 1;
             c.failures += f;
         };
         for (d, u) in unit.iter().enumerate() {
-            add(&mut self.draws[d][bin_of_unit(*u)]);
+            add(&mut self.draws[d][bin_of(*u, FAIL_BINS)]);
         }
         add(&mut self.total);
     }
@@ -61,32 +57,32 @@ mod tests {
 
     #[test]
     fn failures_are_counted_in_their_draws_bins() {
-        let mut m = FailModel::default();
+        let mut m = FailureCounts::default();
         m.observe(&[0.0, 0.19, 0.2, 0.99, 1.0], true);
         m.observe(&[0.5; DIMS], false);
         assert_eq!(
             m.total,
             BinCount {
-                flights: 2.0,
-                failures: 1.0
+                flights: 2,
+                failures: 1
             }
         );
         assert_eq!(
             m.draws[0][0],
             BinCount {
-                flights: 1.0,
-                failures: 1.0
+                flights: 1,
+                failures: 1
             }
         );
-        assert_eq!(m.draws[1][0].failures, 1.0);
-        assert_eq!(m.draws[2][1].failures, 1.0);
-        assert_eq!(m.draws[3][4].failures, 1.0);
-        assert_eq!(m.draws[4][4].failures, 1.0, "1.0 belongs to the last bin");
+        assert_eq!(m.draws[1][0].failures, 1);
+        assert_eq!(m.draws[2][1].failures, 1);
+        assert_eq!(m.draws[3][4].failures, 1);
+        assert_eq!(m.draws[4][4].failures, 1, "1.0 belongs to the last bin");
         assert_eq!(
             m.draws[2][2],
             BinCount {
-                flights: 1.0,
-                failures: 0.0
+                flights: 1,
+                failures: 0
             }
         );
     }
@@ -96,13 +92,13 @@ mod tests {
         fn every_draw_counts_every_flight(
             flights in proptest::collection::vec((proptest::array::uniform5(0.0f64..=1.0), any::<bool>()), 0..60)
         ) {
-            let mut m = FailModel::default();
+            let mut m = FailureCounts::default();
             for (u, f) in &flights {
                 m.observe(u, *f);
             }
             for row in &m.draws {
-                prop_assert_eq!(row.iter().map(|c| c.flights).sum::<f64>(), flights.len() as f64);
-                prop_assert_eq!(row.iter().map(|c| c.failures).sum::<f64>(), m.total.failures);
+                prop_assert_eq!(row.iter().map(|c| c.flights).sum::<u32>(), flights.len() as u32);
+                prop_assert_eq!(row.iter().map(|c| c.failures).sum::<u32>(), m.total.failures);
             }
         }
     }
