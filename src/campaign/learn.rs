@@ -18,6 +18,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::failure_counts::FailureCounts;
+use super::surrogate::Surrogate;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 
 /// Residuals are clipped to this many metres: one flight stuck far from the boxes must not swing the bias.
@@ -115,6 +116,9 @@ impl Calibration {
 pub struct Learnt {
     /// The calibration after the last flight.
     pub calibration: Calibration,
+    /// The flights' kernel the last round ranked with (`None`: the calibrated LFS alone).
+    #[serde(default)]
+    pub surrogate: Option<Surrogate>,
     /// The draw distribution the next round would have used (uniform without `adapt`).
     pub distribution: DrawDistribution,
     /// One entry per round.
@@ -133,10 +137,20 @@ pub struct RoundLog {
     pub first_candidate: u64,
     /// Candidates drawn in it.
     pub candidates: usize,
+    /// Of them, drawn around the closest flights so far ([`super::neighbours`]).
+    #[serde(default)]
+    pub local_candidates: usize,
+    /// Share of its flights offered to neighbour candidates ([`super::neighbours::local_flight_share`]; 0
+    /// without `adapt`).
+    #[serde(default)]
+    pub local_flight_share: f64,
     /// Flights made in it (by this run; a resumed run counts only its own).
     pub flights: usize,
     /// The learnt bias used to rank its flights, metres.
     pub bias_m: f64,
+    /// The flights' kernel used to rank its flights (`None`: the calibrated LFS alone).
+    #[serde(default)]
+    pub surrogate: Option<Surrogate>,
     /// Mean of each unit draw of its distribution (0.5 = uniform).
     pub draw_means: [f64; DIMS],
 }

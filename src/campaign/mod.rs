@@ -3,6 +3,7 @@
 pub mod failure_counts;
 pub mod journal;
 pub mod learn;
+pub mod neighbours;
 pub mod parallel;
 pub mod pool;
 pub mod rank;
@@ -12,4 +13,5 @@ pub mod run;
 pub mod score;
 pub mod screen;
 pub mod stages;
+pub mod surrogate;
 pub mod vehicles;

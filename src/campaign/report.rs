@@ -324,21 +324,35 @@ pub fn markdown(r: &Report) -> String {
             l.calibration.prior_bias_m,
             l.calibration.prior_flights
         );
-        let _ = writeln!(
-            md,
-            "| round | candidates | flights | bias used m | draw means ({}) |",
-            DRAW_NAMES.join(", ")
-        );
-        let _ = writeln!(md, "|---|---|---|---|---|");
-        for round in &l.rounds {
-            let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
+        if let Some(k) = &l.surrogate {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {:+.3} | {} |",
+                "Flights' kernel at the end: bandwidth {:.2} (unit draws), LFS weight {:.2}; leave-one-out error {:.3} m \
+                 against {:.3} m for the calibrated LFS alone, over {} flights.\n",
+                k.bandwidth, k.lfs_weight, k.loo_error_m, k.lfs_error_m, k.flights
+            );
+        }
+        let _ = writeln!(
+            md,
+            "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
+            DRAW_NAMES.join(", ")
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|---|");
+        for round in &l.rounds {
+            let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
+            let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
+                format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
+            });
+            let _ = writeln!(
+                md,
+                "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
                 round.round + 1,
                 round.candidates,
+                round.local_candidates,
                 round.flights,
+                round.local_flight_share,
                 round.bias_m,
+                kernel,
                 means.join(", ")
             );
         }

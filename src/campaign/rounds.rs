@@ -1,23 +1,28 @@
 //! The learning campaign: flights in [`ROUNDS`] rounds (and up to [`EXTRA_ROUNDS`] more while near-duplicates
-//! left budget unflown). Before each round the LFS is calibrated on every
-//! flight so far ([`super::learn`]), the unflown candidates are re-ranked with the calibrated predictions and
-//! ensembles, and (with `adapt`) the round's new candidates come from a draw distribution moved towards the
-//! best candidates so far: the calibrated LFS as the surrogate, the flights as the truth.
+//! left budget unflown). Before each round the LFS is calibrated on every flight so far ([`super::learn`]),
+//! its predictions are moved towards the flown distances of the flights near each candidate in draw space
+//! ([`super::surrogate`], a kernel chosen by leave-one-out on the campaign's own flights), and the unflown
+//! candidates are re-ranked with these predictions and the ensembles.
 //!
-//! The adaptation is a univariate marginal distribution algorithm ([`crate::generator::adaptive`]): elites are
-//! the best [`ELITE_SHARE`] of the screened candidates by calibrated prediction, plus the closest quarter of the
-//! flights and every flown failure at [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
-//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor, or a round
-//! could not fill its share of the budget (its candidates were near-duplicates of flown tests), the fit backs off
-//! (more uniform mass, a smaller step).
+//! With `adapt`, the generator moves towards failures in two ways. Some of a round's new candidates are drawn
+//! in small boxes around the closest flights so far ([`super::neighbours`]), and a share of its flights that
+//! follows their failure rate is offered to them. The others come from a univariate
+//! marginal distribution algorithm ([`crate::generator::adaptive`]): elites are the best [`ELITE_SHARE`] of the
+//! screened candidates by prediction, plus the closest quarter of the flights and every flown failure at
+//! [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
+//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor (counted
+//! from [`neighbours::MIN_FAILING_FOR_DIVERSITY`] failing tests on), the neighbour proposals pause and the fit
+//! backs off (more uniform mass, a smaller step); it also backs off when a
+//! round could not fill its share of the budget (its candidates were near-duplicates of flown tests).
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::failure_counts::FailureCounts;
+use super::failure_counts::{BinCount, FailureCounts};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
+use super::neighbours;
 use super::pool::Vehicle;
 use super::rank::Screened;
 use super::report::StageTimes;
@@ -26,8 +31,9 @@ use super::stages::{
     ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
     screen_all,
 };
+use super::surrogate::{Flown, Surrogate};
 use crate::generator::Generator;
-use crate::generator::adaptive::{DIMS, DrawDistribution};
+use crate::generator::adaptive::{DIMS, DrawDistribution, Proposal};
 use crate::io::write_atomic;
 use crate::judge::diversity;
 use crate::model::{ModelError, Obstacle, TestCase};
@@ -118,30 +124,51 @@ pub fn run_rounds(
     }
     let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
     let mut units: Vec<[f64; DIMS]> = Vec::new();
+    let mut is_local: Vec<bool> = Vec::new();
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
+    let mut surrogate = None;
+    // Neighbour proposals pause while the failing tests are less diverse than the user's floor.
+    let mut alike = false;
     let per_round = cfg.candidates.div_ceil(ROUNDS);
+    let mut next: u64 = 0;
     for round in 0..ROUNDS + EXTRA_ROUNDS {
         // Past the planned rounds only while the near-duplicate filter left budget unflown.
         if round >= ROUNDS && Journal::read(&journal_path)?.len() >= cfg.budget {
             break;
         }
-        let (lo, hi) = if round < ROUNDS {
-            (
-                (cfg.candidates * round / ROUNDS) as u64,
-                (cfg.candidates * (round + 1) / ROUNDS) as u64,
-            )
+        let count = if round < ROUNDS {
+            cfg.candidates * (round + 1) / ROUNDS - cfg.candidates * round / ROUNDS
         } else {
-            let lo = (cfg.candidates + (round - ROUNDS) * per_round) as u64;
-            (lo, lo + per_round as u64)
+            per_round
         };
         let t = Instant::now();
-        let generator = Generator::new(case, cfg.generator.clone(), cfg.seed)?.with_distribution(distribution.clone());
-        for i in lo..hi {
-            let p = generator.sample(i)?;
+        let around = if cfg.adapt && !alike {
+            neighbours::parents(&Journal::read(&journal_path)?, &units)
+        } else {
+            Vec::new()
+        };
+        let local = around.len() * neighbours::PER_PARENT;
+        let count = count + local;
+        let (lo, hi) = (next, next + count as u64);
+        next = hi;
+        let base = Generator::new(case, cfg.generator.clone(), cfg.seed)?;
+        let histogram = base.clone().with_distribution(distribution.clone());
+        let near: Vec<Generator> = around
+            .iter()
+            .map(|n| base.clone().with_proposal(Proposal::Around(*n)))
+            .collect();
+        for (k, i) in (lo..hi).enumerate() {
+            // The round's last `local` candidates come from the parents' boxes, in turn.
+            // A parent's box with no room left falls back to the histogram.
+            let (p, from_box) = match k.checked_sub(count - local).map(|j| near[j % near.len()].sample(i)) {
+                Some(Ok(p)) => (p, true),
+                _ => (histogram.sample(i)?, false),
+            };
             candidates.push(p.obstacles.to_vec());
             units.push(p.draw.unit);
+            is_local.push(from_box);
         }
         stages.sample_s += t.elapsed().as_secs_f64();
         let ctx = Stage {
@@ -158,20 +185,25 @@ pub fn run_rounds(
             lo..hi,
             &format!("screening_round{round}.json"),
             &distribution,
+            &around,
         )?);
         stages.screen_s += t.elapsed().as_secs_f64();
 
-        // Learn from every flight so far, then rank the unflown candidates with the calibrated LFS.
+        // Learn from every flight so far, then rank the unflown candidates with the calibrated LFS, moved
+        // towards the flights near them.
         let t = Instant::now();
         let done = Journal::read(&journal_path)?;
         calibration = calibrated(&start_calibration, &done);
         let bias = calibration.bias_m();
+        let points = flown_points(&done, &units, &calibration);
+        surrogate = Surrogate::fit(&points);
+        let predict = |s: &Screened| prediction(s, &calibration, surrogate.as_ref(), &units, &points);
         let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
         let mut fresh: Vec<Screened> = screened
             .iter()
             .filter(|s| !flown.contains(&s.candidate))
             .map(|s| Screened {
-                min_distance: calibration.predict(s.min_distance),
+                min_distance: predict(s),
                 raw_min_distance: Some(s.min_distance),
                 ..s.clone()
             })
@@ -181,15 +213,34 @@ pub fn run_rounds(
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
-            apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), bias);
+            apply_ensemble(&mut fresh, &members, &screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let ranked = rank_unflown(&fresh, &done, &candidates, cfg, remaining);
+        let (near_flown, other_flown) = arm_counts(&done, &is_local);
+        let share = neighbours::local_flight_share(near_flown, other_flown);
+        let ranked = if cfg.adapt {
+            neighbours::rank_split(
+                &fresh,
+                |c| is_local.get(c as usize).copied().unwrap_or(false),
+                share,
+                &done,
+                &candidates,
+                cfg,
+                remaining,
+            )
+        } else {
+            rank_unflown(&fresh, &done, &candidates, cfg, remaining)
+        };
         progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates, LFS bias {bias:+.2} m learnt from {} flights; flying {}",
+            "round {} of {ROUNDS}: {} candidates ({local} near the closest flights), LFS bias {bias:+.2} m learnt \
+             from {} flights{}; flying {}",
             round + 1,
             hi - lo,
             done.len(),
+            surrogate.map_or(String::new(), |k| format!(
+                ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
+                k.bandwidth, k.loo_error_m, k.lfs_error_m
+            )),
             ranked.len()
         ));
         let t = Instant::now();
@@ -206,8 +257,11 @@ pub fn run_rounds(
             round,
             first_candidate: lo,
             candidates: (hi - lo) as usize,
+            local_candidates: is_local[lo as usize..hi as usize].iter().filter(|l| **l).count(),
+            local_flight_share: if cfg.adapt { share } else { 0.0 },
             flights,
             bias_m: bias,
+            surrogate,
             draw_means: std::array::from_fn(|d| distribution.mean(d)),
         });
         if cancel.load(std::sync::atomic::Ordering::Relaxed) {
@@ -217,23 +271,33 @@ pub fn run_rounds(
         let done = Journal::read(&journal_path)?;
         calibration = calibrated(&start_calibration, &done);
         if cfg.adapt {
-            // Back off when the failures grow alike, or when the round could not fill its share of the budget
-            // (a narrow distribution's candidates are near-duplicates of the flown tests).
+            // Back off when the failures grow alike (once there are enough of them to say so), or when the
+            // round could not fill its share of the budget (a narrow distribution's candidates are
+            // near-duplicates of the flown tests).
             let failing: Vec<Vec<Obstacle>> = done
                 .iter()
                 .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_M))
                 .map(|r| r.obstacles.clone())
                 .collect();
             let starved = flights < remaining;
-            let backoff = starved || diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
-            let (rate, floor) = if backoff { BACKOFF } else { (FIT_RATE, UNIFORM_FLOOR) };
-            distribution = distribution.fitted(&elites(&screened, &done, &units, &calibration), rate, floor);
+            let below_floor = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
+            alike = below_floor && failing.len() >= neighbours::MIN_FAILING_FOR_DIVERSITY;
+            let (rate, floor) = if starved || alike {
+                BACKOFF
+            } else {
+                (FIT_RATE, UNIFORM_FLOOR)
+            };
+            let points = flown_points(&done, &units, &calibration);
+            let kernel = Surrogate::fit(&points);
+            let predict = |s: &Screened| prediction(s, &calibration, kernel.as_ref(), &units, &points);
+            distribution = distribution.fitted(&elites(&screened, &done, &units, predict), rate, floor);
         }
         stages.learn_s += t.elapsed().as_secs_f64();
     }
     let failure_counts = counted_failures(&Journal::read(&journal_path)?, &units);
     let learnt = Learnt {
         calibration,
+        surrogate,
         distribution,
         rounds,
         failure_counts,
@@ -254,6 +318,52 @@ fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
     c
 }
 
+/// Flights and failures of the neighbour candidates and of the others (flights of candidates this run did
+/// not draw count as others).
+fn arm_counts(done: &[FlightRecord], is_local: &[bool]) -> (BinCount, BinCount) {
+    let (mut near, mut other) = (BinCount::default(), BinCount::default());
+    for r in done {
+        if let Some(d) = r.min_distance {
+            let arm = if is_local.get(r.candidate as usize).copied().unwrap_or(false) {
+                &mut near
+            } else {
+                &mut other
+            };
+            arm.flights += 1;
+            arm.failures += u32::from(d < FAIL_M);
+        }
+    }
+    (near, other)
+}
+
+/// What a round ranks a screened candidate by: the calibrated LFS, moved towards the flights near it.
+fn prediction(
+    s: &Screened,
+    calibration: &Calibration,
+    kernel: Option<&Surrogate>,
+    units: &[[f64; DIMS]],
+    points: &[Flown],
+) -> f64 {
+    let lfs = calibration.predict(s.min_distance);
+    match (kernel, units.get(s.candidate as usize)) {
+        (Some(k), Some(u)) => k.predict(u, lfs, points),
+        _ => lfs,
+    }
+}
+
+/// The journaled flights this run drew, with their calibrated LFS predictions: the surrogate's data.
+fn flown_points(done: &[FlightRecord], units: &[[f64; DIMS]], calibration: &Calibration) -> Vec<Flown> {
+    done.iter()
+        .filter_map(|r| {
+            Some(Flown {
+                unit: *units.get(r.candidate as usize)?,
+                lfs_m: calibration.predict(r.predicted_raw_min_distance?),
+                flown_m: r.min_distance.filter(|d| d.is_finite())?,
+            })
+        })
+        .collect()
+}
+
 /// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
 /// longer resumed run, are skipped).
 fn counted_failures(done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailureCounts {
@@ -271,20 +381,15 @@ fn elites(
     screened: &[Screened],
     done: &[FlightRecord],
     units: &[[f64; DIMS]],
-    calibration: &Calibration,
+    predict: impl Fn(&Screened) -> f64,
 ) -> Vec<([f64; DIMS], f64)> {
-    let mut order: Vec<&Screened> = screened.iter().collect();
-    order.sort_by(|a, b| {
-        calibration
-            .predict(a.min_distance)
-            .total_cmp(&calibration.predict(b.min_distance))
-            .then(a.candidate.cmp(&b.candidate))
-    });
+    let mut order: Vec<(&Screened, f64)> = screened.iter().map(|s| (s, predict(s))).collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
     let take = ((order.len() as f64 * ELITE_SHARE).ceil() as usize).max(1);
     let mut out: Vec<([f64; DIMS], f64)> = order
         .iter()
         .take(take)
-        .filter_map(|s| units.get(s.candidate as usize).map(|u| (*u, 1.0)))
+        .filter_map(|(s, _)| units.get(s.candidate as usize).map(|u| (*u, 1.0)))
         .collect();
     // The flights are the truth: the closest quarter of them (and every failure) weigh more than a prediction.
     let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.min_distance?))).collect();
@@ -333,7 +438,7 @@ mod tests {
             .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
             .collect();
         let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
-        let e = elites(&screened, &done, &units, &c);
+        let e = elites(&screened, &done, &units, |s| c.predict(s.min_distance));
         // The best 10 % (candidate 0), then the closest quarter of the flights, which is also the one failure
         // (candidate 1, 1.2 m), at the flights' weight.
         assert_eq!(e.len(), 2);
@@ -351,6 +456,7 @@ mod tests {
         assert!(load_prior(dir.path()).unwrap_err().to_string().contains("learnt.json"));
         let mut l = Learnt {
             calibration: Calibration::default(),
+            surrogate: None,
             distribution: DrawDistribution::uniform(),
             rounds: Vec::new(),
             failure_counts: FailureCounts::default(),

@@ -261,6 +261,7 @@ pub fn run_campaign(
             0..candidates.len() as u64,
             "screening.json",
             &DrawDistribution::uniform(),
+            &[],
         )?
     } else {
         // Every candidate "predicted" at 0 m: the ranking then keeps the order they were drawn in.
@@ -279,7 +280,7 @@ pub fn run_campaign(
         let t = Instant::now();
         let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
         let members = ensemble_shortlist(&ctx, &fresh, cfg, shortlist)?;
-        apply_ensemble(&mut fresh, &members, &screener.ensemble_params(), 0.0);
+        apply_ensemble(&mut fresh, &members, &screener.ensemble_params());
         stages.ensemble_s = t.elapsed().as_secs_f64();
     }
     let ranked = rank_unflown(&fresh, &done, &candidates, cfg, remaining);

@@ -337,6 +337,15 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     // The draws moved towards the elites.
     assert!(!learnt.distribution.is_uniform());
     assert!(learnt.rounds[1].draw_means != [0.5; 5]);
+    // After the first flights, candidates are also drawn around the closest ones, except while the failing
+    // tests are less diverse than the floor (this vehicle fails in one place).
+    assert_eq!(learnt.rounds[0].local_candidates, 0);
+    for round in &learnt.rounds[1..] {
+        use crate::campaign::neighbours::{PARENTS, PER_PARENT};
+        assert!(round.local_candidates % PER_PARENT == 0 && round.local_candidates <= PARENTS * PER_PARENT);
+        assert!((0.25..=0.85).contains(&round.local_flight_share), "{round:?}");
+    }
+    assert!(learnt.rounds.iter().filter(|r| r.local_candidates > 0).count() >= 3);
     assert!(dir.path().join("learnt.json").is_file());
     // Every flight counts in the failure model, under each draw.
     assert_eq!(learnt.failure_counts.total.flights, 12);

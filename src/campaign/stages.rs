@@ -14,7 +14,7 @@ use super::parallel::{available_threads, parallel_map};
 use super::pool::{Job, Vehicle, fly_all};
 use super::rank::{Screened, rank};
 use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
-use crate::generator::DrawDistribution;
+use crate::generator::{DrawDistribution, Neighbourhood};
 use crate::io::write_atomic;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
 use crate::model::{Obstacle, TestCase};
@@ -39,33 +39,36 @@ pub struct Stage<'a> {
     pub cancel: &'a AtomicBool,
 }
 
-/// A screening cache: the predictions and the draw distribution the candidates came from.
+/// A screening cache: the predictions and the draw distribution (and neighbourhoods) the candidates came from.
 #[derive(Serialize, Deserialize)]
 struct ScreenCache {
     distribution: DrawDistribution,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    around: Vec<Neighbourhood>,
     screened: Vec<Screened>,
 }
 
 /// Screens candidates `range` on every core; cached in `folder/cache_name` (reused only for the same
-/// candidates from the same distribution).
+/// candidates from the same distribution and the same parents' neighbourhoods `around`).
 pub fn screen_all(
     ctx: &Stage,
     range: Range<u64>,
     cache_name: &str,
     distribution: &DrawDistribution,
+    around: &[Neighbourhood],
 ) -> Result<Vec<Screened>, CampaignError> {
     let cache = ctx.folder.join(cache_name);
     let want = (range.end - range.start) as usize;
     if let Ok(text) = std::fs::read_to_string(&cache) {
         let cached = serde_json::from_str::<ScreenCache>(&text)
             .ok()
-            .filter(|c| &c.distribution == distribution)
+            .filter(|c| &c.distribution == distribution && c.around == around)
             .map(|c| c.screened)
             // Campaigns before adaptive generators cached the bare list (always the uniform distribution).
             .or_else(|| {
                 serde_json::from_str::<Vec<Screened>>(&text)
                     .ok()
-                    .filter(|_| distribution.is_uniform())
+                    .filter(|_| distribution.is_uniform() && around.is_empty())
             });
         if let Some(cached) = cached
             && cached.len() == want
@@ -95,6 +98,7 @@ pub fn screen_all(
     }
     let json = serde_json::to_string(&ScreenCache {
         distribution: distribution.clone(),
+        around: around.to_vec(),
         screened: screened.clone(),
     })
     .unwrap_or_default();
@@ -157,13 +161,15 @@ pub fn ensemble_shortlist(
     Ok(cache)
 }
 
-/// Sets `p_fail` and expected points of every candidate with members, each member moved by `bias_m` (the
-/// online calibration's learnt offset; 0 without learning).
-pub fn apply_ensemble(fresh: &mut [Screened], members: &BTreeMap<u64, Vec<f64>>, params: &EnsembleParams, bias_m: f64) {
+/// Sets `p_fail` and expected points of every candidate with members, each member moved as far as the
+/// candidate's prediction was moved from the LFS's own (`min_distance - raw_min_distance`: the online
+/// calibration and the flights' surrogate; 0 without learning).
+pub fn apply_ensemble(fresh: &mut [Screened], members: &BTreeMap<u64, Vec<f64>>, params: &EnsembleParams) {
     for s in fresh.iter_mut() {
         if let Some(m) = members.get(&s.candidate) {
+            let shift = s.raw_min_distance.map_or(0.0, |raw| s.min_distance - raw);
             let e = Ensemble {
-                member_min_distances: m.iter().map(|d| (d + bias_m).max(0.0)).collect(),
+                member_min_distances: m.iter().map(|d| (d + shift).max(0.0)).collect(),
                 fork_cycle: 0,
             };
             s.p_fail = e.p_fail(params);

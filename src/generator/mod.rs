@@ -6,7 +6,7 @@ mod config;
 mod placement;
 mod soi;
 
-pub use adaptive::DrawDistribution;
+pub use adaptive::{DrawDistribution, Neighbourhood, Proposal};
 pub use config::GeneratorConfig;
 pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
 pub use soi::{Soi, SoiKind, segment_of_interest};
@@ -66,7 +66,7 @@ pub struct Generator {
     soi: Soi,
     mirror: Mirror,
     a_side: Side,
-    distribution: DrawDistribution,
+    proposal: Proposal,
 }
 
 impl Generator {
@@ -95,19 +95,24 @@ impl Generator {
             soi,
             mirror,
             a_side,
-            distribution: DrawDistribution::uniform(),
+            proposal: Proposal::Histogram(Box::default()),
         })
     }
 
     /// The same generator drawing from `distribution` (an adaptive campaign's learnt one).
-    pub fn with_distribution(mut self, distribution: DrawDistribution) -> Self {
-        self.distribution = distribution;
+    pub fn with_distribution(self, distribution: DrawDistribution) -> Self {
+        self.with_proposal(Proposal::Histogram(Box::new(distribution)))
+    }
+
+    /// The same generator drawing from `proposal` (a histogram, or the neighbourhood of a flown test).
+    pub fn with_proposal(mut self, proposal: Proposal) -> Self {
+        self.proposal = proposal;
         self
     }
 
-    /// The distribution of the draws.
-    pub fn distribution(&self) -> &DrawDistribution {
-        &self.distribution
+    /// Where the draws come from.
+    pub fn proposal(&self) -> &Proposal {
+        &self.proposal
     }
 
     /// The segment of interest.
@@ -136,7 +141,7 @@ impl Generator {
                 self.mirror,
                 &self.arena,
                 &self.config,
-                &self.distribution,
+                &self.proposal,
             ) else {
                 continue;
             };

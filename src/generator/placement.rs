@@ -2,7 +2,7 @@
 
 use rand::Rng;
 
-use super::adaptive::{DIMS, DrawDistribution};
+use super::adaptive::{DIMS, Proposal};
 use super::config::GeneratorConfig;
 use super::soi::{Soi, SoiKind};
 use crate::geometry::{P2, V2};
@@ -99,7 +99,7 @@ pub struct Draw {
     /// Where the SoI crosses obstacle 1's long axis (world frame, `x` North, `y` East).
     #[serde(serialize_with = "ser_p2")]
     pub crossing: P2,
-    /// The five draws in [0, 1] as used (after the [`DrawDistribution`]): what an adaptive campaign learns from.
+    /// The five draws in [0, 1] as used (after the [`Proposal`]): what an adaptive campaign learns from.
     pub unit: [f64; DIMS],
 }
 
@@ -110,14 +110,14 @@ fn ser_p2<S: serde::Serializer>(p: &P2, s: S) -> Result<S::Ok, S::Error> {
 /// Draws one candidate pair of obstacles; `None` when the draw cannot fit (the caller draws again).
 ///
 /// Always makes exactly five draws from `rng`, so a test's numbers do not depend on earlier rejections' paths;
-/// `dist` shapes where in their ranges they fall (uniform: the paper's generator).
+/// `dist` shapes where in their ranges they fall (a uniform histogram: the paper's generator).
 pub fn draw_pair(
     rng: &mut impl Rng,
     soi: &Soi,
     mirror: Mirror,
     arena: &Arena,
     cfg: &GeneratorConfig,
-    dist: &DrawDistribution,
+    dist: &Proposal,
 ) -> Option<(Draw, [Obstacle; 2])> {
     let raw = [0; DIMS].map(|_| rng.random::<f64>());
     let mut u = raw;

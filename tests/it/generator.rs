@@ -264,3 +264,31 @@ fn an_adapted_distribution_keeps_the_rules_and_shapes_the_draws() {
         assert_eq!(plain.sample(i).unwrap(), uniform.sample(i).unwrap());
     }
 }
+
+/// Neighbour proposals (the adapted campaign's draws around its closest flights) keep every rule, stay in
+/// their parent's box and are deterministic per seed, on every mission.
+#[test]
+fn neighbour_proposals_keep_the_rules_and_stay_near_their_parent() {
+    use prgenuav::generator::{Neighbourhood, Proposal};
+    let cfg = GeneratorConfig::default();
+    for n in 1..=3 {
+        let c = case(n);
+        let plain = Generator::new(&c, cfg.clone(), 11).unwrap();
+        for parent_index in [0, 7] {
+            let centre = plain.sample(parent_index).unwrap().draw.unit;
+            let around = Neighbourhood {
+                centre,
+                half_width: 0.1,
+            };
+            let g = plain.clone().with_proposal(Proposal::Around(around));
+            for i in 100..160 {
+                let p = g.sample(i).unwrap();
+                verify(&p, &g, &c.mission);
+                for (u, c) in p.draw.unit.iter().zip(&centre) {
+                    assert!((u - c).abs() <= 0.1 + 1e-12, "{:?}", p.draw.unit);
+                }
+                assert_eq!(g.sample(i).unwrap(), p, "same seed, same parent, same test");
+            }
+        }
+    }
+}

@@ -1,0 +1,143 @@
+//! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
+//! draw space around the campaign's closest flights so far (its *parents*), where the next failures are
+//! likeliest (a test's flown distance and its nearest neighbour's correlate at 0.68 on the embedded mock,
+//! mission 2). They come on top of the round's candidates from the histogram distribution
+//! ([`crate::generator::adaptive`]), which keep the campaign exploring; the near-duplicate filter keeps a child
+//! from repeating its parent (children overlapping their parent by more than the default 0.5 IoU, mission 2, 40
+//! parents x 20 children: 84 % at a half width of 0.05, 51 % at 0.1, 31 % at [`HALF_WIDTH`] 0.15, 12 % at 0.3).
+
+use super::failure_counts::BinCount;
+use super::journal::FlightRecord;
+use super::rank::Screened;
+use super::run::{CampaignConfig, too_similar};
+use super::stages::rank_unflown;
+use crate::generator::adaptive::{DIMS, Neighbourhood};
+use crate::model::Obstacle;
+
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7) and
+/// does not pause the neighbour proposals.
+pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
+/// Candidates drawn around each parent per round.
+pub const PER_PARENT: usize = 6;
+/// Parents per round: the closest flights so far.
+pub const PARENTS: usize = 6;
+/// Half the side of a parent's box, in unit draws (15 % of each range either side).
+pub const HALF_WIDTH: f64 = 0.15;
+
+/// Bounds of the share of a round's flights given to neighbour candidates: never all (the histogram still
+/// explores), never none (their rate is still measured).
+pub const LOCAL_FLIGHT_SHARE: (f64, f64) = (0.25, 0.85);
+
+/// The neighbourhoods of the closest flights in `done` (at most [`PARENTS`], closest first; ties by
+/// candidate); flights of candidates this run did not draw are skipped.
+pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]]) -> Vec<Neighbourhood> {
+    let mut flown: Vec<(f64, u64, [f64; DIMS])> = done
+        .iter()
+        .filter_map(|r| Some((r.min_distance?, r.candidate, *units.get(r.candidate as usize)?)))
+        .filter(|(d, _, _)| d.is_finite())
+        .collect();
+    flown.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    flown
+        .into_iter()
+        .take(PARENTS)
+        .map(|(_, _, centre)| Neighbourhood {
+            centre,
+            half_width: HALF_WIDTH,
+        })
+        .collect()
+}
+
+/// Share of a round's flights for neighbour candidates: their failure rate so far over the sum of theirs and
+/// the histogram's (Laplace-smoothed, so 0.5 before any flight), within [`LOCAL_FLIGHT_SHARE`]. The arm that
+/// finds failures gets the flights; on a stack where neighbours fail no more often, the split stays even.
+pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
+    let rate = |c: BinCount| (f64::from(c.failures) + 1.0) / (f64::from(c.flights) + 2.0);
+    let (l, h) = (rate(local), rate(histogram));
+    (l / (l + h)).clamp(LOCAL_FLIGHT_SHARE.0, LOCAL_FLIGHT_SHARE.1)
+}
+
+/// The round's flights: the best `share` of `remaining` among the neighbour candidates (`is_local`), the rest
+/// from all others, then neighbours again if the others run out; near-duplicates of any flown or chosen test
+/// skipped.
+pub fn rank_split(
+    fresh: &[Screened],
+    is_local: impl Fn(u64) -> bool,
+    share: f64,
+    done: &[FlightRecord],
+    candidates: &[Vec<Obstacle>],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Vec<Screened> {
+    let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
+    let quota = (remaining as f64 * share).round() as usize;
+    let mut chosen = rank_unflown(&near, done, candidates, cfg, quota.min(remaining));
+    let distinct = |chosen: &[Screened], s: &Screened| {
+        !chosen.iter().any(|c| {
+            too_similar(
+                &candidates[c.candidate as usize],
+                &candidates[s.candidate as usize],
+                cfg.max_iou,
+            )
+        })
+    };
+    for pool in [&other, &near] {
+        for s in rank_unflown(pool, done, candidates, cfg, usize::MAX) {
+            if chosen.len() >= remaining {
+                return chosen;
+            }
+            if chosen.iter().all(|c| c.candidate != s.candidate) && distinct(&chosen, &s) {
+                chosen.push(s);
+            }
+        }
+    }
+    chosen
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(candidate: u64, flown: Option<f64>) -> FlightRecord {
+        FlightRecord {
+            candidate,
+            obstacles: Vec::new(),
+            predicted_min_distance: 1.0,
+            predicted_flight_time_s: 60.0,
+            predicted_p_fail: None,
+            predicted_raw_min_distance: Some(1.0),
+            min_distance: flown,
+            min_distance_raw: flown,
+            status: "landed".into(),
+            flight_time_s: 60.0,
+            warnings: Vec::new(),
+            vehicle: "x".into(),
+            trajectory: "t.csv".into(),
+            wall_s: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_closest_flights_are_the_parents() {
+        let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
+        let mut done: Vec<FlightRecord> = (0..9).map(|i| record(i, Some(3.0 - i as f64 * 0.2))).collect();
+        done.push(record(9, None));
+        done.push(record(42, Some(0.1)));
+        let p = parents(&done, &units);
+        assert_eq!(p.len(), PARENTS);
+        // Candidate 8 flew closest (1.4 m); 42 is not this run's; 9 has no distance.
+        assert_eq!(p[0].centre, units[8]);
+        assert_eq!(p[PARENTS - 1].centre, units[3]);
+        assert!(p.iter().all(|n| n.half_width == HALF_WIDTH));
+        assert!(parents(&[], &units).is_empty());
+    }
+
+    #[test]
+    fn the_arm_that_fails_more_gets_more_flights() {
+        let c = |flights, failures| BinCount { flights, failures };
+        assert_eq!(local_flight_share(c(0, 0), c(0, 0)), 0.5);
+        // 5 of 18 against 4 of 82: (6/20) / (6/20 + 5/84) = 0.834.
+        assert!((local_flight_share(c(18, 5), c(82, 4)) - 0.8344).abs() < 1e-3);
+        assert_eq!(local_flight_share(c(40, 20), c(40, 0)), LOCAL_FLIGHT_SHARE.1);
+        assert_eq!(local_flight_share(c(40, 0), c(40, 20)), LOCAL_FLIGHT_SHARE.0);
+    }
+}
