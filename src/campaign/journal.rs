@@ -126,6 +126,27 @@ impl Journal {
     }
 }
 
+/// A landed flight with no obstacles for tests: `raw` predicted, `flown` measured.
+#[cfg(test)]
+pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> FlightRecord {
+    FlightRecord {
+        candidate,
+        obstacles: Vec::new(),
+        predicted_min_distance: raw,
+        predicted_flight_time_s: 60.0,
+        predicted_p_fail: None,
+        predicted_raw_min_distance: Some(raw),
+        min_distance: flown,
+        min_distance_raw: flown,
+        status: "landed".into(),
+        flight_time_s: 60.0,
+        warnings: Vec::new(),
+        vehicle: "x".into(),
+        trajectory: "t.csv".into(),
+        wall_s: 1.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

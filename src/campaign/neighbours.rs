@@ -98,22 +98,7 @@ mod tests {
     use super::*;
 
     fn record(candidate: u64, flown: Option<f64>) -> FlightRecord {
-        FlightRecord {
-            candidate,
-            obstacles: Vec::new(),
-            predicted_min_distance: 1.0,
-            predicted_flight_time_s: 60.0,
-            predicted_p_fail: None,
-            predicted_raw_min_distance: Some(1.0),
-            min_distance: flown,
-            min_distance_raw: flown,
-            status: "landed".into(),
-            flight_time_s: 60.0,
-            warnings: Vec::new(),
-            vehicle: "x".into(),
-            trajectory: "t.csv".into(),
-            wall_s: 1.0,
-        }
+        crate::campaign::journal::test_record(candidate, 1.0, flown)
     }
 
     #[test]

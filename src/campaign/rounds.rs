@@ -410,22 +410,7 @@ mod tests {
     use super::*;
 
     fn record(candidate: u64, raw: f64, flown: f64) -> FlightRecord {
-        FlightRecord {
-            candidate,
-            obstacles: Vec::new(),
-            predicted_min_distance: raw,
-            predicted_flight_time_s: 60.0,
-            predicted_p_fail: None,
-            predicted_raw_min_distance: Some(raw),
-            min_distance: Some(flown),
-            min_distance_raw: Some(flown),
-            status: "landed".into(),
-            flight_time_s: 60.0,
-            warnings: Vec::new(),
-            vehicle: "x".into(),
-            trajectory: "t.csv".into(),
-            wall_s: 1.0,
-        }
+        crate::campaign::journal::test_record(candidate, raw, Some(flown))
     }
 
     #[test]
