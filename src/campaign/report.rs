@@ -82,7 +82,7 @@ pub struct SuiteSummary {
     /// that had an ensemble (the flown tests are the ranking's top, so this is not a random sample).
     pub lfs_p_fail_brier: Option<f64>,
     /// Mean |predicted - flown| over the first quarter of the flights (in flight order), with the prediction
-    /// the campaign ranked by (calibrated in a learning campaign), metres.
+    /// the campaign ranked by (in a learning campaign: calibrated, and moved by the flights' kernel), metres.
     pub lfs_error_first_quarter_m: Option<f64>,
     /// The same over the last quarter.
     pub lfs_error_last_quarter_m: Option<f64>,
