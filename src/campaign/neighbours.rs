@@ -69,8 +69,9 @@ pub fn rank_split(
     remaining: usize,
 ) -> Vec<Screened> {
     let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
-    let quota = (remaining as f64 * share).round() as usize;
-    let mut chosen = rank_unflown(&near, done, candidates, cfg, quota.min(remaining));
+    let quota = ((remaining as f64 * share).round() as usize).min(remaining);
+    let near = rank_unflown(&near, done, candidates, cfg, usize::MAX);
+    let mut chosen: Vec<Screened> = near.iter().take(quota).cloned().collect();
     let distinct = |chosen: &[Screened], s: &Screened| {
         !chosen.iter().any(|c| {
             too_similar(
@@ -80,14 +81,13 @@ pub fn rank_split(
             )
         })
     };
-    for pool in [&other, &near] {
-        for s in rank_unflown(pool, done, candidates, cfg, usize::MAX) {
-            if chosen.len() >= remaining {
-                return chosen;
-            }
-            if chosen.iter().all(|c| c.candidate != s.candidate) && distinct(&chosen, &s) {
-                chosen.push(s);
-            }
+    let others = rank_unflown(&other, done, candidates, cfg, usize::MAX);
+    for s in others.into_iter().chain(near.into_iter().skip(quota)) {
+        if chosen.len() >= remaining {
+            return chosen;
+        }
+        if chosen.iter().all(|c| c.candidate != s.candidate) && distinct(&chosen, &s) {
+            chosen.push(s);
         }
     }
     chosen

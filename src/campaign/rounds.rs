@@ -129,6 +129,7 @@ pub fn run_rounds(
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
     let mut surrogate = None;
+    let mut carried: Option<Learning> = None;
     // Neighbour proposals pause while the failing tests are less diverse than the user's floor.
     let mut alike = false;
     let per_round = cfg.candidates.div_ceil(ROUNDS);
@@ -193,11 +194,15 @@ pub fn run_rounds(
         // towards the flights near them.
         let t = Instant::now();
         let done = Journal::read(&journal_path)?;
-        calibration = calibrated(&start_calibration, &done);
+        // The last round's learning still holds when no flight has landed since.
+        let taught = match carried.take() {
+            Some(l) if l.journaled == done.len() => l,
+            _ => Learning::from(&start_calibration, &done, &units),
+        };
+        calibration = taught.calibration.clone();
+        surrogate = taught.kernel;
         let bias = calibration.bias_m();
-        let points = flown_points(&done, &units, &calibration);
-        surrogate = Surrogate::fit(&points);
-        let predict = |s: &Screened| prediction(s, &calibration, surrogate.as_ref(), &units, &points);
+        let predict = |s: &Screened| taught.predict(s, &units);
         let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
         let mut fresh: Vec<Screened> = screened
             .iter()
@@ -269,7 +274,8 @@ pub fn run_rounds(
         }
         let t = Instant::now();
         let done = Journal::read(&journal_path)?;
-        calibration = calibrated(&start_calibration, &done);
+        let taught = Learning::from(&start_calibration, &done, &units);
+        calibration = taught.calibration.clone();
         if cfg.adapt {
             // Back off when the failures grow alike (once there are enough of them to say so), or when the
             // round could not fill its share of the budget (a narrow distribution's candidates are
@@ -287,11 +293,10 @@ pub fn run_rounds(
             } else {
                 (FIT_RATE, UNIFORM_FLOOR)
             };
-            let points = flown_points(&done, &units, &calibration);
-            let kernel = Surrogate::fit(&points);
-            let predict = |s: &Screened| prediction(s, &calibration, kernel.as_ref(), &units, &points);
+            let predict = |s: &Screened| taught.predict(s, &units);
             distribution = distribution.fitted(&elites(&screened, &done, &units, predict), rate, floor);
         }
+        carried = Some(taught);
         stages.learn_s += t.elapsed().as_secs_f64();
     }
     let failure_counts = counted_failures(&Journal::read(&journal_path)?, &units);
@@ -336,32 +341,45 @@ fn arm_counts(done: &[FlightRecord], is_local: &[bool]) -> (BinCount, BinCount) 
     (near, other)
 }
 
-/// What a round ranks a screened candidate by: the calibrated LFS, moved towards the flights near it.
-fn prediction(
-    s: &Screened,
-    calibration: &Calibration,
-    kernel: Option<&Surrogate>,
-    units: &[[f64; DIMS]],
-    points: &[Flown],
-) -> f64 {
-    let lfs = calibration.predict(s.min_distance);
-    match (kernel, units.get(s.candidate as usize)) {
-        (Some(k), Some(u)) => k.predict(u, lfs, points),
-        _ => lfs,
-    }
+/// What the journal teaches: the calibration, and the flights' kernel over the flights this run drew.
+struct Learning {
+    /// Journal records it learnt from.
+    journaled: usize,
+    calibration: Calibration,
+    points: Vec<Flown>,
+    kernel: Option<Surrogate>,
 }
 
-/// The journaled flights this run drew, with their calibrated LFS predictions: the surrogate's data.
-fn flown_points(done: &[FlightRecord], units: &[[f64; DIMS]], calibration: &Calibration) -> Vec<Flown> {
-    done.iter()
-        .filter_map(|r| {
-            Some(Flown {
-                unit: *units.get(r.candidate as usize)?,
-                lfs_m: calibration.predict(r.predicted_raw_min_distance?),
-                flown_m: r.min_distance.filter(|d| d.is_finite())?,
+impl Learning {
+    fn from(start: &Calibration, done: &[FlightRecord], units: &[[f64; DIMS]]) -> Self {
+        let calibration = calibrated(start, done);
+        let points: Vec<Flown> = done
+            .iter()
+            .filter_map(|r| {
+                Some(Flown {
+                    unit: *units.get(r.candidate as usize)?,
+                    lfs_m: calibration.predict(r.predicted_raw_min_distance?),
+                    flown_m: r.min_distance.filter(|d| d.is_finite())?,
+                })
             })
-        })
-        .collect()
+            .collect();
+        let kernel = Surrogate::fit(&points);
+        Self {
+            journaled: done.len(),
+            calibration,
+            points,
+            kernel,
+        }
+    }
+
+    /// What a round ranks a screened candidate by: the calibrated LFS, moved towards the flights near it.
+    fn predict(&self, s: &Screened, units: &[[f64; DIMS]]) -> f64 {
+        let lfs = self.calibration.predict(s.min_distance);
+        match (&self.kernel, units.get(s.candidate as usize)) {
+            (Some(k), Some(u)) => k.predict(u, lfs, &self.points),
+            _ => lfs,
+        }
+    }
 }
 
 /// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
