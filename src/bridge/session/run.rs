@@ -81,6 +81,7 @@ pub async fn run(
         Err(stop) => stop,
     };
     s.restore_params().await;
+    let trajectory = recorder.finish();
     if let Some(e) = recorder.write_error() {
         s.warnings.push(format!("trajectory CSV incomplete: {e}"));
     }
@@ -101,7 +102,7 @@ pub async fn run(
     let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
     let clock = clock_report.lock().map(|c| c.clone()).ok();
     Ok(FlightReport::judge(
-        recorder.trajectory(),
+        trajectory,
         &s.test.obstacles,
         Ending {
             judge: opts.judge,
