@@ -24,6 +24,9 @@ pub const PARENTS: usize = 6;
 /// Half the side of a parent's box, in unit draws (15 % of each range either side).
 pub const HALF_WIDTH: f64 = 0.15;
 
+/// Valid draws a parent's box may offer for one child before it gives way to the histogram.
+pub const CHILD_TRIES: u32 = 64;
+
 /// Bounds of the share of a round's flights given to neighbour candidates: never all (the histogram still
 /// explores), never none (their rate is still measured).
 pub const LOCAL_FLIGHT_SHARE: (f64, f64) = (0.25, 0.85);
@@ -45,6 +48,12 @@ pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]]) -> Vec<Neighbourhoo
             half_width: HALF_WIDTH,
         })
         .collect()
+}
+
+/// Whether `child` overlaps none of `tests` by more than `max_iou`: the campaign's near-duplicate rule, asked
+/// before screening so a box spends its draws on children that can be flown.
+pub fn distinct<'a>(child: &[Obstacle], mut tests: impl Iterator<Item = &'a Vec<Obstacle>>, max_iou: f64) -> bool {
+    !tests.any(|t| too_similar(child, t, max_iou))
 }
 
 /// Share of a round's flights for neighbour candidates: their failure rate so far over the sum of theirs and
@@ -114,6 +123,18 @@ mod tests {
         assert_eq!(p[PARENTS - 1].centre, units[3]);
         assert!(p.iter().all(|n| n.half_width == HALF_WIDTH));
         assert!(parents(&[], &units).is_empty());
+    }
+
+    #[test]
+    fn a_child_is_distinct_when_it_overlaps_no_test_beyond_the_limit() {
+        let at = |x: f64| vec![Obstacle::new(4.0, 4.0, 10.0, x, 10.0, 0.0)];
+        let tests = [at(0.0), at(20.0)];
+        // Shifted by 1 m of 4: IoU 3/5 = 0.6.
+        assert!(!distinct(&at(1.0), tests.iter(), 0.5));
+        assert!(distinct(&at(1.0), tests.iter(), 0.7));
+        // Shifted by 2 m: IoU 2/6.
+        assert!(distinct(&at(2.0), tests.iter(), 0.5));
+        assert!(distinct(&at(0.0), std::iter::empty(), 0.5));
     }
 
     #[test]

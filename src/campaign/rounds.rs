@@ -145,8 +145,9 @@ pub fn run_rounds(
             per_round
         };
         let t = Instant::now();
+        let before = Journal::read(&journal_path)?;
         let around = if cfg.adapt && !alike {
-            neighbours::parents(&Journal::read(&journal_path)?, &units)
+            neighbours::parents(&before, &units)
         } else {
             Vec::new()
         };
@@ -160,11 +161,26 @@ pub fn run_rounds(
             .iter()
             .map(|n| base.clone().with_proposal(Proposal::Around(*n)))
             .collect();
+        // A child must differ from every flown test and from its siblings, or the near-duplicate filter drops
+        // it before flight: each box offers distinct neighbours of its parent, not copies.
+        let flown_tests: Vec<Vec<Obstacle>> = match local {
+            0 => Vec::new(),
+            _ => before.iter().map(|r| r.obstacles.clone()).collect(),
+        };
+        let mut children: Vec<Vec<Obstacle>> = Vec::new();
         for (k, i) in (lo..hi).enumerate() {
             // The round's last `local` candidates come from the parents' boxes, in turn.
-            // A parent's box with no room left falls back to the histogram.
-            let (p, from_box) = match k.checked_sub(count - local).map(|j| near[j % near.len()].sample(i)) {
-                Some(Ok(p)) => (p, true),
+            // A parent's box with no room left (or no distinct child) falls back to the histogram.
+            let child = k.checked_sub(count - local).map(|j| {
+                near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| {
+                    neighbours::distinct(o, flown_tests.iter().chain(&children), cfg.max_iou)
+                })
+            });
+            let (p, from_box) = match child {
+                Some(Ok(p)) => {
+                    children.push(p.obstacles.to_vec());
+                    (p, true)
+                }
                 _ => (histogram.sample(i)?, false),
             };
             candidates.push(p.obstacles.to_vec());
@@ -352,6 +368,11 @@ struct Learning {
 
 impl Learning {
     fn from(start: &Calibration, done: &[FlightRecord], units: &[[f64; DIMS]]) -> Self {
+        // Parallel vehicles journal a round's flights in the order they land; learning in candidate order
+        // keeps the campaign a function of its seed.
+        let mut done = done.to_vec();
+        done.sort_by_key(|r| r.candidate);
+        let done = &done[..];
         let calibration = calibrated(start, done);
         let points: Vec<Flown> = done
             .iter()

@@ -342,7 +342,8 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     assert_eq!(learnt.rounds[0].local_candidates, 0);
     for round in &learnt.rounds[1..] {
         use crate::campaign::neighbours::{PARENTS, PER_PARENT};
-        assert!(round.local_candidates % PER_PARENT == 0 && round.local_candidates <= PARENTS * PER_PARENT);
+        // A box without a distinct child gives its draw to the histogram.
+        assert!(round.local_candidates <= PARENTS * PER_PARENT, "{round:?}");
         assert!((0.25..=0.85).contains(&round.local_flight_share), "{round:?}");
     }
     assert!(learnt.rounds.iter().filter(|r| r.local_candidates > 0).count() >= 3);

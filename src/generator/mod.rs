@@ -40,6 +40,14 @@ pub enum GenerateError {
         /// The SoI.
         soi: Soi,
     },
+    /// Every valid draw was refused by the caller's filter.
+    #[error("no draw for test {index} passed the campaign's filter in {asked} valid draws")]
+    Refused {
+        /// The test's index.
+        index: u64,
+        /// Valid draws offered to the filter.
+        asked: u32,
+    },
 }
 
 /// One generated test: its obstacles and how they were drawn.
@@ -132,8 +140,21 @@ impl Generator {
 
     /// Test number `index`: redraws until the pair passes every rule, at most `max_attempts` times.
     pub fn sample(&self, index: u64) -> Result<Placement, GenerateError> {
+        self.sample_where(index, u32::MAX, |_| true)
+    }
+
+    /// Test number `index` as [`Self::sample`], from the first valid draw that `accept` also takes (a
+    /// campaign's own filter, e.g. no near-duplicate of a flown test), asking it at most `max_asked` times.
+    /// Still a function of the seed, `index` and the filter's answers only.
+    pub fn sample_where(
+        &self,
+        index: u64,
+        max_asked: u32,
+        accept: impl Fn(&[Obstacle; 2]) -> bool,
+    ) -> Result<Placement, GenerateError> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(index);
+        let mut asked = 0;
         for attempt in 1..=self.config.max_attempts {
             let Some((draw, obstacles)) = placement::draw_pair(
                 &mut rng,
@@ -146,6 +167,13 @@ impl Generator {
                 continue;
             };
             if check_obstacles(&obstacles, &self.mission, &self.arena).is_empty() {
+                if !accept(&obstacles) {
+                    asked += 1;
+                    if asked >= max_asked {
+                        return Err(GenerateError::Refused { index, asked });
+                    }
+                    continue;
+                }
                 return Ok(Placement {
                     index,
                     obstacles,

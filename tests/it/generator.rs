@@ -292,3 +292,45 @@ fn neighbour_proposals_keep_the_rules_and_stay_near_their_parent() {
         }
     }
 }
+
+/// A campaign's filter on the draws (the adapted campaign asks its boxes for children that are no
+/// near-duplicate of a flown test): what it takes obeys it and every rule, the same filter gives the same test,
+/// and a filter that takes nothing is a bounded, named refusal.
+#[test]
+fn a_filtered_draw_obeys_the_filter_and_the_rules() {
+    use prgenuav::generator::{GenerateError, Neighbourhood, Proposal};
+    use prgenuav::geometry::union_iou;
+    let iou = |a: &[Obstacle], b: &[Obstacle]| {
+        let f = |o: &[Obstacle]| o.iter().map(Obstacle::footprint).collect::<Vec<_>>();
+        union_iou(&f(a), &f(b))
+    };
+    for n in 1..=3 {
+        let c = case(n);
+        let plain = Generator::new(&c, GeneratorConfig::default(), 5).unwrap();
+        let parent = plain.sample(3).unwrap();
+        let around = Neighbourhood {
+            centre: parent.draw.unit,
+            half_width: 0.15,
+        };
+        let g = plain.clone().with_proposal(Proposal::Around(around));
+        let mut refused_plain = 0;
+        for i in 200..240 {
+            let distinct = |o: &[Obstacle; 2]| iou(o, &parent.obstacles) <= 0.5;
+            let p = g.sample_where(i, 64, distinct).unwrap();
+            verify(&p, &g, &c.mission);
+            assert!(iou(&p.obstacles, &parent.obstacles) <= 0.5, "mission {n}, test {i}");
+            assert_eq!(g.sample_where(i, 64, distinct).unwrap(), p);
+            refused_plain += usize::from(!distinct(&g.sample(i).unwrap().obstacles));
+            // Accepting everything is the plain draw.
+            assert_eq!(g.sample_where(i, 64, |_| true).unwrap(), g.sample(i).unwrap());
+        }
+        assert!(
+            refused_plain > 0,
+            "mission {n}: some plain children are near-duplicates of the parent"
+        );
+        match g.sample_where(7, 5, |_| false) {
+            Err(GenerateError::Refused { index: 7, asked: 5 }) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+}
