@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::failure_counts::FailureCounts;
+use super::failure_counts::{BinCount, FailureCounts};
 use super::surrogate::Surrogate;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 
@@ -126,6 +126,12 @@ pub struct Learnt {
     /// Where the flights failed, per draw bin (a diagnostic for the report; not carried by `--prior`).
     #[serde(default)]
     pub failure_counts: FailureCounts,
+    /// Flights and failures of the candidates drawn near failing flights ([`super::neighbours`]) ...
+    #[serde(default)]
+    pub drawn_near_failures: BinCount,
+    /// ... and of all the others (a diagnostic: did the boxes pay on this vehicle?).
+    #[serde(default)]
+    pub drawn_elsewhere: BinCount,
 }
 
 /// One round.
@@ -137,7 +143,7 @@ pub struct RoundLog {
     pub first_candidate: u64,
     /// Candidates drawn in it.
     pub candidates: usize,
-    /// Of them, drawn around the closest flights so far ([`super::neighbours`]).
+    /// Of them, drawn around the failing flights so far ([`super::neighbours`]).
     #[serde(default)]
     pub local_candidates: usize,
     /// Share of its flights offered to neighbour candidates ([`super::neighbours::local_flight_share`]; 0

@@ -377,6 +377,14 @@ pub fn markdown(r: &Report) -> String {
             let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
             let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
         }
+        let (near, other) = (l.drawn_near_failures, l.drawn_elsewhere);
+        if near.flights > 0 {
+            let _ = writeln!(
+                md,
+                "\nCandidates drawn near failing flights failed {} of {} flights; the others {} of {}.",
+                near.failures, near.flights, other.failures, other.flights
+            );
+        }
         let _ = writeln!(md);
     }
     let _ = writeln!(

@@ -5,7 +5,7 @@
 //! candidates are re-ranked with these predictions and the ensembles.
 //!
 //! With `adapt`, the generator moves towards failures in two ways. Some of a round's new candidates are drawn
-//! in small boxes around the closest flights so far ([`super::neighbours`]), and a share of its flights that
+//! in small boxes around the failing flights so far ([`super::neighbours`]), and a share of its flights that
 //! follows their failure rate is offered to them. The others come from a univariate
 //! marginal distribution algorithm ([`crate::generator::adaptive`]): elites are the best [`ELITE_SHARE`] of the
 //! screened candidates by prediction, plus the closest quarter of the flights and every flown failure at
@@ -147,11 +147,11 @@ pub fn run_rounds(
         let t = Instant::now();
         let before = Journal::read(&journal_path)?;
         let around = if cfg.adapt && !alike {
-            neighbours::parents(&before, &units)
+            neighbours::parents(&before, &units, FAIL_M)
         } else {
             Vec::new()
         };
-        let local = around.len() * neighbours::PER_PARENT;
+        let local = if around.is_empty() { 0 } else { neighbours::CHILDREN };
         let count = count + local;
         let (lo, hi) = (next, next + count as u64);
         next = hi;
@@ -253,7 +253,7 @@ pub fn run_rounds(
             rank_unflown(&fresh, &done, &candidates, cfg, remaining)
         };
         progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates ({local} near the closest flights), LFS bias {bias:+.2} m learnt \
+            "round {} of {ROUNDS}: {} candidates ({local} near the failing flights), LFS bias {bias:+.2} m learnt \
              from {} flights{}; flying {}",
             round + 1,
             hi - lo,
@@ -315,13 +315,17 @@ pub fn run_rounds(
         carried = Some(taught);
         stages.learn_s += t.elapsed().as_secs_f64();
     }
-    let failure_counts = counted_failures(&Journal::read(&journal_path)?, &units);
+    let done = Journal::read(&journal_path)?;
+    let failure_counts = counted_failures(&done, &units);
+    let (drawn_near_failures, drawn_elsewhere) = arm_counts(&done, &is_local);
     let learnt = Learnt {
         calibration,
         surrogate,
         distribution,
         rounds,
         failure_counts,
+        drawn_near_failures,
+        drawn_elsewhere,
     };
     let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
     write_atomic(&folder.join("learnt.json"), json.as_bytes())?;
@@ -484,6 +488,8 @@ mod tests {
             distribution: DrawDistribution::uniform(),
             rounds: Vec::new(),
             failure_counts: FailureCounts::default(),
+            drawn_near_failures: BinCount::default(),
+            drawn_elsewhere: BinCount::default(),
         };
         l.calibration.prior_flights = -3.0;
         std::fs::write(dir.path().join("learnt.json"), serde_json::to_string(&l).unwrap()).unwrap();

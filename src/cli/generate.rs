@@ -90,16 +90,16 @@ pub struct Args {
     /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in 8
     /// rounds (up to 12 while near-duplicates leave budget unflown), calibrating the LFS on every flight (a bias,
     /// and a kernel over the flights near each candidate) and adapting the generator towards failures (draws
-    /// around the closest flights, and a draw distribution moved towards the best candidates).
+    /// around the failing flights, and a draw distribution moved towards the best candidates).
     #[arg(long)]
     no_learn: bool,
-    /// Learn the LFS's calibration but keep the paper's uniform draws (no draws around the closest flights).
+    /// Learn the LFS's calibration but keep the paper's uniform draws (no draws around the failing flights).
     #[arg(long, conflicts_with = "no_learn")]
     no_adapt: bool,
     /// Start from what an earlier campaign learnt (its output folder's learnt.json).
     #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
     prior: Option<PathBuf>,
-    /// The adapted generator backs off (and stops drawing around the closest flights) when the failing tests'
+    /// The adapted generator backs off (and stops drawing around the failing flights) when the failing tests'
     /// diversity (1 - mean pairwise IoU; counted from 4 failing tests on) falls below this.
     #[arg(long, default_value_t = 0.8, value_name = "D")]
     min_diversity: f64,

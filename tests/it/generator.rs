@@ -265,7 +265,7 @@ fn an_adapted_distribution_keeps_the_rules_and_shapes_the_draws() {
     }
 }
 
-/// Neighbour proposals (the adapted campaign's draws around its closest flights) keep every rule, stay in
+/// Neighbour proposals (the adapted campaign's draws around its failing flights) keep every rule, stay in
 /// their parent's box and are deterministic per seed, on every mission.
 #[test]
 fn neighbour_proposals_keep_the_rules_and_stay_near_their_parent() {
