@@ -386,9 +386,14 @@ impl Vehicle {
             && self.avoidance.awaiting_answer(self.now)
     }
 
-    /// Go on without the answer (the lockstep wait timed out; the avoidance timeout logic takes over).
+    /// Go on without the answer (the lockstep wait timed out; the avoidance timeout logic takes over). Said
+    /// aloud: from here the flight depends on the machine's load and is no longer repeatable.
     pub fn lockstep_release(&mut self) {
         self.avoidance.release();
+        self.text(
+            MavSeverity::MAV_SEVERITY_WARNING,
+            "Lockstep: no avoidance answer in time, going on",
+        );
     }
 
     /// Advance the simulation by one fixed step `dt`.

@@ -160,6 +160,11 @@ fn avoidance_companion_steers_and_its_silence_holds() {
                 } else {
                     v.lockstep_release();
                     assert!(!v.lockstep_blocked(), "released after the runner's wall-time bound");
+                    // Said aloud: from here the flight depends on the machine's load.
+                    let said = v.drain_outbox().any(|m| {
+                        matches!(&m, MavMessage::STATUSTEXT(t) if t.text.to_str().is_ok_and(|s| s.starts_with("Lockstep")))
+                    });
+                    assert!(said, "a released lockstep wait is reported");
                 }
             }
         }

@@ -1,6 +1,6 @@
 //! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
 //! draw space around the campaign's failing flights so far (its *parents*), where the next failures are
-//! likeliest. On the embedded mock (mission 2, 1498 flights of 18 campaigns) a flight whose most-overlapping
+//! likeliest. On the embedded mock (mission 2, 1498 flights of 15 campaigns) a flight whose most-overlapping
 //! earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
 //! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
