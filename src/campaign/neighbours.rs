@@ -19,7 +19,8 @@ use crate::model::Obstacle;
 /// Below this many failing tests their diversity says little (two tests next to each other score 0.7) and
 /// does not pause the neighbour proposals.
 pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
-/// Candidates drawn around the parents per round, shared out among them in turn.
+/// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out
+/// among them in turn.
 pub const CHILDREN: usize = 36;
 /// Parents per round: the most severe failing flights so far.
 pub const PARENTS: usize = 12;

@@ -151,7 +151,12 @@ pub fn run_rounds(
         } else {
             Vec::new()
         };
-        let local = if around.is_empty() { 0 } else { neighbours::CHILDREN };
+        // As many children as the round's own draws (a small campaign stays small), at most CHILDREN.
+        let local = if around.is_empty() {
+            0
+        } else {
+            neighbours::CHILDREN.min(count)
+        };
         let count = count + local;
         let (lo, hi) = (next, next + count as u64);
         next = hi;
