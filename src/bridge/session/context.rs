@@ -6,7 +6,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use mavlink::dialects::common::MavCmd;
+use mavlink::dialects::common::{MavCmd, MavResult};
 use tokio::sync::broadcast;
 
 use super::placement::Placement;
@@ -130,8 +130,15 @@ impl Session<'_> {
             return Ok(());
         }
         let p = [242.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-        if let Err(e) = self.command(MavCmd::MAV_CMD_REQUEST_MESSAGE, p).await {
-            self.warnings.push(format!("requesting HOME_POSITION: {e}"));
+        match self.command(MavCmd::MAV_CMD_REQUEST_MESSAGE, p).await {
+            // PX4 denies the request while it has no home yet (its stream has nothing to send); home then
+            // comes on its own stream, which the wait below covers.
+            Ok(())
+            | Err(ProtocolError::CommandRefused {
+                result: MavResult::MAV_RESULT_DENIED,
+                ..
+            }) => {}
+            Err(e) => self.warnings.push(format!("requesting HOME_POSITION: {e}")),
         }
         let clock = self.link.clock();
         // Home comes once the estimator has a fix: the readiness budget, not a fixed wait.

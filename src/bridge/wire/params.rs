@@ -322,6 +322,6 @@ mod tests {
         let mut p = ParamSet::new(T, vec![("X".into(), 1.0)], Retry::PARAM);
         let (r, sent) = run_scripted(&mut p, Duration::from_millis(10), |_, _| vec![]);
         assert!(r.is_err());
-        assert_eq!(sent.len(), 6);
+        assert_eq!(sent.len(), 1 + Retry::PARAM.max_retries as usize);
     }
 }
