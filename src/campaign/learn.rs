@@ -132,6 +132,10 @@ pub struct Learnt {
     /// ... and of all the others (a diagnostic: did the boxes pay on this vehicle?).
     #[serde(default)]
     pub drawn_elsewhere: BinCount,
+    /// Of the candidates drawn near failing flights, those closer to a flown test than `--max-iou`
+    /// ([`super::child_rule`]).
+    #[serde(default)]
+    pub drawn_close: BinCount,
 }
 
 /// One round.

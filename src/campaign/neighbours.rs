@@ -4,15 +4,17 @@
 //! earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
 //! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
-//! the campaign exploring. Children are drawn distinct from every flown test and from each other
-//! ([`distinct`]), since the near-duplicate filter would drop them before flight otherwise (at half width
-//! [`HALF_WIDTH`] only 31 % of plain children differ from their parent by IoU <= 0.5).
+//! the campaign exploring. Children are drawn distinct from each other and from the flown tests, or close to
+//! a flown test where the failing tests' diversity allows ([`super::child_rule`]); the near-duplicate filter
+//! would drop them before flight otherwise (at half width [`HALF_WIDTH`] only 31 % of plain children differ
+//! from their parent by IoU <= 0.5).
 
+use super::child_rule::child_max_iou;
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
 use super::rank::Screened;
 use super::run::{CampaignConfig, too_similar};
-use super::stages::rank_unflown;
+use super::stages::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 use crate::model::Obstacle;
 
@@ -53,12 +55,6 @@ pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> Vec
         .collect()
 }
 
-/// Whether `child` overlaps none of `tests` by more than `max_iou`: the campaign's near-duplicate rule, asked
-/// before screening so a box spends its draws on children that can be flown.
-pub fn distinct<'a>(child: &[Obstacle], mut tests: impl Iterator<Item = &'a Vec<Obstacle>>, max_iou: f64) -> bool {
-    !tests.any(|t| too_similar(child, t, max_iou))
-}
-
 /// Share of a round's flights for neighbour candidates: their failure rate so far over the sum of theirs and
 /// the histogram's (Laplace-smoothed, so 0.5 before any flight), within [`LOCAL_FLIGHT_SHARE`]. The arm that
 /// finds failures gets the flights; on a stack where neighbours fail no more often, the split stays even.
@@ -82,7 +78,7 @@ pub fn rank_split(
 ) -> Vec<Screened> {
     let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
     let quota = ((remaining as f64 * share).round() as usize).min(remaining);
-    let near = rank_unflown(&near, done, candidates, cfg, usize::MAX);
+    let near = rank_unflown_within(&near, done, candidates, cfg, usize::MAX, child_max_iou(cfg));
     let mut chosen: Vec<Screened> = near.iter().take(quota).cloned().collect();
     let distinct = |chosen: &[Screened], s: &Screened| {
         !chosen.iter().any(|c| {
@@ -136,18 +132,6 @@ mod tests {
         assert_eq!(p[0].centre, units[19]);
         assert!(parents(&[], &units, 1.5).is_empty());
         assert!(parents(&done[10..], &units, 1.5).is_empty(), "no failure, no parent");
-    }
-
-    #[test]
-    fn a_child_is_distinct_when_it_overlaps_no_test_beyond_the_limit() {
-        let at = |x: f64| vec![Obstacle::new(4.0, 4.0, 10.0, x, 10.0, 0.0)];
-        let tests = [at(0.0), at(20.0)];
-        // Shifted by 1 m of 4: IoU 3/5 = 0.6.
-        assert!(!distinct(&at(1.0), tests.iter(), 0.5));
-        assert!(distinct(&at(1.0), tests.iter(), 0.7));
-        // Shifted by 2 m: IoU 2/6.
-        assert!(distinct(&at(2.0), tests.iter(), 0.5));
-        assert!(distinct(&at(0.0), std::iter::empty(), 0.5));
     }
 
     #[test]

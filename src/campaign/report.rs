@@ -381,8 +381,14 @@ pub fn markdown(r: &Report) -> String {
         if near.flights > 0 {
             let _ = writeln!(
                 md,
-                "\nCandidates drawn near failing flights failed {} of {} flights; the others {} of {}.",
-                near.failures, near.flights, other.failures, other.flights
+                "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
+                 --max-iou: {} of {}); the others {} of {}.",
+                near.failures,
+                near.flights,
+                l.drawn_close.failures,
+                l.drawn_close.flights,
+                other.failures,
+                other.flights
             );
         }
         let _ = writeln!(md);

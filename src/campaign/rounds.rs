@@ -19,6 +19,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
+use super::child_rule::{ChildRule, child_max_iou};
 use super::failure_counts::{BinCount, FailureCounts};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
@@ -125,6 +126,8 @@ pub fn run_rounds(
     let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
     let mut units: Vec<[f64; DIMS]> = Vec::new();
     let mut is_local: Vec<bool> = Vec::new();
+    // Children closer to a flown test than `max_iou` (admitted by the child rule).
+    let mut close: std::collections::BTreeSet<u64> = std::collections::BTreeSet::new();
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
@@ -166,24 +169,28 @@ pub fn run_rounds(
             .iter()
             .map(|n| base.clone().with_proposal(Proposal::Around(*n)))
             .collect();
-        // A child must differ from every flown test and from its siblings, or the near-duplicate filter drops
-        // it before flight: each box offers distinct neighbours of its parent, not copies.
-        let flown_tests: Vec<Vec<Obstacle>> = match local {
-            0 => Vec::new(),
-            _ => before.iter().map(|r| r.obstacles.clone()).collect(),
-        };
-        let mut children: Vec<Vec<Obstacle>> = Vec::new();
+        // A child must differ from its siblings and from every flown test (or come close where the failing tests'
+        // diversity can afford it), and keep their expected diversity above the floor ([`ChildRule`]).
+        let (near_so_far, _) = arm_counts(&before, &is_local);
+        let child_fail_rate = (f64::from(near_so_far.failures) + 1.0) / (f64::from(near_so_far.flights) + 2.0);
+        let mut rule = ChildRule::new(
+            if local == 0 { &[] } else { &before },
+            FAIL_M,
+            (cfg.max_iou, child_max_iou(cfg)),
+            cfg.min_diversity,
+            child_fail_rate,
+        );
         for (k, i) in (lo..hi).enumerate() {
             // The round's last `local` candidates come from the parents' boxes, in turn.
-            // A parent's box with no room left (or no distinct child) falls back to the histogram.
-            let child = k.checked_sub(count - local).map(|j| {
-                near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| {
-                    neighbours::distinct(o, flown_tests.iter().chain(&children), cfg.max_iou)
-                })
-            });
+            // A parent's box with no room left (or no admissible child) falls back to the histogram.
+            let child = k
+                .checked_sub(count - local)
+                .map(|j| near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| rule.admit(o)));
             let (p, from_box) = match child {
                 Some(Ok(p)) => {
-                    children.push(p.obstacles.to_vec());
+                    if rule.last_was_close() {
+                        close.insert(i);
+                    }
                     (p, true)
                 }
                 _ => (histogram.sample(i)?, false),
@@ -323,6 +330,8 @@ pub fn run_rounds(
     let done = Journal::read(&journal_path)?;
     let failure_counts = counted_failures(&done, &units);
     let (drawn_near_failures, drawn_elsewhere) = arm_counts(&done, &is_local);
+    let is_close: Vec<bool> = (0..is_local.len() as u64).map(|c| close.contains(&c)).collect();
+    let (drawn_close, _) = arm_counts(&done, &is_close);
     let learnt = Learnt {
         calibration,
         surrogate,
@@ -331,6 +340,7 @@ pub fn run_rounds(
         failure_counts,
         drawn_near_failures,
         drawn_elsewhere,
+        drawn_close,
     };
     let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
     write_atomic(&folder.join("learnt.json"), json.as_bytes())?;
@@ -495,6 +505,7 @@ mod tests {
             failure_counts: FailureCounts::default(),
             drawn_near_failures: BinCount::default(),
             drawn_elsewhere: BinCount::default(),
+            drawn_close: BinCount::default(),
         };
         l.calibration.prior_flights = -3.0;
         std::fs::write(dir.path().join("learnt.json"), serde_json::to_string(&l).unwrap()).unwrap();

@@ -84,6 +84,7 @@ fn config(budget: usize) -> CampaignConfig {
         adapt: false,
         prior: None,
         min_diversity: 0.8,
+        child_max_iou: None,
     }
 }
 
@@ -370,6 +371,11 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("Where the flights failed"), "{md}");
     assert!(near.flights > 0, "{near:?}");
+    let close = learnt.drawn_close;
+    assert!(
+        close.flights <= near.flights && close.failures <= near.failures,
+        "{close:?} of {near:?}"
+    );
     assert!(md.contains("Candidates drawn near failing flights failed"), "{md}");
     // Every test flown still obeys the rules.
     for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
@@ -414,4 +420,63 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     )
     .unwrap_err();
     assert!(e.to_string().contains("learnt.json"), "{e}");
+}
+
+#[test]
+fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
+    use crate::campaign::child_rule::child_max_iou;
+    let mut cfg = config(10);
+    assert_eq!(
+        child_max_iou(&cfg),
+        0.5,
+        "campaign files before the child rule: max_iou"
+    );
+    cfg.child_max_iou = Some(0.75);
+    assert_eq!(child_max_iou(&cfg), 0.75);
+    cfg.child_max_iou = Some(0.3);
+    assert_eq!(child_max_iou(&cfg), 0.5);
+    let json = serde_json::to_value(&config(10)).expect("config serialises");
+    let mut old = json.as_object().expect("an object").clone();
+    old.remove("child_max_iou");
+    let read: CampaignConfig = serde_json::from_value(old.into()).expect("an old campaign.json reads");
+    assert_eq!(read.child_max_iou, None);
+}
+
+#[test]
+fn close_children_stay_within_child_max_iou_of_every_flown_test() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let cfg = CampaignConfig {
+        learn: true,
+        adapt: true,
+        min_diversity: 0.0,
+        child_max_iou: Some(0.75),
+        ..config(24)
+    };
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &ScriptedLfs,
+        vehicle(&flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    let learnt = r.learning.expect("learnt");
+    let tests: Vec<Vec<crate::geometry::Footprint>> = Journal::read(&dir.path().join("journal.jsonl"))
+        .unwrap()
+        .iter()
+        .map(|r| r.obstacles.iter().map(crate::model::Obstacle::footprint).collect())
+        .collect();
+    let mut closest = 0.0_f64;
+    for (i, a) in tests.iter().enumerate() {
+        for b in &tests[..i] {
+            closest = closest.max(crate::geometry::union_iou(a, b));
+        }
+    }
+    assert!(closest <= 0.75 + 1e-9, "{closest}");
+    let (close, near) = (learnt.drawn_close, learnt.drawn_near_failures);
+    assert!(close.flights <= near.flights, "{close:?} of {near:?}");
+    // With no diversity floor, this vehicle's one failing place gets close children.
+    assert!(close.flights > 0 && closest > 0.5, "{close:?}, closest pair {closest}");
 }

@@ -196,12 +196,25 @@ pub fn rank_unflown(
     cfg: &CampaignConfig,
     remaining: usize,
 ) -> Vec<Screened> {
+    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
+}
+
+/// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
+/// failing flights admitted by [`super::child_rule`]); among themselves they still obey `max_iou`.
+pub fn rank_unflown_within(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Vec<Obstacle>],
+    cfg: &CampaignConfig,
+    remaining: usize,
+    flown_max_iou: f64,
+) -> Vec<Screened> {
     let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
     let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
     ranked.retain(|s| {
         !done
             .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], cfg.max_iou))
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], flown_max_iou))
     });
     ranked.truncate(remaining);
     ranked

@@ -103,6 +103,11 @@ pub struct Args {
     /// diversity (1 - mean pairwise IoU; counted from 4 failing tests on) falls below this.
     #[arg(long, default_value_t = 0.8, value_name = "D")]
     min_diversity: f64,
+    /// A candidate drawn next to a failing flight may overlap a flown test up to this IoU (more than --max-iou)
+    /// as long as the failing tests would keep --min-diversity if it failed too: near copies of a failure fail
+    /// most often. Set it to --max-iou to hold every candidate to --max-iou.
+    #[arg(long, default_value_t = 0.75, value_name = "IOU")]
+    child_max_iou: f64,
     /// Continue a killed campaign in this folder (its campaign.json holds the settings).
     #[arg(long, value_name = "FOLDER")]
     resume: Option<PathBuf>,
@@ -156,8 +161,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 // Refuse a bad prior before anything is sampled or flown.
                 prgenuav::campaign::rounds::load_prior(p)?;
             }
-            if !(args.threshold.is_finite() && args.threshold > 0.0 && (0.0..=1.0).contains(&args.max_iou)) {
-                bail!("--threshold must be positive and --max-iou within 0..1");
+            if !(args.threshold.is_finite()
+                && args.threshold > 0.0
+                && (0.0..=1.0).contains(&args.max_iou)
+                && (0.0..=1.0).contains(&args.child_max_iou))
+            {
+                bail!("--threshold must be positive, --max-iou and --child-max-iou within 0..1");
             }
             let cfg = CampaignConfig {
                 case,
@@ -189,6 +198,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 adapt: !args.no_learn && !args.no_adapt && !args.no_screen,
                 prior: args.prior.clone(),
                 min_diversity: args.min_diversity,
+                child_max_iou: Some(args.child_max_iou),
             };
             (cfg, timestamped_folder(&args.out, std::time::SystemTime::now()))
         }

@@ -150,7 +150,7 @@ impl Generator {
         &self,
         index: u64,
         max_asked: u32,
-        accept: impl Fn(&[Obstacle; 2]) -> bool,
+        mut accept: impl FnMut(&[Obstacle; 2]) -> bool,
     ) -> Result<Placement, GenerateError> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(index);

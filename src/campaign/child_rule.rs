@@ -1,0 +1,200 @@
+//! Which children of the failing flights may be drawn. A child must differ from its siblings by the campaign's
+//! near-duplicate rule (`--max-iou`). Against the flown tests it may go further, up to `--child-max-iou`: near
+//! copies of a failure fail far more often than their distant neighbours (mission 2 on the mock: 45 % of 29
+//! flights whose closest failure overlapped them by IoU 0.65-0.7, 16 % at 0.25-0.35, 7 % with no failure
+//! overlapping). What bounds the children is the failing tests' diversity, the user's floor: every child must
+//! leave the failing tests' *expected* diversity above it, counting the failures so far, each close child as
+//! a failure and every other child as a failure with the children's failure rate so far. Without that, a
+//! campaign's failures cluster where the vehicle fails, and moderate overlaps (IoU 0.3-0.6) between many of
+//! them pull the diversity below the floor by the last round.
+
+use super::journal::FlightRecord;
+use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
+use super::run::CampaignConfig;
+use crate::geometry::{Footprint, union_iou};
+use crate::model::Obstacle;
+
+/// Expected diversity a child must leave above the user's floor: the expectation is over one round's children,
+/// and the flights' failures scatter around it.
+pub const DIVERSITY_MARGIN: f64 = 0.02;
+
+/// How close to a flown test a child may come: `child_max_iou`, never below `max_iou` (campaign files written
+/// before the child rule: `max_iou`).
+pub fn child_max_iou(cfg: &CampaignConfig) -> f64 {
+    cfg.child_max_iou.unwrap_or(cfg.max_iou).max(cfg.max_iou)
+}
+
+fn prints(obstacles: &[Obstacle]) -> Vec<Footprint> {
+    obstacles.iter().map(Obstacle::footprint).collect()
+}
+
+/// The rule for one round's children: the flown tests, the failing ones (weighted by how likely they fail) with
+/// their weighted pairwise IoU summed (so a child's effect on diversity costs one IoU per failure), and the
+/// siblings drawn so far.
+#[derive(Debug, Clone)]
+pub struct ChildRule {
+    flown: Vec<Vec<Footprint>>,
+    /// The failing tests (weight 1), and the children admitted this round (close ones 1, the others
+    /// `child_fail_rate`).
+    failing: Vec<(Vec<Footprint>, f64)>,
+    /// Sum over pairs of the product of their weights and IoU ...
+    pair_sum: f64,
+    /// ... and of their weights alone: the expected diversity is 1 - pair_sum / pair_weight.
+    pair_weight: f64,
+    /// Flown failures (the rule says nothing below [`MIN_FAILING_FOR_DIVERSITY`] of them).
+    failures: usize,
+    child_fail_rate: f64,
+    siblings: Vec<Vec<Footprint>>,
+    max_iou: f64,
+    child_max_iou: f64,
+    floor: f64,
+    last_close: bool,
+}
+
+impl ChildRule {
+    /// The rule for children drawn after the flights in `done` (failing below `fail_m`), whose children have
+    /// failed at `child_fail_rate` so far.
+    pub fn new(
+        done: &[FlightRecord],
+        fail_m: f64,
+        (max_iou, child_max_iou): (f64, f64),
+        floor: f64,
+        child_fail_rate: f64,
+    ) -> Self {
+        let mut rule = Self {
+            flown: done.iter().map(|r| prints(&r.obstacles)).collect(),
+            failing: Vec::new(),
+            pair_sum: 0.0,
+            pair_weight: 0.0,
+            failures: 0,
+            child_fail_rate: child_fail_rate.clamp(0.0, 1.0),
+            siblings: Vec::new(),
+            max_iou,
+            child_max_iou: child_max_iou.max(max_iou),
+            floor,
+            last_close: false,
+        };
+        for r in done.iter().filter(|r| r.min_distance.is_some_and(|d| d < fail_m)) {
+            let (sum, weight) = rule.pairs_with(&prints(&r.obstacles), 1.0);
+            rule.add(prints(&r.obstacles), 1.0, (sum, weight));
+            rule.failures += 1;
+        }
+        rule
+    }
+
+    /// What joining the failing tests with weight `w` adds to (pair_sum, pair_weight).
+    fn pairs_with(&self, p: &[Footprint], w: f64) -> (f64, f64) {
+        self.failing
+            .iter()
+            .fold((0.0, 0.0), |(s, n), (f, wf)| (s + w * wf * union_iou(p, f), n + w * wf))
+    }
+
+    fn add(&mut self, p: Vec<Footprint>, w: f64, (sum, weight): (f64, f64)) {
+        self.pair_sum += sum;
+        self.pair_weight += weight;
+        self.failing.push((p, w));
+    }
+
+    /// Whether `child` may be drawn; if so it joins the siblings and, weighted, the failing tests the next child
+    /// is checked against.
+    pub fn admit(&mut self, child: &[Obstacle]) -> bool {
+        let p = prints(child);
+        if self.siblings.iter().any(|s| union_iou(&p, s) > self.max_iou) {
+            return false;
+        }
+        let closest = self.flown.iter().map(|f| union_iou(&p, f)).fold(0.0, f64::max);
+        let close = closest > self.max_iou;
+        // Below MIN_FAILING_FOR_DIVERSITY failures diversity says too little: no close child, no check.
+        let counted = self.failures + 1 >= MIN_FAILING_FOR_DIVERSITY;
+        if close && (closest > self.child_max_iou || !counted) {
+            return false;
+        }
+        let w = if close { 1.0 } else { self.child_fail_rate };
+        let (sum, weight) = self.pairs_with(&p, w);
+        let expected = 1.0 - (self.pair_sum + sum) / (self.pair_weight + weight).max(f64::MIN_POSITIVE);
+        if counted && expected < self.floor + DIVERSITY_MARGIN {
+            return false;
+        }
+        self.add(p.clone(), w, (sum, weight));
+        self.last_close = close;
+        self.siblings.push(p);
+        true
+    }
+
+    /// Whether the child admitted last overlaps a flown test beyond `max_iou`.
+    pub fn last_was_close(&self) -> bool {
+        self.last_close
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::journal::test_record;
+
+    fn at(x: f64) -> Vec<Obstacle> {
+        vec![Obstacle::new(4.0, 4.0, 10.0, x, 10.0, 0.0)]
+    }
+
+    fn flown(x: f64, d: f64) -> FlightRecord {
+        let mut r = test_record(0, 1.0, Some(d));
+        r.obstacles = at(x);
+        r
+    }
+
+    #[test]
+    fn without_room_above_max_iou_only_distinct_children_pass() {
+        let done = [flown(0.0, 1.0), flown(20.0, 2.0)];
+        let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.5), 0.8, 0.3);
+        // Shifted by 1 m of 4: IoU 3/5 = 0.6 with the first flight.
+        assert!(!rule.admit(&at(1.0)));
+        // Shifted by 2 m: IoU 2/6.
+        assert!(rule.admit(&at(2.0)));
+        // A sibling of that one by IoU 0.6: refused.
+        assert!(!rule.admit(&at(3.0)));
+        assert!(rule.admit(&at(40.0)));
+    }
+
+    #[test]
+    fn a_close_child_needs_enough_diverse_failures() {
+        // One failure: diversity says too little, so no close child yet.
+        let mut rule = ChildRule::new(&[flown(0.0, 1.0)], 1.5, (0.5, 0.75), 0.8, 0.3);
+        assert!(!rule.admit(&at(1.0)));
+        // Ten failures 20 m apart: a child at IoU 0.6 of one leaves diversity 1 - 0.6 / 55 > 0.82.
+        let spread: Vec<FlightRecord> = (0..10).map(|i| flown(20.0 * f64::from(i), 1.0)).collect();
+        let mut rule = ChildRule::new(&spread, 1.5, (0.5, 0.75), 0.8, 0.3);
+        assert!(rule.admit(&at(1.0)) && rule.last_was_close());
+        assert!(rule.admit(&at(10.0)) && !rule.last_was_close());
+        // Beyond child_max_iou: IoU 3.5/4.5 = 0.78.
+        assert!(!rule.admit(&at(20.5)));
+        // Near a flight that passed, the same rule applies (it is close to a flown test).
+        assert!(!ChildRule::new(&[flown(0.0, 2.0)], 1.5, (0.5, 0.75), 0.8, 0.3).admit(&at(1.0)));
+    }
+
+    #[test]
+    fn close_children_stop_when_the_floor_would_break() {
+        // Four failures, two of them overlapping by IoU 0.6: diversity 1 - 0.6 / 6 = 0.9.
+        let done = [flown(0.0, 1.0), flown(1.0, 1.0), flown(40.0, 1.0), flown(80.0, 1.0)];
+        let admitted = |floor: f64| {
+            let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.75), floor, 0.3);
+            [41.0, 81.0, 121.0, 39.0, 79.0]
+                .iter()
+                .filter(|&&x| rule.admit(&at(x)))
+                .copied()
+                .collect::<Vec<f64>>()
+        };
+        // A close child counts as a failure, the others as 0.3 of one: 41 leaves 1 - 1.2 / 10 = 0.88, 81 then
+        // 1 - 1.8 / 15 = 0.88, the distant 121 1 - 1.8 / 16.8 = 0.893, 39 (0.6 of 40, 1/3 of 41) 0.882, 79 0.879.
+        assert_eq!(admitted(0.8), vec![41.0, 81.0, 121.0, 39.0, 79.0]);
+        // Without 41 and 81, 39 and 79 are no siblings: 39 leaves 1 - 1.2 / 11.5 = 0.896, then 79 0.893.
+        assert_eq!(admitted(0.87), vec![121.0, 39.0, 79.0], "0.88 < 0.87 + margin");
+        assert_eq!(admitted(0.875), vec![121.0, 39.0], "0.893 < 0.875 + margin");
+        assert_eq!(admitted(0.9), Vec::<f64>::new(), "121 leaves 0.917");
+        // A child that is not close still counts: at -2 it overlaps the failures at 0 and 1 by 1/3 and 1/7,
+        // which at weight 0.3 leaves 1 - (0.6 + 0.143) / 7.2 = 0.897.
+        let child = at(-2.0);
+        assert!(ChildRule::new(&done, 1.5, (0.5, 0.75), 0.87, 0.3).admit(&child));
+        let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.75), 0.88, 0.3);
+        assert!(!rule.admit(&child) && !rule.last_was_close());
+    }
+}
