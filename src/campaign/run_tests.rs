@@ -435,7 +435,7 @@ fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
     assert_eq!(child_max_iou(&cfg), 0.75);
     cfg.child_max_iou = Some(0.3);
     assert_eq!(child_max_iou(&cfg), 0.5);
-    let json = serde_json::to_value(&config(10)).expect("config serialises");
+    let json = serde_json::to_value(config(10)).expect("config serialises");
     let mut old = json.as_object().expect("an object").clone();
     old.remove("child_max_iou");
     let read: CampaignConfig = serde_json::from_value(old.into()).expect("an old campaign.json reads");
