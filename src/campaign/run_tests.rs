@@ -88,6 +88,19 @@ fn config(budget: usize) -> CampaignConfig {
     }
 }
 
+/// `cfg`'s campaign in `dir` with the scripted LFS and vehicles, run to its end.
+fn run_scripted(cfg: &CampaignConfig, dir: &Path, flown: &Arc<Mutex<Vec<f64>>>) -> crate::campaign::run::Report {
+    run_campaign(
+        cfg,
+        dir,
+        &ScriptedLfs,
+        vehicle(flown, None),
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap()
+}
+
 fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<dyn Vehicle>> {
     let count = Arc::new(AtomicUsize::new(0));
     vec![Box::new(ScriptedVehicle {
@@ -313,15 +326,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         adapt: true,
         ..config(12)
     };
-    let r = run_campaign(
-        &cfg,
-        dir.path(),
-        &ScriptedLfs,
-        vehicle(&flown, None),
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let r = run_scripted(&cfg, dir.path(), &flown);
     assert_eq!(r.suite.flown, 12);
     let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
     assert!(learnt.rounds.len() >= crate::campaign::rounds::ROUNDS);
@@ -445,7 +450,6 @@ fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
 #[test]
 fn close_children_stay_within_child_max_iou_of_every_flown_test() {
     let dir = tempfile::tempdir().unwrap();
-    let flown = Arc::new(Mutex::new(Vec::new()));
     let cfg = CampaignConfig {
         learn: true,
         adapt: true,
@@ -453,15 +457,7 @@ fn close_children_stay_within_child_max_iou_of_every_flown_test() {
         child_max_iou: Some(0.75),
         ..config(24)
     };
-    let r = run_campaign(
-        &cfg,
-        dir.path(),
-        &ScriptedLfs,
-        vehicle(&flown, None),
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");
     let tests: Vec<Vec<crate::geometry::Footprint>> = Journal::read(&dir.path().join("journal.jsonl"))
         .unwrap()
