@@ -25,6 +25,13 @@ pub struct BinCount {
     pub failures: u32,
 }
 
+impl BinCount {
+    /// The failure rate, Laplace-smoothed (0.5 before any flight).
+    pub fn rate(self) -> f64 {
+        (f64::from(self.failures) + 1.0) / (f64::from(self.flights) + 2.0)
+    }
+}
+
 /// Failure counts per bin of each draw.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FailureCounts {

@@ -133,7 +133,7 @@ pub struct Learnt {
     #[serde(default)]
     pub drawn_elsewhere: BinCount,
     /// Of the candidates drawn near failing flights, those closer to a flown test than `--max-iou`
-    /// ([`super::child_rule`]).
+    /// ([`super::diversity_guard`]).
     #[serde(default)]
     pub drawn_close: BinCount,
 }

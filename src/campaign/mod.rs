@@ -1,6 +1,6 @@
 //! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
 
-pub mod child_rule;
+pub mod diversity_guard;
 pub mod failure_counts;
 pub mod journal;
 pub mod learn;

@@ -5,15 +5,16 @@
 //! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
 //! the campaign exploring. Children are drawn distinct from each other and from the flown tests, or close to
-//! a flown test where the failing tests' diversity allows ([`super::child_rule`]); the near-duplicate filter
+//! a flown test where the failing tests' diversity allows ([`super::diversity_guard`]); the near-duplicate filter
 //! would drop them before flight otherwise (at half width [`HALF_WIDTH`] only 31 % of plain children differ
 //! from their parent by IoU <= 0.5).
 
-use super::child_rule::child_max_iou;
+use super::diversity_guard::DiversityGuard;
+use super::diversity_guard::child_max_iou;
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
 use super::rank::Screened;
-use super::run::{CampaignConfig, too_similar};
+use super::run::CampaignConfig;
 use super::stages::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 use crate::model::Obstacle;
@@ -59,42 +60,45 @@ pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> Vec
 /// the histogram's (Laplace-smoothed, so 0.5 before any flight), within [`LOCAL_FLIGHT_SHARE`]. The arm that
 /// finds failures gets the flights; on a stack where neighbours fail no more often, the split stays even.
 pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
-    let rate = |c: BinCount| (f64::from(c.failures) + 1.0) / (f64::from(c.flights) + 2.0);
-    let (l, h) = (rate(local), rate(histogram));
+    let (l, h) = (local.rate(), histogram.rate());
     (l / (l + h)).clamp(LOCAL_FLIGHT_SHARE.0, LOCAL_FLIGHT_SHARE.1)
 }
 
 /// The round's flights: the best `share` of `remaining` among the neighbour candidates (`is_local`), the rest
-/// from all others, then neighbours again if the others run out; near-duplicates of any flown or chosen test
-/// skipped.
+/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped, and
+/// each flight admitted by `guard` (distinct from the round's others, keeping the failing tests' expected
+/// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(
     fresh: &[Screened],
     is_local: impl Fn(u64) -> bool,
     share: f64,
-    done: &[FlightRecord],
-    candidates: &[Vec<Obstacle>],
+    (done, candidates): (&[FlightRecord], &[Vec<Obstacle>]),
     cfg: &CampaignConfig,
     remaining: usize,
+    (guard, (near_rate, other_rate)): (&mut DiversityGuard, (f64, f64)),
 ) -> Vec<Screened> {
     let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
     let quota = ((remaining as f64 * share).round() as usize).min(remaining);
     let near = rank_unflown_within(&near, done, candidates, cfg, usize::MAX, child_max_iou(cfg));
-    let mut chosen: Vec<Screened> = near.iter().take(quota).cloned().collect();
-    let distinct = |chosen: &[Screened], s: &Screened| {
-        !chosen.iter().any(|c| {
-            too_similar(
-                &candidates[c.candidate as usize],
-                &candidates[s.candidate as usize],
-                cfg.max_iou,
-            )
-        })
-    };
-    let others = rank_unflown(&other, done, candidates, cfg, usize::MAX);
-    for s in others.into_iter().chain(near.into_iter().skip(quota)) {
-        if chosen.len() >= remaining {
-            return chosen;
+    let mut chosen: Vec<Screened> = Vec::new();
+    let mut later = Vec::new();
+    for s in near {
+        if chosen.len() < quota && guard.admit(&candidates[s.candidate as usize], near_rate) {
+            chosen.push(s);
+        } else {
+            later.push(s);
         }
-        if chosen.iter().all(|c| c.candidate != s.candidate) && distinct(&chosen, &s) {
+    }
+    let others = rank_unflown(&other, done, candidates, cfg, usize::MAX);
+    let rest = others
+        .into_iter()
+        .map(|s| (s, other_rate))
+        .chain(later.into_iter().map(|s| (s, near_rate)));
+    for (s, rate) in rest {
+        if chosen.len() >= remaining {
+            break;
+        }
+        if chosen.iter().all(|c| c.candidate != s.candidate) && guard.admit(&candidates[s.candidate as usize], rate) {
             chosen.push(s);
         }
     }

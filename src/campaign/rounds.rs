@@ -19,7 +19,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::child_rule::{ChildRule, child_max_iou};
+use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::{BinCount, FailureCounts};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
@@ -170,22 +170,20 @@ pub fn run_rounds(
             .map(|n| base.clone().with_proposal(Proposal::Around(*n)))
             .collect();
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
-        // diversity can afford it), and keep their expected diversity above the floor ([`ChildRule`]).
-        let (near_so_far, _) = arm_counts(&before, &is_local);
-        let child_fail_rate = (f64::from(near_so_far.failures) + 1.0) / (f64::from(near_so_far.flights) + 2.0);
-        let mut rule = ChildRule::new(
+        // diversity can afford it), and keep their expected diversity above the floor ([`DiversityGuard`]).
+        let child_rate = arm_counts(&before, &is_local).0.rate();
+        let mut rule = DiversityGuard::new(
             if local == 0 { &[] } else { &before },
             FAIL_M,
             (cfg.max_iou, child_max_iou(cfg)),
             cfg.min_diversity,
-            child_fail_rate,
         );
         for (k, i) in (lo..hi).enumerate() {
             // The round's last `local` candidates come from the parents' boxes, in turn.
             // A parent's box with no room left (or no admissible child) falls back to the histogram.
             let child = k
                 .checked_sub(count - local)
-                .map(|j| near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| rule.admit(o)));
+                .map(|j| near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| rule.admit(o, child_rate)));
             let (p, from_box) = match child {
                 Some(Ok(p)) => {
                     if rule.last_was_close() {
@@ -252,14 +250,15 @@ pub fn run_rounds(
         let (near_flown, other_flown) = arm_counts(&done, &is_local);
         let share = neighbours::local_flight_share(near_flown, other_flown);
         let ranked = if cfg.adapt {
+            let mut guard = DiversityGuard::new(&done, FAIL_M, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity);
             neighbours::rank_split(
                 &fresh,
                 |c| is_local.get(c as usize).copied().unwrap_or(false),
                 share,
-                &done,
-                &candidates,
+                (&done, &candidates),
                 cfg,
                 remaining,
+                (&mut guard, (near_flown.rate(), other_flown.rate())),
             )
         } else {
             rank_unflown(&fresh, &done, &candidates, cfg, remaining)

@@ -93,7 +93,7 @@ pub struct CampaignConfig {
     #[serde(default = "default_min_diversity")]
     pub min_diversity: f64,
     /// With `adapt`, a child of a failing flight may overlap a flown test up to this IoU (above `max_iou`)
-    /// while the failing tests would keep `min_diversity` ([`super::child_rule`]); `None` (campaign files
+    /// while the failing tests would keep `min_diversity` ([`super::diversity_guard`]); `None` (campaign files
     /// written before): children obey `max_iou` like every candidate.
     #[serde(default)]
     pub child_max_iou: Option<f64>,

@@ -200,7 +200,7 @@ pub fn rank_unflown(
 }
 
 /// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
-/// failing flights admitted by [`super::child_rule`]); among themselves they still obey `max_iou`.
+/// failing flights admitted by [`super::diversity_guard`]); among themselves they still obey `max_iou`.
 pub fn rank_unflown_within(
     fresh: &[Screened],
     done: &[FlightRecord],

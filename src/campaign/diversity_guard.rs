@@ -1,12 +1,14 @@
-//! Which children of the failing flights may be drawn. A child must differ from its siblings by the campaign's
-//! near-duplicate rule (`--max-iou`). Against the flown tests it may go further, up to `--child-max-iou`: near
+//! Which children of the failing flights may be drawn, and which candidates a round may fly. A candidate must
+//! differ from the round's others by the campaign's near-duplicate rule (`--max-iou`). A child may come closer to
+//! the flown tests, up to `--child-max-iou`: near
 //! copies of a failure fail far more often than their distant neighbours (mission 2 on the mock: 45 % of 29
 //! flights whose closest failure overlapped them by IoU 0.65-0.7, 16 % at 0.25-0.35, 7 % with no failure
-//! overlapping). What bounds the children is the failing tests' diversity, the user's floor: every child must
-//! leave the failing tests' *expected* diversity above it, counting the failures so far, each close child as
-//! a failure and every other child as a failure with the children's failure rate so far. Without that, a
-//! campaign's failures cluster where the vehicle fails, and moderate overlaps (IoU 0.3-0.6) between many of
-//! them pull the diversity below the floor by the last round.
+//! overlapping). What bounds them is the failing tests' diversity, the user's floor: every child drawn and
+//! every candidate flown must leave the failing tests' *expected* diversity above it, counting the failures so
+//! far, each close child as a failure and every other candidate as a failure at its arm's failure rate so far.
+//! Without that, a campaign's failures cluster where the vehicle fails (the histogram follows them there too),
+//! and moderate overlaps (IoU 0.3-0.6) between many of them pull the diversity below the floor by the last
+//! round.
 
 use super::journal::FlightRecord;
 use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
@@ -32,7 +34,7 @@ fn prints(obstacles: &[Obstacle]) -> Vec<Footprint> {
 /// their weighted pairwise IoU summed (so a child's effect on diversity costs one IoU per failure), and the
 /// siblings drawn so far.
 #[derive(Debug, Clone)]
-pub struct ChildRule {
+pub struct DiversityGuard {
     flown: Vec<Vec<Footprint>>,
     /// The failing tests (weight 1), and the children admitted this round (close ones 1, the others
     /// `child_fail_rate`).
@@ -43,7 +45,6 @@ pub struct ChildRule {
     pair_weight: f64,
     /// Flown failures (the rule says nothing below [`MIN_FAILING_FOR_DIVERSITY`] of them).
     failures: usize,
-    child_fail_rate: f64,
     siblings: Vec<Vec<Footprint>>,
     max_iou: f64,
     child_max_iou: f64,
@@ -51,23 +52,15 @@ pub struct ChildRule {
     last_close: bool,
 }
 
-impl ChildRule {
-    /// The rule for children drawn after the flights in `done` (failing below `fail_m`), whose children have
-    /// failed at `child_fail_rate` so far.
-    pub fn new(
-        done: &[FlightRecord],
-        fail_m: f64,
-        (max_iou, child_max_iou): (f64, f64),
-        floor: f64,
-        child_fail_rate: f64,
-    ) -> Self {
+impl DiversityGuard {
+    /// The rule after the flights in `done` (failing below `fail_m`).
+    pub fn new(done: &[FlightRecord], fail_m: f64, (max_iou, child_max_iou): (f64, f64), floor: f64) -> Self {
         let mut rule = Self {
             flown: done.iter().map(|r| prints(&r.obstacles)).collect(),
             failing: Vec::new(),
             pair_sum: 0.0,
             pair_weight: 0.0,
             failures: 0,
-            child_fail_rate: child_fail_rate.clamp(0.0, 1.0),
             siblings: Vec::new(),
             max_iou,
             child_max_iou: child_max_iou.max(max_iou),
@@ -95,9 +88,10 @@ impl ChildRule {
         self.failing.push((p, w));
     }
 
-    /// Whether `child` may be drawn; if so it joins the siblings and, weighted, the failing tests the next child
-    /// is checked against.
-    pub fn admit(&mut self, child: &[Obstacle]) -> bool {
+    /// Whether `child` (a candidate failing at `fail_rate`, or certainly if it is close to a flown test) may be
+    /// drawn or flown; if so it joins the siblings and, weighted, the failing tests the next one is checked
+    /// against.
+    pub fn admit(&mut self, child: &[Obstacle], fail_rate: f64) -> bool {
         let p = prints(child);
         if self.siblings.iter().any(|s| union_iou(&p, s) > self.max_iou) {
             return false;
@@ -109,7 +103,7 @@ impl ChildRule {
         if close && (closest > self.child_max_iou || !counted) {
             return false;
         }
-        let w = if close { 1.0 } else { self.child_fail_rate };
+        let w = if close { 1.0 } else { fail_rate.clamp(0.0, 1.0) };
         let (sum, weight) = self.pairs_with(&p, w);
         let expected = 1.0 - (self.pair_sum + sum) / (self.pair_weight + weight).max(f64::MIN_POSITIVE);
         if counted && expected < self.floor + DIVERSITY_MARGIN {
@@ -145,30 +139,30 @@ mod tests {
     #[test]
     fn without_room_above_max_iou_only_distinct_children_pass() {
         let done = [flown(0.0, 1.0), flown(20.0, 2.0)];
-        let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.5), 0.8, 0.3);
+        let mut rule = DiversityGuard::new(&done, 1.5, (0.5, 0.5), 0.8);
         // Shifted by 1 m of 4: IoU 3/5 = 0.6 with the first flight.
-        assert!(!rule.admit(&at(1.0)));
+        assert!(!rule.admit(&at(1.0), 0.3));
         // Shifted by 2 m: IoU 2/6.
-        assert!(rule.admit(&at(2.0)));
+        assert!(rule.admit(&at(2.0), 0.3));
         // A sibling of that one by IoU 0.6: refused.
-        assert!(!rule.admit(&at(3.0)));
-        assert!(rule.admit(&at(40.0)));
+        assert!(!rule.admit(&at(3.0), 0.3));
+        assert!(rule.admit(&at(40.0), 0.3));
     }
 
     #[test]
     fn a_close_child_needs_enough_diverse_failures() {
         // One failure: diversity says too little, so no close child yet.
-        let mut rule = ChildRule::new(&[flown(0.0, 1.0)], 1.5, (0.5, 0.75), 0.8, 0.3);
-        assert!(!rule.admit(&at(1.0)));
+        let mut rule = DiversityGuard::new(&[flown(0.0, 1.0)], 1.5, (0.5, 0.75), 0.8);
+        assert!(!rule.admit(&at(1.0), 0.3));
         // Ten failures 20 m apart: a child at IoU 0.6 of one leaves diversity 1 - 0.6 / 55 > 0.82.
         let spread: Vec<FlightRecord> = (0..10).map(|i| flown(20.0 * f64::from(i), 1.0)).collect();
-        let mut rule = ChildRule::new(&spread, 1.5, (0.5, 0.75), 0.8, 0.3);
-        assert!(rule.admit(&at(1.0)) && rule.last_was_close());
-        assert!(rule.admit(&at(10.0)) && !rule.last_was_close());
+        let mut rule = DiversityGuard::new(&spread, 1.5, (0.5, 0.75), 0.8);
+        assert!(rule.admit(&at(1.0), 0.3) && rule.last_was_close());
+        assert!(rule.admit(&at(10.0), 0.3) && !rule.last_was_close());
         // Beyond child_max_iou: IoU 3.5/4.5 = 0.78.
-        assert!(!rule.admit(&at(20.5)));
+        assert!(!rule.admit(&at(20.5), 0.3));
         // Near a flight that passed, the same rule applies (it is close to a flown test).
-        assert!(!ChildRule::new(&[flown(0.0, 2.0)], 1.5, (0.5, 0.75), 0.8, 0.3).admit(&at(1.0)));
+        assert!(!DiversityGuard::new(&[flown(0.0, 2.0)], 1.5, (0.5, 0.75), 0.8).admit(&at(1.0), 0.3));
     }
 
     #[test]
@@ -176,10 +170,10 @@ mod tests {
         // Four failures, two of them overlapping by IoU 0.6: diversity 1 - 0.6 / 6 = 0.9.
         let done = [flown(0.0, 1.0), flown(1.0, 1.0), flown(40.0, 1.0), flown(80.0, 1.0)];
         let admitted = |floor: f64| {
-            let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.75), floor, 0.3);
+            let mut rule = DiversityGuard::new(&done, 1.5, (0.5, 0.75), floor);
             [41.0, 81.0, 121.0, 39.0, 79.0]
                 .iter()
-                .filter(|&&x| rule.admit(&at(x)))
+                .filter(|&&x| rule.admit(&at(x), 0.3))
                 .copied()
                 .collect::<Vec<f64>>()
         };
@@ -193,8 +187,8 @@ mod tests {
         // A child that is not close still counts: at -2 it overlaps the failures at 0 and 1 by 1/3 and 1/7,
         // which at weight 0.3 leaves 1 - (0.6 + 0.143) / 7.2 = 0.897.
         let child = at(-2.0);
-        assert!(ChildRule::new(&done, 1.5, (0.5, 0.75), 0.87, 0.3).admit(&child));
-        let mut rule = ChildRule::new(&done, 1.5, (0.5, 0.75), 0.88, 0.3);
-        assert!(!rule.admit(&child) && !rule.last_was_close());
+        assert!(DiversityGuard::new(&done, 1.5, (0.5, 0.75), 0.87).admit(&child, 0.3));
+        let mut rule = DiversityGuard::new(&done, 1.5, (0.5, 0.75), 0.88);
+        assert!(!rule.admit(&child, 0.3) && !rule.last_was_close());
     }
 }
