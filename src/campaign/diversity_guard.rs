@@ -30,14 +30,14 @@ fn prints(obstacles: &[Obstacle]) -> Vec<Footprint> {
     obstacles.iter().map(Obstacle::footprint).collect()
 }
 
-/// The rule for one round's children: the flown tests, the failing ones (weighted by how likely they fail) with
+/// The rule for one round's children or flights: the flown tests, the failing ones (weighted by how likely they fail) with
 /// their weighted pairwise IoU summed (so a child's effect on diversity costs one IoU per failure), and the
 /// siblings drawn so far.
 #[derive(Debug, Clone)]
 pub struct DiversityGuard {
     flown: Vec<Vec<Footprint>>,
-    /// The failing tests (weight 1), and the children admitted this round (close ones 1, the others
-    /// `child_fail_rate`).
+    /// The failing tests (weight 1), and the candidates admitted since (close ones 1, the others their arm's
+    /// failure rate).
     failing: Vec<(Vec<Footprint>, f64)>,
     /// Sum over pairs of the product of their weights and IoU ...
     pair_sum: f64,
@@ -68,8 +68,9 @@ impl DiversityGuard {
             last_close: false,
         };
         for r in done.iter().filter(|r| r.min_distance.is_some_and(|d| d < fail_m)) {
-            let (sum, weight) = rule.pairs_with(&prints(&r.obstacles), 1.0);
-            rule.add(prints(&r.obstacles), 1.0, (sum, weight));
+            let p = prints(&r.obstacles);
+            let pairs = rule.pairs_with(&p, 1.0);
+            rule.add(p, 1.0, pairs);
             rule.failures += 1;
         }
         rule

@@ -9,8 +9,7 @@
 //! would drop them before flight otherwise (at half width [`HALF_WIDTH`] only 31 % of plain children differ
 //! from their parent by IoU <= 0.5).
 
-use super::diversity_guard::DiversityGuard;
-use super::diversity_guard::child_max_iou;
+use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
 use super::rank::Screened;

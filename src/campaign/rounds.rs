@@ -126,8 +126,8 @@ pub fn run_rounds(
     let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
     let mut units: Vec<[f64; DIMS]> = Vec::new();
     let mut is_local: Vec<bool> = Vec::new();
-    // Children closer to a flown test than `max_iou` (admitted by the child rule).
-    let mut close: std::collections::BTreeSet<u64> = std::collections::BTreeSet::new();
+    // Per candidate: a child closer to a flown test than `max_iou` (admitted by the diversity guard).
+    let mut is_close: Vec<bool> = Vec::new();
     let mut screened: Vec<Screened> = Vec::new();
     let mut rounds = Vec::new();
     let mut calibration = start_calibration.clone();
@@ -185,14 +185,10 @@ pub fn run_rounds(
                 .checked_sub(count - local)
                 .map(|j| near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| rule.admit(o, child_rate)));
             let (p, from_box) = match child {
-                Some(Ok(p)) => {
-                    if rule.last_was_close() {
-                        close.insert(i);
-                    }
-                    (p, true)
-                }
+                Some(Ok(p)) => (p, true),
                 _ => (histogram.sample(i)?, false),
             };
+            is_close.push(from_box && rule.last_was_close());
             candidates.push(p.obstacles.to_vec());
             units.push(p.draw.unit);
             is_local.push(from_box);
@@ -329,7 +325,6 @@ pub fn run_rounds(
     let done = Journal::read(&journal_path)?;
     let failure_counts = counted_failures(&done, &units);
     let (drawn_near_failures, drawn_elsewhere) = arm_counts(&done, &is_local);
-    let is_close: Vec<bool> = (0..is_local.len() as u64).map(|c| close.contains(&c)).collect();
     let (drawn_close, _) = arm_counts(&done, &is_close);
     let learnt = Learnt {
         calibration,
