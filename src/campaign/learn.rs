@@ -154,6 +154,9 @@ pub struct RoundLog {
     /// without `adapt`).
     #[serde(default)]
     pub local_flight_share: f64,
+    /// Its neighbour candidates were drawn around near misses: no flight had failed yet.
+    #[serde(default)]
+    pub near_miss_parents: bool,
     /// Flights made in it (by this run; a resumed run counts only its own).
     pub flights: usize,
     /// The learnt bias used to rank its flights, metres.

@@ -1,6 +1,6 @@
 //! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
 //! draw space around the campaign's failing flights so far (its *parents*), where the next failures are
-//! likeliest. On the embedded mock (mission 2, 1498 flights of 15 campaigns) a flight whose most-overlapping
+//! likeliest; before the first failure, around its closest near misses. On the embedded mock (mission 2, 1498 flights of 15 campaigns) a flight whose most-overlapping
 //! earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
 //! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
@@ -36,23 +36,46 @@ pub const CHILD_TRIES: u32 = 64;
 /// explores), never none (their rate is still measured).
 pub const LOCAL_FLIGHT_SHARE: (f64, f64) = (0.25, 0.85);
 
+/// Flights within this margin of the failure distance stand in as parents while the campaign has no failure
+/// yet, metres. On a stack that rarely fails (PX4 v1.14 SIH: 0-1 failures in 30 flights, its closest at
+/// 1.57-1.67 m) the closest flights are all the campaign knows of where failures lie.
+pub const NEAR_MISS_M: f64 = 0.3;
+/// Near-miss parents per round at most (the closest), so their children crowd the closest flights.
+pub const NEAR_MISS_PARENTS: usize = 4;
+
+/// Where a round's children come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lineage {
+    /// The failing flights so far.
+    Failures,
+    /// No flight has failed yet: the closest flights within [`NEAR_MISS_M`] of failing.
+    NearMisses,
+}
+
 /// The neighbourhoods of the failing flights in `done` (flown closer than `fail_m`; at most [`PARENTS`],
-/// closest first, ties by candidate); flights of candidates this run did not draw are skipped.
-pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> Vec<Neighbourhood> {
+/// closest first, ties by candidate); with no failure, of the closest near misses (below `fail_m` +
+/// [`NEAR_MISS_M`], at most [`NEAR_MISS_PARENTS`]). Flights of candidates this run did not draw are skipped.
+pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> (Vec<Neighbourhood>, Lineage) {
     let mut flown: Vec<(f64, u64, [f64; DIMS])> = done
         .iter()
         .filter_map(|r| Some((r.min_distance?, r.candidate, *units.get(r.candidate as usize)?)))
-        .filter(|(d, _, _)| *d < fail_m)
+        .filter(|(d, _, _)| *d < fail_m + NEAR_MISS_M)
         .collect();
     flown.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    flown
-        .into_iter()
-        .take(PARENTS)
+    let failures = flown.iter().take_while(|(d, _, _)| *d < fail_m).count();
+    let (lineage, take) = if failures > 0 {
+        (Lineage::Failures, failures.min(PARENTS))
+    } else {
+        (Lineage::NearMisses, flown.len().min(NEAR_MISS_PARENTS))
+    };
+    let boxes = flown[..take]
+        .iter()
         .map(|(_, _, centre)| Neighbourhood {
-            centre,
+            centre: *centre,
             half_width: HALF_WIDTH,
         })
-        .collect()
+        .collect();
+    (boxes, lineage)
 }
 
 /// Share of a round's flights for neighbour candidates: their failure rate so far over the sum of theirs and
@@ -119,22 +142,47 @@ mod tests {
         let mut done: Vec<FlightRecord> = (0..16).map(|i| record(i, Some(1.0 + i as f64 * 0.05))).collect();
         done.push(record(16, None));
         done.push(record(42, Some(0.1)));
-        let p = parents(&done, &units, 1.5);
+        let (p, lineage) = parents(&done, &units, 1.5);
+        assert_eq!(lineage, Lineage::Failures);
         assert_eq!(
             p.len(),
             10,
-            "only failures are parents; 42 is not this run's; 16 has no distance"
+            "only failures are parents while there are any; 42 is not this run's; 16 has no distance"
         );
         assert_eq!(p[0].centre, units[0]);
         assert_eq!(p[9].centre, units[9]);
         assert!(p.iter().all(|n| n.half_width == HALF_WIDTH));
         // More failures than PARENTS: the closest.
         let many: Vec<FlightRecord> = (0..20).map(|i| record(i, Some(1.4 - i as f64 * 0.01))).collect();
-        let p = parents(&many, &units, 1.5);
+        let (p, _) = parents(&many, &units, 1.5);
         assert_eq!(p.len(), PARENTS);
         assert_eq!(p[0].centre, units[19]);
-        assert!(parents(&[], &units, 1.5).is_empty());
-        assert!(parents(&done[10..], &units, 1.5).is_empty(), "no failure, no parent");
+        assert!(parents(&[], &units, 1.5).0.is_empty());
+    }
+
+    #[test]
+    fn with_no_failure_the_closest_near_misses_are_the_parents() {
+        let units: Vec<[f64; DIMS]> = (0..20).map(|i| [i as f64 / 20.0; DIMS]).collect();
+        // Candidates 0-15 flew 1.5, 1.55, ... 2.25 m: none failed; 0-5 are within 0.3 m of failing.
+        let done: Vec<FlightRecord> = (0..16).rev().map(|i| record(i, Some(1.5 + i as f64 * 0.05))).collect();
+        let (p, lineage) = parents(&done, &units, 1.5);
+        assert_eq!(lineage, Lineage::NearMisses);
+        assert_eq!(p.len(), NEAR_MISS_PARENTS);
+        let centres: Vec<_> = p.iter().map(|n| n.centre).collect();
+        assert_eq!(centres, vec![units[0], units[1], units[2], units[3]], "closest first");
+        // Only two near misses (1.75 and 1.78 m); 1.85 m is not one.
+        let few = vec![record(3, Some(1.85)), record(7, Some(1.78)), record(9, Some(1.75)), record(1, Some(2.5))];
+        let (p, lineage) = parents(&few, &units, 1.5);
+        assert_eq!(lineage, Lineage::NearMisses);
+        assert_eq!(p.iter().map(|n| n.centre).collect::<Vec<_>>(), vec![units[9], units[7]]);
+        // One failure takes over from every near miss.
+        let mut one = few.clone();
+        one.push(record(12, Some(1.49)));
+        let (p, lineage) = parents(&one, &units, 1.5);
+        assert_eq!((p.len(), lineage), (1, Lineage::Failures));
+        assert_eq!(p[0].centre, units[12]);
+        // Far flights only: no parent.
+        assert!(parents(&few[3..], &units, 1.5).0.is_empty());
     }
 
     #[test]

@@ -343,12 +343,17 @@ pub fn markdown(r: &Report) -> String {
             let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
                 format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
             });
+            let near = if round.near_miss_parents {
+                format!("{} near misses", round.local_candidates)
+            } else {
+                round.local_candidates.to_string()
+            };
             let _ = writeln!(
                 md,
                 "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
                 round.round + 1,
                 round.candidates,
-                round.local_candidates,
+                near,
                 round.flights,
                 round.local_flight_share,
                 round.bias_m,
@@ -381,8 +386,8 @@ pub fn markdown(r: &Report) -> String {
         if near.flights > 0 {
             let _ = writeln!(
                 md,
-                "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
-                 --max-iou: {} of {}); the others {} of {}.",
+                "\nCandidates drawn near failing flights (near the closest flights before the first failure) failed {} \
+                 of {} flights (those closer to a flown test than --max-iou: {} of {}); the others {} of {}.",
                 near.failures,
                 near.flights,
                 l.drawn_close.failures,

@@ -5,7 +5,8 @@
 //! candidates are re-ranked with these predictions and the ensembles.
 //!
 //! With `adapt`, the generator moves towards failures in two ways. Some of a round's new candidates are drawn
-//! in small boxes around the failing flights so far ([`super::neighbours`]), and a share of its flights that
+//! in small boxes around the failing flights so far (before the first failure, around the closest near misses:
+//! [`super::neighbours`]), and a share of its flights that
 //! follows their failure rate is offered to them. The others come from a univariate
 //! marginal distribution algorithm ([`crate::generator::adaptive`]): elites are the best [`ELITE_SHARE`] of the
 //! screened candidates by prediction, plus the closest quarter of the flights and every flown failure at
@@ -23,7 +24,7 @@ use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::{BinCount, FailureCounts};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
-use super::neighbours;
+use super::neighbours::{self, Lineage};
 use super::pool::Vehicle;
 use super::rank::Screened;
 use super::report::StageTimes;
@@ -149,10 +150,10 @@ pub fn run_rounds(
         };
         let t = Instant::now();
         let before = Journal::read(&journal_path)?;
-        let around = if cfg.adapt && !alike {
+        let (around, lineage) = if cfg.adapt && !alike {
             neighbours::parents(&before, &units, FAIL_M)
         } else {
-            Vec::new()
+            (Vec::new(), Lineage::Failures)
         };
         // As many children as the round's own draws (a small campaign stays small), at most CHILDREN.
         let local = if around.is_empty() {
@@ -260,10 +261,14 @@ pub fn run_rounds(
             rank_unflown(&fresh, &done, &candidates, cfg, remaining)
         };
         progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates ({local} near the failing flights), LFS bias {bias:+.2} m learnt \
+            "round {} of {ROUNDS}: {} candidates ({local} near the {}), LFS bias {bias:+.2} m learnt \
              from {} flights{}; flying {}",
             round + 1,
             hi - lo,
+            match lineage {
+                Lineage::Failures => "failing flights",
+                Lineage::NearMisses => "closest flights, none failing yet",
+            },
             done.len(),
             surrogate.map_or(String::new(), |k| format!(
                 ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
@@ -287,6 +292,7 @@ pub fn run_rounds(
             candidates: (hi - lo) as usize,
             local_candidates: is_local[lo as usize..hi as usize].iter().filter(|l| **l).count(),
             local_flight_share: if cfg.adapt { share } else { 0.0 },
+            near_miss_parents: local > 0 && lineage == Lineage::NearMisses,
             flights,
             bias_m: bias,
             surrogate,

@@ -391,7 +391,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         close.flights <= near.flights && close.failures <= near.failures,
         "{close:?} of {near:?}"
     );
-    assert!(md.contains("Candidates drawn near failing flights failed"), "{md}");
+    assert!(md.contains("Candidates drawn near failing flights (near the closest flights before the first failure) failed"), "{md}");
     // Every test flown still obeys the rules.
     for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
         let t = TestCase::load(&cfg.case).unwrap().with_obstacles(rec.obstacles);
