@@ -171,7 +171,12 @@ mod tests {
         let centres: Vec<_> = p.iter().map(|n| n.centre).collect();
         assert_eq!(centres, vec![units[0], units[1], units[2], units[3]], "closest first");
         // Only two near misses (1.75 and 1.78 m); 1.85 m is not one.
-        let few = vec![record(3, Some(1.85)), record(7, Some(1.78)), record(9, Some(1.75)), record(1, Some(2.5))];
+        let few = vec![
+            record(3, Some(1.85)),
+            record(7, Some(1.78)),
+            record(9, Some(1.75)),
+            record(1, Some(2.5)),
+        ];
         let (p, lineage) = parents(&few, &units, 1.5);
         assert_eq!(lineage, Lineage::NearMisses);
         assert_eq!(p.iter().map(|n| n.centre).collect::<Vec<_>>(), vec![units[9], units[7]]);

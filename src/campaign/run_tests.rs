@@ -20,12 +20,13 @@ impl Screener for ScriptedLfs {
     }
 }
 
-/// Flies by writing a two-sample CSV; the flown distance is the prediction plus 0.2 m. Cancels the
-/// campaign after `stop_after` flights (a "kill").
+/// Flies by writing a two-sample CSV; the flown distance is the prediction plus `extra_m` (0.2 m unless
+/// told). Cancels the campaign after `stop_after` flights (a "kill").
 struct ScriptedVehicle {
     flown: Arc<Mutex<Vec<f64>>>,
     stop_after: Option<usize>,
     count: Arc<AtomicUsize>,
+    extra_m: f64,
 }
 
 impl Vehicle for ScriptedVehicle {
@@ -40,7 +41,7 @@ impl Vehicle for ScriptedVehicle {
         if self.stop_after.is_some_and(|k| n >= k) {
             cancel.store(true, Ordering::SeqCst);
         }
-        let d = (y - 20.0).abs() / 2.0 + 0.2;
+        let d = (y - 20.0).abs() / 2.0 + self.extra_m;
         Ok(Flown {
             status: "landed".into(),
             min_distance: Some(d),
@@ -107,6 +108,7 @@ fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<d
         flown: flown.clone(),
         stop_after,
         count,
+        extra_m: 0.2,
     })]
 }
 
@@ -391,7 +393,10 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         close.flights <= near.flights && close.failures <= near.failures,
         "{close:?} of {near:?}"
     );
-    assert!(md.contains("Candidates drawn near failing flights (near the closest flights before the first failure) failed"), "{md}");
+    assert!(
+        md.contains("Candidates drawn near failing flights (near the closest flights before the first failure) failed"),
+        "{md}"
+    );
     // Every test flown still obeys the rules.
     for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
         let t = TestCase::load(&cfg.case).unwrap().with_obstacles(rec.obstacles);
@@ -485,4 +490,44 @@ fn close_children_stay_within_child_max_iou_of_every_flown_test() {
     assert!(close.flights <= near.flights, "{close:?} of {near:?}");
     // With no diversity floor, this vehicle's one failing place gets close children.
     assert!(close.flights > 0 && closest > 0.5, "{close:?}, closest pair {closest}");
+}
+
+#[test]
+fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = CampaignConfig {
+        learn: true,
+        adapt: true,
+        ..config(24)
+    };
+    // Flies 1.5 m farther than the scripted LFS predicts: never below 1.5 m, often within 0.3 m of it.
+    let vehicles: Vec<Box<dyn Vehicle>> = vec![Box::new(ScriptedVehicle {
+        flown: Arc::new(Mutex::new(Vec::new())),
+        stop_after: None,
+        count: Arc::new(AtomicUsize::new(0)),
+        extra_m: 1.5,
+    })];
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &ScriptedLfs,
+        vehicles,
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!((r.suite.flown, r.suite.failing), (24, 0));
+    let learnt = r.learning.expect("learnt");
+    let first = &learnt.rounds[0];
+    assert!(!first.near_miss_parents && first.local_candidates == 0, "{first:?}");
+    let later: Vec<_> = learnt.rounds[1..].iter().filter(|r| r.near_miss_parents).collect();
+    assert!(!later.is_empty(), "{:?}", learnt.rounds);
+    assert!(later.iter().all(|r| r.local_candidates > 0));
+    assert!(
+        learnt.drawn_near_failures.flights > 0,
+        "{:?}",
+        learnt.drawn_near_failures
+    );
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("near misses) |"), "{md}");
 }
