@@ -129,6 +129,9 @@ pub struct Learnt {
     /// Flights and failures of the candidates drawn near failing flights ([`super::neighbours`]) ...
     #[serde(default)]
     pub drawn_near_failures: BinCount,
+    /// ... near the closest flights, before the first failure ...
+    #[serde(default)]
+    pub drawn_near_misses: BinCount,
     /// ... and of all the others (a diagnostic: did the boxes pay on this vehicle?).
     #[serde(default)]
     pub drawn_elsewhere: BinCount,

@@ -382,16 +382,19 @@ pub fn markdown(r: &Report) -> String {
             let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
             let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
         }
-        let (near, other) = (l.drawn_near_failures, l.drawn_elsewhere);
-        if near.flights > 0 {
+        let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
+        if near.flights + misses.flights > 0 {
             let _ = writeln!(
                 md,
-                "\nCandidates drawn near failing flights (near the closest flights before the first failure) failed {} \
-                 of {} flights (those closer to a flown test than --max-iou: {} of {}); the others {} of {}.",
+                "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
+                 --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
+                 {}.",
                 near.failures,
                 near.flights,
                 l.drawn_close.failures,
                 l.drawn_close.flights,
+                misses.failures,
+                misses.flights,
                 other.failures,
                 other.flights
             );

@@ -126,7 +126,9 @@ pub fn run_rounds(
     }
     let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
     let mut units: Vec<[f64; DIMS]> = Vec::new();
+    // Per candidate: a child of a failing flight; a child of a near miss (drawn before the first failure).
     let mut is_local: Vec<bool> = Vec::new();
+    let mut is_near_miss: Vec<bool> = Vec::new();
     // Per candidate: a child closer to a flown test than `max_iou` (admitted by the diversity guard).
     let mut is_close: Vec<bool> = Vec::new();
     let mut screened: Vec<Screened> = Vec::new();
@@ -172,7 +174,13 @@ pub fn run_rounds(
             .collect();
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
         // diversity can afford it), and keep their expected diversity above the floor ([`DiversityGuard`]).
-        let child_rate = arm_counts(&before, &is_local).0.rate();
+        // Children are measured against their own lineage: a near miss's children fail at about the base rate
+        // on the mock, and counting them with the failures' children would starve the latter of flights.
+        let arm = match lineage {
+            Lineage::Failures => &is_local,
+            Lineage::NearMisses => &is_near_miss,
+        };
+        let child_rate = arm_counts(&before, arm).0.rate();
         let mut rule = DiversityGuard::new(
             if local == 0 { &[] } else { &before },
             FAIL_M,
@@ -192,7 +200,8 @@ pub fn run_rounds(
             is_close.push(from_box && rule.last_was_close());
             candidates.push(p.obstacles.to_vec());
             units.push(p.draw.unit);
-            is_local.push(from_box);
+            is_local.push(from_box && lineage == Lineage::Failures);
+            is_near_miss.push(from_box && lineage == Lineage::NearMisses);
         }
         stages.sample_s += t.elapsed().as_secs_f64();
         let ctx = Stage {
@@ -244,13 +253,17 @@ pub fn run_rounds(
             apply_ensemble(&mut fresh, &members, &screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let (near_flown, other_flown) = arm_counts(&done, &is_local);
+        let arm = match lineage {
+            Lineage::Failures => &is_local,
+            Lineage::NearMisses => &is_near_miss,
+        };
+        let (near_flown, other_flown) = arm_counts(&done, arm);
         let share = neighbours::local_flight_share(near_flown, other_flown);
         let ranked = if cfg.adapt {
             let mut guard = DiversityGuard::new(&done, FAIL_M, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity);
             neighbours::rank_split(
                 &fresh,
-                |c| is_local.get(c as usize).copied().unwrap_or(false),
+                |c| arm.get(c as usize).copied().unwrap_or(false),
                 share,
                 (&done, &candidates),
                 cfg,
@@ -290,7 +303,9 @@ pub fn run_rounds(
             round,
             first_candidate: lo,
             candidates: (hi - lo) as usize,
-            local_candidates: is_local[lo as usize..hi as usize].iter().filter(|l| **l).count(),
+            local_candidates: (lo as usize..hi as usize)
+                .filter(|&c| is_local[c] || is_near_miss[c])
+                .count(),
             local_flight_share: if cfg.adapt { share } else { 0.0 },
             near_miss_parents: local > 0 && lineage == Lineage::NearMisses,
             flights,
@@ -330,7 +345,10 @@ pub fn run_rounds(
     }
     let done = Journal::read(&journal_path)?;
     let failure_counts = counted_failures(&done, &units);
-    let (drawn_near_failures, drawn_elsewhere) = arm_counts(&done, &is_local);
+    let (drawn_near_failures, _) = arm_counts(&done, &is_local);
+    let (drawn_near_misses, _) = arm_counts(&done, &is_near_miss);
+    let any_child: Vec<bool> = is_local.iter().zip(&is_near_miss).map(|(l, n)| *l || *n).collect();
+    let (_, drawn_elsewhere) = arm_counts(&done, &any_child);
     let (drawn_close, _) = arm_counts(&done, &is_close);
     let learnt = Learnt {
         calibration,
@@ -339,6 +357,7 @@ pub fn run_rounds(
         rounds,
         failure_counts,
         drawn_near_failures,
+        drawn_near_misses,
         drawn_elsewhere,
         drawn_close,
     };
@@ -504,6 +523,7 @@ mod tests {
             rounds: Vec::new(),
             failure_counts: FailureCounts::default(),
             drawn_near_failures: BinCount::default(),
+            drawn_near_misses: BinCount::default(),
             drawn_elsewhere: BinCount::default(),
             drawn_close: BinCount::default(),
         };
