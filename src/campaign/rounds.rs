@@ -258,7 +258,10 @@ pub fn run_rounds(
             Lineage::NearMisses => &is_near_miss,
         };
         let (near_flown, other_flown) = arm_counts(&done, arm);
-        let share = neighbours::local_flight_share(near_flown, other_flown);
+        let share = match lineage {
+            Lineage::Failures => neighbours::local_flight_share(near_flown, other_flown),
+            Lineage::NearMisses => neighbours::NEAR_MISS_FLIGHT_SHARE,
+        };
         let ranked = if cfg.adapt {
             let mut guard = DiversityGuard::new(&done, FAIL_M, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity);
             neighbours::rank_split(
