@@ -1,7 +1,7 @@
 //! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
 //! draw space around the campaign's failing flights so far (its *parents*), where the next failures are
-//! likeliest; before the first failure, around its closest near misses. On the embedded mock (mission 2, 1498 flights of 15 campaigns) a flight whose most-overlapping
-//! earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
+//! likeliest; before the first failure, around its closest near misses. On the embedded mock (mission 2, 1498
+//! flights of 15 campaigns) a flight whose most-overlapping earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
 //! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
 //! the campaign exploring. Children are drawn distinct from each other and from the flown tests, or close to
@@ -54,6 +54,16 @@ pub enum Lineage {
     Failures,
     /// No flight has failed yet: the closest flights within [`NEAR_MISS_M`] of failing.
     NearMisses,
+}
+
+impl Lineage {
+    /// Which candidates are this lineage's children: `failures_children` or `near_misses_children`.
+    pub fn children<'a>(self, failures_children: &'a [bool], near_misses_children: &'a [bool]) -> &'a [bool] {
+        match self {
+            Lineage::Failures => failures_children,
+            Lineage::NearMisses => near_misses_children,
+        }
+    }
 }
 
 /// The neighbourhoods of the failing flights in `done` (flown closer than `fail_m`; at most [`PARENTS`],

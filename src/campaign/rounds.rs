@@ -176,11 +176,7 @@ pub fn run_rounds(
         // diversity can afford it), and keep their expected diversity above the floor ([`DiversityGuard`]).
         // Children are measured against their own lineage: a near miss's children fail at about the base rate
         // on the mock, and counting them with the failures' children would starve the latter of flights.
-        let arm = match lineage {
-            Lineage::Failures => &is_local,
-            Lineage::NearMisses => &is_near_miss,
-        };
-        let child_rate = arm_counts(&before, arm).0.rate();
+        let child_rate = arm_counts(&before, lineage.children(&is_local, &is_near_miss)).0.rate();
         let mut rule = DiversityGuard::new(
             if local == 0 { &[] } else { &before },
             FAIL_M,
@@ -253,10 +249,7 @@ pub fn run_rounds(
             apply_ensemble(&mut fresh, &members, &screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let arm = match lineage {
-            Lineage::Failures => &is_local,
-            Lineage::NearMisses => &is_near_miss,
-        };
+        let arm = lineage.children(&is_local, &is_near_miss);
         let (near_flown, other_flown) = arm_counts(&done, arm);
         let share = match lineage {
             Lineage::Failures => neighbours::local_flight_share(near_flown, other_flown),
