@@ -168,9 +168,10 @@ pub fn run_rounds(
         next = hi;
         let base = Generator::new(case, cfg.generator.clone(), cfg.seed)?;
         let histogram = base.clone().with_distribution(distribution.clone());
-        let near: Vec<Generator> = around
-            .iter()
-            .map(|n| base.clone().with_proposal(Proposal::Around(*n)))
+        // Every parent's wide box, then every narrow one (`neighbours::child_box`'s order).
+        let near: Vec<Generator> = (0..2 * around.len())
+            .filter_map(|j| neighbours::child_box(&around, j))
+            .map(|n| base.clone().with_proposal(Proposal::Around(n)))
             .collect();
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
         // diversity can afford it), and keep their expected diversity above the floor ([`DiversityGuard`]).
@@ -184,7 +185,7 @@ pub fn run_rounds(
             cfg.min_diversity,
         );
         for (k, i) in (lo..hi).enumerate() {
-            // The round's last `local` candidates come from the parents' boxes, in turn.
+            // The round's last `local` candidates come from the parents' boxes, in turn (wide, then narrow).
             // A parent's box with no room left (or no admissible child) falls back to the histogram.
             let child = k
                 .checked_sub(count - local)
