@@ -229,6 +229,20 @@ pub fn diversity(tests: &[Vec<Obstacle>]) -> Option<f64> {
     Some(1.0 - sum / pairs as f64)
 }
 
+/// How many of `tests` (in order, best first) overlap no earlier *kept* test by more than `max_iou`: the suite
+/// counted once per place, a close variant of a kept test not counted again. Not a competition metric: it
+/// says how much of a suite's failure count is close variants, which its diversity averages away.
+pub fn distinct_tests(tests: &[Vec<Obstacle>], max_iou: f64) -> usize {
+    let mut kept: Vec<Vec<Footprint>> = Vec::new();
+    for t in tests {
+        let p: Vec<Footprint> = t.iter().map(Obstacle::footprint).collect();
+        if kept.iter().all(|k| crate::geometry::union_iou(&p, k) <= max_iou) {
+            kept.push(p);
+        }
+    }
+    kept.len()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,6 +340,18 @@ mod tests {
         assert_eq!(diversity(&[a.clone(), a.clone()]), Some(0.0));
         assert_eq!(diversity(&[a.clone(), b]), Some(1.0));
         assert_eq!(diversity(&[a]), None);
+    }
+
+    #[test]
+    fn distinct_tests_count_each_place_once() {
+        let at = |x: f64| vec![Obstacle::new(2.0, 2.0, 20.0, x, 20.0, 0.0)];
+        // Shifted 0.5 m: IoU 1.5 / 2.5 = 0.6; shifted 1 m: 1 / 3 = 0.33; 10 m: 0.
+        assert_eq!(distinct_tests(&[at(0.0), at(0.5), at(10.0)], 0.5), 2);
+        assert_eq!(distinct_tests(&[at(0.0), at(0.5), at(10.0)], 0.7), 3);
+        assert_eq!(distinct_tests(&[at(0.0), at(1.0), at(10.0)], 0.5), 3);
+        // Greedy in order: 0.5 is a variant of 0.0 and of 1.0, which is kept (IoU 0.33 to 0.0).
+        assert_eq!(distinct_tests(&[at(0.0), at(1.0), at(0.5)], 0.5), 2);
+        assert_eq!(distinct_tests(&[], 0.5), 0);
     }
 
     #[test]

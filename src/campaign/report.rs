@@ -10,12 +10,15 @@ use super::journal::FlightRecord;
 use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::write_atomic;
-use crate::judge::{Judge, diversity, judge_in_frame, points, test_score};
-use crate::model::{ModelError, Spelling, TestCase, Trajectory};
+use crate::judge::{Judge, distinct_tests, diversity, judge_in_frame, points, test_score};
+use crate::model::{ModelError, Obstacle, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
 /// The competition's failure distance, metres.
 pub const FAIL_DISTANCE_M: f64 = 1.5;
+/// Two failing tests overlapping more than this (IoU) count as one place in [`SuiteSummary::distinct_failing`]:
+/// the campaign's default `--max-iou`, its near-duplicate rule.
+pub const DISTINCT_IOU: f64 = 0.5;
 
 /// Wall time of each stage, seconds.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -74,6 +77,9 @@ pub struct SuiteSummary {
     pub failure_score: f64,
     /// Diversity of the reported tests (1 - mean pairwise IoU).
     pub diversity: Option<f64>,
+    /// Reported tests, best first, that overlap no better one kept by more than [`DISTINCT_IOU`]: the failures
+    /// counted once per place ([`distinct_tests`]).
+    pub distinct_failing: usize,
     /// Of the flown tests the LFS predicted below 1.5 m, the share that flew below 1.5 m.
     pub lfs_precision: Option<f64>,
     /// Mean |predicted - flown| minimum distance over flown tests, metres.
@@ -223,6 +229,7 @@ pub fn write_outputs(
         .iter()
         .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_DISTANCE_M)))
         .unzip();
+    let failing_obstacles: Vec<Vec<Obstacle>> = failing.iter().map(|r| r.obstacles.clone()).collect();
     let suite = SuiteSummary {
         candidates_screened,
         flown: records.len(),
@@ -232,7 +239,8 @@ pub fn write_outputs(
             .filter(|f| f.reported_as.is_some())
             .map(|f| f.test_score)
             .sum(),
-        diversity: diversity(&failing.iter().map(|r| r.obstacles.clone()).collect::<Vec<_>>()),
+        diversity: diversity(&failing_obstacles),
+        distinct_failing: distinct_tests(&failing_obstacles, DISTINCT_IOU),
         lfs_precision: precision.filter(|_| screened),
         lfs_mean_abs_error_m: (screened && !errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
@@ -295,6 +303,11 @@ pub fn markdown(r: &Report) -> String {
     );
     let _ = writeln!(md, "| metric | value |\n|---|---|");
     let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);
+    let _ = writeln!(
+        md,
+        "| distinct failing tests (none overlapping a better one by IoU > {DISTINCT_IOU}) | {} |",
+        s.distinct_failing
+    );
     let _ = writeln!(md, "| failure score | {:.3} |", s.failure_score);
     let _ = writeln!(md, "| diversity | {} |", opt(s.diversity));
     let _ = writeln!(

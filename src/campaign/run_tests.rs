@@ -137,6 +137,8 @@ fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
         .filter_map(|f| f.min_distance.filter(|d| *d < 1.5))
         .collect();
     assert_eq!(r.suite.failing, failing.len());
+    assert!(r.suite.distinct_failing <= r.suite.failing);
+    assert_eq!(r.suite.distinct_failing == 0, r.suite.failing == 0);
     let mut last = 0.0;
     for i in 0..r.suite.failing {
         let t = TestCase::load(&dir.path().join(format!("test_{i}.yaml"))).unwrap();

@@ -11,7 +11,7 @@ use anyhow::{Context, bail};
 use prgenuav::bridge::FlyMode;
 use prgenuav::campaign::parallel::available_threads;
 use prgenuav::campaign::pool::Vehicle;
-use prgenuav::campaign::report::timestamped_folder;
+use prgenuav::campaign::report::{DISTINCT_IOU, timestamped_folder};
 use prgenuav::campaign::run::{CampaignConfig, run_campaign};
 use prgenuav::campaign::screen::LfsScreener;
 use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
@@ -106,7 +106,7 @@ pub struct Args {
     /// A candidate drawn next to a failing flight may overlap a flown test up to this IoU (more than --max-iou)
     /// as long as the failing tests would keep --min-diversity if it failed too: near copies of a failure fail
     /// most often. Set it to --max-iou to hold every candidate to --max-iou.
-    #[arg(long, default_value_t = 0.75, value_name = "IOU")]
+    #[arg(long, default_value_t = 0.85, value_name = "IOU")]
     child_max_iou: f64,
     /// Continue a killed campaign in this folder (its campaign.json holds the settings).
     #[arg(long, value_name = "FOLDER")]
@@ -293,8 +293,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         let s = &report.suite;
         println!(
-            "{} failing tests of {} flights ({} candidates screened), failure score {:.2}, diversity {}",
+            "{} failing tests ({} distinct at IoU {DISTINCT_IOU}) of {} flights ({} candidates screened), failure \
+             score {:.2}, diversity {}",
             s.failing,
+            s.distinct_failing,
             s.flown,
             s.candidates_screened,
             s.failure_score,
