@@ -119,6 +119,13 @@ impl DiversityGuard {
         true
     }
 
+    /// Whether a child may come closer to a flown test than `max_iou` at all: from
+    /// [`MIN_FAILING_FOR_DIVERSITY`] - 1 failures on (the child would make the count), and only with a
+    /// `child_max_iou` above `max_iou`.
+    pub fn close_children_may_fly(&self) -> bool {
+        self.failures + 1 >= MIN_FAILING_FOR_DIVERSITY && self.child_max_iou > self.max_iou
+    }
+
     /// Whether the child admitted last overlaps a flown test beyond `max_iou`.
     pub fn last_was_close(&self) -> bool {
         self.last_close

@@ -18,8 +18,8 @@ use super::stages::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 use crate::model::Obstacle;
 
-/// Below this many failing tests their diversity says little (two tests next to each other score 0.7) and
-/// does not pause the neighbour proposals.
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it
+/// neither bounds the children nor backs off the fit, and no child may come closer than `--max-iou`.
 pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out
 /// among them in turn.
@@ -98,10 +98,11 @@ pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> (Ve
 }
 
 /// The box a round's child `j` is drawn in, among `parents`' boxes: the parents in turn, in their wide box on
-/// the first pass, then narrow and wide passes alternately.
-pub fn child_box(parents: &[Neighbourhood], j: usize) -> Option<Neighbourhood> {
+/// the first pass, then (with `close`: close children may fly) narrow and wide passes alternately. Without
+/// close children every pass is wide: the narrow box's draws overlap their parent by more than `--max-iou`.
+pub fn child_box(parents: &[Neighbourhood], j: usize, close: bool) -> Option<Neighbourhood> {
     let parent = parents.get(j.checked_rem(parents.len())?)?;
-    let narrow = (j / parents.len()) % 2 == 1;
+    let narrow = close && (j / parents.len()) % 2 == 1;
     Some(Neighbourhood {
         half_width: if narrow { NARROW_HALF_WIDTH } else { parent.half_width },
         ..*parent
@@ -221,19 +222,28 @@ mod tests {
     }
 
     #[test]
-    fn children_take_the_parents_in_turn_wide_then_narrow() {
+    fn children_take_the_parents_in_turn_wide_then_narrow_when_close_children_may_fly() {
         let parent = |x: f64| Neighbourhood {
             centre: [x; DIMS],
             half_width: HALF_WIDTH,
         };
         let parents = [parent(0.2), parent(0.6)];
-        let boxes: Vec<(f64, f64)> = (0..6)
-            .filter_map(|j| child_box(&parents, j))
-            .map(|b| (b.centre[0], b.half_width))
-            .collect();
+        let boxes = |close| -> Vec<(f64, f64)> {
+            (0..6)
+                .filter_map(|j| child_box(&parents, j, close))
+                .map(|b| (b.centre[0], b.half_width))
+                .collect()
+        };
         let (w, n) = (HALF_WIDTH, NARROW_HALF_WIDTH);
-        assert_eq!(boxes, vec![(0.2, w), (0.6, w), (0.2, n), (0.6, n), (0.2, w), (0.6, w)]);
-        assert_eq!(child_box(&[], 3), None, "no parent, no box");
+        assert_eq!(
+            boxes(true),
+            vec![(0.2, w), (0.6, w), (0.2, n), (0.6, n), (0.2, w), (0.6, w)]
+        );
+        assert_eq!(
+            boxes(false),
+            vec![(0.2, w), (0.6, w), (0.2, w), (0.6, w), (0.2, w), (0.6, w)]
+        );
+        assert_eq!(child_box(&[], 3, true), None, "no parent, no box");
     }
 
     #[test]

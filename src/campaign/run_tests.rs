@@ -545,3 +545,40 @@ fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
     );
     assert!(md.contains(&line), "{md}");
 }
+
+#[test]
+fn below_the_diversity_floor_the_failures_still_get_children() {
+    let dir = tempfile::tempdir().unwrap();
+    // A floor no set of failures reaches: from the fourth failure on the failing tests are always below it.
+    let cfg = CampaignConfig {
+        learn: true,
+        adapt: true,
+        min_diversity: 0.999,
+        ..config(40)
+    };
+    let vehicles: Vec<Box<dyn Vehicle>> = vec![Box::new(ScriptedVehicle {
+        flown: Arc::new(Mutex::new(Vec::new())),
+        stop_after: None,
+        count: Arc::new(AtomicUsize::new(0)),
+        extra_m: 0.0,
+    })];
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &ScriptedLfs,
+        vehicles,
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    let learnt = r.learning.expect("learnt");
+    assert!(
+        r.suite.failing >= crate::campaign::neighbours::MIN_FAILING_FOR_DIVERSITY,
+        "{:?}",
+        r.suite
+    );
+    // Up to session 10 the children paused here for the rest of the campaign; now the guard admits those that
+    // do not lower the diversity.
+    let last = learnt.rounds.last().expect("rounds");
+    assert!(last.local_candidates > 0, "{:?}", learnt.rounds);
+}
