@@ -556,29 +556,15 @@ fn below_the_diversity_floor_the_failures_still_get_children() {
         min_diversity: 0.999,
         ..config(40)
     };
-    let vehicles: Vec<Box<dyn Vehicle>> = vec![Box::new(ScriptedVehicle {
-        flown: Arc::new(Mutex::new(Vec::new())),
-        stop_after: None,
-        count: Arc::new(AtomicUsize::new(0)),
-        extra_m: 0.0,
-    })];
-    let r = run_campaign(
-        &cfg,
-        dir.path(),
-        &ScriptedLfs,
-        vehicles,
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");
     assert!(
         r.suite.failing >= crate::campaign::neighbours::MIN_FAILING_FOR_DIVERSITY,
         "{:?}",
         r.suite
     );
-    // Up to session 10 the children paused here for the rest of the campaign; now the guard admits those that
-    // do not lower the diversity.
-    let last = learnt.rounds.last().expect("rounds");
-    assert!(last.local_candidates > 0, "{:?}", learnt.rounds);
+    // Up to session 10 the children paused for the rest of the campaign once the failures were below the floor;
+    // now the guard admits those that do not lower the diversity.
+    let late: Vec<usize> = learnt.rounds[4..].iter().map(|r| r.local_candidates).collect();
+    assert!(late.iter().any(|&c| c > 0), "{:?}", learnt.rounds);
 }
