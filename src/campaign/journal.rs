@@ -37,6 +37,9 @@ pub struct FlightRecord {
     /// Warnings of the flight side (e.g. the avoidance planner falling behind).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Why the flight stopped, in words, when it did not land (journals before session 11 have none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// The vehicle (MAVLink URL or `mock`) that flew it.
     pub vehicle: String,
     /// The trajectory CSV, relative to the campaign folder.
@@ -141,6 +144,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         status: "landed".into(),
         flight_time_s: 60.0,
         warnings: Vec::new(),
+        reason: None,
         vehicle: "x".into(),
         trajectory: "t.csv".into(),
         wall_s: 1.0,
@@ -164,6 +168,7 @@ mod tests {
             status: "landed".into(),
             flight_time_s: 41.0,
             warnings: Vec::new(),
+            reason: None,
             vehicle: "mock".into(),
             trajectory: "flights/candidate_1.csv".into(),
             wall_s: 0.3,
@@ -183,6 +188,26 @@ mod tests {
         let back = Journal::read(&path).unwrap();
         assert_eq!(back, vec![record(1), record(7)]);
         assert!(Journal::read(&dir.path().join("none.jsonl")).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_stop_reason_is_kept_and_older_lines_read_without_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let stopped = FlightRecord {
+            status: "link_lost".into(),
+            reason: Some("no MISSION_ACK within 1.0 s".into()),
+            min_distance: None,
+            ..record(2)
+        };
+        let mut j = Journal::open(&path).unwrap();
+        j.append(&stopped).unwrap();
+        drop(j);
+        assert_eq!(Journal::read(&path).unwrap(), vec![stopped]);
+        let old = serde_json::to_string(&record(1)).unwrap();
+        assert!(!old.contains("reason"), "{old}");
+        std::fs::write(&path, format!("{old}\n")).unwrap();
+        assert_eq!(Journal::read(&path).unwrap()[0].reason, None);
     }
 
     #[test]

@@ -24,6 +24,8 @@ pub struct Flown {
     pub flight_time_s: f64,
     /// What the flight side warned about (e.g. the avoidance planner falling behind).
     pub warnings: Vec<String>,
+    /// Why the flight stopped, in words, when it did not land.
+    pub reason: Option<String>,
 }
 
 /// Why a vehicle could not fly.
@@ -149,6 +151,7 @@ pub fn fly_all(
                                 status: flown.status,
                                 flight_time_s: flown.flight_time_s,
                                 warnings: flown.warnings,
+                                reason: flown.reason,
                                 vehicle: vehicle.name(),
                                 trajectory: rel,
                                 wall_s: t0.elapsed().as_secs_f64(),
@@ -245,6 +248,7 @@ mod tests {
                 min_distance_raw: Some(0.9),
                 flight_time_s: 40.0,
                 warnings: Vec::new(),
+                reason: None,
             })
         }
     }

@@ -52,6 +52,9 @@ pub struct FlownTest {
     pub min_distance_raw: Option<f64>,
     /// How the flight ended.
     pub status: String,
+    /// Why, in words, when it did not land.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// Flight time, seconds.
     pub flight_time_s: f64,
     /// The competition's points for this run.
@@ -198,6 +201,7 @@ pub fn write_outputs(
                 min_distance: r.min_distance,
                 min_distance_raw: r.min_distance_raw,
                 status: r.status.clone(),
+                reason: r.reason.clone(),
                 flight_time_s: r.flight_time_s,
                 points: points(d),
                 test_score: if r.min_distance.is_some() {
@@ -428,7 +432,11 @@ pub fn markdown(r: &Report) -> String {
             opt(f.predicted_p_fail),
             opt(f.min_distance),
             opt(f.min_distance_raw),
-            f.status,
+            f.reason.as_deref().map_or(f.status.clone(), |why| format!(
+                "{} ({})",
+                f.status,
+                why.replace('|', "/")
+            )),
             f.flight_time_s,
             f.points,
             f.test_score,

@@ -48,6 +48,7 @@ impl Vehicle for ScriptedVehicle {
             min_distance_raw: Some(d),
             flight_time_s: 40.0,
             warnings: Vec::new(),
+            reason: None,
         })
     }
 }

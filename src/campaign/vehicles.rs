@@ -47,6 +47,7 @@ fn flown(report: FlightReport) -> Flown {
         min_distance_raw: report.min_distance_raw,
         flight_time_s: report.flight_time_s,
         warnings: report.warnings,
+        reason: report.reason,
     }
 }
 
