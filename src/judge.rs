@@ -215,10 +215,7 @@ pub fn diversity(tests: &[Vec<Obstacle>]) -> Option<f64> {
     if tests.len() < 2 {
         return None;
     }
-    let prints: Vec<Vec<Footprint>> = tests
-        .iter()
-        .map(|t| t.iter().map(Obstacle::footprint).collect())
-        .collect();
+    let prints: Vec<Vec<Footprint>> = tests.iter().map(|t| footprints(t)).collect();
     let (mut sum, mut pairs) = (0.0, 0usize);
     for i in 0..prints.len() {
         for j in i + 1..prints.len() {
@@ -229,13 +226,18 @@ pub fn diversity(tests: &[Vec<Obstacle>]) -> Option<f64> {
     Some(1.0 - sum / pairs as f64)
 }
 
+/// A test's obstacle footprints, what the competition's similarity compares.
+fn footprints(test: &[Obstacle]) -> Vec<Footprint> {
+    test.iter().map(Obstacle::footprint).collect()
+}
+
 /// How many of `tests` (in order, best first) overlap no earlier *kept* test by more than `max_iou`: the suite
 /// counted once per place, a close variant of a kept test not counted again. Not a competition metric: it
 /// says how much of a suite's failure count is close variants, which its diversity averages away.
 pub fn distinct_tests(tests: &[Vec<Obstacle>], max_iou: f64) -> usize {
     let mut kept: Vec<Vec<Footprint>> = Vec::new();
     for t in tests {
-        let p: Vec<Footprint> = t.iter().map(Obstacle::footprint).collect();
+        let p = footprints(t);
         if kept.iter().all(|k| crate::geometry::union_iou(&p, k) <= max_iou) {
             kept.push(p);
         }

@@ -1,8 +1,9 @@
 //! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
 //! draw space around the campaign's failing flights so far (its *parents*), where the next failures are
 //! likeliest; before the first failure, around its closest near misses. On the embedded mock (mission 2, 1498
-//! flights of 15 campaigns) a flight whose most-overlapping earlier flight had failed failed itself 22 % of the time (25 of 113), against 7 % (75 of 1025) when that
-//! flight had flown 1.5-1.8 m: a near miss says little about its neighbours, a failure says much. They come on
+//! flights of 15 campaigns) a flight whose most-overlapping earlier flight had failed failed itself 22 % of the
+//! time (25 of 113), against 7 % (75 of 1025) when that flight had flown 1.5-1.8 m: a near miss says little
+//! about its neighbours, a failure says much. They come on
 //! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
 //! the campaign exploring. Children are drawn distinct from each other and from the flown tests, or close to
 //! a flown test where the failing tests' diversity allows ([`super::diversity_guard`]); the near-duplicate filter
@@ -28,10 +29,11 @@ pub const CHILDREN: usize = 36;
 pub const PARENTS: usize = 12;
 /// Half the side of a parent's box, in unit draws (15 % of each range either side).
 pub const HALF_WIDTH: f64 = 0.15;
-/// Half the side of a parent's narrow box, in unit draws: every second pass over the parents draws there, for
-/// close variants of the failure. The closer a flight is to a failure the likelier it fails (mission 2 on the
-/// mock, 6660 flights of sessions 7-10: 45 % at IoU 0.7-0.8 with an earlier failure, 39 % at 0.6-0.7, 20 % at
-/// 0.4-0.5, 9 % below 0.1), and few draws of the wide box come that close.
+/// Half the side of a parent's narrow box, in unit draws: once close children may fly, every second pass over
+/// the parents draws there, for close variants of the failure ([`child_box`]). The closer a flight is to a
+/// failure the likelier it fails (mission 2 on the mock, 6660 flights of sessions 7-10: 45 % at IoU 0.7-0.8
+/// with an earlier failure, 39 % at 0.6-0.7, 20 % at 0.4-0.5, 9 % below 0.1), and few draws of the wide box
+/// come that close.
 pub const NARROW_HALF_WIDTH: f64 = 0.05;
 
 /// Valid draws a parent's box may offer for one child before it gives way to the histogram.

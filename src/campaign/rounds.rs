@@ -181,8 +181,9 @@ pub fn run_rounds(
             cfg.min_diversity,
         );
         // Every parent's wide box, then every narrow one (`neighbours::child_box`'s order).
+        let close = rule.close_children_may_fly();
         let near: Vec<Generator> = (0..2 * around.len())
-            .filter_map(|j| neighbours::child_box(&around, j, rule.close_children_may_fly()))
+            .filter_map(|j| neighbours::child_box(&around, j, close))
             .map(|n| base.clone().with_proposal(Proposal::Around(n)))
             .collect();
         for (k, i) in (lo..hi).enumerate() {
