@@ -35,10 +35,16 @@ impl BinCount {
 /// Failure counts per bin of each draw.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FailureCounts {
-    /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`.
+    /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`
+    /// (older files hold only the paper's five draws).
+    #[serde(deserialize_with = "padded_counts")]
     pub draws: [[BinCount; FAIL_BINS]; DIMS],
     /// All flights.
     pub total: BinCount,
+}
+
+fn padded_counts<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[[BinCount; FAIL_BINS]; DIMS], D::Error> {
+    crate::generator::adaptive::padded(d, [BinCount::default(); FAIL_BINS])
 }
 
 impl FailureCounts {
@@ -65,7 +71,7 @@ mod tests {
     #[test]
     fn failures_are_counted_in_their_draws_bins() {
         let mut m = FailureCounts::default();
-        m.observe(&[0.0, 0.19, 0.2, 0.99, 1.0], true);
+        m.observe(&[0.0, 0.19, 0.2, 0.99, 1.0, 0.5, 0.6, 0.0], true);
         m.observe(&[0.5; DIMS], false);
         assert_eq!(
             m.total,
@@ -85,6 +91,7 @@ mod tests {
         assert_eq!(m.draws[2][1].failures, 1);
         assert_eq!(m.draws[3][4].failures, 1);
         assert_eq!(m.draws[4][4].failures, 1, "1.0 belongs to the last bin");
+        assert_eq!(m.draws[6][3].failures, 1, "a third obstacle starts the fourth fifth");
         assert_eq!(
             m.draws[2][2],
             BinCount {
@@ -97,7 +104,7 @@ mod tests {
     proptest! {
         #[test]
         fn every_draw_counts_every_flight(
-            flights in proptest::collection::vec((proptest::array::uniform5(0.0f64..=1.0), any::<bool>()), 0..60)
+            flights in proptest::collection::vec((proptest::array::uniform8(0.0f64..=1.0), any::<bool>()), 0..60)
         ) {
             let mut m = FailureCounts::default();
             for (u, f) in &flights {

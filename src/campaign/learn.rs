@@ -167,8 +167,13 @@ pub struct RoundLog {
     /// The flights' kernel used to rank its flights (`None`: the calibrated LFS alone).
     #[serde(default)]
     pub surrogate: Option<Surrogate>,
-    /// Mean of each unit draw of its distribution (0.5 = uniform).
+    /// Mean of each unit draw of its distribution (0.5 = uniform; older files hold only the paper's five).
+    #[serde(deserialize_with = "uniform_means")]
     pub draw_means: [f64; DIMS],
+}
+
+fn uniform_means<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; DIMS], D::Error> {
+    crate::generator::adaptive::padded(d, 0.5)
 }
 
 /// Mean absolute error of a prequential run: each truth predicted with the bias learnt from those before it

@@ -83,6 +83,10 @@ pub struct SuiteSummary {
     /// Reported tests, best first, that overlap no better one kept by more than [`DISTINCT_IOU`]: the failures
     /// counted once per place ([`distinct_tests`]).
     pub distinct_failing: usize,
+    /// Reported tests with three obstacles (the adapted family's second S); each scores 4/9 of the same
+    /// failure with two (the competition divides by the number of obstacles squared).
+    #[serde(default)]
+    pub failing_with_three: usize,
     /// Of the flown tests the LFS predicted below 1.5 m, the share that flew below 1.5 m.
     pub lfs_precision: Option<f64>,
     /// Mean |predicted - flown| minimum distance over flown tests, metres.
@@ -245,6 +249,7 @@ pub fn write_outputs(
             .sum(),
         diversity: diversity(&failing_obstacles),
         distinct_failing: distinct_tests(&failing_obstacles, DISTINCT_IOU),
+        failing_with_three: failing_obstacles.iter().filter(|o| o.len() == 3).count(),
         lfs_precision: precision.filter(|_| screened),
         lfs_mean_abs_error_m: (screened && !errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
@@ -312,6 +317,7 @@ pub fn markdown(r: &Report) -> String {
         "| distinct failing tests (none overlapping a better one by IoU > {DISTINCT_IOU}) | {} |",
         s.distinct_failing
     );
+    let _ = writeln!(md, "| failing tests with three obstacles | {} |", s.failing_with_three);
     let _ = writeln!(md, "| failure score | {:.3} |", s.failure_score);
     let _ = writeln!(md, "| diversity | {} |", opt(s.diversity));
     let _ = writeln!(

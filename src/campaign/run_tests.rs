@@ -9,6 +9,7 @@ use crate::campaign::journal::Journal;
 use crate::campaign::pool::{Flown, Vehicle, VehicleError};
 use crate::campaign::run::{CampaignConfig, CampaignError, Progress, Screener, run_campaign};
 use crate::generator::GeneratorConfig;
+use crate::generator::adaptive::DIMS;
 use crate::model::TestCase;
 
 /// Predicts obstacle 1's centre y minus 20 as the distance: deterministic and spread out.
@@ -347,7 +348,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     assert!(last < first, "{first} -> {last}");
     // The draws moved towards the elites.
     assert!(!learnt.distribution.is_uniform());
-    assert!(learnt.rounds[1].draw_means != [0.5; 5]);
+    assert!(learnt.rounds[1].draw_means != [0.5; DIMS]);
     // After the first flights, candidates are also drawn around the closest ones, except while the failing
     // tests are less diverse than the floor (this vehicle fails in one place).
     assert_eq!(learnt.rounds[0].local_candidates, 0);

@@ -114,7 +114,7 @@ mod tests {
 
     fn flown(x: f64, lfs_m: f64, flown_m: f64) -> Flown {
         Flown {
-            unit: [x, 0.5, 0.5, 0.5, 0.5],
+            unit: [x, 0.5, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0],
             lfs_m,
             flown_m,
         }
@@ -132,11 +132,11 @@ mod tests {
         let s = Surrogate::fit(&flights).expect("the kernel beats a constant LFS");
         assert!(s.loo_error_m < 0.5 * s.lfs_error_m, "{s:?}");
         assert!((s.lfs_error_m - 0.5).abs() < 1e-9);
-        let low = s.predict(&[0.05, 0.5, 0.5, 0.5, 0.5], 2.0, &flights);
-        let high = s.predict(&[0.95, 0.5, 0.5, 0.5, 0.5], 2.0, &flights);
+        let low = s.predict(&[0.05, 0.5, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0], 2.0, &flights);
+        let high = s.predict(&[0.95, 0.5, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0], 2.0, &flights);
         assert!(low < 1.4 && high > 2.6, "{low} {high}");
         // Far from every flight (other draws), the LFS speaks.
-        let far = s.predict(&[0.05, 0.0, 0.0, 1.0, 1.0], 2.0, &flights);
+        let far = s.predict(&[0.05, 0.0, 0.0, 1.0, 1.0, 0.5, 0.0, 0.0], 2.0, &flights);
         assert!((far - 2.0).abs() < 0.05, "{far}");
     }
 
@@ -153,8 +153,8 @@ mod tests {
     proptest! {
         #[test]
         fn a_prediction_lies_between_the_lfs_and_the_flown_extremes(
-            raw in proptest::collection::vec((proptest::array::uniform5(0.0f64..1.0), 0.0f64..5.0, 0.0f64..5.0), 1..30),
-            x in proptest::array::uniform5(0.0f64..1.0),
+            raw in proptest::collection::vec((proptest::array::uniform8(0.0f64..1.0), 0.0f64..5.0, 0.0f64..5.0), 1..30),
+            x in proptest::array::uniform8(0.0f64..1.0),
             lfs in 0.0f64..5.0,
             h in 0usize..BANDWIDTHS.len(),
             k in 0usize..LFS_WEIGHTS.len(),

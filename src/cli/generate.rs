@@ -292,9 +292,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         super::print_json(&value)?;
     } else {
         let s = &report.suite;
+        let three = if s.failing_with_three > 0 {
+            format!(", {} with three obstacles", s.failing_with_three)
+        } else {
+            String::new()
+        };
         println!(
-            "{} failing tests ({} distinct at IoU {DISTINCT_IOU}) of {} flights ({} candidates screened), failure \
-             score {:.2}, diversity {}",
+            "{} failing tests ({} distinct at IoU {DISTINCT_IOU}{three}) of {} flights ({} candidates screened), \
+             failure score {:.2}, diversity {}",
             s.failing,
             s.distinct_failing,
             s.flown,

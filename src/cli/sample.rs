@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
-use prgenuav::generator::{Generator, GeneratorConfig, Placement};
+use prgenuav::generator::{Family, Generator, GeneratorConfig, Placement};
 use prgenuav::judge::diversity;
 use prgenuav::model::{Range, TestCase};
 
@@ -49,6 +49,10 @@ pub struct GeneratorArgs {
     /// Box height, metres.
     #[arg(long)]
     pub height: Option<f64>,
+    /// Construction: paper (two obstacles, the paper's split) or extended (the split drawn too, and a third
+    /// obstacle beyond the pair where the mission leaves room).
+    #[arg(long, value_enum)]
+    pub family: Option<FamilyArg>,
     /// Key spelling of the written YAML: new (robot/mission) or old (drone/test, Aerialist before 2025-09).
     #[arg(long, value_enum, default_value_t = Spelling::New)]
     pub spelling: Spelling,
@@ -68,9 +72,23 @@ impl GeneratorArgs {
         c.angle_deg = self.angle.unwrap_or(c.angle_deg);
         c.gap_m = self.gap.unwrap_or(c.gap_m);
         c.height_m = self.height.unwrap_or(c.height_m);
+        c.family = match self.family {
+            Some(FamilyArg::Paper) => Family::Paper,
+            Some(FamilyArg::Extended) => Family::Extended,
+            None => c.family,
+        };
         c.validate().map_err(|e| anyhow::anyhow!("generator parameters: {e}"))?;
         Ok(c)
     }
+}
+
+/// `--family`'s values.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum FamilyArg {
+    /// The paper's two-obstacle S.
+    Paper,
+    /// The split drawn, and a third obstacle where the case allows.
+    Extended,
 }
 
 fn parse_range(s: &str) -> Result<Range, String> {

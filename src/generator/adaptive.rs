@@ -1,6 +1,8 @@
-//! An adaptable distribution over the generator's five unit draws (obstacle 1's diagonal, its place along
-//! the segment of interest, the angle, the gap, obstacle 2's overhang): the paper's construction stays the
-//! family, only where in its ranges the draws fall changes.
+//! An adaptable distribution over the generator's unit draws: the paper's five (obstacle 1's diagonal, its
+//! place along the segment of interest, the angle, the gap, obstacle 2's overhang) and, in the extended family
+//! only, three more (the split of obstacle 1 across the segment, whether a third obstacle stands beyond the
+//! pair, and how far beyond). The paper's construction stays the family; only where in its ranges the draws
+//! fall changes.
 //!
 //! Each draw has its own histogram density on [0, 1] with [`BINS`] equal bins (a univariate marginal
 //! distribution algorithm, UMDA, with histogram marginals, the estimation-of-distribution relative of the
@@ -11,18 +13,63 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Number of draws a test takes.
-pub const DIMS: usize = 5;
+/// Draws of the paper's generator (the static family takes only these, so its tests stay as they were).
+pub const PAPER_DIMS: usize = 5;
+/// Draws of the extended family ([`crate::generator::Family::Extended`]): the paper's, then split, third obstacle, third obstacle's distance.
+pub const DIMS: usize = 8;
+/// Index of the split draw.
+pub const SPLIT: usize = 5;
+/// Index of the third obstacle's draw: below [`THIRD_FROM`], no third obstacle.
+pub const THIRD: usize = 6;
+/// Index of the draw of the third obstacle's distance beyond the pair.
+pub const THIRD_AHEAD: usize = 7;
+/// A third obstacle stands where its draw is at least this: 40 % of a uniform draw, and the draw's first three
+/// fifths (the report's failure table) and first six bins mean "two obstacles".
+pub const THIRD_FROM: f64 = 0.6;
 /// Bins per draw.
 pub const BINS: usize = 10;
 /// Names of the draws, in order (for reports).
-pub const DRAW_NAMES: [&str; DIMS] = ["diagonal", "position", "angle", "gap", "overhang"];
+pub const DRAW_NAMES: [&str; DIMS] = [
+    "diagonal",
+    "position",
+    "angle",
+    "gap",
+    "overhang",
+    "split",
+    "third",
+    "third_ahead",
+];
 
-/// Histogram densities of the five draws; each row holds bin probabilities summing to 1.
+/// Histogram densities of the draws; each row holds bin probabilities summing to 1.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DrawDistribution {
-    /// `weights[d][k]`: probability that draw `d` falls in `[k / BINS, (k + 1) / BINS)`.
+    /// `weights[d][k]`: probability that draw `d` falls in `[k / BINS, (k + 1) / BINS)`. A prior written
+    /// before the extended family had its three extra draws (five rows) reads with those rows uniform.
+    #[serde(deserialize_with = "padded_rows")]
     pub weights: [[f64; BINS]; DIMS],
+}
+
+/// Reads 1 to [`DIMS`] rows; missing rows are uniform.
+fn padded_rows<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[[f64; BINS]; DIMS], D::Error> {
+    padded(d, [1.0 / BINS as f64; BINS])
+}
+
+/// Reads one value per draw, 1 to [`DIMS`] of them (a file written before the extended family had its extra
+/// draws holds [`PAPER_DIMS`]); the missing ones are `fill`.
+pub fn padded<'de, D: serde::Deserializer<'de>, T: Deserialize<'de> + Copy>(
+    d: D,
+    fill: T,
+) -> Result<[T; DIMS], D::Error> {
+    let rows: Vec<T> = Deserialize::deserialize(d)?;
+    if rows.is_empty() || rows.len() > DIMS {
+        return Err(serde::de::Error::custom(format!(
+            "{} values, one per draw expected (1 to {DIMS})",
+            rows.len()
+        )));
+    }
+    let mut out = [fill; DIMS];
+    out[..rows.len()].copy_from_slice(&rows);
+    Ok(out)
 }
 
 impl Default for DrawDistribution {
@@ -179,7 +226,7 @@ mod tests {
     #[test]
     fn fitting_moves_mass_towards_the_elites_and_keeps_the_floor() {
         let d = DrawDistribution::uniform();
-        let elites = vec![([0.05, 0.95, 0.5, 0.5, 0.5], 1.0); 4];
+        let elites = vec![([0.05, 0.95, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5], 1.0); 4];
         let f = d.fitted(&elites, 1.0, 0.1);
         f.validate().unwrap();
         // All the elite mass in bin 0 of draw 0, plus the floor's share.
@@ -201,9 +248,22 @@ mod tests {
     }
 
     #[test]
+    fn a_prior_of_the_paper_family_reads_with_the_extra_draws_uniform() {
+        let mut five = DrawDistribution::uniform();
+        five.weights[2] = [0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0];
+        let json = serde_json::to_value(&five).unwrap();
+        let rows: Vec<serde_json::Value> = json["weights"].as_array().unwrap()[..PAPER_DIMS].to_vec();
+        let old = serde_json::json!({ "weights": rows });
+        let read: DrawDistribution = serde_json::from_value(old).unwrap();
+        assert_eq!(read, five, "rows 5-7 uniform, the five read as written");
+        let none = serde_json::json!({ "weights": [] });
+        assert!(serde_json::from_value::<DrawDistribution>(none).is_err());
+    }
+
+    #[test]
     fn a_neighbourhood_stays_near_its_centre_and_reflects_at_the_borders() {
         let n = Neighbourhood {
-            centre: [0.5, 0.02, 0.99, 0.3, 0.7],
+            centre: [0.5, 0.02, 0.99, 0.3, 0.7, 0.5, 0.5, 0.5],
             half_width: 0.1,
         };
         assert!((n.map(0, 0.0) - 0.4).abs() < 1e-12);
@@ -218,7 +278,7 @@ mod tests {
     proptest! {
         #[test]
         fn neighbour_draws_stay_in_the_unit_interval_and_the_box(
-            centre in proptest::array::uniform5(0.0f64..1.0),
+            centre in proptest::array::uniform8(0.0f64..1.0),
             half_width in 0.0f64..0.5,
             u in 0.0f64..1.0,
             dim in 0usize..DIMS,

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::placement::Family;
 use crate::model::Range;
 
 /// Every knob of the two-obstacle construction (paper, section II). Lengths in metres, angles in degrees.
@@ -33,6 +34,16 @@ pub struct GeneratorConfig {
     /// How far obstacle 2 reaches past obstacle 1's far (back) face, as a share of its length; the rest of it
     /// reaches back towards the approaching drone, which is what stops it circling obstacle 2 "from below".
     pub overhang: Range,
+    /// The construction drawn: `paper` (default) or `extended` (the split drawn from `adapted_split`, and a
+    /// third obstacle).
+    pub family: Family,
+    /// The extended family's range of `split` (the paper's family keeps `split`).
+    pub adapted_split: Range,
+    /// The extended family's third obstacle: the clear distance along the segment of interest between the
+    /// pair's farthest point and the third obstacle's nearest one. It is obstacle 1 mirrored across the
+    /// segment (same length, angle and split, its short part on the other side), so the drone flies a second,
+    /// reversed S; where the case leaves no room for it on the segment, the draw is refused.
+    pub third_ahead_m: Range,
     /// Attempts per test before the generator reports that the mission leaves no room.
     pub max_attempts: u32,
 }
@@ -48,6 +59,9 @@ impl Default for GeneratorConfig {
             angle_deg: Range::new(20.0, 70.0),
             gap_m: Range::new(2.0, 4.0),
             overhang: Range::new(0.0, 1.0 / 3.0),
+            family: Family::Paper,
+            adapted_split: Range::new(0.2, 0.45),
+            third_ahead_m: Range::new(2.0, 8.0),
             max_attempts: 10_000,
         }
     }
@@ -79,6 +93,8 @@ impl GeneratorConfig {
         range("angle_deg", self.angle_deg, 1.0, 89.0)?;
         range("gap_m", self.gap_m, 0.01, 100.0)?;
         range("overhang", self.overhang, 0.0, 1.0)?;
+        range("adapted_split", self.adapted_split, 0.01, 0.49)?;
+        range("third_ahead_m", self.third_ahead_m, 0.5, 100.0)?;
         if !(self.split > 0.0 && self.split < 0.5) {
             return Err(format!("split: {} must be in (0, 0.5)", self.split));
         }
@@ -106,11 +122,25 @@ mod tests {
         assert_eq!(c.gap_m, Range::new(2.5, 3.0));
         assert_eq!(c.height_m, 15.0);
         assert_eq!(c.split, 1.0 / 3.0);
+        assert_eq!(c.family, Family::Paper);
+        assert_eq!(
+            GeneratorConfig::from_toml("family = \"extended\"").unwrap().family,
+            Family::Extended
+        );
+        assert!(
+            GeneratorConfig::from_toml("family = \"wide\"")
+                .unwrap_err()
+                .contains("family")
+        );
         assert!(
             GeneratorConfig::from_toml("gap = 1")
                 .unwrap_err()
                 .contains("unknown field")
         );
         assert!(GeneratorConfig::from_toml("split = 0.7").unwrap_err().contains("split"));
+        let e = GeneratorConfig::from_toml("adapted_split = { min = 0.3, max = 0.6 }").unwrap_err();
+        assert!(e.contains("adapted_split"), "{e}");
+        let e = GeneratorConfig::from_toml("third_ahead_m = { min = 5.0, max = 3.0 }").unwrap_err();
+        assert!(e.contains("third_ahead_m"), "{e}");
     }
 }

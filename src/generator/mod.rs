@@ -1,5 +1,6 @@
 //! The pseudo-random test generator (paper, section II): two box obstacles placed on the mission's segment
-//! of interest so that the drone must fly an S-shape.
+//! of interest so that the drone must fly an S-shape (in the extended family, perhaps a third beyond them for
+//! a second, reversed S).
 
 pub mod adaptive;
 mod config;
@@ -8,7 +9,7 @@ mod soi;
 
 pub use adaptive::{DrawDistribution, Neighbourhood, Proposal};
 pub use config::GeneratorConfig;
-pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
+pub use placement::{Draw, Family, Mirror, Side, canonical_mirror, left_of, room};
 pub use soi::{Soi, SoiKind, segment_of_interest};
 
 use rand::SeedableRng;
@@ -55,8 +56,9 @@ pub enum GenerateError {
 pub struct Placement {
     /// The test's index for its seed.
     pub index: u64,
-    /// Obstacle 1 (crossing the SoI) and obstacle 2 (beyond its A end).
-    pub obstacles: [Obstacle; 2],
+    /// Obstacle 1 (crossing the SoI), obstacle 2 (beyond its A end) and perhaps a
+    /// third (the extended family: obstacle 1 mirrored, beyond the pair).
+    pub obstacles: Vec<Obstacle>,
     /// The numbers drawn.
     pub draw: Draw,
     /// Attempts it took (1 = the first draw was valid).
@@ -118,6 +120,17 @@ impl Generator {
         self
     }
 
+    /// The same generator drawing from `family` (its configuration's, by default the paper's).
+    pub fn with_family(mut self, family: Family) -> Self {
+        self.config.family = family;
+        self
+    }
+
+    /// The construction it draws from.
+    pub fn family(&self) -> Family {
+        self.config.family
+    }
+
     /// Where the draws come from.
     pub fn proposal(&self) -> &Proposal {
         &self.proposal
@@ -150,19 +163,18 @@ impl Generator {
         &self,
         index: u64,
         max_asked: u32,
-        mut accept: impl FnMut(&[Obstacle; 2]) -> bool,
+        mut accept: impl FnMut(&[Obstacle]) -> bool,
     ) -> Result<Placement, GenerateError> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(index);
         let mut asked = 0;
         for attempt in 1..=self.config.max_attempts {
-            let Some((draw, obstacles)) = placement::draw_pair(
+            let Some((draw, obstacles)) = placement::draw_test(
                 &mut rng,
                 &self.soi,
-                self.mirror,
-                &self.arena,
+                (self.mirror, &self.arena),
                 &self.config,
-                &self.proposal,
+                (self.config.family, &self.proposal),
             ) else {
                 continue;
             };

@@ -29,7 +29,8 @@ fn verify(p: &Placement, g: &Generator, mission: &Mission) {
     assert!(v.is_empty(), "test {} breaks rules: {v:#?}", p.index);
     let soi: &Soi = g.soi();
     let d = soi.direction();
-    let [o1, o2] = &p.obstacles;
+    assert_eq!(p.obstacles.len(), 2 + usize::from(p.draw.third_ahead_m.is_some()));
+    let (o1, o2) = (&p.obstacles[0], &p.obstacles[1]);
     let (u1, long1, short1) = long_axis(o1);
     let (u2, long2, short2) = long_axis(o2);
     assert!((short1 - cfg.width_m).abs() < 1e-12 && (short2 - cfg.width_m).abs() < 1e-12);
@@ -40,7 +41,7 @@ fn verify(p: &Placement, g: &Generator, mission: &Mission) {
     let part_a = long1 / 2.0 - s.abs();
     let ratio = part_a / long1;
     assert!(
-        (ratio - 1.0 / 3.0).abs() <= 1e-6 / 3.0,
+        (ratio - p.draw.split).abs() <= 1e-6 / 3.0,
         "test {}: split {ratio}",
         p.index
     );
@@ -65,6 +66,45 @@ fn verify(p: &Placement, g: &Generator, mission: &Mission) {
     // Beyond the A end: obstacle 2's centre is further along A than obstacle 1's A end.
     let c2 = V2::new(o2.position.x, o2.position.y);
     assert!((c2 - at).dot(&a_dir) > part_a, "obstacle 2 must stand beyond the A end");
+    if let Some(ahead) = p.draw.third_ahead_m {
+        verify_third(p, soi, (o1, a_dir, at), ahead);
+    }
+}
+
+/// The third obstacle: obstacle 1 mirrored across the SoI (same size, same angle to it, its short part on the
+/// other side), crossing the SoI between its ends, `ahead` clear of the pair along the SoI.
+fn verify_third(p: &Placement, soi: &Soi, (o1, a_dir, at): (&Obstacle, V2, V2), ahead: f64) {
+    let cfg = GeneratorConfig::default();
+    let d = soi.direction();
+    let o3 = &p.obstacles[2];
+    let (u3, long3, short3) = long_axis(o3);
+    let (_, long1, _) = long_axis(o1);
+    assert!((long3 - long1).abs() < 1e-9 && (short3 - cfg.width_m).abs() < 1e-12);
+    let c3 = V2::new(o3.position.x, o3.position.y);
+    let s = cross(V2::new(soi.start.x, soi.start.y) - c3, d) / cross(u3, d);
+    let at3 = c3 + u3 * s;
+    let t3 = (at3 - V2::new(soi.start.x, soi.start.y)).dot(&d);
+    assert!(t3 > (at - V2::new(soi.start.x, soi.start.y)).dot(&d) && t3 <= soi.length() + 1e-9);
+    let a3 = u3 * s.signum();
+    assert!((long3 / 2.0 - s.abs()) / long3 - p.draw.split < 1e-6, "same split");
+    assert!((a3.dot(&d) - a_dir.dot(&d)).abs() < 1e-9, "same angle to the SoI");
+    assert!(cross(d, a3) * cross(d, a_dir) < 0.0, "its short part on the other side");
+    // Clear of the pair along the SoI by `ahead` (so it neither overlaps nor touches them).
+    let proj = |o: &Obstacle| {
+        let f = o.footprint();
+        let ps: Vec<f64> = f.corners().iter().map(|c| V2::new(c.x, c.y).dot(&d)).collect();
+        (
+            ps.iter().cloned().fold(f64::MAX, f64::min),
+            ps.iter().cloned().fold(f64::MIN, f64::max),
+        )
+    };
+    let pair_far = proj(o1).1.max(proj(&p.obstacles[1]).1);
+    assert!(
+        (proj(o3).0 - pair_far - ahead).abs() < 1e-6,
+        "test {}: not {ahead} m clear",
+        p.index
+    );
+    assert!(ahead >= cfg.third_ahead_m.min - 1e-12 && ahead <= cfg.third_ahead_m.max + 1e-12);
 }
 
 fn generator_for(mission: &Mission, seed: u64) -> Generator {
@@ -178,6 +218,38 @@ fn sample_cli_is_byte_identical_per_seed_and_valid() {
         assert_eq!(code, 0, "{out}{err}");
     }
     let _ = repo();
+}
+
+/// `--family extended` writes tests with three obstacles where the mission leaves room, and `check` takes them.
+#[test]
+fn sample_cli_extended_family_writes_valid_three_obstacle_tests() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x");
+    let (code, _, err) = prgenuav(&[
+        "sample",
+        "missions/mission2.yaml",
+        "--count",
+        "40",
+        "--family",
+        "extended",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let mut three = 0;
+    for i in 0..40 {
+        let f = out.join(format!("test_{i}.yaml"));
+        let text = std::fs::read_to_string(&f).unwrap();
+        three += usize::from(text.matches("size:").count() == 3);
+        let (code, out, err) = prgenuav(&["check", f.to_str().unwrap()]);
+        assert_eq!(code, 0, "{out}{err}");
+    }
+    assert!(three > 0, "no test with three obstacles in 40");
+    let (code, _, err) = prgenuav(&["sample", "missions/mission2.yaml", "--count", "2", "--family", "wide"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--family"), "{err}");
 }
 
 #[test]
@@ -315,7 +387,7 @@ fn a_filtered_draw_obeys_the_filter_and_the_rules() {
         let g = plain.clone().with_proposal(Proposal::Around(around));
         let mut refused_plain = 0;
         for i in 200..240 {
-            let distinct = |o: &[Obstacle; 2]| iou(o, &parent.obstacles) <= 0.5;
+            let distinct = |o: &[Obstacle]| iou(o, &parent.obstacles) <= 0.5;
             let p = g.sample_where(i, 64, distinct).unwrap();
             verify(&p, &g, &c.mission);
             assert!(iou(&p.obstacles, &parent.obstacles) <= 0.5, "mission {n}, test {i}");
@@ -331,6 +403,39 @@ fn a_filtered_draw_obeys_the_filter_and_the_rules() {
         match g.sample_where(7, 5, |_| false) {
             Err(GenerateError::Refused { index: 7, asked: 5 }) => {}
             other => panic!("{other:?}"),
+        }
+    }
+}
+
+/// The extended family draws the split and, where its draw and the case allow, a third obstacle: every test
+/// keeps the rules and the construction, the same seed gives the same test, and the paper's family is what
+/// `Generator::new` draws.
+#[test]
+fn the_extended_family_draws_the_split_and_a_third_obstacle_where_the_case_allows() {
+    use prgenuav::generator::Family;
+    let cfg = GeneratorConfig::default();
+    for n in 1..=7 {
+        let c = case(n);
+        let paper = Generator::new(&c, cfg.clone(), 3).unwrap();
+        assert_eq!(paper.family(), Family::Paper);
+        let extended = paper.clone().with_family(Family::Extended);
+        let (mut thirds, mut splits) = (0, Vec::new());
+        for i in 0..300 {
+            let p = extended.sample(i).unwrap();
+            verify(&p, &extended, &c.mission);
+            assert_eq!(extended.sample(i).unwrap(), p, "same seed, same test");
+            thirds += usize::from(p.obstacles.len() == 3);
+            splits.push(p.draw.split);
+            let q = paper.sample(i).unwrap();
+            assert_eq!((q.obstacles.len(), q.draw.split), (2, cfg.split), "the paper's family");
+        }
+        let lo = splits.iter().cloned().fold(1.0, f64::min);
+        let hi = splits.iter().cloned().fold(0.0, f64::max);
+        assert!(lo < 0.25 && hi > 0.4, "mission {n}: splits {lo}..{hi}");
+        // A third obstacle fits on the long segments of interest only.
+        eprintln!("mission {n}: {thirds} of 300 tests with a third obstacle");
+        if n <= 3 {
+            assert!(thirds > 0, "mission {n}: no third obstacle in 300 tests");
         }
     }
 }
