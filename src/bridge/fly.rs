@@ -1,4 +1,5 @@
-//! The bridge's entry points: open the link (retrying a refused TCP connection) and run one flight.
+//! The bridge's entry points: open the link (retrying a refused TCP connection, or a UDP port the last flight's
+//! link is still letting go of) and run one flight.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -22,8 +23,12 @@ pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Res
     fly_on(test, opts, Arc::new(transport), cancel).await
 }
 
-/// Opens the link. A refused TCP connection (the simulator is still starting) is tried again every 200 ms
-/// within the heartbeat wait (as wall seconds) or until cancelled; any other error is final.
+/// Opens the link. A refused TCP connection (the simulator is still starting) and a UDP port still in use are
+/// tried again every 200 ms within the heartbeat wait (as wall seconds) or until cancelled; any other error is
+/// final. The port: a campaign flies a vehicle's next test on the same `udpin` address as soon as the last one
+/// ends, while the runtime may not yet have dropped the last link's aborted receive task, which holds its
+/// socket (PX4 SITL campaigns on 2 instances: both vehicles refused with `AddrInUse` at their 2nd flight in one
+/// campaign and at their 6th in another, each refusal dropping its vehicle for the rest of the campaign).
 async fn open_with_retry(
     address: &str,
     opts: &FlyOptions,
@@ -34,8 +39,10 @@ async fn open_with_retry(
         match link::MavTransport::open(address).await {
             Ok(t) => return Ok(t),
             Err(e)
-                if e.kind() == std::io::ErrorKind::ConnectionRefused
-                    && std::time::Instant::now() < deadline
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::ConnectionRefused | std::io::ErrorKind::AddrInUse
+                ) && std::time::Instant::now() < deadline
                     && !cancel.is_cancelled() =>
             {
                 tokio::time::sleep(Duration::from_millis(200)).await;
@@ -59,4 +66,45 @@ pub async fn fly_on(
 ) -> Result<FlightReport, BridgeError> {
     opts.validate()?;
     run::run(test, opts, transport, cancel).await
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts(wait_s: f64) -> FlyOptions {
+        FlyOptions {
+            heartbeat_wait_s: wait_s,
+            ..FlyOptions::default()
+        }
+    }
+
+    #[tokio::test]
+    async fn a_udp_port_still_held_is_tried_again_until_it_is_free() {
+        let held = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        let address = format!("udpin:{}", held.local_addr().unwrap());
+        let release = tokio::spawn(async move {
+            tokio::time::sleep(Duration::from_millis(500)).await;
+            drop(held);
+        });
+        let t = std::time::Instant::now();
+        let opened = open_with_retry(&address, &opts(10.0), &CancelToken::new()).await;
+        assert!(opened.is_ok(), "{:?}", opened.err());
+        assert!(t.elapsed() >= Duration::from_millis(400), "it waited for the port");
+        release.await.unwrap();
+    }
+
+    #[tokio::test]
+    async fn a_udp_port_held_for_good_fails_after_the_wait_naming_the_address() {
+        let held = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        let address = format!("udpin:{}", held.local_addr().unwrap());
+        let t = std::time::Instant::now();
+        let e = match open_with_retry(&address, &opts(0.6), &CancelToken::new()).await {
+            Ok(_) => panic!("the port is held"),
+            Err(e) => e.to_string(),
+        };
+        assert!(t.elapsed() >= Duration::from_millis(500) && t.elapsed() < Duration::from_secs(5));
+        assert!(e.contains(&address) && e.to_lowercase().contains("in use"), "{e}");
+        drop(held);
+    }
 }

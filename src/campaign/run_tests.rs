@@ -570,3 +570,64 @@ fn below_the_diversity_floor_the_failures_still_get_children() {
     let late: Vec<usize> = learnt.rounds[4..].iter().map(|r| r.local_candidates).collect();
     assert!(late.iter().any(|&c| c > 0), "{:?}", learnt.rounds);
 }
+
+/// Flies `left` flights, then is unreachable (a SITL instance whose port or process went away).
+struct DyingVehicle {
+    left: usize,
+}
+
+impl Vehicle for DyingVehicle {
+    fn name(&self) -> String {
+        "dying".into()
+    }
+    fn fly(&mut self, test: &TestCase, csv: &Path, _: &AtomicBool) -> Result<Flown, VehicleError> {
+        if self.left == 0 {
+            return Err(VehicleError::Unreachable {
+                vehicle: self.name(),
+                reason: "cannot open udpin:0.0.0.0:14540: Address already in use".into(),
+            });
+        }
+        self.left -= 1;
+        std::fs::write(csv, "timestamp,x,y,z,r\n0,0,0,0,\n1000000,0,10,10,\n").unwrap();
+        let d = (test.obstacles[0].position.y - 20.0).abs() / 2.0;
+        Ok(Flown {
+            status: "landed".into(),
+            min_distance: Some(d),
+            min_distance_raw: Some(d),
+            flight_time_s: 40.0,
+            warnings: Vec::new(),
+            reason: None,
+        })
+    }
+}
+
+#[test]
+fn a_campaign_whose_every_vehicle_is_dropped_stops_with_an_error_and_keeps_its_flights() {
+    for (learn, adapt) in [(false, false), (true, true)] {
+        let dir = tempfile::tempdir().unwrap();
+        let cfg = CampaignConfig {
+            learn,
+            adapt,
+            ..config(20)
+        };
+        let vehicles: Vec<Box<dyn Vehicle>> =
+            vec![Box::new(DyingVehicle { left: 3 }), Box::new(DyingVehicle { left: 2 })];
+        let e = run_campaign(
+            &cfg,
+            dir.path(),
+            &ScriptedLfs,
+            vehicles,
+            &Quiet,
+            &AtomicBool::new(false),
+        )
+        .expect_err("no vehicle is left after 5 flights")
+        .to_string();
+        assert!(
+            e.contains("no reachable vehicle") && e.contains("Address already in use"),
+            "{e}"
+        );
+        assert!(e.contains("--resume"), "{e}");
+        let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
+        assert_eq!(journal.len(), 5, "learn {learn}: the flights before the drop are kept");
+    }
+}

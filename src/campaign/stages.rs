@@ -235,7 +235,10 @@ pub struct FlightStage<'a> {
 }
 
 /// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made.
-/// A journal error stops the campaign; so does a fleet that flew nothing because every vehicle was dropped.
+/// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
+/// an earlier round's), keeping the flights journaled so far for `--resume`. (A learning campaign on two PX4
+/// SITL instances went on with none after both were dropped after 10 flights, and ended "0 failing tests of 10
+/// flights" with exit code 0.)
 pub fn fly_ranked(
     ctx: &FlightStage,
     ranked: Vec<Screened>,
@@ -251,6 +254,15 @@ pub fn fly_ranked(
         .collect();
     if jobs.is_empty() {
         return Ok(0);
+    }
+    let no_vehicle_left = |why: String| {
+        CampaignError::NoVehicle(format!(
+            "{why}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
+            ctx.folder.display()
+        ))
+    };
+    if vehicles.is_empty() {
+        return Err(no_vehicle_left("every vehicle was dropped in an earlier round".into()));
     }
     let progress = ctx.progress;
     progress.stage("fly", jobs.len());
@@ -285,8 +297,8 @@ pub fn fly_ranked(
     if let Some(e) = outcome.errors.first() {
         return Err(CampaignError::Config(format!("journal: {e}")));
     }
-    if outcome.flown == 0 && !outcome.dropped.is_empty() {
-        return Err(CampaignError::NoVehicle(outcome.dropped.join("; ")));
+    if vehicles.is_empty() {
+        return Err(no_vehicle_left(outcome.dropped.join("; ")));
     }
     Ok(outcome.flown)
 }

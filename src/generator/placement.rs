@@ -151,7 +151,7 @@ pub fn draw_test(
     }
     let split = match family {
         Family::Paper => {
-            // Where the paper's constants sit in the adapted family's ranges (for the reports).
+            // Where the paper's split sits in the extended family's range (for the reports).
             let r = cfg.adapted_split;
             u[SPLIT] = if r.max > r.min {
                 ((cfg.split - r.min) / (r.max - r.min)).clamp(0.0, 1.0)
