@@ -43,14 +43,19 @@ impl Vehicle for ScriptedVehicle {
             cancel.store(true, Ordering::SeqCst);
         }
         let d = (y - 20.0).abs() / 2.0 + self.extra_m;
-        Ok(Flown {
-            status: "landed".into(),
-            min_distance: Some(d),
-            min_distance_raw: Some(d),
-            flight_time_s: 40.0,
-            warnings: Vec::new(),
-            reason: None,
-        })
+        Ok(landed(d))
+    }
+}
+
+/// A 40 s flight that landed `d` metres from the boxes.
+fn landed(d: f64) -> Flown {
+    Flown {
+        status: "landed".into(),
+        min_distance: Some(d),
+        min_distance_raw: Some(d),
+        flight_time_s: 40.0,
+        warnings: Vec::new(),
+        reason: None,
     }
 }
 
@@ -590,14 +595,7 @@ impl Vehicle for DyingVehicle {
         self.left -= 1;
         std::fs::write(csv, "timestamp,x,y,z,r\n0,0,0,0,\n1000000,0,10,10,\n").unwrap();
         let d = (test.obstacles[0].position.y - 20.0).abs() / 2.0;
-        Ok(Flown {
-            status: "landed".into(),
-            min_distance: Some(d),
-            min_distance_raw: Some(d),
-            flight_time_s: 40.0,
-            warnings: Vec::new(),
-            reason: None,
-        })
+        Ok(landed(d))
     }
 }
 
