@@ -26,9 +26,9 @@ pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Res
 /// Opens the link. A refused TCP connection (the simulator is still starting) and a UDP port still in use are
 /// tried again every 200 ms within the heartbeat wait (as wall seconds) or until cancelled; any other error is
 /// final. The port: a campaign flies a vehicle's next test on the same `udpin` address as soon as the last one
-/// ends, while the runtime may not yet have dropped the last link's aborted receive task, which holds its
-/// socket (PX4 SITL campaigns on 2 instances: both vehicles refused with `AddrInUse` at their 2nd flight in one
-/// campaign and at their 6th in another, each refusal dropping its vehicle for the rest of the campaign).
+/// ends. A finished flight closes its socket before returning (`Link::close`); a flight that ended early (no
+/// heartbeat) or another process may still hold it for a moment. (PX4 SITL campaigns on 2 instances lost both
+/// vehicles to `AddrInUse`, at their 2nd flight in one campaign and their 6th in another.)
 async fn open_with_retry(
     address: &str,
     opts: &FlyOptions,

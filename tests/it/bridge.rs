@@ -479,3 +479,33 @@ async fn a_timeout_lands_and_disarms_the_vehicle() {
     let end = r.trajectory.samples.last().copied().expect("samples");
     assert!(end.z < 0.3, "recorded down to the ground: {end:?}");
 }
+
+/// A flight on a `udpin` address lets go of its port before `fly` returns, so the vehicle's next flight can
+/// bind it at once. (A PX4 SITL campaign lost both vehicles to `AddrInUse`: the last link's aborted tasks were
+/// dropped only when the runtime next polled them.) On a current-thread runtime that poll never comes before
+/// the bind below, so the test fails on a bridge that only aborts its tasks.
+#[tokio::test(flavor = "current_thread")]
+async fn a_flight_on_udpin_lets_go_of_its_port_before_it_returns() {
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .expect("a free port")
+        .port();
+    let ours: std::net::SocketAddr = format!("127.0.0.1:{port}").parse().expect("addr");
+    let mock = MockAutopilot::builder()
+        .link(LinkSpec::UdpOut {
+            bind: "127.0.0.1:0".parse().expect("addr"),
+            remote: ours,
+        })
+        .speed_factor(SpeedFactor::Times(SPEED))
+        .spawn()
+        .await
+        .expect("mock starts");
+    let url = format!("udpin:{ours}");
+    for flight in 1..=2 {
+        let r = fly_bounded(&generated(2), &opts(&url, FlyMode::Mission, SPEED), CancelToken::new()).await;
+        assert_flown(&r, &format!("flight {flight}"));
+        let again = std::net::UdpSocket::bind(ours);
+        assert!(again.is_ok(), "flight {flight}: port still held: {:?}", again.err());
+    }
+    drop(mock);
+}

@@ -81,6 +81,9 @@ pub async fn run(
         Err(stop) => stop,
     };
     s.restore_params().await;
+    // Let go of the link before reporting: its tasks end, then its receive task (see `Link::close`).
+    s.tasks.shutdown().await;
+    s.link.close().await;
     let trajectory = recorder.finish();
     if let Some(e) = recorder.write_error() {
         s.warnings.push(format!("trajectory CSV incomplete: {e}"));

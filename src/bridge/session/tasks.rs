@@ -11,6 +11,16 @@ impl Tasks {
     pub fn push(&mut self, t: JoinHandle<()>) {
         self.0.push(t);
     }
+
+    /// Aborts every task and waits until each has ended (and dropped what it held, such as the link).
+    pub async fn shutdown(&mut self) {
+        for t in &self.0 {
+            t.abort();
+        }
+        for t in self.0.drain(..) {
+            let _ = t.await; // cancelled: nothing to report
+        }
+    }
 }
 
 impl Drop for Tasks {

@@ -122,12 +122,15 @@ pub struct Link {
     /// 0 = not locked yet.
     locked: Arc<AtomicU32>,
     clock: std::sync::Mutex<VehicleClock>,
-    rx_task: JoinHandle<()>,
+    /// `None` once [`Link::close`] stopped it.
+    rx_task: std::sync::Mutex<Option<JoinHandle<()>>>,
 }
 
 impl Drop for Link {
     fn drop(&mut self) {
-        self.rx_task.abort();
+        if let Some(t) = self.rx_task.lock().unwrap_or_else(|p| p.into_inner()).take() {
+            t.abort();
+        }
     }
 }
 
@@ -152,7 +155,18 @@ impl Link {
             counters,
             locked,
             clock: std::sync::Mutex::new(clock),
-            rx_task,
+            rx_task: std::sync::Mutex::new(Some(rx_task)),
+        }
+    }
+
+    /// Stops the receive task and waits until it has let go of the transport, so that once the last `Link`
+    /// handle is dropped the transport (a `udpin` socket) is closed at once, not whenever the runtime next
+    /// polls the aborted task: a campaign re-binds the same port for the vehicle's next flight straight away.
+    pub async fn close(&self) {
+        let task = self.rx_task.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let Some(t) = task {
+            t.abort();
+            let _ = t.await; // cancelled: nothing to report
         }
     }
 
