@@ -83,7 +83,7 @@ pub struct SuiteSummary {
     /// Reported tests, best first, that overlap no better one kept by more than [`DISTINCT_IOU`]: the failures
     /// counted once per place ([`distinct_tests`]).
     pub distinct_failing: usize,
-    /// Reported tests with three obstacles (the adapted family's second S); each scores 4/9 of the same
+    /// Reported tests with three obstacles (the extended family's second S); each scores 4/9 of the same
     /// failure with two (the competition divides by the number of obstacles squared).
     #[serde(default)]
     pub failing_with_three: usize,

@@ -15,7 +15,8 @@ use serde::{Deserialize, Serialize};
 
 /// Draws of the paper's generator (the static family takes only these, so its tests stay as they were).
 pub const PAPER_DIMS: usize = 5;
-/// Draws of the extended family ([`crate::generator::Family::Extended`]): the paper's, then split, third obstacle, third obstacle's distance.
+/// Draws of the extended family ([`crate::generator::Family::Extended`]): the paper's, then the split, the
+/// third obstacle and its distance beyond the pair.
 pub const DIMS: usize = 8;
 /// Index of the split draw.
 pub const SPLIT: usize = 5;
