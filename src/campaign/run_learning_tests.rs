@@ -92,15 +92,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         prior: Some(dir.path().to_path_buf()),
         ..cfg.clone()
     };
-    let r2 = run_campaign(
-        &next_cfg,
-        next_dir.path(),
-        &ScriptedLfs,
-        vehicle(&flown, None),
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let r2 = run_scripted(&next_cfg, next_dir.path(), &flown);
     let l2 = r2.learning.unwrap();
     assert!((l2.rounds[0].bias_m - bias).abs() < 1e-12);
     // The failure counts are this campaign's own.
