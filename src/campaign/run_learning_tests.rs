@@ -177,15 +177,7 @@ fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
         count: Arc::new(AtomicUsize::new(0)),
         extra_m: 1.5,
     })];
-    let r = run_campaign(
-        &cfg,
-        dir.path(),
-        &ScriptedLfs,
-        vehicles,
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let r = run_with(&cfg, dir.path(), vehicles).unwrap();
     assert_eq!((r.suite.flown, r.suite.failing), (24, 0));
     let learnt = r.learning.expect("learnt");
     let first = &learnt.rounds[0];

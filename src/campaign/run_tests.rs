@@ -107,15 +107,16 @@ fn adapted(budget: usize) -> CampaignConfig {
 
 /// `cfg`'s campaign in `dir` with the scripted LFS and vehicles, run to its end.
 fn run_scripted(cfg: &CampaignConfig, dir: &Path, flown: &Arc<Mutex<Vec<f64>>>) -> crate::campaign::run::Report {
-    run_campaign(
-        cfg,
-        dir,
-        &ScriptedLfs,
-        vehicle(flown, None),
-        &Quiet,
-        &AtomicBool::new(false),
-    )
-    .unwrap()
+    run_with(cfg, dir, vehicle(flown, None)).unwrap()
+}
+
+/// `cfg`'s campaign in `dir` with the scripted LFS on `vehicles`.
+fn run_with(
+    cfg: &CampaignConfig,
+    dir: &Path,
+    vehicles: Vec<Box<dyn Vehicle>>,
+) -> Result<crate::campaign::run::Report, CampaignError> {
+    run_campaign(cfg, dir, &ScriptedLfs, vehicles, &Quiet, &AtomicBool::new(false))
 }
 
 fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<dyn Vehicle>> {
@@ -371,16 +372,9 @@ fn a_campaign_whose_every_vehicle_is_dropped_stops_with_an_error_and_keeps_its_f
         };
         let vehicles: Vec<Box<dyn Vehicle>> =
             vec![Box::new(DyingVehicle { left: 3 }), Box::new(DyingVehicle { left: 2 })];
-        let e = run_campaign(
-            &cfg,
-            dir.path(),
-            &ScriptedLfs,
-            vehicles,
-            &Quiet,
-            &AtomicBool::new(false),
-        )
-        .expect_err("no vehicle is left after 5 flights")
-        .to_string();
+        let e = run_with(&cfg, dir.path(), vehicles)
+            .expect_err("no vehicle is left after 5 flights")
+            .to_string();
         assert!(
             e.contains("no reachable vehicle") && e.contains("Address already in use"),
             "{e}"
