@@ -9,11 +9,18 @@
 //! Without that, a campaign's failures cluster where the vehicle fails (the histogram follows them there too),
 //! and moderate overlaps (IoU 0.3-0.6) between many of them pull the diversity below the floor by the last
 //! round.
+//!
+//! The expectation is over the campaign's *final* failing tests: the failures still to come (the flights after
+//! this round at the campaign's failure rate so far, overlapping everything by the flown tests' mean IoU) are
+//! counted too ([`DiversityGuard::expecting`]). So the rule holds from the first failure on, lenient early (many
+//! failures to come dilute a close pair) and strict late: a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30)
+//! would otherwise end with a parent and its children, diversity 0.71, the guard silent below 4 failures.
 
 use super::journal::FlightRecord;
 use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
 use super::run::CampaignConfig;
 use crate::geometry::{Footprint, union_iou};
+use crate::judge::diversity;
 use crate::model::Obstacle;
 
 /// Expected diversity a child must leave above the user's floor: the expectation is over one round's children,
@@ -43,8 +50,10 @@ pub struct DiversityGuard {
     pair_sum: f64,
     /// ... and of their weights alone: the expected diversity is 1 - pair_sum / pair_weight.
     pair_weight: f64,
-    /// Flown failures (the rule says nothing below [`MIN_FAILING_FOR_DIVERSITY`] of them).
+    /// Flown failures (no close child below [`MIN_FAILING_FOR_DIVERSITY`] of them; no check before the first).
     failures: usize,
+    /// The failures expected after this round and their mean IoU with any test ([`Self::expecting`]).
+    future: (f64, f64),
     siblings: Vec<Vec<Footprint>>,
     max_iou: f64,
     child_max_iou: f64,
@@ -61,6 +70,7 @@ impl DiversityGuard {
             pair_sum: 0.0,
             pair_weight: 0.0,
             failures: 0,
+            future: (0.0, 0.0),
             siblings: Vec::new(),
             max_iou,
             child_max_iou: child_max_iou.max(max_iou),
@@ -76,11 +86,31 @@ impl DiversityGuard {
         rule
     }
 
+    /// The rule for a round of campaign `cfg` after the flights in `done`, with `later` flights of the budget
+    /// left after this round ([`projection`]).
+    pub fn for_round(done: &[FlightRecord], fail_m: f64, cfg: &CampaignConfig, later: usize) -> Self {
+        let (failures, mean_iou) = projection(done, fail_m, later);
+        Self::new(done, fail_m, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity).expecting(failures, mean_iou)
+    }
+
+    /// Counts `failures` more failing tests to come (after this round), each overlapping any other test by
+    /// `mean_iou`: the expectation is then over the campaign's final failing tests.
+    pub fn expecting(mut self, failures: f64, mean_iou: f64) -> Self {
+        let (m, b) = (failures.max(0.0), mean_iou.clamp(0.0, 1.0));
+        let known: f64 = self.failing.iter().map(|(_, w)| w).sum();
+        // Pairs of the known with the future ones, and of the future ones among themselves (m^2 / 2).
+        self.pair_sum += known * m * b + m * m / 2.0 * b;
+        self.pair_weight += known * m + m * m / 2.0;
+        self.future = (m, b);
+        self
+    }
+
     /// What joining the failing tests with weight `w` adds to (pair_sum, pair_weight).
     fn pairs_with(&self, p: &[Footprint], w: f64) -> (f64, f64) {
-        self.failing
-            .iter()
-            .fold((0.0, 0.0), |(s, n), (f, wf)| (s + w * wf * union_iou(p, f), n + w * wf))
+        let (m, b) = self.future;
+        self.failing.iter().fold((w * m * b, w * m), |(s, n), (f, wf)| {
+            (s + w * wf * union_iou(p, f), n + w * wf)
+        })
     }
 
     fn add(&mut self, p: Vec<Footprint>, w: f64, (sum, weight): (f64, f64)) {
@@ -99,7 +129,8 @@ impl DiversityGuard {
         }
         let closest = self.flown.iter().map(|f| union_iou(&p, f)).fold(0.0, f64::max);
         let close = closest > self.max_iou;
-        // Below MIN_FAILING_FOR_DIVERSITY failures diversity says too little: no close child, no check.
+        // Below MIN_FAILING_FOR_DIVERSITY failures diversity says too little to risk a close child; before the
+        // first failure there is nothing to keep diverse.
         let counted = self.failures + 1 >= MIN_FAILING_FOR_DIVERSITY;
         if close && (closest > self.child_max_iou || !counted) {
             return false;
@@ -110,7 +141,7 @@ impl DiversityGuard {
         // Below the floor, a candidate that does not lower the expectation is still flown: refusing it too would
         // leave the rest of the budget unflown (mission 2 seed 2 once stopped at 50 of 100 flights this way).
         let now = 1.0 - self.pair_sum / self.pair_weight.max(f64::MIN_POSITIVE);
-        if counted && expected < self.floor + DIVERSITY_MARGIN && (close || expected < now) {
+        if self.failures > 0 && expected < self.floor + DIVERSITY_MARGIN && (close || expected < now) {
             return false;
         }
         self.add(p.clone(), w, (sum, weight));
@@ -132,6 +163,20 @@ impl DiversityGuard {
     }
 }
 
+/// The failing tests still to come: those of `later` flights at the failure rate of `done` so far (failing
+/// below `fail_m`), and their mean IoU with any other test, taken as the flown tests' mean pairwise IoU.
+pub fn projection(done: &[FlightRecord], fail_m: f64, later: usize) -> (f64, f64) {
+    let distances: Vec<f64> = done.iter().filter_map(|r| r.min_distance).collect();
+    let failing = distances.iter().filter(|&&d| d < fail_m).count();
+    let rate = if distances.is_empty() {
+        0.0
+    } else {
+        failing as f64 / distances.len() as f64
+    };
+    let flown: Vec<Vec<Obstacle>> = done.iter().map(|r| r.obstacles.clone()).collect();
+    (rate * later as f64, diversity(&flown).map_or(0.0, |d| 1.0 - d))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,7 +195,8 @@ mod tests {
     #[test]
     fn without_room_above_max_iou_only_distinct_children_pass() {
         let done = [flown(0.0, 1.0), flown(20.0, 2.0)];
-        let mut rule = DiversityGuard::new(&done, 1.5, (0.5, 0.5), 0.8);
+        // Many distinct failures to come, so diversity does not bind here.
+        let mut rule = DiversityGuard::new(&done, 1.5, (0.5, 0.5), 0.8).expecting(50.0, 0.0);
         // Shifted by 1 m of 4: IoU 3/5 = 0.6 with the first flight.
         assert!(!rule.admit(&at(1.0), 0.3));
         // Shifted by 2 m: IoU 2/6.
@@ -174,6 +220,44 @@ mod tests {
         assert!(!rule.admit(&at(20.5), 0.3));
         // Near a flight that passed, the same rule applies (it is close to a flown test).
         assert!(!DiversityGuard::new(&[flown(0.0, 2.0)], 1.5, (0.5, 0.75), 0.8).admit(&at(1.0), 0.3));
+    }
+
+    #[test]
+    fn the_failures_to_come_dilute_a_pair_early_and_not_late() {
+        // One failure at 0; a child at 2 overlaps it by IoU 8 / 24 = 1/3, failing at 0.3.
+        let done = [flown(0.0, 1.0), flown(20.0, 2.0)];
+        let rule = |future: f64| DiversityGuard::new(&done, 1.5, (0.5, 0.75), 0.8).expecting(future, 0.05);
+        // In the last round no failure is to come: the pair alone leaves 1 - 1/3 = 0.67 < 0.8.
+        assert!(!rule(0.0).admit(&at(2.0), 0.3));
+        // Ten failures to come at IoU 0.05: 1 - (0.5 + 2.5 + 0.1 + 0.15) / (10 + 50 + 0.3 + 3) = 0.949.
+        assert!(rule(10.0).admit(&at(2.0), 0.3));
+        // A distinct candidate flies either way, and before any failure nothing is checked.
+        assert!(rule(0.0).admit(&at(40.0), 0.3));
+        assert!(
+            DiversityGuard::new(&[flown(0.0, 2.0)], 1.5, (0.5, 0.75), 0.8)
+                .expecting(0.0, 0.05)
+                .admit(&at(2.0), 0.3)
+        );
+        // Two failures 40 m apart, no failure to come: a candidate failing at 0.5 at IoU 1/3 of one leaves
+        // 1 - (0.5 / 3) / 2 = 0.917. (Below 4 failures nothing was checked up to session 12.)
+        let two = [flown(0.0, 1.0), flown(40.0, 1.0)];
+        let last = |floor: f64| DiversityGuard::new(&two, 1.5, (0.5, 0.75), floor);
+        assert!(last(0.8).admit(&at(-2.0), 0.5));
+        assert!(!last(0.9).admit(&at(-2.0), 0.5));
+    }
+
+    #[test]
+    fn the_projection_is_the_failure_rate_over_the_flights_left_and_the_flown_mean_iou() {
+        assert_eq!(projection(&[], 1.5, 40), (0.0, 0.0), "no flight, no rate");
+        // 1 of 4 flights failed (one not landed does not count); tests at 0, 2 (IoU 1/3 of 0), 40 and 80.
+        let mut done = vec![flown(0.0, 1.0), flown(2.0, 2.0), flown(40.0, 2.0), flown(80.0, 3.0)];
+        let mut lost = flown(120.0, 1.0);
+        lost.min_distance = None;
+        done.push(lost);
+        let (failures, mean_iou) = projection(&done, 1.5, 40);
+        assert!((failures - 10.0).abs() < 1e-12, "{failures}");
+        // One pair of 10 overlaps, by 1/3.
+        assert!((mean_iou - 1.0 / 30.0).abs() < 1e-12, "{mean_iou}");
     }
 
     #[test]

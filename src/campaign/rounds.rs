@@ -20,7 +20,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::diversity_guard::{DiversityGuard, child_max_iou};
+use super::diversity_guard::DiversityGuard;
 use super::failure_counts::{BinCount, FailureCounts};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
@@ -174,12 +174,8 @@ pub fn run_rounds(
         // Children are measured against their own lineage: a near miss's children fail at about the base rate
         // on the mock, and counting them with the failures' children would starve the latter of flights.
         let child_rate = arm_counts(&before, lineage.children(&is_local, &is_near_miss)).0.rate();
-        let mut rule = DiversityGuard::new(
-            if local == 0 { &[] } else { &before },
-            FAIL_M,
-            (cfg.max_iou, child_max_iou(cfg)),
-            cfg.min_diversity,
-        );
+        let later = cfg.budget - cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
+        let mut rule = DiversityGuard::for_round(if local == 0 { &[] } else { &before }, FAIL_M, cfg, later);
         // Every parent's wide box, then every narrow one (`neighbours::child_box`'s order).
         let close = rule.close_children_may_fly();
         let near: Vec<Generator> = (0..2 * around.len())
@@ -259,7 +255,8 @@ pub fn run_rounds(
             Lineage::NearMisses => neighbours::NEAR_MISS_FLIGHT_SHARE,
         };
         let ranked = if cfg.adapt {
-            let mut guard = DiversityGuard::new(&done, FAIL_M, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity);
+            let later = cfg.budget - cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
+            let mut guard = DiversityGuard::for_round(&done, FAIL_M, cfg, later);
             neighbours::rank_split(
                 &fresh,
                 |c| arm.get(c as usize).copied().unwrap_or(false),
