@@ -19,8 +19,9 @@ use super::stages::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 use crate::model::Obstacle;
 
-/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it
-/// neither bounds the children nor backs off the fit, and no child may come closer than `--max-iou`.
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
+/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
+/// which counts the failures still to come, binds from the first failure.)
 pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out
 /// among them in turn.

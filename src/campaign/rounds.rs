@@ -11,10 +11,11 @@
 //! marginal distribution algorithm ([`crate::generator::adaptive`]): elites are the best [`ELITE_SHARE`] of the
 //! screened candidates by prediction, plus the closest quarter of the flights and every flown failure at
 //! [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
-//! [`UNIFORM_FLOOR`] of uniform mass. When the failing tests' diversity falls below the user's floor (counted
-//! from [`neighbours::MIN_FAILING_FOR_DIVERSITY`] failing tests on), the fit backs off (more uniform mass, a
-//! smaller step) and only candidates that do not lower the diversity fly; it also backs off when a
-//! round could not fill its share of the budget (its candidates were near-duplicates of flown tests).
+//! [`UNIFORM_FLOOR`] of uniform mass. Every child drawn and every candidate flown must keep the final failing
+//! tests' expected diversity above the user's floor ([`DiversityGuard`]). When the failing tests' diversity
+//! falls below it (counted from [`neighbours::MIN_FAILING_FOR_DIVERSITY`] failing tests on), the fit backs off
+//! (more uniform mass, a smaller step); it also backs off when a round could not fill its share of the budget
+//! (its candidates were near-duplicates of flown tests).
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;

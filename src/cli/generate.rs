@@ -99,8 +99,8 @@ pub struct Args {
     /// Start from what an earlier campaign learnt (its output folder's learnt.json).
     #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
     prior: Option<PathBuf>,
-    /// The adapted generator backs off (and stops drawing around the failing flights) when the failing tests'
-    /// diversity (1 - mean pairwise IoU; counted from 4 failing tests on) falls below this.
+    /// Floor of the failing tests' diversity (1 - mean pairwise IoU): the adapted generator draws and flies only
+    /// candidates that keep the expected final diversity above it, and backs off below it.
     #[arg(long, default_value_t = 0.8, value_name = "D")]
     min_diversity: f64,
     /// A candidate drawn next to a failing flight may overlap a flown test up to this IoU (more than --max-iou)
@@ -309,6 +309,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         );
         println!("output folder: {}", folder.display());
     }
+    if let Some(w) = floor_warning(report.suite.diversity, cfg.adapt, cfg.min_diversity) {
+        eprintln!("warning: {w}");
+    }
     if stop.load(Ordering::SeqCst) {
         eprintln!(
             "interrupted: resume with  prgenuav generate --resume {}",
@@ -317,4 +320,31 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The floor bounds an expectation: what to say when a learning campaign's failing tests still ended below it.
+fn floor_warning(diversity: Option<f64>, adapt: bool, floor: f64) -> Option<String> {
+    let d = diversity.filter(|&d| adapt && d < floor)?;
+    Some(format!(
+        "the failing tests' diversity {d:.3} ended below --min-diversity {floor} (the campaign kept their expected \
+         diversity above it; the failures fell closer together than expected)"
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::floor_warning;
+
+    #[test]
+    fn a_learning_campaign_below_its_diversity_floor_says_so() {
+        let w = floor_warning(Some(0.708), true, 0.8).unwrap();
+        assert!(w.contains("0.708") && w.contains("--min-diversity 0.8"), "{w}");
+        assert_eq!(floor_warning(Some(0.81), true, 0.8), None);
+        assert_eq!(floor_warning(None, true, 0.8), None, "fewer than two failing tests");
+        assert_eq!(
+            floor_warning(Some(0.5), false, 0.8),
+            None,
+            "static campaigns have no floor"
+        );
+    }
 }
