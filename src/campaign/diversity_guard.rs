@@ -11,10 +11,11 @@
 //! round.
 //!
 //! The expectation is over the campaign's *final* failing tests: the failures still to come (the flights after
-//! this round at the campaign's failure rate so far, overlapping everything by the flown tests' mean IoU) are
-//! counted too ([`DiversityGuard::expecting`]). So the rule holds from the first failure on, lenient early (many
-//! failures to come dilute a close pair) and strict late: a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30)
-//! would otherwise end with a parent and its children, diversity 0.71, the guard silent below 4 failures.
+//! this round at the campaign's failure rate so far, overlapping everything like the flown tests, or like the
+//! failing tests so far when those overlap more: [`projection`]) are counted too. So the rule holds from the
+//! first failure on, lenient early (many failures to come dilute a close pair) and strict late. Up to session
+//! 12 it held only from 4 failing tests on, and a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30) ended
+//! with a parent and two of its children at diversity 0.708.
 
 use super::journal::FlightRecord;
 use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
@@ -94,8 +95,9 @@ impl DiversityGuard {
     }
 
     /// Counts `failures` more failing tests to come (after this round), each overlapping any other test by
-    /// `mean_iou`: the expectation is then over the campaign's final failing tests.
-    pub fn expecting(mut self, failures: f64, mean_iou: f64) -> Self {
+    /// `mean_iou`: the expectation is then over the campaign's final failing tests. Called once, before any
+    /// candidate is admitted.
+    fn expecting(mut self, failures: f64, mean_iou: f64) -> Self {
         let (m, b) = (failures.max(0.0), mean_iou.clamp(0.0, 1.0));
         let known: f64 = self.failing.iter().map(|(_, w)| w).sum();
         // Pairs of the known with the future ones, and of the future ones among themselves (m^2 / 2).
