@@ -69,6 +69,12 @@ pub struct PoolOutcome {
     pub errors: Vec<String>,
 }
 
+/// A vehicle that rejects this many flights in a row at setup (status `rejected`: never armed) is dropped, and
+/// the last of them is given to another vehicle instead of being journaled. A PX4 SITL instance whose simulated
+/// sensors timed out (`MAG #0 failed: TIMEOUT`, "Preflight Fail: No valid data from Compass 0") rejected 8 of a
+/// campaign's 30 flights in a row this way, each spending a flight of the budget.
+pub const REJECTED_IN_A_ROW_TO_DROP: usize = 2;
+
 /// Shared by the pool's workers: jobs left, flights in the air, flights finished.
 struct Ledger {
     queue: VecDeque<Job>,
@@ -79,9 +85,10 @@ struct Ledger {
 /// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
 /// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
 ///
-/// A vehicle that turns out unreachable gives its job back; the others wait for that (rather than stopping
-/// at a budget that is only reserved) so the job is still flown. Unreachable vehicles are removed from
-/// `vehicles`; the others stay for the next call (a learning campaign flies in rounds).
+/// A vehicle that turns out unreachable, or rejects [`REJECTED_IN_A_ROW_TO_DROP`] flights in a row, gives its
+/// job back; the others wait for that (rather than stopping at a budget that is only reserved) so the job is
+/// still flown. Such vehicles are removed from `vehicles`; the others stay for the next call (a learning
+/// campaign flies in rounds).
 pub fn fly_all(
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     jobs: Vec<Job>,
@@ -106,6 +113,7 @@ pub fn fly_all(
         for (index, vehicle) in vehicles.iter_mut().enumerate() {
             let (journal, outcome, stop, changed, lock, dead) = (&journal, &outcome, &stop, &changed, &lock, &dead);
             scope.spawn(move || {
+                let mut rejected_in_a_row = 0;
                 loop {
                     // Take the next job, or learn there will be none.
                     let job = {
@@ -131,7 +139,26 @@ pub fn fly_all(
                     };
                     let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
                     let t0 = Instant::now();
-                    let result = vehicle.fly(&job.test, &folder.join(&rel), cancel);
+                    let result = match vehicle.fly(&job.test, &folder.join(&rel), cancel) {
+                        Ok(flown) if flown.status == "rejected" => {
+                            rejected_in_a_row += 1;
+                            if rejected_in_a_row >= REJECTED_IN_A_ROW_TO_DROP {
+                                Err(VehicleError::Unreachable {
+                                    vehicle: vehicle.name(),
+                                    reason: format!(
+                                        "rejected {rejected_in_a_row} flights in a row at setup (last: {})",
+                                        flown.reason.as_deref().unwrap_or("no reason given")
+                                    ),
+                                })
+                            } else {
+                                Ok(flown)
+                            }
+                        }
+                        other => {
+                            rejected_in_a_row = 0;
+                            other
+                        }
+                    };
                     let mut l = lock();
                     l.in_flight -= 1;
                     match result {
@@ -214,6 +241,9 @@ mod tests {
         /// Set once an unreachable vehicle was tried; reachable ones wait for it (bounded), so a test does not
         /// depend on which thread starts first.
         dead_tried: Option<Arc<AtomicBool>>,
+        /// Reachable, but rejects every flight at setup (sets `dead_tried` from its second).
+        rejects: bool,
+        rejected: usize,
     }
 
     impl Vehicle for Fake {
@@ -221,6 +251,20 @@ mod tests {
             self.name.into()
         }
         fn fly(&mut self, test: &TestCase, _csv: &Path, _c: &AtomicBool) -> Result<Flown, VehicleError> {
+            if self.rejects {
+                self.rejected += 1;
+                if let Some(d) = self.dead_tried.as_ref().filter(|_| self.rejected >= 2) {
+                    d.store(true, Ordering::SeqCst);
+                }
+                return Ok(Flown {
+                    status: "rejected".into(),
+                    min_distance: None,
+                    min_distance_raw: None,
+                    flight_time_s: 0.0,
+                    warnings: Vec::new(),
+                    reason: Some("not ready to arm: no valid data from Compass 0".into()),
+                });
+            }
             if !self.reachable {
                 if let Some(d) = &self.dead_tried {
                     d.store(true, Ordering::SeqCst);
@@ -270,6 +314,8 @@ mod tests {
             reachable,
             log: log.clone(),
             dead_tried: dead_tried.clone(),
+            rejects: false,
+            rejected: 0,
         })
     }
 
@@ -363,6 +409,44 @@ mod tests {
             let (out, flown, records) = run(vec![("dead", false), ("ok", true)], 3, 1);
             assert_eq!((out.flown, flown.len(), records), (1, 1, 1), "{:?}", out.dropped);
         }
+    }
+
+    #[test]
+    fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_elsewhere() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let dropped = Some(Arc::new(AtomicBool::new(false)));
+        let rejecting = Box::new(Fake {
+            name: "bad",
+            reachable: true,
+            log: log.clone(),
+            dead_tried: dropped.clone(),
+            rejects: true,
+            rejected: 0,
+        });
+        // "ok" holds its first job until "bad" has rejected twice.
+        let mut fleet: Vec<Box<dyn Vehicle>> = vec![rejecting, fake("ok", true, &log, &dropped)];
+        let path = dir.path().join("journal.jsonl");
+        let out = fly_all(
+            &mut fleet,
+            jobs(5),
+            5,
+            dir.path(),
+            Journal::open(&path).unwrap(),
+            &AtomicBool::new(false),
+            &|_| {},
+        );
+        let records = Journal::read(&path).unwrap();
+        assert_eq!(out.dropped.len(), 1, "{:?}", out.dropped);
+        assert!(out.dropped[0].contains("rejected 2 flights in a row") && out.dropped[0].contains("Compass"));
+        assert_eq!((fleet.len(), fleet[0].name()), (1, "ok".to_string()));
+        // One rejection is journaled, the second's job is flown by "ok": the budget is spent on 4 flights.
+        let rejected: Vec<_> = records.iter().filter(|r| r.status == "rejected").collect();
+        assert_eq!((records.len(), rejected.len(), out.flown), (5, 1, 5));
+        let mut ids: Vec<u64> = records.iter().map(|r| r.candidate).collect();
+        ids.sort();
+        assert_eq!(ids, vec![0, 1, 2, 3, 4], "every job once");
+        assert_eq!(log.lock().unwrap().len(), 4);
     }
 
     #[test]
