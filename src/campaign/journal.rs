@@ -73,6 +73,11 @@ impl Journal {
         })
     }
 
+    /// Where the journal is.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// Appends one record and syncs it to disk before returning.
     pub fn append(&mut self, record: &FlightRecord) -> Result<(), ModelError> {
         let io = |source| ModelError::Io {

@@ -109,11 +109,23 @@ pub fn fly_all(
     let stop = AtomicBool::new(false);
     let lock = || ledger.lock().unwrap_or_else(|p| p.into_inner());
     let dead: Mutex<Vec<usize>> = Mutex::new(Vec::new());
+    // Rejections count across calls (a learning campaign's rounds) and resumes: the journal holds them.
+    let history = journal
+        .lock()
+        .ok()
+        .and_then(|j| Journal::read(j.path()).ok())
+        .unwrap_or_default();
     std::thread::scope(|scope| {
         for (index, vehicle) in vehicles.iter_mut().enumerate() {
+            let name = vehicle.name();
+            let mut rejected_in_a_row = history
+                .iter()
+                .rev()
+                .filter(|r| r.vehicle == name)
+                .take_while(|r| r.status == "rejected")
+                .count();
             let (journal, outcome, stop, changed, lock, dead) = (&journal, &outcome, &stop, &changed, &lock, &dead);
             scope.spawn(move || {
-                let mut rejected_in_a_row = 0;
                 loop {
                     // Take the next job, or learn there will be none.
                     let job = {
@@ -447,6 +459,56 @@ mod tests {
         ids.sort();
         assert_eq!(ids, vec![0, 1, 2, 3, 4], "every job once");
         assert_eq!(log.lock().unwrap().len(), 4);
+    }
+
+    #[test]
+    fn rejections_in_a_row_count_across_rounds() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let dropped = Some(Arc::new(AtomicBool::new(false)));
+        let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(Fake {
+            name: "bad",
+            reachable: true,
+            log: log.clone(),
+            dead_tried: dropped.clone(),
+            rejects: true,
+            rejected: 0,
+        })];
+        let path = dir.path().join("journal.jsonl");
+        let no_stop = AtomicBool::new(false);
+        // Round 1: one rejection, journaled; the vehicle stays.
+        let first = fly_all(
+            &mut fleet,
+            jobs(1),
+            1,
+            dir.path(),
+            Journal::open(&path).unwrap(),
+            &no_stop,
+            &|_| {},
+        );
+        assert_eq!((first.flown, first.dropped.len(), fleet.len()), (1, 0, 1));
+        // Round 2: its next rejection is the second in a row.
+        fleet.push(fake("ok", true, &log, &dropped));
+        let mut next = jobs(3);
+        next.remove(0);
+        let second = fly_all(
+            &mut fleet,
+            next,
+            2,
+            dir.path(),
+            Journal::open(&path).unwrap(),
+            &no_stop,
+            &|_| {},
+        );
+        assert_eq!(
+            (second.flown, second.dropped.len(), fleet.len()),
+            (2, 1, 1),
+            "{:?}",
+            second.dropped
+        );
+        let records = Journal::read(&path).unwrap();
+        let statuses: Vec<&str> = records.iter().map(|r| r.status.as_str()).collect();
+        assert_eq!(statuses, vec!["rejected", "landed", "landed"]);
     }
 
     #[test]
