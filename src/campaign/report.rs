@@ -246,7 +246,8 @@ pub fn write_outputs(
             .iter()
             .filter(|f| f.reported_as.is_some())
             .map(|f| f.test_score)
-            .sum(),
+            .sum::<f64>()
+            + 0.0, // an empty sum is -0.0, printed "-0.00"
         diversity: diversity(&failing_obstacles),
         distinct_failing: distinct_tests(&failing_obstacles, DISTINCT_IOU),
         failing_with_three: failing_obstacles.iter().filter(|o| o.len() == 3).count(),
