@@ -331,6 +331,18 @@ mod tests {
         })
     }
 
+    /// A vehicle that rejects every flight at setup, setting `dropped` from its second.
+    fn rejecting(name: &'static str, log: &Log, dropped: &Option<Arc<AtomicBool>>) -> Box<dyn Vehicle> {
+        Box::new(Fake {
+            name,
+            reachable: true,
+            log: log.clone(),
+            dead_tried: dropped.clone(),
+            rejects: true,
+            rejected: 0,
+        })
+    }
+
     fn jobs(n: u64) -> Vec<Job> {
         let base = test_case();
         (0..n)
@@ -428,16 +440,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let log = Arc::new(Mutex::new(Vec::new()));
         let dropped = Some(Arc::new(AtomicBool::new(false)));
-        let rejecting = Box::new(Fake {
-            name: "bad",
-            reachable: true,
-            log: log.clone(),
-            dead_tried: dropped.clone(),
-            rejects: true,
-            rejected: 0,
-        });
         // "ok" holds its first job until "bad" has rejected twice.
-        let mut fleet: Vec<Box<dyn Vehicle>> = vec![rejecting, fake("ok", true, &log, &dropped)];
+        let mut fleet = vec![rejecting("bad", &log, &dropped), fake("ok", true, &log, &dropped)];
         let path = dir.path().join("journal.jsonl");
         let out = fly_all(
             &mut fleet,
@@ -466,14 +470,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let log = Arc::new(Mutex::new(Vec::new()));
         let dropped = Some(Arc::new(AtomicBool::new(false)));
-        let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(Fake {
-            name: "bad",
-            reachable: true,
-            log: log.clone(),
-            dead_tried: dropped.clone(),
-            rejects: true,
-            rejected: 0,
-        })];
+        let mut fleet = vec![rejecting("bad", &log, &dropped)];
         let path = dir.path().join("journal.jsonl");
         let no_stop = AtomicBool::new(false);
         // Round 1: one rejection, journaled; the vehicle stays.
