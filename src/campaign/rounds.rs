@@ -175,7 +175,9 @@ pub fn run_rounds(
         // Children are measured against their own lineage: a near miss's children fail at about the base rate
         // on the mock, and counting them with the failures' children would starve the latter of flights.
         let child_rate = arm_counts(&before, lineage.children(&is_local, &is_near_miss)).0.rate();
-        let later = cfg.budget - cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
+        // Flights the budget plans by the end of this round, and after it.
+        let planned = cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
+        let later = cfg.budget - planned;
         let mut rule = DiversityGuard::for_round(if local == 0 { &[] } else { &before }, FAIL_M, cfg, later);
         // Every parent's wide box, then every narrow one (`neighbours::child_box`'s order).
         let close = rule.close_children_may_fly();
@@ -242,7 +244,7 @@ pub fn run_rounds(
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = (cfg.budget * (round + 1).min(ROUNDS) / ROUNDS).saturating_sub(done.len());
+        let remaining = planned.saturating_sub(done.len());
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
@@ -256,7 +258,6 @@ pub fn run_rounds(
             Lineage::NearMisses => neighbours::NEAR_MISS_FLIGHT_SHARE,
         };
         let ranked = if cfg.adapt {
-            let later = cfg.budget - cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
             let mut guard = DiversityGuard::for_round(&done, FAIL_M, cfg, later);
             neighbours::rank_split(
                 &fresh,
