@@ -2,13 +2,19 @@
 //! runs. Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
 //! `make px4_sitl sihsim_quadx` target does, in a private working directory, and stops it when dropped.
 
+use std::collections::VecDeque;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// How long the startup script may take before [`Px4Sitl::start`] gives up.
 const BOOT_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Console lines kept for [`Px4Sitl::console_tail`]: enough for a flight's failsafe, landing and disarm
+/// messages, small enough to keep for every instance of a fleet.
+const CONSOLE_LINES: usize = 400;
 
 /// The competition's home (PX4 1.14's SIH reads these integer parameters in 1e-7 degrees).
 pub const COMPETITION_HOME_E7: (i64, i64) = (473_977_420, 85_455_940);
@@ -73,6 +79,7 @@ pub struct Px4Sitl {
     child: Child,
     instance: u8,
     dir: PathBuf,
+    console: Arc<Mutex<VecDeque<String>>>,
 }
 
 impl Px4Sitl {
@@ -105,14 +112,18 @@ impl Px4Sitl {
             .stderr(Stdio::null())
             .spawn()
             .map_err(spawn_err)?;
-        // The reader thread ends with the process (its stdout closes); it keeps draining so PX4 never blocks.
+        // The reader thread ends with the process (its stdout closes); it keeps draining so PX4 never blocks,
+        // and keeps the console's last lines: PX4's own account of a flight that went wrong.
         let (tx, rx) = std::sync::mpsc::channel();
+        let console = Arc::new(Mutex::new(VecDeque::with_capacity(CONSOLE_LINES)));
         if let Some(out) = child.stdout.take() {
+            let console = Arc::clone(&console);
             std::thread::spawn(move || {
                 for line in BufReader::new(out).lines().map_while(Result::ok) {
                     if line.contains("Startup script returned") {
                         let _ = tx.send(());
                     }
+                    keep_line(&console, line);
                 }
             });
         }
@@ -120,6 +131,7 @@ impl Px4Sitl {
             child,
             instance: spec.instance,
             dir,
+            console,
         };
         match rx.recv_timeout(BOOT_TIMEOUT) {
             Ok(()) => Ok(sitl),
@@ -139,6 +151,42 @@ impl Px4Sitl {
     pub fn instance(&self) -> u8 {
         self.instance
     }
+
+    /// The console's last `n` lines (at most [`CONSOLE_LINES`]), oldest first, terminal colours removed.
+    pub fn console_tail(&self, n: usize) -> Vec<String> {
+        let lines = self.console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        lines.iter().skip(lines.len().saturating_sub(n)).cloned().collect()
+    }
+}
+
+/// Appends `line` without its ANSI colour codes, dropping the oldest line beyond [`CONSOLE_LINES`].
+fn keep_line(console: &Mutex<VecDeque<String>>, line: String) {
+    let plain = strip_ansi(&line);
+    let mut lines = console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if lines.len() == CONSOLE_LINES {
+        lines.pop_front();
+    }
+    lines.push_back(plain);
+}
+
+/// `line` without `ESC [ ... letter` sequences (PX4 colours its console's INFO/WARN tags).
+fn strip_ansi(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            if chars.next() == Some('[') {
+                for c in chars.by_ref() {
+                    if c.is_ascii_alphabetic() {
+                        break;
+                    }
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 impl Drop for Px4Sitl {
@@ -172,6 +220,30 @@ mod tests {
             etc_dir(Path::new("/b/px4_sitl_default/bin/px4")),
             PathBuf::from("/b/px4_sitl_default/etc")
         );
+    }
+
+    #[test]
+    fn colours_are_removed_from_console_lines() {
+        assert_eq!(
+            strip_ansi("INFO  [commander] \u{1b}[32mReady for takeoff!\u{1b}[0m"),
+            "INFO  [commander] Ready for takeoff!"
+        );
+        assert_eq!(
+            strip_ansi("WARN  [failsafe] Failsafe activated\t"),
+            "WARN  [failsafe] Failsafe activated\t"
+        );
+    }
+
+    #[test]
+    fn the_console_keeps_its_last_lines() {
+        let console = Mutex::new(VecDeque::new());
+        for i in 0..CONSOLE_LINES + 5 {
+            keep_line(&console, format!("line {i}"));
+        }
+        let lines = console.lock().unwrap();
+        assert_eq!(lines.len(), CONSOLE_LINES);
+        assert_eq!(lines.front().map(String::as_str), Some("line 5"));
+        assert_eq!(lines.back(), Some(&format!("line {}", CONSOLE_LINES + 4)));
     }
 
     #[test]
