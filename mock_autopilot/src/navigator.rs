@@ -405,10 +405,13 @@ impl Navigator {
                     self.mission_finished = true;
                     self.phase = Phase::Finished;
                     self.hold = pos;
-                    ev.push(NavEvent::Text(
-                        MavSeverity::MAV_SEVERITY_INFO,
-                        "Mission finished, loitering".into(),
-                    ));
+                    // PX4 v1.14's texts (navigator's mission.cpp), with the tab that marks an event twin.
+                    let text = if ctx.landed {
+                        "Mission finished, landed\t"
+                    } else {
+                        "Mission finished, loitering\t"
+                    };
+                    ev.push(NavEvent::Text(MavSeverity::MAV_SEVERITY_INFO, text.into()));
                 }
                 return self.hold_sp(ctx);
             }

@@ -7,6 +7,11 @@ use crate::dynamics::Ned;
 use crate::modes::FlightMode;
 use crate::vehicle::Vehicle;
 
+/// Commander's text while the vehicle is inside an exclusion fence (PX4 v1.14, any GF_ACTION but 0).
+pub const GEOFENCE_VIOLATION: &str = "Preflight Fail: Geofence violation";
+/// The failsafe framework's text when the breach's action starts (also for GF_ACTION 1, warning only).
+pub const FAILSAFE_ACTIVATED: &str = "Failsafe activated\t";
+
 impl Vehicle {
     pub(crate) fn check_fence(&mut self) {
         if self.fence.is_empty() || !self.armed || self.landed {
@@ -17,19 +22,18 @@ impl Vehicle {
         let breach = self.fence.check(p.x, p.y).is_some();
         if breach && !self.fence_breached {
             let action = self.params.f64("GF_ACTION") as i32;
-            let (mode, what) = match action {
-                0 => (None, "no action"),
-                1 => (None, "warning only"),
-                3 => (Some(FlightMode::Rtl), "Return"),
-                5 => (Some(FlightMode::Land), "Land"),
-                4 => (None, "Terminate"),
-                _ => (Some(FlightMode::Loiter), "Hold"),
+            let mode = match action {
+                0 | 1 | 4 => None,
+                3 => Some(FlightMode::Rtl),
+                5 => Some(FlightMode::Land),
+                _ => Some(FlightMode::Loiter),
             };
             if action != 0 {
-                self.text(
-                    MavSeverity::MAV_SEVERITY_CRITICAL,
-                    &format!("Geofence violated, {what} activated"),
-                );
+                // PX4 v1.14's texts on a breach, whatever the action (seen on SIH with GF_ACTION 1): commander's
+                // geofence check, then the failsafe framework, which ends the texts it also sends as events
+                // with a tab.
+                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, GEOFENCE_VIOLATION);
+                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, FAILSAFE_ACTIVATED);
             }
             if action == 4 {
                 self.crash_to_ground();

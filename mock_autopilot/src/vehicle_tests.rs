@@ -197,11 +197,13 @@ fn avoidance_companion_steers_and_its_silence_holds() {
     );
 }
 
-#[test]
-fn exclusion_fence_breach_holds_with_px4_text() {
+/// Mission 2 through an exclusion fence across its first leg (East 20-30 m) with `GF_ACTION = action`; returns
+/// the vehicle, its STATUSTEXTs and the time it disarmed (None: still flying after 120 s).
+fn fly_through_fence(action: i32) -> (Vehicle, Vec<String>, Option<Duration>) {
     use crate::scenarios::item;
     use mavlink::dialects::common::MavCmd;
     let mut v = vehicle();
+    v.params.set("GF_ACTION", ParamValue::Int(action));
     upload(&mut v, MavMissionType::MAV_MISSION_TYPE_MISSION, &mission2());
     let proj = v.proj;
     let ex = MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION;
@@ -220,18 +222,50 @@ fn exclusion_fence_breach_holds_with_px4_text() {
         Some(MavMissionResult::MAV_MISSION_ACCEPTED)
     );
     let mut texts = Vec::new();
-    let end = fly_until_disarmed(&mut v, DT, Duration::from_secs(60), |_, m| {
+    let end = fly_until_disarmed(&mut v, DT, Duration::from_secs(120), |_, m| {
         if let MavMessage::STATUSTEXT(s) = m {
             texts.push(s.text.to_str().unwrap_or("").to_string());
         }
     });
+    (v, texts, end)
+}
+
+/// PX4 v1.14's two texts on a breach, in order, once per entry into the fence.
+fn assert_breach_texts(texts: &[String], entries: usize) {
+    let breach = [crate::safety::GEOFENCE_VIOLATION, crate::safety::FAILSAFE_ACTIVATED];
+    let at: Vec<usize> = (0..texts.len().saturating_sub(1))
+        .filter(|&i| texts[i..i + 2] == breach)
+        .collect();
+    assert_eq!(at.len(), entries, "PX4 v1.14's texts per entry, in order: {texts:?}");
+}
+
+#[test]
+fn exclusion_fence_breach_holds_with_px4_text() {
+    let (v, texts, end) = fly_through_fence(2);
     assert!(end.is_none(), "GF_ACTION 2 holds in the air, no landing");
-    assert!(
-        texts.iter().any(|t| t == "Geofence violated, Hold activated"),
-        "{texts:?}"
-    );
+    assert_breach_texts(&texts, 1);
     assert_eq!(v.state().mode, FlightMode::Loiter);
     assert!(v.state().pos_ned.y > 19.0 && v.state().pos_ned.y < 25.0);
+}
+
+/// What the bridge sets (GF_ACTION 1): PX4 v1.14 SIH says "Preflight Fail: Geofence violation" and "Failsafe
+/// activated" and flies the mission on to its land point (15 of 15 mission-mode flights of mission 3).
+#[test]
+fn exclusion_fence_breach_with_warning_only_flies_on_with_px4_text() {
+    let (v, texts, end) = fly_through_fence(1);
+    assert!(end.is_some(), "the mission ends landed and disarmed: {texts:?}");
+    // Out and back across the fence: one pair of texts per entry.
+    assert_breach_texts(&texts, 2);
+    assert!(texts.iter().any(|t| t == "Mission finished, landed\t"), "{texts:?}");
+    let land = mission2()
+        .last()
+        .map(|i| v.proj.project(f64::from(i.x) * 1e-7, f64::from(i.y) * 1e-7))
+        .expect("land item");
+    let p = v.state().pos_ned;
+    assert!(
+        (p.x - land.0).hypot(p.y - land.1) < 1.0,
+        "landed at {p:?}, land item {land:?}"
+    );
 }
 
 #[test]

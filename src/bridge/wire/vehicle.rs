@@ -86,8 +86,9 @@ impl VehicleView {
                 self.reached = Some(self.reached.map_or(r.seq, |s| s.max(r.seq)));
             }
             MavMessage::STATUSTEXT(t) if t.severity as u8 <= MavSeverity::MAV_SEVERITY_WARNING as u8 => {
+                // PX4 ends a text it also sends as an event with a tab (QGC's marker), e.g. "Failsafe activated\t".
                 if let Ok(s) = t.text.to_str() {
-                    self.warnings.push(s.to_string());
+                    self.warnings.push(s.trim_end().to_string());
                 }
             }
             _ => {}
@@ -122,6 +123,7 @@ mod tests {
     use super::*;
     use mavlink::dialects::common::{
         EXTENDED_SYS_STATE_DATA, HEARTBEAT_DATA, LOCAL_POSITION_NED_DATA, MavState, MavType, MavVtolState,
+        STATUSTEXT_DATA,
     };
 
     fn hb(armed: bool) -> MavMessage {
@@ -170,6 +172,25 @@ mod tests {
         v.update(&hb(false), Duration::from_secs(3));
         assert!(v.landed_after_flight());
         assert_eq!(v.silent_for(Duration::from_secs(5)), Some(Duration::from_secs(2)));
+    }
+
+    #[test]
+    fn warnings_lose_px4s_trailing_tab_and_infos_are_not_warnings() {
+        let mut v = VehicleView::default();
+        for (severity, text) in [
+            (MavSeverity::MAV_SEVERITY_CRITICAL, "Failsafe activated\t"),
+            (MavSeverity::MAV_SEVERITY_INFO, "Takeoff detected"),
+            (MavSeverity::MAV_SEVERITY_WARNING, "Preflight Fail: Geofence violation"),
+        ] {
+            let msg = MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+                severity,
+                text: text.into(),
+                id: 0,
+                chunk_seq: 0,
+            });
+            v.update(&msg, Duration::ZERO);
+        }
+        assert_eq!(v.warnings, ["Failsafe activated", "Preflight Fail: Geofence violation"]);
     }
 
     #[test]
