@@ -233,10 +233,8 @@ fn fly_through_fence(action: i32) -> (Vehicle, Vec<String>, Option<Duration>) {
 /// PX4 v1.14's two texts on a breach, in order, once per entry into the fence.
 fn assert_breach_texts(texts: &[String], entries: usize) {
     let breach = [crate::safety::GEOFENCE_VIOLATION, crate::safety::FAILSAFE_ACTIVATED];
-    let at: Vec<usize> = (0..texts.len().saturating_sub(1))
-        .filter(|&i| texts[i..i + 2] == breach)
-        .collect();
-    assert_eq!(at.len(), entries, "PX4 v1.14's texts per entry, in order: {texts:?}");
+    let pairs = texts.windows(2).filter(|w| *w == breach).count();
+    assert_eq!(pairs, entries, "PX4 v1.14's texts per entry, in order: {texts:?}");
 }
 
 #[test]
