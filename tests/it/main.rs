@@ -6,6 +6,7 @@ mod cli_errors;
 mod frame;
 mod generator;
 mod geometry_props;
+mod hygiene;
 mod layering;
 mod lfs;
 mod missions;
