@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 /// Folders that hold no prose or code of ours.
-const SKIPPED: &[&str] = &["target", ".git", "data", "proptest-regressions"];
+const SKIPPED: &[&str] = &["target", ".git", "proptest-regressions"];
 
 /// Text files of the repository that people read: sources, docs, manifests, scripts.
 fn text_files(dir: &Path, out: &mut Vec<PathBuf>) {

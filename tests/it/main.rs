@@ -10,6 +10,7 @@ mod hygiene;
 mod layering;
 mod lfs;
 mod missions;
+mod pinned;
 mod pty;
 mod px4_reference;
 mod px4_sitl;
