@@ -123,18 +123,7 @@ impl FlightPlot {
 
     /// The SVG document.
     pub fn to_svg(&self) -> String {
-        let (n0, n1, e0, e1) = self.bounds();
-        let scale = (SIZE_PX - 2.0 * MARGIN_PX) / (n1 - n0);
-        let px = |n: f64, e: f64| (MARGIN_PX + (e - e0) * scale, MARGIN_PX + (n1 - n) * scale);
-        let poly = |pts: &[(f64, f64)]| {
-            pts.iter()
-                .map(|&(n, e)| {
-                    let (x, y) = px(n, e);
-                    format!("{x:.1},{y:.1}")
-                })
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
+        let c = Canvas::new(self.bounds());
         let legend_h = 20.0 * (3 + self.paths.len() + usize::from(self.closest.is_some())) as f64;
         let mut s = String::new();
         let _ = writeln!(
@@ -149,30 +138,17 @@ impl FlightPlot {
             r#"<text x="{MARGIN_PX}" y="20" font-size="14">{}</text>"#,
             esc(&self.title)
         );
-        // Grid every 10 m.
-        let mut g = (n0 / 10.0).ceil() * 10.0;
-        while g <= n1 {
-            let (x0, y) = px(g, e0);
-            let (x1, _) = px(g, e1);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x0:.1}" y1="{y:.1}" x2="{x1:.1}" y2="{y:.1}" stroke="#eee"/><text x="4" y="{:.1}" fill="#999">N {g:.0}</text>"##,
-                y + 4.0
-            );
-            g += 10.0;
-        }
-        let mut g = (e0 / 10.0).ceil() * 10.0;
-        while g <= e1 {
-            let (x, y0) = px(n1, g);
-            let (_, y1) = px(n0, g);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{y1:.1}" stroke="#eee"/><text x="{:.1}" y="{:.1}" fill="#999">E {g:.0}</text>"##,
-                x - 10.0,
-                y1 + 14.0
-            );
-            g += 10.0;
-        }
+        c.grid(&mut s);
+        self.write_obstacles(&c, &mut s);
+        self.write_mission(&c, &mut s);
+        self.write_paths(&c, &mut s);
+        self.write_legend(&mut s);
+        s.push_str("</svg>\n");
+        s
+    }
+
+    /// The obstacle area and the obstacles, numbered.
+    fn write_obstacles(&self, c: &Canvas, s: &mut String) {
         let a = &self.arena;
         let oda = [
             (a.x.min, a.y.min),
@@ -183,30 +159,34 @@ impl FlightPlot {
         let _ = writeln!(
             s,
             r##"<polygon points="{}" fill="#fff8e0" stroke="#d9b24a" stroke-dasharray="6 4"/>"##,
-            poly(&oda)
+            c.poly(&oda)
         );
         for (k, o) in self.obstacles.iter().enumerate() {
             let _ = writeln!(
                 s,
                 r##"<polygon points="{}" fill="#c0392b" fill-opacity="0.55" stroke="#7b241c"/>"##,
-                poly(o)
+                c.poly(o)
             );
             let (cn, ce) = o
                 .iter()
                 .fold((0.0, 0.0), |acc, p| (acc.0 + p.0 / 4.0, acc.1 + p.1 / 4.0));
-            let (x, y) = px(cn, ce);
+            let (x, y) = c.px(cn, ce);
             let _ = writeln!(
                 s,
                 r#"<text x="{x:.1}" y="{y:.1}" text-anchor="middle" fill="white">{k}</text>"#
             );
         }
+    }
+
+    /// The mission's path and its numbered waypoints.
+    fn write_mission(&self, c: &Canvas, s: &mut String) {
         let _ = writeln!(
             s,
             r##"<polyline points="{}" fill="none" stroke="#333" stroke-dasharray="2 4"/>"##,
-            poly(&self.mission)
+            c.poly(&self.mission)
         );
         for (k, &(n, e)) in self.mission.iter().enumerate() {
-            let (x, y) = px(n, e);
+            let (x, y) = c.px(n, e);
             let _ = writeln!(
                 s,
                 r##"<circle cx="{x:.1}" cy="{y:.1}" r="4" fill="#333"/><text x="{:.1}" y="{:.1}">{k}</text>"##,
@@ -214,26 +194,53 @@ impl FlightPlot {
                 y - 6.0
             );
         }
+    }
+
+    /// The paths, then the closest approach on top of them.
+    fn write_paths(&self, c: &Canvas, s: &mut String) {
         for p in &self.paths {
             let (color, dash) = p.style.stroke();
             let _ = writeln!(
                 s,
                 r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"{dash}/>"#,
-                poly(&p.points)
+                c.poly(&p.points)
             );
         }
-        if let Some(c) = &self.closest {
-            let (x, y) = px(c.x, c.y);
+        if let Some(cl) = &self.closest {
+            let (x, y) = c.px(cl.x, cl.y);
             let _ = writeln!(
                 s,
                 r##"<circle cx="{x:.1}" cy="{y:.1}" r="6" fill="none" stroke="#e67e22" stroke-width="2.5"/><text x="{:.1}" y="{:.1}" fill="#e67e22">{:.2} m</text>"##,
                 x + 8.0,
                 y + 4.0,
-                c.distance
+                cl.distance
             );
         }
-        // Legend: one row of 20 px per entry; each swatch is drawn about the row's centre line `y`.
+    }
+
+    /// Legend: one row of 20 px per entry below the map; each swatch is drawn about the row's centre line `y`.
+    fn write_legend(&self, s: &mut String) {
         let x = MARGIN_PX;
+        for (k, (swatch, text)) in self.legend_rows().iter().enumerate() {
+            let y = SIZE_PX + 5.0 + 20.0 * k as f64;
+            let swatch = swatch
+                .replace("{x}", &format!("{x:.1}"))
+                .replace("{x10}", &format!("{:.1}", x + 10.0))
+                .replace("{x20}", &format!("{:.1}", x + 20.0))
+                .replace("{y5}", &format!("{:.1}", y - 5.0))
+                .replace("{y}", &format!("{y:.1}"));
+            let _ = writeln!(
+                s,
+                r#"{swatch}<text x="{:.1}" y="{:.1}">{}</text>"#,
+                x + 30.0,
+                y + 4.0,
+                esc(text)
+            );
+        }
+    }
+
+    /// (swatch template, text) per legend row; the template's `{x}`, `{y}`, ... are filled in per row.
+    fn legend_rows(&self) -> Vec<(String, String)> {
         let mut rows: Vec<(String, String)> = vec![
             (
                 r##"<rect x="{x}" y="{y5}" width="20" height="10" fill="#c0392b" fill-opacity="0.55"/>"##.into(),
@@ -263,24 +270,69 @@ impl FlightPlot {
                 format!("closest approach: {:.2} m to obstacle {}", c.distance, c.obstacle),
             ));
         }
-        for (k, (swatch, text)) in rows.iter().enumerate() {
-            let y = SIZE_PX + 5.0 + 20.0 * k as f64;
-            let swatch = swatch
-                .replace("{x}", &format!("{x:.1}"))
-                .replace("{x10}", &format!("{:.1}", x + 10.0))
-                .replace("{x20}", &format!("{:.1}", x + 20.0))
-                .replace("{y5}", &format!("{:.1}", y - 5.0))
-                .replace("{y}", &format!("{y:.1}"));
+        rows
+    }
+}
+
+/// The map's projection: metres (north, east) to pixels, East to the right and North up.
+struct Canvas {
+    n0: f64,
+    n1: f64,
+    e0: f64,
+    e1: f64,
+    scale: f64,
+}
+
+impl Canvas {
+    fn new((n0, n1, e0, e1): (f64, f64, f64, f64)) -> Self {
+        let scale = (SIZE_PX - 2.0 * MARGIN_PX) / (n1 - n0);
+        Self { n0, n1, e0, e1, scale }
+    }
+
+    fn px(&self, n: f64, e: f64) -> (f64, f64) {
+        (
+            MARGIN_PX + (e - self.e0) * self.scale,
+            MARGIN_PX + (self.n1 - n) * self.scale,
+        )
+    }
+
+    /// SVG `points` of `pts`.
+    fn poly(&self, pts: &[(f64, f64)]) -> String {
+        pts.iter()
+            .map(|&(n, e)| {
+                let (x, y) = self.px(n, e);
+                format!("{x:.1},{y:.1}")
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
+    /// Grid lines every 10 m, labelled.
+    fn grid(&self, s: &mut String) {
+        let (n0, n1, e0, e1) = (self.n0, self.n1, self.e0, self.e1);
+        let mut g = (n0 / 10.0).ceil() * 10.0;
+        while g <= n1 {
+            let (x0, y) = self.px(g, e0);
+            let (x1, _) = self.px(g, e1);
             let _ = writeln!(
                 s,
-                r#"{swatch}<text x="{:.1}" y="{:.1}">{}</text>"#,
-                x + 30.0,
-                y + 4.0,
-                esc(text)
+                r##"<line x1="{x0:.1}" y1="{y:.1}" x2="{x1:.1}" y2="{y:.1}" stroke="#eee"/><text x="4" y="{:.1}" fill="#999">N {g:.0}</text>"##,
+                y + 4.0
             );
+            g += 10.0;
         }
-        s.push_str("</svg>\n");
-        s
+        let mut g = (e0 / 10.0).ceil() * 10.0;
+        while g <= e1 {
+            let (x, y0) = self.px(n1, g);
+            let (_, y1) = self.px(n0, g);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{y1:.1}" stroke="#eee"/><text x="{:.1}" y="{:.1}" fill="#999">E {g:.0}</text>"##,
+                x - 10.0,
+                y1 + 14.0
+            );
+            g += 10.0;
+        }
     }
 }
 

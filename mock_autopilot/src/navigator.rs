@@ -393,145 +393,6 @@ impl Navigator {
             ev.push(NavEvent::Current(self.current as u16));
         }
     }
-
-    fn mission(&mut self, ctx: &NavCtx, ev: &mut Vec<NavEvent>) -> Setpoint {
-        let pos = ctx.body.pos_ned;
-        let p = ctx.p;
-        let cruise = self.speed_m_s.unwrap_or(p.cruise_m_s);
-        // Instant items are consumed in one update; the bound stops DO_JUMP loops.
-        for _ in 0..=self.items.len() {
-            if self.mission_finished || self.current >= self.items.len() {
-                if !self.mission_finished {
-                    self.mission_finished = true;
-                    self.phase = Phase::Finished;
-                    self.hold = pos;
-                    // PX4 v1.14's texts (navigator's mission.cpp), with the tab that marks an event twin.
-                    let text = if ctx.landed {
-                        "Mission finished, landed\t"
-                    } else {
-                        "Mission finished, loitering\t"
-                    };
-                    ev.push(NavEvent::Text(MavSeverity::MAV_SEVERITY_INFO, text.into()));
-                }
-                return self.hold_sp(ctx);
-            }
-            let kind = self.items[self.current].1;
-            match kind {
-                NavKind::Instant => self.advance(ev),
-                NavKind::Speed { m_s } => {
-                    self.speed_m_s = Some(m_s);
-                    self.advance(ev);
-                }
-                NavKind::Jump { to, repeat } => {
-                    let done = &mut self.jumps[self.current];
-                    if to < self.items.len() && (repeat < 0 || *done < repeat) {
-                        *done += 1;
-                        self.current = to;
-                        self.phase = Phase::Start;
-                        ev.push(NavEvent::Current(to as u16));
-                    } else {
-                        self.advance(ev);
-                    }
-                }
-                NavKind::Rtl => {
-                    self.advance(ev);
-                    self.mode = FlightMode::Rtl;
-                    self.phase = Phase::Start;
-                    ev.push(NavEvent::Mode(FlightMode::Rtl));
-                    return self.rtl(ctx);
-                }
-                NavKind::Takeoff { target, xy_set } => {
-                    let z = target.z.min(-p.takeoff_alt_m);
-                    if self.phase == Phase::Start {
-                        self.phase = if pos.z <= z + p.alt_rad_m {
-                            Phase::Approach
-                        } else {
-                            Phase::Climb { xy: (pos.x, pos.y), z }
-                        };
-                    }
-                    if let Phase::Climb { xy, z } = self.phase {
-                        if (pos.z - z).abs() <= p.alt_rad_m {
-                            self.phase = Phase::Approach;
-                        } else {
-                            return self.goto(Ned::new(xy.0, xy.1, z), cruise, p.takeoff_speed_m_s, p.down_m_s, None);
-                        }
-                    }
-                    let goal = if xy_set {
-                        Ned::new(target.x, target.y, z)
-                    } else {
-                        Ned::new(pos.x, pos.y, z)
-                    };
-                    if (goal - pos).xy().norm() <= p.acc_rad_m {
-                        self.advance(ev);
-                        continue;
-                    }
-                    return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
-                }
-                NavKind::Waypoint {
-                    target,
-                    hold_s,
-                    acc_rad_m,
-                    forever,
-                } => {
-                    if self.phase == Phase::Start {
-                        self.phase = Phase::Approach;
-                    }
-                    let sp = self.goto(target, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &target));
-                    match self.phase {
-                        Phase::Approach => {
-                            let acc = acc_rad_m.unwrap_or(p.acc_rad_m);
-                            if (target - pos).xy().norm() <= acc && (target.z - pos.z).abs() <= p.alt_rad_m {
-                                self.phase = Phase::Hold {
-                                    until: (!forever).then(|| ctx.now + Duration::from_secs_f64(hold_s)),
-                                };
-                                if forever {
-                                    ev.push(NavEvent::Reached(self.current as u16));
-                                }
-                                continue;
-                            }
-                            return sp;
-                        }
-                        Phase::Hold { until: Some(t) } if ctx.now >= t => {
-                            self.advance(ev);
-                            continue;
-                        }
-                        _ => return sp,
-                    }
-                }
-                NavKind::Land { xy } => {
-                    if self.phase == Phase::Start {
-                        self.phase = match xy {
-                            Some(_) => Phase::LandApproach { z: pos.z },
-                            None => Phase::Descend { xy: (pos.x, pos.y) },
-                        };
-                    }
-                    match self.phase {
-                        Phase::LandApproach { z } => {
-                            let (n, e) = xy.unwrap_or((pos.x, pos.y));
-                            let goal = Ned::new(n, e, z);
-                            if (goal - pos).xy().norm() <= p.acc_rad_m.min(1.0) {
-                                self.phase = Phase::Descend { xy: (n, e) };
-                                continue;
-                            }
-                            return self.goto(goal, cruise, p.up_m_s, p.down_m_s, heading_to(&pos, &goal));
-                        }
-                        Phase::Descend { xy } => {
-                            // A land item is reached when the land detector says landed (mission_block.cpp
-                            // l. 101-103), not at touchdown.
-                            if ctx.landed {
-                                self.advance(ev);
-                                self.hold = pos;
-                                continue;
-                            }
-                            return self.descend(ctx, xy);
-                        }
-                        _ => return self.hold_sp(ctx),
-                    }
-                }
-            }
-        }
-        self.hold_sp(ctx)
-    }
 }
 
 impl Default for Navigator {
@@ -539,6 +400,9 @@ impl Default for Navigator {
         Self::new()
     }
 }
+
+#[path = "nav_mission.rs"]
+mod mission;
 
 #[cfg(test)]
 #[path = "navigator_tests.rs"]

@@ -293,6 +293,29 @@ struct Runner {
     lockstep: Option<Duration>,
 }
 
+/// Reads the transport in its own task, so the simulation loop polls a channel instead of blocking on the socket.
+fn spawn_receiver<T: Transport>(
+    transport: std::sync::Arc<T>,
+) -> (JoinHandle<()>, mpsc::Receiver<(MavHeader, MavMessage)>) {
+    let (in_tx, in_rx) = mpsc::channel::<(MavHeader, MavMessage)>(1024);
+    let receiver = tokio::spawn(async move {
+        loop {
+            match transport.recv().await {
+                Ok(msgs) => {
+                    for m in msgs {
+                        if in_tx.send(m).await.is_err() {
+                            return;
+                        }
+                    }
+                }
+                // ICMP errors, TCP peer gone: back off instead of spinning.
+                Err(_) => tokio::time::sleep(Duration::from_millis(20)).await,
+            }
+        }
+    });
+    (receiver, in_rx)
+}
+
 /// What ended a lockstep wait.
 enum Waited {
     Answered,
@@ -308,23 +331,7 @@ impl Runner {
         state: watch::Sender<VehicleState>,
     ) {
         let transport = std::sync::Arc::new(transport);
-        let (in_tx, mut in_rx) = mpsc::channel::<(MavHeader, MavMessage)>(1024);
-        let rx_transport = transport.clone();
-        let receiver = tokio::spawn(async move {
-            loop {
-                match rx_transport.recv().await {
-                    Ok(msgs) => {
-                        for m in msgs {
-                            if in_tx.send(m).await.is_err() {
-                                return;
-                            }
-                        }
-                    }
-                    // ICMP errors, TCP peer gone: back off instead of spinning.
-                    Err(_) => tokio::time::sleep(Duration::from_millis(20)).await,
-                }
-            }
-        });
+        let (receiver, mut in_rx) = spawn_receiver(transport.clone());
         let mut pacer = Pacer::new(self.speed, self.step, Instant::now());
         let mut reboot_pending = self.link.faults().reboot_after;
         loop {
@@ -348,20 +355,7 @@ impl Runner {
                 continue;
             }
             let target = pacer.sim_target(Instant::now());
-            let mut n = 0;
-            while n < MAX_BATCH
-                && target.is_none_or(|t| self.vehicle.now() + self.step <= t)
-                && !(self.lockstep.is_some() && self.vehicle.lockstep_blocked())
-            {
-                self.vehicle.step(self.step);
-                n += 1;
-                if let Some(at) = reboot_pending.filter(|at| self.vehicle.now() >= *at) {
-                    reboot_pending = None;
-                    self.vehicle.reboot();
-                    self.link.kill_until(at + REBOOT_DOWNTIME);
-                }
-                self.deliver(&*transport).await;
-            }
+            self.run_batch(&*transport, target, &mut reboot_pending).await;
             state.send_replace(self.vehicle.state());
             if self.lockstep.is_some() && self.vehicle.lockstep_blocked() {
                 continue;
@@ -382,6 +376,30 @@ impl Runner {
             }
         }
         receiver.abort();
+    }
+
+    /// Runs up to [`MAX_BATCH`] steps, as far as the pacer's `target` (`None`: unpaced) allows and until a
+    /// lockstep wait, rebooting the vehicle when the fault is due.
+    async fn run_batch<T: Transport>(
+        &mut self,
+        transport: &T,
+        target: Option<Duration>,
+        reboot_pending: &mut Option<Duration>,
+    ) {
+        let mut n = 0;
+        while n < MAX_BATCH
+            && target.is_none_or(|t| self.vehicle.now() + self.step <= t)
+            && !(self.lockstep.is_some() && self.vehicle.lockstep_blocked())
+        {
+            self.vehicle.step(self.step);
+            n += 1;
+            if let Some(at) = reboot_pending.filter(|at| self.vehicle.now() >= *at) {
+                *reboot_pending = None;
+                self.vehicle.reboot();
+                self.link.kill_until(at + REBOOT_DOWNTIME);
+            }
+            self.deliver(transport).await;
+        }
     }
 
     /// Simulated time stands still until the companion answers, the wall-time bound passes or the mock stops.

@@ -110,7 +110,7 @@ fn mirror(req: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> TRAJECTORY_REPRESEN
     a
 }
 
-/// Today's companion during the land descent: a position setpoint at height `z` (NED) over the land point.
+/// A companion that answers the land descent with a position setpoint at height `z` (NED) over the land point.
 fn holding_at(
     z: f32,
 ) -> impl FnMut(&TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {

@@ -27,8 +27,8 @@ pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Res
 /// tried again every 200 ms within the heartbeat wait (as wall seconds) or until cancelled; any other error is
 /// final. The port: a campaign flies a vehicle's next test on the same `udpin` address as soon as the last one
 /// ends. A finished flight closes its socket before returning (`Link::close`); a flight that ended early (no
-/// heartbeat) or another process may still hold it for a moment. (PX4 SITL campaigns on 2 instances lost both
-/// vehicles to `AddrInUse`, at their 2nd flight in one campaign and their 6th in another.)
+/// heartbeat) or another process may still hold it for a moment; without the retry, a campaign on 2 PX4 SITL
+/// instances loses its vehicles to `AddrInUse` within a few flights.
 async fn open_with_retry(
     address: &str,
     opts: &FlyOptions,

@@ -129,7 +129,7 @@ pub enum BridgeError {
 }
 
 /// The readiness wait's floor in wall seconds: at 100x a 60 s budget is 0.6 s of wall time, which a busy
-/// machine can spend before the bridge runs at all (seen in CI with four campaigns on 2 cores).
+/// machine (four campaigns on 2 cores) can spend before the bridge runs at all.
 pub const MIN_READY_WALL_S: f64 = 5.0;
 
 impl FlyOptions {

@@ -13,7 +13,7 @@ fn land(n: u32) -> (f64, f64) {
 
 #[test]
 fn missions_land_within_5_cm_of_the_published_coordinates() {
-    // competition.md section 2.
+    // The published coordinates: docs/formats.md, "Frames".
     let expected = [
         (1, (3.30, 53.09)),
         (2, (-12.36, 0.13)),

@@ -1,4 +1,4 @@
-//! Issue 11 on the mock: the bridge waits for a vehicle that is still settling after boot, refuses a mission
+//! On the mock: the bridge waits for a vehicle that is still settling after boot, refuses a mission
 //! the vehicle's navigator rejects before arming (with the vehicle's own words), and says at once when the
 //! vehicle's clock disagrees with the time scale. Assertions go through the report's JSON, as users read it.
 
@@ -95,8 +95,8 @@ async fn a_mission_the_navigator_rejects_is_never_armed_into() {
     m.shutdown().await.expect("mock stops");
     assert_eq!(json["status"], "rejected");
     let reason = json["reason"].as_str().unwrap_or("");
-    // The bridge's own MIS_DIST_1WP check (frame placement) now refuses first, before anything is uploaded;
-    // PX4's navigator wording is the fallback when the vehicle refuses by itself.
+    // The bridge's own MIS_DIST_1WP check (frame placement) refuses before anything is uploaded; PX4's
+    // navigator wording is accepted too, for a vehicle that refuses by itself.
     assert!(
         (reason.contains("First waypoint too far away") && reason.contains("900 max"))
             || (reason.contains("MIS_DIST_1WP") && reason.contains("--anchor-at-vehicle-home")),

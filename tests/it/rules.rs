@@ -1,4 +1,4 @@
-//! Every rule of competition.md section 3, each broken on its own.
+//! Every rule of docs/formats.md, "Rules for a valid test", each broken on its own.
 
 use prgenuav::model::{Arena, Obstacle};
 use prgenuav::rules::check_obstacles;

@@ -124,7 +124,7 @@ async fn params_commands_and_requests_like_px4() {
         .await
         .is_some()
     );
-    // 100 Hz now: count over 0.5 s wall at speed 1.
+    // At the 100 Hz just set: count over 0.5 s wall at speed 1.
     let mut n = 0;
     gcs.wait(Duration::from_millis(500), |r| {
         n += usize::from(matches!(r, MavMessage::LOCAL_POSITION_NED(_)));

@@ -212,7 +212,7 @@ mod tests {
             e.push(t0 + Duration::from_millis(u64::from(i) * 10), 5_000 + i * 100);
         }
         assert!((e.rate().unwrap() - 10.0).abs() < 1e-9);
-        // Now 1x: the window forgets the old rate.
+        // Then 1x: the window forgets the 10x rate.
         let t1 = t0 + Duration::from_millis(7000);
         for i in 0..700u32 {
             e.push(t1 + Duration::from_millis(u64::from(i) * 10), 75_000 + i * 10);

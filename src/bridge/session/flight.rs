@@ -80,6 +80,20 @@ fn flight_time(s: &Session<'_>, clock: &VehicleClock, start: Duration, now: Dura
     reported.max(clock.wall(scaled))
 }
 
+/// What [`follow`] keeps between its rounds to judge whether the flight has ended.
+struct Ends {
+    /// Vehicle time the flight started.
+    start: Duration,
+    /// The test's time limit.
+    timeout: Duration,
+    /// Silence (vehicle time) that means a lost link.
+    loss: Duration,
+    /// The vehicle has been seen armed.
+    was_armed: bool,
+    /// The vehicle's `time_boot_ms` at the start, once a position brought it.
+    start_boot_ms: Option<u32>,
+}
+
 /// Follows the flight to its end.
 pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     let clock = s.link.clock();
@@ -87,33 +101,20 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     let start = clock.now();
     // Setup took its time; silence is measured from here.
     s.view.last_heard = Some(start);
-    let timeout = secs(s.opts.timeout_s);
-    let loss = secs(s.opts.link_loss_s);
+    let mut ends = Ends {
+        start,
+        timeout: secs(s.opts.timeout_s),
+        loss: secs(s.opts.link_loss_s),
+        was_armed: false,
+        start_boot_ms: s.view.pose.map(|p| p.time_boot_ms),
+    };
     let mut plan = schedule(&s.test.commands, &mut s.warnings);
     let mut progress = if s.opts.mode == FlyMode::Offboard {
-        let acc = s
-            .test
-            .params
-            .iter()
-            .find(|p| p.name == "NAV_ACC_RAD")
-            .map_or(1.0, |p| p.value.clamp(0.5, 1.0));
-        // The mission's goals are in the test's frame; the pilot flies in the vehicle's.
-        let goals = offboard::goals(&s.test.mission);
-        let goals = match s.frame {
-            Some(f) => goals.into_iter().map(|g| f.to_vehicle(g)).collect(),
-            None => goals,
-        };
-        let pilot = Pilot::new(goals, acc);
-        let steer = steer_for(s.test, s.opts, s.frame, s.mpc_xy_cruise_m_s);
-        let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer);
-        s.tasks.push(task);
-        Some(rx)
+        Some(start_pilot(s))
     } else {
         None
     };
     let mut landing_sent = false;
-    let mut was_armed = false;
-    let mut start_boot_ms = s.view.pose.map(|p| p.time_boot_ms);
     loop {
         let now = clock.now();
         while plan.front().is_some_and(|(at, _)| start + *at <= now) {
@@ -122,38 +123,7 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
                 return end(s, stop).await;
             }
         }
-        was_armed |= s.view.armed;
-        start_boot_ms = start_boot_ms.or(s.view.pose.map(|p| p.time_boot_ms));
-        if s.view.rebooted {
-            return end(s, Stop::new(Status::LinkLost, "the autopilot rebooted mid-flight")).await;
-        }
-        if link_lost(s.view.silent_for(now), loss, &clock, s.opts.lockstep.is_some()) {
-            let why = format!(
-                "no message from the vehicle for {:.1} s (and at least {} s of wall time)",
-                loss.as_secs_f64(),
-                MIN_WALL_SILENCE.as_secs()
-            );
-            return end(s, Stop::new(Status::LinkLost, why)).await;
-        }
-        if s.view.landed_after_flight() {
-            return Stop::new(Status::Landed, "landed and disarmed");
-        }
-        if was_armed && !s.view.armed && !s.view.took_off {
-            let why = s
-                .view
-                .warnings
-                .last()
-                .cloned()
-                .unwrap_or_else(|| "no reason given".into());
-            return Stop::new(
-                Status::Rejected,
-                format!("the vehicle disarmed before taking off: {why}"),
-            );
-        }
-        if flight_time(s, &clock, start, now, start_boot_ms) > timeout {
-            let why = format!("still flying after {} s", s.opts.timeout_s);
-            let stop = end(s, Stop::new(Status::Timeout, why)).await;
-            see_it_land(s, rec).await;
+        if let Some(stop) = ends.check(s, rec, &clock, now).await {
             return stop;
         }
         if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
@@ -180,6 +150,75 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             },
             _ = tokio::time::sleep(clock.wall(TICK)) => {}
         }
+    }
+}
+
+/// Starts the offboard pilot over the mission's goals; its progress says when to switch modes and land.
+fn start_pilot(s: &mut Session<'_>) -> watch::Receiver<Progress> {
+    let acc = s
+        .test
+        .params
+        .iter()
+        .find(|p| p.name == "NAV_ACC_RAD")
+        .map_or(1.0, |p| p.value.clamp(0.5, 1.0));
+    // The mission's goals are in the test's frame; the pilot flies in the vehicle's.
+    let goals = offboard::goals(&s.test.mission);
+    let goals = match s.frame {
+        Some(f) => goals.into_iter().map(|g| f.to_vehicle(g)).collect(),
+        None => goals,
+    };
+    let pilot = Pilot::new(goals, acc);
+    let steer = steer_for(s.test, s.opts, s.frame, s.mpc_xy_cruise_m_s);
+    let (task, rx) = offboard::spawn(s.link.clone(), s.target, pilot, steer);
+    s.tasks.push(task);
+    rx
+}
+
+impl Ends {
+    /// How the flight ended at vehicle time `now`, if it has: reboot, silence, landing, a disarm before
+    /// takeoff or the time limit. An abnormal end has been answered with LAND already.
+    async fn check(
+        &mut self,
+        s: &mut Session<'_>,
+        rec: &mut Recorder,
+        clock: &VehicleClock,
+        now: Duration,
+    ) -> Option<Stop> {
+        self.was_armed |= s.view.armed;
+        self.start_boot_ms = self.start_boot_ms.or(s.view.pose.map(|p| p.time_boot_ms));
+        if s.view.rebooted {
+            return Some(end(s, Stop::new(Status::LinkLost, "the autopilot rebooted mid-flight")).await);
+        }
+        if link_lost(s.view.silent_for(now), self.loss, clock, s.opts.lockstep.is_some()) {
+            let why = format!(
+                "no message from the vehicle for {:.1} s (and at least {} s of wall time)",
+                self.loss.as_secs_f64(),
+                MIN_WALL_SILENCE.as_secs()
+            );
+            return Some(end(s, Stop::new(Status::LinkLost, why)).await);
+        }
+        if s.view.landed_after_flight() {
+            return Some(Stop::new(Status::Landed, "landed and disarmed"));
+        }
+        if self.was_armed && !s.view.armed && !s.view.took_off {
+            let why = s
+                .view
+                .warnings
+                .last()
+                .cloned()
+                .unwrap_or_else(|| "no reason given".into());
+            return Some(Stop::new(
+                Status::Rejected,
+                format!("the vehicle disarmed before taking off: {why}"),
+            ));
+        }
+        if flight_time(s, clock, self.start, now, self.start_boot_ms) > self.timeout {
+            let why = format!("still flying after {} s", s.opts.timeout_s);
+            let stop = end(s, Stop::new(Status::Timeout, why)).await;
+            see_it_land(s, rec).await;
+            return Some(stop);
+        }
+        None
     }
 }
 

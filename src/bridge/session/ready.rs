@@ -17,7 +17,7 @@ use super::context::{Session, Stop};
 use super::report::Status;
 use super::schedule::{Action, schedule};
 use crate::bridge::options::FlyMode;
-use crate::bridge::wire::clock::secs;
+use crate::bridge::wire::clock::{VehicleClock, secs};
 use crate::bridge::wire::exchange::ProtocolError;
 use crate::bridge::wire::notices;
 use crate::bridge::wire::notices::{Notice, last_texts, tell, texts_since};
@@ -153,23 +153,8 @@ pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), 
                 (false, _) => break,
                 (true, None) => {
                     switched = Some((now, st.unhealthy()));
-                    if st.px4_mode != (PX4_MAIN_AUTO, PX4_SUB_MISSION) {
-                        let mode = [
-                            1.0,
-                            f32::from(PX4_MAIN_AUTO),
-                            f32::from(PX4_SUB_MISSION),
-                            0.0,
-                            0.0,
-                            0.0,
-                            0.0,
-                        ];
-                        if let Err(e) = s.command(MavCmd::MAV_CMD_DO_SET_MODE, mode).await {
-                            if e == ProtocolError::Cancelled {
-                                return Err(Stop::new(Status::Aborted, "cancelled while waiting for the vehicle"));
-                            }
-                            s.warnings.push(format!("switching to AUTO.MISSION before arming: {e}"));
-                            break;
-                        }
+                    if st.px4_mode != (PX4_MAIN_AUTO, PX4_SUB_MISSION) && !switch_to_mission(s).await? {
+                        break;
                     }
                     continue;
                 }
@@ -179,33 +164,12 @@ pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), 
         if let Some((at, health)) = switched {
             match mission_verdict(st, at, health, s.ready.mission_uploaded_at, now) {
                 Verdict::Ready => break,
-                Verdict::Refused => {
-                    let said = texts_since(&s.messages, first_message)
-                        .or_else(|| last_texts(&s.messages, 3))
-                        .unwrap_or_else(|| "no reason given".into());
-                    return Err(Stop::new(
-                        Status::Rejected,
-                        format!(
-                            "the vehicle refuses this mission (its pre-arm check passes in Hold but fails in AUTO.MISSION): {said}"
-                        ),
-                    ));
-                }
+                Verdict::Refused => return Err(mission_refused(s, first_message)),
                 Verdict::Wait => {}
             }
         }
         if now >= deadline {
-            let said = last_texts(&s.messages, 3).unwrap_or_else(|| "no reason given".into());
-            return Err(Stop::new(
-                Status::Rejected,
-                format!(
-                    "not ready to arm within {budget_s:.0} s (missing: {}); vehicle: {said}",
-                    if missing.is_empty() {
-                        "PX4's pre-arm checks in AUTO.MISSION".into()
-                    } else {
-                        missing.join(", ")
-                    }
-                ),
-            ));
+            return Err(not_ready(s, budget_s, &missing));
         }
         if !missing.is_empty()
             && told
@@ -223,22 +187,84 @@ pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), 
             told = Some((now, missing));
         }
         let wait = clock.wall_until(deadline).min(clock.wall(Duration::from_millis(200)));
-        tokio::select! {
-            biased;
-            _ = s.cancel.cancelled() => return Err(Stop::new(Status::Aborted, "cancelled while waiting for the vehicle")),
-            r = s.rx.recv() => match r {
-                Ok(inb) => {
-                    let t = clock.now();
-                    st.update(&inb.msg, t);
-                    s.view.update(&inb.msg, t);
-                }
-                Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wait).await,
-            },
-            _ = tokio::time::sleep(wait) => {}
-        }
+        next_message(s, st, &clock, wait).await?;
     }
     s.ready.waited_s = Some(clock.now().saturating_sub(start).as_secs_f64());
+    Ok(())
+}
+
+/// Switches to AUTO.MISSION while disarmed, so the pre-arm bit covers the mission. False: the switch failed
+/// (warned), and arming goes ahead without the vehicle's verdict on the mission.
+async fn switch_to_mission(s: &mut Session<'_>) -> Result<bool, Stop> {
+    let mode = [
+        1.0,
+        f32::from(PX4_MAIN_AUTO),
+        f32::from(PX4_SUB_MISSION),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ];
+    match s.command(MavCmd::MAV_CMD_DO_SET_MODE, mode).await {
+        Ok(()) => Ok(true),
+        Err(ProtocolError::Cancelled) => Err(Stop::new(Status::Aborted, "cancelled while waiting for the vehicle")),
+        Err(e) => {
+            s.warnings.push(format!("switching to AUTO.MISSION before arming: {e}"));
+            Ok(false)
+        }
+    }
+}
+
+/// The stop for a mission the vehicle refuses, quoting what it said since the wait began.
+fn mission_refused(s: &Session<'_>, first_message: usize) -> Stop {
+    let said = texts_since(&s.messages, first_message)
+        .or_else(|| last_texts(&s.messages, 3))
+        .unwrap_or_else(|| "no reason given".into());
+    Stop::new(
+        Status::Rejected,
+        format!(
+            "the vehicle refuses this mission (its pre-arm check passes in Hold but fails in AUTO.MISSION): {said}"
+        ),
+    )
+}
+
+/// The stop for a vehicle not ready within the budget, with what is still missing.
+fn not_ready(s: &Session<'_>, budget_s: f64, missing: &[&str]) -> Stop {
+    let said = last_texts(&s.messages, 3).unwrap_or_else(|| "no reason given".into());
+    Stop::new(
+        Status::Rejected,
+        format!(
+            "not ready to arm within {budget_s:.0} s (missing: {}); vehicle: {said}",
+            if missing.is_empty() {
+                "PX4's pre-arm checks in AUTO.MISSION".into()
+            } else {
+                missing.join(", ")
+            }
+        ),
+    )
+}
+
+/// Folds in the next message, or returns after `wait` (wall time) without one; Ctrl-C aborts.
+async fn next_message(
+    s: &mut Session<'_>,
+    st: &mut ReadyState,
+    clock: &VehicleClock,
+    wait: Duration,
+) -> Result<(), Stop> {
+    tokio::select! {
+        biased;
+        _ = s.cancel.cancelled() => return Err(Stop::new(Status::Aborted, "cancelled while waiting for the vehicle")),
+        r = s.rx.recv() => match r {
+            Ok(inb) => {
+                let t = clock.now();
+                st.update(&inb.msg, t);
+                s.view.update(&inb.msg, t);
+            }
+            Err(broadcast::error::RecvError::Lagged(_)) => {}
+            Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wait).await,
+        },
+        _ = tokio::time::sleep(wait) => {}
+    }
     Ok(())
 }
 

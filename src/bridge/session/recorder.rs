@@ -5,8 +5,8 @@
 //!
 //! The recording starts [`GROUND_LEAD_S`] before liftoff, as PX4's log (Aerialist's source) starts at arming.
 //! Anchoring it at a vehicle event rather than at the first position after setup makes the judge's 0.5 s bins,
-//! and so the competition distance, repeatable: setup takes a varying wall (and so vehicle) time, which moved
-//! the bins' phase and a flight's score by millimetres between identical runs on the lockstep mock.
+//! and so the competition distance, repeatable: setup takes a varying wall (and so vehicle) time, which would
+//! shift the bins' phase and a flight's score by millimetres between identical runs on the lockstep mock.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};

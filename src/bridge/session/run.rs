@@ -3,13 +3,14 @@
 //! [`super::flight`] and finally restore what was changed. Vehicle refusals end in a report, not an error.
 #![allow(deprecated)]
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use mavlink::dialects::common::{HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType};
 use tokio::sync::broadcast;
 
-use super::context::{Readiness, Session};
+use super::clock_watch::ClockReport;
+use super::context::{Readiness, Session, Stop};
 use super::flight;
 use super::recorder::Recorder;
 use super::report::{Ending, FlightReport, Status};
@@ -29,10 +30,37 @@ pub async fn run(
     transport: Arc<dyn Transport>,
     cancel: CancelToken,
 ) -> Result<FlightReport, BridgeError> {
-    let recorder = Recorder::create(opts.trajectory_csv.as_deref()).map_err(|source| BridgeError::Trajectory {
+    let mut recorder = Recorder::create(opts.trajectory_csv.as_deref()).map_err(|source| BridgeError::Trajectory {
         path: opts.trajectory_csv.clone().unwrap_or_default(),
         source,
     })?;
+    // The test re-anchored at the vehicle's home, if asked (it must outlive the session that borrows it).
+    let anchored = std::sync::OnceLock::new();
+    let (mut s, clock_report) = connect(test, opts, transport, cancel).await?;
+    s.ready.started = Some(s.link.clock().now());
+    let stop = match s.place(&anchored).await {
+        Ok(()) => match s.prepare().await {
+            Ok(()) => flight::follow(&mut s, &mut recorder).await,
+            Err(stop) => stop,
+        },
+        Err(stop) => stop,
+    };
+    s.restore_params().await;
+    // Let go of the link before reporting: its tasks end, then its receive task (see `Link::close`).
+    s.tasks.shutdown().await;
+    s.link.close().await;
+    let clock = clock_report.lock().map(|c| c.clone()).ok();
+    Ok(report(s, stop, recorder, clock))
+}
+
+/// Opens the link, waits for the vehicle and locks onto it, and starts the session's background tasks (our
+/// heartbeat, the clock watch, the vehicle's texts); returns the session and the clock watch's report.
+async fn connect<'a>(
+    test: &'a TestCase,
+    opts: &'a FlyOptions,
+    transport: Arc<dyn Transport>,
+    cancel: CancelToken,
+) -> Result<(Session<'a>, Arc<Mutex<ClockReport>>), BridgeError> {
     let clock = VehicleClock::new(opts.time_scale);
     let link = Arc::new(Link::new(transport, clock));
     let mut tasks = Tasks::default();
@@ -42,8 +70,6 @@ pub async fn run(
     let texts_rx = link.subscribe();
     let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
-    // The test re-anchored at the vehicle's home, if asked (it must outlive the session that borrows it).
-    let anchored = std::sync::OnceLock::new();
     let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
     let messages = crate::bridge::wire::notices::Messages::default();
     tasks.push(crate::bridge::wire::notices::spawn_collector(
@@ -52,7 +78,7 @@ pub async fn run(
         messages.clone(),
         opts.notices.clone(),
     ));
-    let mut s = Session {
+    let s = Session {
         link,
         target,
         opts,
@@ -71,19 +97,11 @@ pub async fn run(
         mpc_xy_cruise_m_s: None,
         ready: Readiness::default(),
     };
-    let mut recorder = recorder;
-    s.ready.started = Some(s.link.clock().now());
-    let stop = match s.place(&anchored).await {
-        Ok(()) => match s.prepare().await {
-            Ok(()) => flight::follow(&mut s, &mut recorder).await,
-            Err(stop) => stop,
-        },
-        Err(stop) => stop,
-    };
-    s.restore_params().await;
-    // Let go of the link before reporting: its tasks end, then its receive task (see `Link::close`).
-    s.tasks.shutdown().await;
-    s.link.close().await;
+    Ok((s, clock_report))
+}
+
+/// The report of a finished session: the recording judged, with every warning and how the flight ended.
+fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<ClockReport>) -> FlightReport {
     let trajectory = recorder.finish();
     if let Some(e) = recorder.write_error() {
         s.warnings.push(format!("trajectory CSV incomplete: {e}"));
@@ -103,8 +121,8 @@ pub async fn run(
     }
     let reason = (stop.status != Status::Landed).then_some(reason);
     let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
-    let clock = clock_report.lock().map(|c| c.clone()).ok();
-    Ok(FlightReport::judge(
+    let opts = s.opts;
+    FlightReport::judge(
         trajectory,
         &s.test.obstacles,
         Ending {
@@ -124,7 +142,7 @@ pub async fn run(
             companion_timing: s.companion.timing.report(),
             planner_cruise_m_s: s.mpc_xy_cruise_m_s,
         },
-    ))
+    )
 }
 
 /// Our ground-station heartbeat at 1 Hz (vehicle time) for the whole session.
