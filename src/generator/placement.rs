@@ -3,7 +3,7 @@
 use rand::Rng;
 
 use super::adaptive::{DIMS, PAPER_DIMS, Proposal, SPLIT, THIRD, THIRD_AHEAD, THIRD_FROM};
-use super::config::GeneratorConfig;
+use super::config::{Family, GeneratorConfig};
 use super::soi::{Soi, SoiKind};
 use crate::geometry::{P2, V2};
 use crate::model::{Arena, Obstacle};
@@ -81,19 +81,6 @@ pub fn canonical_mirror(soi: &Soi, arena: &Arena) -> (Mirror, Side) {
     // One reflection turns the world's left into the canonical right.
     let x = y ^ (a_side == Side::Right);
     (Mirror { x, y }, a_side)
-}
-
-/// Which construction a generator draws from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Family {
-    /// The paper's: five draws, `split` fixed, two obstacles.
-    #[default]
-    Paper,
-    /// The split drawn too (`adapted_split`), and a third obstacle (`third_ahead_m`) where its draw and the
-    /// case allow. Opt-in: on the embedded mock it found fewer failures (mission 2, seeds 0-2, adapted
-    /// campaign: 25 against 42 for the paper's family).
-    Extended,
 }
 
 /// The numbers drawn for one test, and where the SoI crosses obstacle 1.

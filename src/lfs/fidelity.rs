@@ -17,10 +17,7 @@ use super::ensemble::{Ensemble, EnsembleError, EnsembleParams, run_ensemble};
 use super::sim::{SimConfig, Status, simulate_parts};
 use crate::model::{GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, Param, Position, SIM_HOME, Size};
 
-/// "Below 1.5 m" is a soft failure in the competition.
-pub const FAIL_BELOW_M: f64 = 1.5;
-/// Half the vehicle width Aerialist subtracts since October 2024 (tier B).
-pub const HALF_VEHICLE_WIDTH_M: f64 = 0.125;
+pub use crate::model::competition::{FAIL_BELOW_M, HALF_VEHICLE_WIDTH_M};
 /// Box height used where a flight did not record it (above the 10 m flight altitude, as the rules require).
 pub const DEFAULT_HEIGHT_M: f64 = 15.0;
 

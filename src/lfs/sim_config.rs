@@ -96,7 +96,7 @@ impl Default for SimConfig {
             planner: PlannerParams::default(),
             mission: None,
             dt_s: 0.1,
-            timeout_s: 500.0,
+            timeout_s: crate::model::competition::SIMULATION_TIMEOUT_S,
             stuck_s: 20.0,
             progress_m: 1.0,
             judge: Judge::default(),

@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use num_traits::FromPrimitive;
 use serde_json::Value;
 
-use super::error::{ModelError, Result, read_text};
+use super::error::{ModelError, Result};
+use super::files::read_text;
 use super::geo::{GeoPoint, LocalProjection};
 
 /// MAV_CMD_NAV_WAYPOINT.
