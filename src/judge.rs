@@ -1,4 +1,4 @@
-//! How the competition judges a flight (competition.md section 4): minimum distance to the obstacles,
+//! How the competition judges a flight (`docs/formats.md`, judging and scoring): minimum distance to the obstacles,
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
 pub mod edition;

@@ -7,9 +7,9 @@ use super::attitude::TiltParams;
 use super::camera::Camera;
 use super::mission::MissionParams;
 use super::motion::{PaperParams, Px4Params};
-use super::params::PlannerParams;
 use crate::judge::{FlightDistance, Judge};
 use crate::model::{Param, Trajectory};
+use prgenuav_planner::params::PlannerParams;
 
 /// Which motion model moves the vehicle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,7 +112,7 @@ pub enum SimError {
     EmptyMission,
     /// Planner parameters are invalid.
     #[error(transparent)]
-    Planner(#[from] super::LfsError),
+    Planner(#[from] prgenuav_planner::PlannerError),
     /// A setting is out of range.
     #[error("invalid simulation setting {0}")]
     Setting(&'static str),

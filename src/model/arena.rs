@@ -28,7 +28,8 @@ impl Range {
     }
 }
 
-/// The competition's arena and rules (`docs/formats.md`, rules; the values are [`Arena::COMPETITION`]), in the local frame (`x` North, `y` East).
+/// The competition's arena and rules (`docs/formats.md`, rules; the values are [`Arena::COMPETITION`]), in the
+/// local frame (`x` North, `y` East).
 ///
 /// The footprint of every obstacle must lie strictly inside `x` x `y` (the ODA). "Bottom" and "top" of the
 /// arena are its `y` borders (`y.min`, `y.max`), "left" and "right" its `x` borders.

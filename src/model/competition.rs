@@ -53,6 +53,19 @@ pub const FLIGHT_ALTITUDE_M: f64 = 10.0;
 /// Most obstacles in one test (`docs/formats.md`, rules; fewer score more).
 pub const MAX_OBSTACLES: usize = 3;
 
+/// The vehicle parameters every case study sets before the flight (`mission-params.csv`, `docs/formats.md`,
+/// files): PX4 parameter name and value.
+pub const MISSION_PARAMS: [(&str, f64); 8] = [
+    ("NAV_ACC_RAD", 0.5),
+    ("NAV_MC_ALT_RAD", 0.5),
+    ("NAV_RCL_ACT", 3.0),
+    ("NAV_DLL_ACT", 0.0),
+    ("MIS_YAW_ERR", 12.0),
+    ("MIS_TAKEOFF_ALT", 1.0),
+    ("MPC_YAW_MODE", 0.0),
+    ("SDLOG_PROFILE", 7.0),
+];
+
 /// Wall-clock limit of one simulation in the competition's protocol, seconds (`docs/formats.md`, scoring).
 pub const SIMULATION_TIMEOUT_S: f64 = 500.0;
 
