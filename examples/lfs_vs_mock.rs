@@ -15,7 +15,8 @@ use prgenuav::lfs::sim::MotionModel;
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;
 
-const THRESHOLD_M: f64 = 1.5;
+/// The competition's failure distance, metres.
+const THRESHOLD_M: f64 = prgenuav::model::competition::FAIL_BELOW_M;
 
 #[derive(Debug, Clone)]
 struct Row {

@@ -23,7 +23,7 @@ use tokio::sync::Semaphore;
 const SPEED: f64 = 100.0;
 
 async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result<Option<f64>> {
-    // Free-running (no lockstep) runs at the campaign's old 20x.
+    // Without lockstep nothing holds the clock back for the planner, so it runs at a moderate 20x.
     let speed = if latency.is_some() { SPEED } else { 20.0 };
     let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
     let mut test = base.with_obstacles(case.obstacles.clone());

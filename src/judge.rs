@@ -1,4 +1,4 @@
-//! How the competition judges a flight (competition.md section 4): minimum distance to the obstacles,
+//! How the competition judges a flight (`docs/formats.md`, judging and scoring): minimum distance to the obstacles,
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
 pub mod edition;
@@ -8,6 +8,7 @@ use serde::Serialize;
 pub use edition::{Judge, VEHICLE_WIDTH_M};
 
 use crate::geometry::{Footprint, P2};
+use crate::model::competition::{RUN_POINTS, TEST_SCORE_SCALE};
 use crate::model::{AERIALIST_BIN_S, Obstacle, Sample, Trajectory};
 
 /// Distance of a flight to one obstacle, metres.
@@ -183,17 +184,12 @@ fn closest_approach(judge: Judge, obstacles: &[Obstacle], path: &[Sample]) -> Cl
     best
 }
 
-/// The competition's points for one run: 5 below 0.25 m, 2 below 1 m, 1 below 1.5 m, else 0.
+/// The competition's points for one run ([`RUN_POINTS`]: 5 below 0.25 m, 2 below 1 m, 1 below 1.5 m, else 0).
 pub fn points(min_distance: f64) -> u32 {
-    if min_distance < 0.25 {
-        5
-    } else if min_distance < 1.0 {
-        2
-    } else if min_distance < 1.5 {
-        1
-    } else {
-        0
-    }
+    RUN_POINTS
+        .iter()
+        .find(|(below_m, _)| min_distance < *below_m)
+        .map_or(0, |(_, points)| *points)
 }
 
 /// Test score: mean points x 10 / (obstacles^2 x mean flight time in minutes); 0 when undefined.
@@ -206,7 +202,7 @@ pub fn test_score(run_distances: &[f64], run_flight_times_s: &[f64], obstacle_co
     if minutes <= 0.0 {
         return 0.0;
     }
-    mean_points * 10.0 / ((obstacle_count * obstacle_count) as f64 * minutes)
+    mean_points * TEST_SCORE_SCALE / ((obstacle_count * obstacle_count) as f64 * minutes)
 }
 
 /// The competition's diversity of a suite: 1 - mean pairwise IoU of the tests' obstacle footprints;

@@ -1,4 +1,4 @@
-//! The competition's rules for a valid test (competition.md section 3), each violation named by field.
+//! The competition's rules for a valid test (`docs/formats.md`, rules), each violation named by field.
 
 use serde::Serialize;
 use serde_json::{Value, json};

@@ -15,7 +15,7 @@ use crate::model::{ModelError, Obstacle, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
 /// The competition's failure distance, metres.
-pub const FAIL_DISTANCE_M: f64 = 1.5;
+pub const FAIL_DISTANCE_M: f64 = crate::model::competition::FAIL_BELOW_M;
 /// Two failing tests overlapping more than this (IoU) count as one place in [`SuiteSummary::distinct_failing`]:
 /// the campaign's default `--max-iou`, its near-duplicate rule.
 pub const DISTINCT_IOU: f64 = 0.5;

@@ -59,7 +59,7 @@ pub const UNIFORM_FLOOR: f64 = 0.2;
 /// could not fill its share of the budget.
 const BACKOFF: (f64, f64) = (0.3, 0.5);
 /// Below this, a flown test failed.
-const FAIL_M: f64 = 1.5;
+const FAIL_M: f64 = crate::model::competition::FAIL_BELOW_M;
 
 /// Reads `folder/learnt.json` (a previous campaign's), naming the file and the field on error.
 pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {

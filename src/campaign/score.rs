@@ -93,7 +93,7 @@ pub fn score_test(
         test: test_path.to_path_buf(),
         obstacles: test.obstacles.len(),
         score: test_score(&distances, &times, test.obstacles.len()),
-        failed: distances.iter().any(|d| *d < 1.5),
+        failed: distances.iter().any(|d| *d < crate::model::competition::FAIL_BELOW_M),
         runs,
         duplicate_of: None,
     })

@@ -55,8 +55,8 @@ fn padded_rows<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[[f64; BINS]; D
     padded(d, [1.0 / BINS as f64; BINS])
 }
 
-/// Reads one value per draw, 1 to [`DIMS`] of them (a file written before the extended family had its extra
-/// draws holds [`PAPER_DIMS`]); the missing ones are `fill`.
+/// Reads one value per draw, 1 to [`DIMS`] of them (a file of the
+/// paper's family may hold only its [`PAPER_DIMS`]); the missing ones are `fill`.
 pub fn padded<'de, D: serde::Deserializer<'de>, T: Deserialize<'de> + Copy>(
     d: D,
     fill: T,
@@ -234,7 +234,7 @@ mod tests {
         assert!((f.weights[0][0] - (0.9 + 0.01)).abs() < 1e-12, "{:?}", f.weights[0]);
         assert!((f.weights[0][5] - 0.01).abs() < 1e-12);
         assert!(f.mean(0) < 0.2 && f.mean(1) > 0.8);
-        // Draws now land mostly in the elite bin.
+        // After the fit, draws land mostly in the elite bin.
         let low = (0..1000).filter(|i| f.map(0, *i as f64 / 1000.0) < 0.1).count();
         assert!((900..=920).contains(&low), "{low}");
         // No elites, no change.

@@ -8,8 +8,8 @@ mod placement;
 mod soi;
 
 pub use adaptive::{DrawDistribution, Neighbourhood, Proposal};
-pub use config::GeneratorConfig;
-pub use placement::{Draw, Family, Mirror, Side, canonical_mirror, left_of, room};
+pub use config::{Family, GeneratorConfig};
+pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
 pub use soi::{Soi, SoiKind, segment_of_interest};
 
 use rand::SeedableRng;

@@ -3,10 +3,10 @@
 use rand::Rng;
 
 use super::adaptive::{DIMS, PAPER_DIMS, Proposal, SPLIT, THIRD, THIRD_AHEAD, THIRD_FROM};
-use super::config::GeneratorConfig;
+use super::config::{Family, GeneratorConfig};
 use super::soi::{Soi, SoiKind};
 use crate::geometry::{P2, V2};
-use crate::model::{Arena, Obstacle};
+use crate::model::{Arena, Obstacle, Range};
 
 /// Which side of the direction of flight a thing lies on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -83,19 +83,6 @@ pub fn canonical_mirror(soi: &Soi, arena: &Arena) -> (Mirror, Side) {
     (Mirror { x, y }, a_side)
 }
 
-/// Which construction a generator draws from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Family {
-    /// The paper's: five draws, `split` fixed, two obstacles.
-    #[default]
-    Paper,
-    /// The split drawn too (`adapted_split`), and a third obstacle (`third_ahead_m`) where its draw and the
-    /// case allow. Opt-in: on the embedded mock it found fewer failures (mission 2, seeds 0-2, adapted
-    /// campaign: 25 against 42 for the paper's family).
-    Extended,
-}
-
 /// The numbers drawn for one test, and where the SoI crosses obstacle 1.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Draw {
@@ -137,31 +124,8 @@ pub fn draw_test(
     cfg: &GeneratorConfig,
     (family, dist): (Family, &Proposal),
 ) -> Option<(Draw, Vec<Obstacle>)> {
-    let lerp = |r: crate::model::Range, t: f64| r.min + (r.max - r.min) * t;
-    let taken = match family {
-        Family::Paper => PAPER_DIMS,
-        Family::Extended => DIMS,
-    };
-    let mut u = [0.0; DIMS];
-    for x in u.iter_mut().take(taken) {
-        *x = rng.random::<f64>();
-    }
-    for (d, x) in u.iter_mut().enumerate().take(taken) {
-        *x = dist.map(d, *x);
-    }
-    let split = match family {
-        Family::Paper => {
-            // Where the paper's split sits in the extended family's range (for the reports).
-            let r = cfg.adapted_split;
-            u[SPLIT] = if r.max > r.min {
-                ((cfg.split - r.min) / (r.max - r.min)).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            cfg.split
-        }
-        Family::Extended => lerp(cfg.adapted_split, u[SPLIT]),
-    };
+    let mut u = unit_draws(rng, family, dist);
+    let split = split_of(cfg, family, &mut u);
     let w = cfg.width_m;
     // Obstacle 2 (length_factor x obstacle 1) must respect the length rule too.
     let d_max = cfg
@@ -174,24 +138,7 @@ pub fn draw_test(
     // Canonical frame: flown towards +y, A on the left.
     let (s0, s1) = (mirror.point(soi.start, arena), mirror.point(soi.end, arena));
     let d = (s1 - s0).normalize();
-    let crossing = match soi.kind {
-        // The paper: draw y so the diagonal fits between the bottom and top borders, x from the SoI's line.
-        SoiKind::Crossing => {
-            let (lo, hi) = (arena.y.min + diagonal / 2.0, arena.y.max - diagonal / 2.0);
-            if lo > hi {
-                return None;
-            }
-            let y = lo + (hi - lo) * u[1];
-            s0 + (s1 - s0) * ((y - s0.y) / (s1.y - s0.y))
-        }
-        SoiKind::LongestInside => {
-            let len = (s1 - s0).norm();
-            if len < diagonal {
-                return None;
-            }
-            s0 + d * (diagonal / 2.0 + (len - diagonal) * u[1])
-        }
-    };
+    let crossing = soi_crossing(soi.kind, (s0, s1), diagonal, u[1], arena)?;
     // The paper's containment test: split x diagonal fits on the A side, the rest on the B side.
     let left = left_of(d);
     if room(crossing, left, arena) <= split * diagonal || room(crossing, -left, arena) <= (1.0 - split) * diagonal {
@@ -217,17 +164,16 @@ pub fn draw_test(
     let third_ahead_m =
         (family == Family::Extended && u[THIRD] >= THIRD_FROM).then(|| lerp(cfg.third_ahead_m, u[THIRD_AHEAD]));
     if let Some(ahead) = third_ahead_m {
-        // Obstacle 1 mirrored across the SoI, its near face `ahead` beyond the pair's farthest point.
-        let a3 = d * angle.cos() - left * angle.sin();
-        let reach = extent(c1, a, length, w, d).1.max(extent(c2, a2, length2, w, d).1) - crossing.coords.dot(&d);
-        let offset = -a3 * ((0.5 - split) * length);
-        let back = extent(P2::from(offset), a3, length, w, d).0;
-        let t = reach + ahead - back;
-        // The third obstacle must cross the SoI itself: beyond its end the drone would never meet it.
-        if (crossing - s0).dot(&d) + t > (s1 - s0).norm() {
-            return None;
-        }
-        let c3 = crossing + d * t + offset;
+        let pair = Pair {
+            d,
+            left,
+            angle,
+            split,
+            crossing,
+            boxes: [(c1, a, length), (c2, a2, length2)],
+            w,
+        };
+        let (c3, a3) = pair.third(ahead, (s0, s1))?;
         obstacles.push(oriented(
             mirror.point(c3, arena),
             mirror.direction(a3),
@@ -248,6 +194,97 @@ pub fn draw_test(
         unit: u,
     };
     Some((draw, obstacles))
+}
+
+fn lerp(r: Range, t: f64) -> f64 {
+    r.min + (r.max - r.min) * t
+}
+
+/// The family's unit draws (uniform, then mapped through the proposal `dist`); the others stay 0.
+fn unit_draws(rng: &mut impl Rng, family: Family, dist: &Proposal) -> [f64; DIMS] {
+    let taken = match family {
+        Family::Paper => PAPER_DIMS,
+        Family::Extended => DIMS,
+    };
+    let mut u = [0.0; DIMS];
+    for x in u.iter_mut().take(taken) {
+        *x = rng.random::<f64>();
+    }
+    for (d, x) in u.iter_mut().enumerate().take(taken) {
+        *x = dist.map(d, *x);
+    }
+    u
+}
+
+/// The split: the paper's fixed one (recorded in `u[SPLIT]` where it sits in the extended range, for the
+/// reports), or the extended family's draw.
+fn split_of(cfg: &GeneratorConfig, family: Family, u: &mut [f64; DIMS]) -> f64 {
+    match family {
+        Family::Paper => {
+            let r = cfg.adapted_split;
+            u[SPLIT] = if r.max > r.min {
+                ((cfg.split - r.min) / (r.max - r.min)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            cfg.split
+        }
+        Family::Extended => lerp(cfg.adapted_split, u[SPLIT]),
+    }
+}
+
+/// Where obstacle 1's diagonal crosses the canonical SoI `s0 -> s1` for unit draw `u1`; `None` when the
+/// diagonal does not fit.
+fn soi_crossing(kind: SoiKind, (s0, s1): (P2, P2), diagonal: f64, u1: f64, arena: &Arena) -> Option<P2> {
+    match kind {
+        // The paper: draw y so the diagonal fits between the bottom and top borders, x from the SoI's line.
+        SoiKind::Crossing => {
+            let (lo, hi) = (arena.y.min + diagonal / 2.0, arena.y.max - diagonal / 2.0);
+            if lo > hi {
+                return None;
+            }
+            let y = lo + (hi - lo) * u1;
+            Some(s0 + (s1 - s0) * ((y - s0.y) / (s1.y - s0.y)))
+        }
+        SoiKind::LongestInside => {
+            let len = (s1 - s0).norm();
+            if len < diagonal {
+                return None;
+            }
+            let d = (s1 - s0).normalize();
+            Some(s0 + d * (diagonal / 2.0 + (len - diagonal) * u1))
+        }
+    }
+}
+
+/// Obstacles 1 and 2 in the canonical frame: the unit direction of flight `d` and its left, the drawn angle
+/// (radians) and split, the SoI crossing, each box's centre, long axis and length, and the common width (metres).
+struct Pair {
+    d: V2,
+    left: V2,
+    angle: f64,
+    split: f64,
+    crossing: P2,
+    boxes: [(P2, V2, f64); 2],
+    w: f64,
+}
+
+impl Pair {
+    /// Obstacle 1 mirrored across the SoI, its near face `ahead` metres beyond the pair's farthest point: its
+    /// centre and long axis, or `None` when it would not cross the SoI `s0 -> s1` (the drone would never meet it).
+    fn third(&self, ahead: f64, (s0, s1): (P2, P2)) -> Option<(P2, V2)> {
+        let (d, w, split) = (self.d, self.w, self.split);
+        let [(c1, a, length), (c2, a2, length2)] = self.boxes;
+        let a3 = d * self.angle.cos() - self.left * self.angle.sin();
+        let reach = extent(c1, a, length, w, d).1.max(extent(c2, a2, length2, w, d).1) - self.crossing.coords.dot(&d);
+        let offset = -a3 * ((0.5 - split) * length);
+        let back = extent(P2::from(offset), a3, length, w, d).0;
+        let t = reach + ahead - back;
+        if (self.crossing - s0).dot(&d) + t > (s1 - s0).norm() {
+            return None;
+        }
+        Some((self.crossing + d * t + offset, a3))
+    }
 }
 
 /// The smallest and largest projection on `d` of the rectangle centred at `c` with its `long` side along unit

@@ -14,8 +14,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-/// Aerialist's `VEHICLE_WIDTH`, metres: the 2026 edition buffers the path by half of it.
-pub const VEHICLE_WIDTH_M: f64 = 0.25;
+use crate::model::competition::HALF_VEHICLE_WIDTH_M;
+pub use crate::model::competition::VEHICLE_WIDTH_M;
 
 /// Which edition's definition judges a flight.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -63,7 +63,7 @@ impl Judge {
                 Some(z) if z > box_h => z - box_h,
                 _ => 0.0,
             },
-            Judge::E2026 => (d2d - VEHICLE_WIDTH_M / 2.0).max(0.0),
+            Judge::E2026 => (d2d - HALF_VEHICLE_WIDTH_M).max(0.0),
         }
     }
 }

@@ -6,7 +6,7 @@
 //! Model: the vehicle follows the motion model's velocity `v` with a first-order lag of `time_constant_s`
 //! (filtered velocity `v_f`, `v_f' = (v - v_f) / tau`). Its horizontal specific force is the filtered
 //! acceleration plus linear drag, `f = v_f' + drag_per_s * v_f` (ENU, m/s^2). Pitch (radians, positive
-//! nose-down, about body y as in 3dvfh.md section 1.1) is `atan(f . forward / g)`, limited to `max_tilt_deg`;
+//! nose-down, about body y as in docs/planner.md §1.1) is `atan(f . forward / g)`, limited to `max_tilt_deg`;
 //! the lateral part of `f` would roll the vehicle, which the renderer does not model (the vehicles of both
 //! motion models face their direction of travel, so lateral forces are small).
 //!

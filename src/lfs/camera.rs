@@ -1,4 +1,4 @@
-//! The depth-camera model of the competition's Gazebo vehicle (3dvfh.md §10): intrinsics, clip and cutoff
+//! The depth-camera model of the competition's Gazebo vehicle (docs/planner.md §10): intrinsics, clip and cutoff
 //! ranges, mount, and the plugin's pixel-to-point rule.
 //!
 //! Frames: pixel `(i, j)` is column `i` (0 = left) and row `j` (0 = top). The optical frame is x right, y down,
@@ -6,7 +6,7 @@
 
 use nalgebra::Vector3;
 
-use super::fov::Fov;
+use prgenuav_planner::fov::Fov;
 
 /// A pinhole depth camera looking along body +x, level, mounted `mount_forward_m` ahead of the body origin.
 #[derive(Debug, Clone, PartialEq)]
@@ -143,7 +143,7 @@ impl Camera {
         Vector3::new(1.0, -self.tan_x(i), -self.tan_y(j))
     }
 
-    /// The plugin's pixel-to-point rule (3dvfh.md §10): the optical-frame point `(d tan x, d tan y, d)` of a
+    /// The plugin's pixel-to-point rule (docs/planner.md §10): the optical-frame point `(d tan x, d tan y, d)` of a
     /// pixel with depth `d`, or `None` outside the cutoff `(cutoff_min, cutoff_max)` or when `d` is NaN.
     pub fn pixel_to_optical(&self, i: u32, j: u32, depth_m: f32) -> Option<Vector3<f64>> {
         self.optical_from_tans(self.tan_x(i), self.tan_y(j), depth_m)
@@ -231,7 +231,7 @@ mod tests {
         let p = 5f64.to_radians();
         let t = c.with_view_pitch(p);
         assert_eq!(c.with_view_pitch(0.0), c);
-        // At the principal point's old row the ray now looks down by exactly the pitch (body FLU: z up).
+        // On the level camera's principal-point row the pitched ray looks down by exactly the pitch (body FLU: z up).
         let (cx, cy) = c.center_px();
         let f = c.focal_px();
         let down = |cam: &Camera, j: u32| -cam.ray_body(0, j).z.atan();

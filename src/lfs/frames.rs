@@ -1,4 +1,4 @@
-//! Conversions between our local NED frame and the planner's ENU frame (3dvfh.md §1.1, §8.3, §9.1).
+//! Conversions between our local NED frame and the planner's ENU frame (docs/planner.md §1.1, §8.3, §9.1).
 //!
 //! * local NED: x North, y East, z Down (metres); PX4 yaw clockwise from North.
 //! * planner ENU: x East, y North, z Up (metres); ENU yaw counter-clockwise from East.

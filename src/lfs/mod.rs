@@ -1,61 +1,35 @@
-//! Low-fidelity simulator core: a faithful Rust port of the PX4-Avoidance 3DVFH* local planner
-//! (`../shared/docs/3dvfh.md` §3-8) with a pure, clock-free API.
+//! The low-fidelity simulator (LFS): flies a test with a virtual depth camera, the 3DVFH* port of
+//! [`prgenuav_planner`] and a motion model, then judges the flight as the competition does.
 //!
-//! Every position, velocity and direction here is in the planner's **ENU** world frame (x East, y North, z Up,
-//! metres, m/s); [`frames`] converts from and to our local NED. Angles are degrees unless named `_rad`.
+//! - sensing: [`camera`] (intrinsics and mounting), [`render`] (every pixel) and [`render_fast`] (the
+//!   planner's cloud), with the camera tilt of [`attitude`];
+//! - the vehicle: [`mission`] (the plan as the planner's goals), [`motion`] (how the vehicle follows a
+//!   setpoint), [`frames`] (our local NED to the planner's ENU);
+//! - the loop: [`sim`] steps a world tick by tick, configured by [`sim_config`];
+//! - [`eval`]: how well the simulator predicts real flights, and its failure probability from an ensemble.
+//!
+//! The planner's modules are re-exported under their former paths (`lfs::planner`, `lfs::waypoint`, ...), so
+//! callers need not know the crate boundary. Every position, velocity and direction here is in the
+//! planner's **ENU** world frame (x East, y North, z Up, metres, m/s); [`frames`] converts from and to our
+//! local NED. Angles are degrees unless named `_rad`.
 
 pub mod attitude;
-pub mod calibration;
 pub mod camera;
-pub mod cloud;
-pub mod cost;
-pub mod cv;
-pub mod ensemble;
-pub mod fidelity;
-pub mod fov;
-pub mod fov_estimate;
+pub mod eval;
 pub mod frames;
-pub mod histogram;
 pub mod mission;
 pub mod motion;
-pub mod params;
-pub mod planner;
-pub mod polar;
-pub mod px4_flights;
 pub mod render;
 pub mod render_fast;
-pub mod select;
 pub mod sim;
 pub mod sim_config;
-pub mod smoothing;
-pub mod tree;
-pub mod waypoint;
 
 #[cfg(test)]
-mod equivalence_tests;
-#[cfg(test)]
-mod reference;
+mod fov_takeoff_tests;
 
-pub use fov::Fov;
-pub use params::{CostParams, PlannerParams};
-
-/// Errors of the planner API (bad input, never a panic).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum LfsError {
-    /// A parameter is out of range or not finite.
-    #[error("invalid planner parameter {name} = {value}")]
-    InvalidParam {
-        /// Parameter name as in [`PlannerParams`].
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-    },
-    /// An input value (pose, goal, time) is not finite or not usable.
-    #[error("invalid planner input {name}: {detail}")]
-    InvalidInput {
-        /// Which input.
-        name: &'static str,
-        /// What is wrong with it.
-        detail: String,
-    },
-}
+pub use eval::{calibration, cv, ensemble, fidelity, px4_flights};
+pub use prgenuav_planner::PlannerError as LfsError;
+pub use prgenuav_planner::{
+    CostParams, Fov, PlannerParams, cloud, cost, fov, fov_estimate, histogram, params, planner, polar, select,
+    smoothing, tree, waypoint,
+};

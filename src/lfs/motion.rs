@@ -17,7 +17,7 @@
 //!
 //! # `px4`
 //! The waypoint generator's setpoint (carrot on the tree path, FOV speed taper, speed low-pass, damped smoothing;
-//! see [`super::waypoint`]) is tracked like PX4's position controller: velocity command `pos_gain * error`,
+//! see [`prgenuav_planner::waypoint`]) is tracked like PX4's position controller: velocity command `pos_gain * error`,
 //! limited to `max_speed_xy` / `max_speed_z`, reached with at most `max_acc` (MPC_ACC_HOR), optionally with a
 //! jerk limit as PX4's trajectory smoother (`max_jerk_m_s3`, off: it fitted worse), and yaw turned towards the
 //! yaw setpoint at most `max_yaw_rate_deg_s` (MPC_YAWRAUTO_MAX), integrated in sub-steps.
@@ -63,7 +63,7 @@
 //! 0.516, 0.525, 0.553, 0.568 for delay 0-4) it is 1, which on the held-out half 1 (67) gives 0.445 / 0.833 /
 //! 1.000 / 0.414 against 0.477 / 0.786 / 0.889 / 0.552 without it; chosen on half 1 it is 2 (0.443 vs 0.445),
 //! which on half 0 gives 0.525 / 0.739 / 1.000 / 0.517 against 0.558 / 0.761 / 0.944 / 0.586 (MAE better,
-//! Spearman and recall slightly worse). Speed and yaw rate were fitted on all flights before (a 2 x 2 x 2 grid:
+//! Spearman and recall slightly worse). Speed and yaw rate are fitted on all flights first (a 2 x 2 x 2 grid:
 //! speed {2, 3} x yaw rate {13.5, 30} x fraction {1/3, 1}; px4: gain {0.5, 0.95} x speed {3, 5} x yaw rate
 //! {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}). Moving every obstacle 1 or 2 cm changes a single
 //! prediction by 0.08 m on average (up to 0.6 m) and the aggregates by about 0.007 m MAE and 0.005 Spearman
@@ -74,7 +74,8 @@
 //! inference.
 //!
 //! The delay works by raising predictions: the paper model was too close on tier C (the unselected generator
-//! log: bias -0.18 m, now -0.11) and too far on tiers A and B (+0.18 / +0.32, now +0.22 / +0.39). Tiers A and B
+//! log: bias -0.18 m without the delay, -0.11 with it) and too far on tiers A and B (+0.18 / +0.32 without,
+//! +0.22 / +0.39 with). Tiers A and B
 //! hold tests their authors kept because they failed (B: the minimum over 1-2 runs), so given the real
 //! simulator's own scatter their recorded distances are biased low. The real simulator disagrees with itself by
 //! 0.29 m on average between repeated runs of the same obstacles (and by up to 3 m, see the flights' README),

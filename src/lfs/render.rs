@@ -1,5 +1,5 @@
 //! Ray-cast depth rendering (parry3d) of the ground plane and a test's boxes, and the point cloud the
-//! competition's pipeline makes of it (3dvfh.md §1.5, §10).
+//! competition's pipeline makes of it (docs/planner.md §1.5, §10).
 //!
 //! Everything is in the planner's ENU frame (x East, y North, z Up, metres). The camera sits
 //! `mount_forward_m` ahead of the body origin and renders from there; the cloud is then transformed with the
@@ -357,7 +357,7 @@ mod tests {
 
     #[test]
     fn rotated_box_is_placed_like_the_footprint() {
-        // r = 90: the 4 m side now runs East-West; the box spans East -2..2 at North 10 +- 1.
+        // r = 90: the 4 m side runs East-West; the box spans East -2..2 at North 10 +- 1.
         let scene = Scene::new(&[Obstacle::new(4.0, 2.0, 20.0, 10.0, 0.0, 90.0)]);
         let cam = Camera::hfs();
         let pose = CameraPose::level(Vector3::new(0.0, 0.0, 5.0), std::f64::consts::FRAC_PI_2);

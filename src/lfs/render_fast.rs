@@ -1,4 +1,4 @@
-//! The planner cycle's render: only the pixels the 2-degree subsampling (3dvfh.md §3.2) would keep.
+//! The planner cycle's render: only the pixels the 2-degree subsampling (docs/planner.md §3.2) would keep.
 //!
 //! The cloud processing keeps, of each 2-degree cell seen from the vehicle, the **first** valid point in pixel
 //! (row-major) order. Because the pipeline transforms the cloud with a zero-translation extrinsic, a pixel's
@@ -13,8 +13,8 @@
 use nalgebra::Vector3;
 
 use super::camera::Camera;
-use super::histogram::azimuth_cell;
 use super::render::{CameraPose, RenderError, Scene, cloud_from_depth, pixel_point_enu_tans, render_depth};
+use prgenuav_planner::histogram::azimuth_cell;
 
 const SUB_RES_DEG: i32 = 2;
 const SUB_E: usize = 90;
@@ -26,7 +26,7 @@ const EDGE_EPS_DEG: f64 = 2e-3;
 const ROW_EPS: f64 = 0.01;
 
 /// Exactly `x.floor()` (sign of zero included) without the libm call that baseline x86-64 needs (no rounding
-/// instruction); it was the render's most frequent call.
+/// instruction); it is the render's most frequent call.
 #[inline]
 fn floor_f64(x: f64) -> f64 {
     if x.abs() < 4_503_599_627_370_496.0 {
@@ -139,118 +139,210 @@ pub fn render_cloud(
         return Ok(());
     }
     scratch.prepare(camera);
-    let (w, h) = (camera.width_px, camera.height_px);
-    let fl = camera.focal_px();
-    let cy = camera.center_px().1;
     let (sy, cyaw) = pose.yaw_enu_rad.sin_cos();
-    let depth_lo = f64::from(limit_lo);
-    let depth_hi = f64::from(camera.far_clip_m.min(camera.cutoff_max_m));
-    let range_hi = f64::from(keep.max_m);
-    let cz = cam.z;
+    let frame = LevelFrame {
+        scene,
+        cam,
+        w: camera.width_px,
+        h: camera.height_px,
+        fl: camera.focal_px(),
+        cy: camera.center_px().1,
+        sy,
+        cyaw,
+        depth_lo: f64::from(limit_lo),
+        depth_hi: f64::from(camera.far_clip_m.min(camera.cutoff_max_m)),
+        range_hi: f64::from(keep.max_m),
+    };
     let mut intervals: Vec<(f64, f64)> = Vec::with_capacity(scene.boxes.len() + 1);
-    for i in 0..w {
+    for i in 0..frame.w {
+        frame.scan_column(i, &mut intervals, scratch);
+    }
+    cast_chosen(&frame, camera, pose, scratch, out);
+    Ok(())
+}
+
+/// A level frame's constants for the column scan: the scene, the camera's ENU position (metres), the image size
+/// and focal length (pixels), its centre row, the yaw's sine and cosine, and the depth and range limits (metres).
+struct LevelFrame<'a> {
+    scene: &'a Scene,
+    cam: Vector3<f64>,
+    w: u32,
+    h: u32,
+    fl: f64,
+    cy: f64,
+    sy: f64,
+    cyaw: f64,
+    depth_lo: f64,
+    depth_hi: f64,
+    range_hi: f64,
+}
+
+impl LevelFrame<'_> {
+    /// Offers (or marks for casting) the first row of every elevation band of pixel column `i`.
+    fn scan_column(&self, i: u32, intervals: &mut Vec<(f64, f64)>, scratch: &mut FastRenderScratch) {
         let tx = scratch.tan_x[i as usize];
         // Column direction: body (1, -tx) turned by yaw; n = horizontal metres per metre of depth.
         let (bx, by) = (1.0, -tx);
-        let (ux, uy) = (cyaw * bx - sy * by, sy * bx + cyaw * by);
+        let (ux, uy) = (self.cyaw * bx - self.sy * by, self.sy * bx + self.cyaw * by);
         let n = (1.0 + tx * tx).sqrt();
-        let (rho_lo, rho_hi) = (depth_lo * n, depth_hi * n);
-        intervals.clear();
-        if let Some(iv) = ground_slopes(cz, rho_lo, rho_hi, range_hi) {
-            intervals.push(iv);
-        }
-        for b in &scene.boxes {
-            if let Some(iv) = box_slopes(b, &cam, ux / n, uy / n, cz, rho_lo, rho_hi, range_hi) {
-                intervals.push(iv);
-            }
-        }
-        // Only intervals that reach the image's rows (the ground is often entirely below the frame).
-        let scale = fl * n;
-        let rows_hi = h as f64 + 1.0;
-        intervals.retain(|&(s_lo, s_hi)| cy - scale * s_hi <= rows_hi && cy - scale * s_lo >= -1.0);
+        self.column_intervals(ux, uy, n, intervals);
         if intervals.is_empty() {
-            continue;
+            return;
         }
-        let z_idx = azimuth_cell(ux as f32, uy as f32, SUB_RES_DEG);
-        // A column this close to an azimuth cell edge may fall on either side once its points are rounded.
-        let az_ambiguous = near_edge(ux.atan2(uy).to_degrees());
         let tan_y = std::mem::take(&mut scratch.tan_y);
         let tan_band = std::mem::take(&mut scratch.tan_band);
-        // Row slope (rise per horizontal metre); its band k holds tan_band[k] <= s < tan_band[k + 1].
-        let inv_n = 1.0 / n;
-        let slope = |j: u32| -tan_y[j as usize] * inv_n;
-        // Within EDGE_EPS_DEG of a band edge, in slope units (d tan(a) = (1 + tan^2) da).
-        let near_band_edge = |s: f64, k: usize| {
-            let eps = EDGE_EPS_DEG.to_radians() * (1.0 + s * s);
-            (s - tan_band[k]).abs() < eps || (tan_band[k + 1] - s).abs() < eps
+        let column = Column {
+            i,
+            w: self.w,
+            h: self.h,
+            cy: self.cy,
+            scale: self.fl * n,
+            inv_n: 1.0 / n,
+            z_idx: azimuth_cell(ux as f32, uy as f32, SUB_RES_DEG),
+            // A column this close to an azimuth cell edge may fall on either side once its points are rounded.
+            az_ambiguous: near_edge(ux.atan2(uy).to_degrees()),
+            tan_y: &tan_y,
+            tan_band: &tan_band,
         };
-        let band_below = |s: f64, mut k: usize| {
-            while k > 0 && s < tan_band[k] {
-                k -= 1;
-            }
-            k
-        };
-        for &(s_lo, s_hi) in &intervals {
-            // Slope s of row j is (cy - j) / (fl n): rows from the top edge of the interval down.
-            let (top, bottom) = (cy - scale * s_hi, cy - scale * s_lo);
-            let ja = (-floor_f64(-top)).max(0.0);
-            let jb = floor_f64(bottom).min(h as f64 - 1.0);
-            // Rows at an interval end may be valid or not once parry's f32 ray decides: cast both neighbours.
-            for end in [top, bottom] {
-                if (end - end.round()).abs() < ROW_EPS && end.round() >= 0.0 {
-                    let m = end.round() as u32;
-                    for r in [m.saturating_sub(1), m, m + 1] {
-                        if r < h {
-                            scratch.extras.push(r * w + i);
-                        }
-                    }
-                }
-            }
-            if ja > jb {
-                continue;
-            }
-            let (ja, jb) = (ja as u32, jb as u32);
-            let mut j = ja;
-            let el0 = slope(ja).atan().to_degrees();
-            let mut k = (floor_f64(el0 / 2.0 + 45.0) as usize).min(SUB_E - 1);
-            loop {
-                let s_j = slope(j);
-                // Pixels that may fall on either side of an edge once the planner rounds them are always cast
-                // (they never hide another candidate); the next row is then surely inside its band.
-                let el_ambiguous = near_band_edge(s_j, k);
-                if az_ambiguous || el_ambiguous {
-                    scratch.extras.push(j * w + i);
-                }
-                if el_ambiguous && j < jb {
-                    if az_ambiguous {
-                        scratch.extras.push((j + 1) * w + i);
-                    } else {
-                        let k1 = band_below(slope(j + 1), k);
-                        scratch.offer(k1 * SUB_Z + z_idx, (j + 1) * w + i);
-                    }
-                } else if !az_ambiguous && !el_ambiguous {
-                    scratch.offer(k * SUB_Z + z_idx, j * w + i);
-                }
-                // The row above (in band k + 1 or higher) may really belong to band k if it is at their edge.
-                let eps_prev = |sp: f64| EDGE_EPS_DEG.to_radians() * (1.0 + sp * sp);
-                if j > ja && {
-                    let sp = slope(j - 1);
-                    (sp - tan_band[k + 1]).abs() < eps_prev(sp)
-                } {
-                    scratch.extras.push((j - 1) * w + i);
-                }
-                // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).
-                let next = floor_f64(cy - scale * tan_band[k]) + 1.0;
-                if next > f64::from(jb) || k == 0 {
-                    break;
-                }
-                j = (next as u32).max(j + 1);
-                k = band_below(slope(j), k);
-            }
+        for &(s_lo, s_hi) in intervals.iter() {
+            column.scan_interval(s_lo, s_hi, scratch);
         }
         scratch.tan_band = tan_band;
         scratch.tan_y = tan_y;
     }
+
+    /// The slope intervals of the column in horizontal direction `(ux, uy)` (`n` horizontal metres per metre of
+    /// depth) in which the ground or a box is hit within the limits, keeping those that reach the image's rows.
+    fn column_intervals(&self, ux: f64, uy: f64, n: f64, intervals: &mut Vec<(f64, f64)>) {
+        let cz = self.cam.z;
+        let (rho_lo, rho_hi) = (self.depth_lo * n, self.depth_hi * n);
+        intervals.clear();
+        if let Some(iv) = ground_slopes(cz, rho_lo, rho_hi, self.range_hi) {
+            intervals.push(iv);
+        }
+        for b in &self.scene.boxes {
+            if let Some(iv) = box_slopes(b, &self.cam, ux / n, uy / n, cz, rho_lo, rho_hi, self.range_hi) {
+                intervals.push(iv);
+            }
+        }
+        // Only intervals that reach the image's rows (the ground is often entirely below the frame).
+        let scale = self.fl * n;
+        let rows_hi = self.h as f64 + 1.0;
+        let cy = self.cy;
+        intervals.retain(|&(s_lo, s_hi)| cy - scale * s_hi <= rows_hi && cy - scale * s_lo >= -1.0);
+    }
+}
+
+/// One pixel column's scan: its index `i`, image size `w` x `h`, centre row `cy`, pixels per unit slope
+/// `scale`, `1 / n`, its azimuth cell and the cached tangents of the rows and of the 2-degree band edges.
+struct Column<'t> {
+    i: u32,
+    w: u32,
+    h: u32,
+    cy: f64,
+    scale: f64,
+    inv_n: f64,
+    z_idx: usize,
+    az_ambiguous: bool,
+    tan_y: &'t [f64],
+    tan_band: &'t [f64],
+}
+
+impl Column<'_> {
+    /// Row `j`'s slope (rise per horizontal metre); band k holds `tan_band[k] <= s < tan_band[k + 1]`.
+    fn slope(&self, j: u32) -> f64 {
+        -self.tan_y[j as usize] * self.inv_n
+    }
+
+    /// Within EDGE_EPS_DEG of a band edge, in slope units (d tan(a) = (1 + tan^2) da).
+    fn near_band_edge(&self, s: f64, k: usize) -> bool {
+        let eps = EDGE_EPS_DEG.to_radians() * (1.0 + s * s);
+        (s - self.tan_band[k]).abs() < eps || (self.tan_band[k + 1] - s).abs() < eps
+    }
+
+    fn band_below(&self, s: f64, mut k: usize) -> usize {
+        while k > 0 && s < self.tan_band[k] {
+            k -= 1;
+        }
+        k
+    }
+
+    /// Offers the first row of each band within the slope interval `[s_lo, s_hi]`.
+    fn scan_interval(&self, s_lo: f64, s_hi: f64, scratch: &mut FastRenderScratch) {
+        // Slope s of row j is (cy - j) / (fl n): rows from the top edge of the interval down.
+        let (top, bottom) = (self.cy - self.scale * s_hi, self.cy - self.scale * s_lo);
+        let ja = (-floor_f64(-top)).max(0.0);
+        let jb = floor_f64(bottom).min(self.h as f64 - 1.0);
+        // Rows at an interval end may be valid or not once parry's f32 ray decides: cast both neighbours.
+        for end in [top, bottom] {
+            if (end - end.round()).abs() < ROW_EPS && end.round() >= 0.0 {
+                let m = end.round() as u32;
+                for r in [m.saturating_sub(1), m, m + 1] {
+                    if r < self.h {
+                        scratch.extras.push(r * self.w + self.i);
+                    }
+                }
+            }
+        }
+        if ja > jb {
+            return;
+        }
+        let (ja, jb) = (ja as u32, jb as u32);
+        let mut j = ja;
+        let el0 = self.slope(ja).atan().to_degrees();
+        let mut k = (floor_f64(el0 / 2.0 + 45.0) as usize).min(SUB_E - 1);
+        loop {
+            self.offer_row(j, (ja, jb), k, scratch);
+            // The band's lower edge: rows keep band k while their slope >= tan(2k - 90 deg).
+            let next = floor_f64(self.cy - self.scale * self.tan_band[k]) + 1.0;
+            if next > f64::from(jb) || k == 0 {
+                break;
+            }
+            j = (next as u32).max(j + 1);
+            k = self.band_below(self.slope(j), k);
+        }
+    }
+
+    /// Offers row `j` (the first of band `k` within rows `ja..=jb`) or marks it and its neighbours for casting.
+    fn offer_row(&self, j: u32, (ja, jb): (u32, u32), k: usize, scratch: &mut FastRenderScratch) {
+        let (i, w) = (self.i, self.w);
+        let s_j = self.slope(j);
+        // Pixels that may fall on either side of an edge once the planner rounds them are always cast
+        // (they never hide another candidate); the next row is then surely inside its band.
+        let el_ambiguous = self.near_band_edge(s_j, k);
+        if self.az_ambiguous || el_ambiguous {
+            scratch.extras.push(j * w + i);
+        }
+        if el_ambiguous && j < jb {
+            if self.az_ambiguous {
+                scratch.extras.push((j + 1) * w + i);
+            } else {
+                let k1 = self.band_below(self.slope(j + 1), k);
+                scratch.offer(k1 * SUB_Z + self.z_idx, (j + 1) * w + i);
+            }
+        } else if !self.az_ambiguous && !el_ambiguous {
+            scratch.offer(k * SUB_Z + self.z_idx, j * w + i);
+        }
+        // The row above (in band k + 1 or higher) may really belong to band k if it is at their edge.
+        let eps_prev = |sp: f64| EDGE_EPS_DEG.to_radians() * (1.0 + sp * sp);
+        if j > ja && {
+            let sp = self.slope(j - 1);
+            (sp - self.tan_band[k + 1]).abs() < eps_prev(sp)
+        } {
+            scratch.extras.push((j - 1) * w + i);
+        }
+    }
+}
+
+/// Ray casts the chosen pixels (each touched cell's first plus every ambiguous one), in pixel order, into `out`.
+fn cast_chosen(
+    frame: &LevelFrame,
+    camera: &Camera,
+    pose: &CameraPose,
+    scratch: &mut FastRenderScratch,
+    out: &mut Vec<Vector3<f32>>,
+) {
+    let w = frame.w;
     scratch.keys.extend(scratch.touched.iter().map(|&c| scratch.first[c]));
     scratch.keys.extend_from_slice(&scratch.extras);
     scratch.keys.sort_unstable();
@@ -261,13 +353,12 @@ pub fn render_cloud(
         // The cached tangents are those of `camera` (`prepare`): `ray_body(i, j)` without recomputing them.
         let (tx, ty) = (scratch.tan_x[i as usize], scratch.tan_y[j as usize]);
         let dir = rot * Vector3::new(1.0, -tx, -ty);
-        if let Some(d) = scene.cast(&cam, &dir, camera)
+        if let Some(d) = frame.scene.cast(&frame.cam, &dir, camera)
             && let Some(p) = pixel_point_enu_tans(camera, pose, &rot, tx, ty, d)
         {
             out.push(p);
         }
     }
-    Ok(())
 }
 
 /// Slopes (rise per horizontal metre) of rays that meet the ground at horizontal distance in
@@ -355,178 +446,5 @@ fn box_slopes(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::lfs::cloud::{CloudPose, PointMemory};
-    use crate::lfs::histogram::Histogram;
-    use crate::lfs::params::PlannerParams;
-    use crate::model::Obstacle;
-
-    const KEEP: KeepRange = KeepRange {
-        min_m: 0.2,
-        max_m: 15.0,
-    };
-
-    fn processed(points: &[Vector3<f32>], pose: &CameraPose, cam: &Camera) -> PointMemory {
-        let params = PlannerParams {
-            fovs: vec![cam.fov()],
-            ..Default::default()
-        };
-        let mut m = PointMemory::new();
-        let p = pose.position_enu;
-        let cp = CloudPose {
-            position_enu: Vector3::new(p.x as f32, p.y as f32, p.z as f32),
-            yaw_enu_deg: pose.yaw_enu_rad.to_degrees() as f32,
-            pitch_deg: pose.pitch_rad.to_degrees() as f32,
-        };
-        m.process(points, &cp, &params, 0.1);
-        m
-    }
-
-    fn obstacles() -> Vec<Obstacle> {
-        vec![
-            Obstacle::new(10.0, 5.0, 20.0, 10.0, 20.0, 0.0),
-            Obstacle::new(12.0, 4.0, 8.0, -6.0, 24.0, 35.0),
-            Obstacle::new(3.0, 3.0, 12.0, 2.0, 8.0, 80.0),
-        ]
-    }
-
-    fn poses() -> Vec<CameraPose> {
-        let p = |e: f64, n: f64, z: f64, yaw_deg: f64| CameraPose::level(Vector3::new(e, n, z), yaw_deg.to_radians());
-        vec![
-            p(5.0, -5.0, 10.0, 45.0),
-            p(12.0, 0.0, 10.0, 0.0),
-            p(14.0, -1.0, 3.0, 30.0),
-            p(25.0, 6.0, 9.5, 160.0),
-            p(4.0, 4.0, 1.5, -45.0),
-            p(18.0, -14.0, 10.0, 45.0),
-            p(30.0, 2.0, 4.0, 179.9),
-            p(8.0, 14.0, 10.0, -60.0),
-        ]
-    }
-
-    #[test]
-    fn floor_f64_is_std_floor() {
-        let mut s: u64 = 99;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            f64::from_bits(s)
-        };
-        let edge = [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.5,
-            -2.5,
-            4.5e15,
-            -4.5e15,
-            1e300,
-            -1e-300,
-            f64::INFINITY,
-        ];
-        for x in edge.into_iter().chain((0..100_000).map(|_| next())) {
-            let (a, b) = (floor_f64(x), x.floor());
-            assert!(
-                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
-                "{x}: {a} vs {b}"
-            );
-        }
-        for i in -2000..2000 {
-            let x = i as f64 * 0.37;
-            assert_eq!(floor_f64(x).to_bits(), x.floor().to_bits(), "{x}");
-        }
-    }
-
-    #[test]
-    fn fast_cloud_equals_full_render_cloud() {
-        let scene = Scene::new(&obstacles());
-        for cam in [Camera::hfs(), Camera::v2019(), Camera::d455()] {
-            let mut scratch = FastRenderScratch::default();
-            for pose in poses() {
-                let full = cloud_from_depth(&cam, &pose, &render_depth(&scene, &cam, &pose).unwrap());
-                let mut fast = Vec::new();
-                render_cloud(&scene, &cam, &pose, KEEP, &mut scratch, &mut fast).unwrap();
-                let a = processed(&full, &pose, &cam);
-                let b = processed(&fast, &pose, &cam);
-                let pa: Vec<_> = a.points().map(|p| p.0).collect();
-                let pb: Vec<_> = b.points().map(|p| p.0).collect();
-                assert!(pa.len() > 20, "{} {:?}: only {} points", cam.name, pose, pa.len());
-                let only_a: Vec<_> = pa.iter().filter(|p| !pb.contains(p)).collect();
-                let only_b: Vec<_> = pb.iter().filter(|p| !pa.contains(p)).collect();
-                assert!(
-                    only_a.is_empty() && only_b.is_empty(),
-                    "{} {pose:?}: full only {only_a:?}, fast only {only_b:?}",
-                    cam.name
-                );
-                assert_eq!(pa, pb, "{} {:?}", cam.name, pose);
-                let o = Vector3::new(
-                    pose.position_enu.x as f32,
-                    pose.position_enu.y as f32,
-                    pose.position_enu.z as f32,
-                );
-                assert_eq!(Histogram::from_points(&pa, &o), Histogram::from_points(&pb, &o));
-                assert!(
-                    fast.len() < full.len() / 10 || cam.name == "2019",
-                    "{} of {}",
-                    fast.len(),
-                    full.len()
-                );
-            }
-            assert_eq!(scratch.fallbacks, 0);
-        }
-    }
-
-    #[test]
-    fn fast_cloud_equals_full_render_cloud_on_random_poses() {
-        use rand::{Rng, SeedableRng};
-        let scene = Scene::new(&obstacles());
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let mut scratch = FastRenderScratch::default();
-        let mut checked = 0;
-        for n in 0..60 {
-            let cam = if n % 6 == 0 { Camera::hfs() } else { Camera::v2019() };
-            let pose = CameraPose::level(
-                Vector3::new(
-                    rng.random_range(-5.0..35.0),
-                    rng.random_range(-15.0..20.0),
-                    rng.random_range(0.3..14.0),
-                ),
-                rng.random_range(-3.2..3.2),
-            );
-            let Ok(img) = render_depth(&scene, &cam, &pose) else {
-                continue;
-            };
-            let full = cloud_from_depth(&cam, &pose, &img);
-            let mut fast = Vec::new();
-            render_cloud(&scene, &cam, &pose, KEEP, &mut scratch, &mut fast).unwrap();
-            let a: Vec<_> = processed(&full, &pose, &cam).points().collect();
-            let b: Vec<_> = processed(&fast, &pose, &cam).points().collect();
-            assert_eq!(a, b, "{} {pose:?}", cam.name);
-            checked += 1;
-        }
-        assert!(checked > 40);
-    }
-
-    #[test]
-    fn near_box_and_pitch_fall_back_to_the_full_render() {
-        let scene = Scene::new(&obstacles());
-        let cam = Camera::v2019();
-        let mut scratch = FastRenderScratch::default();
-        let near = CameraPose::level(Vector3::new(20.0, 4.7, 5.0), 90f64.to_radians());
-        let mut out = Vec::new();
-        render_cloud(&scene, &cam, &near, KEEP, &mut scratch, &mut out).unwrap();
-        let pitched = CameraPose {
-            pitch_rad: 0.1,
-            ..CameraPose::level(Vector3::new(0.0, 0.0, 10.0), 1.0)
-        };
-        render_cloud(&scene, &cam, &pitched, KEEP, &mut scratch, &mut out).unwrap();
-        assert_eq!(scratch.fallbacks, 2);
-        let inside = CameraPose::level(Vector3::new(20.0, 10.0, 5.0), 0.0);
-        assert!(render_cloud(&scene, &cam, &inside, KEEP, &mut scratch, &mut out).is_err());
-    }
-}
+#[path = "render_fast_tests.rs"]
+mod tests;

@@ -14,12 +14,12 @@ use super::camera::Camera;
 use super::frames::yaw_enu_to_ned_rad;
 use super::mission::{MissionParams, MissionRunner, Phase};
 use super::motion::{PaperParams, Px4Params, Vehicle, vertical_step};
-use super::planner::{PlanInput, Planner, VehicleState};
 use super::render::{CameraPose, Scene};
 use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
-use super::waypoint::{NavState, WaypointGenerator, WaypointInput};
 use crate::judge::judge_in_frame;
 use crate::model::{Mission, Obstacle, Param, Sample, TestCase, Trajectory};
+use prgenuav_planner::planner::{PlanInput, Planner, VehicleState};
+use prgenuav_planner::waypoint::{NavState, WaypointGenerator, WaypointInput};
 
 pub use super::sim_config::{MotionModel, SimConfig, SimError, SimResult, Status, cruise_param};
 

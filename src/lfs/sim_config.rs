@@ -7,9 +7,9 @@ use super::attitude::TiltParams;
 use super::camera::Camera;
 use super::mission::MissionParams;
 use super::motion::{PaperParams, Px4Params};
-use super::params::PlannerParams;
 use crate::judge::{FlightDistance, Judge};
 use crate::model::{Param, Trajectory};
+use prgenuav_planner::params::PlannerParams;
 
 /// Which motion model moves the vehicle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,7 +96,7 @@ impl Default for SimConfig {
             planner: PlannerParams::default(),
             mission: None,
             dt_s: 0.1,
-            timeout_s: 500.0,
+            timeout_s: crate::model::competition::SIMULATION_TIMEOUT_S,
             stuck_s: 20.0,
             progress_m: 1.0,
             judge: Judge::default(),
@@ -112,7 +112,7 @@ pub enum SimError {
     EmptyMission,
     /// Planner parameters are invalid.
     #[error(transparent)]
-    Planner(#[from] super::LfsError),
+    Planner(#[from] prgenuav_planner::PlannerError),
     /// A setting is out of range.
     #[error("invalid simulation setting {0}")]
     Setting(&'static str),

@@ -149,8 +149,8 @@ fn tilted_camera_keeps_the_fast_render_and_passes_the_pitch_on() {
 fn estimated_fov_is_narrow_and_low_after_a_ground_only_takeoff() {
     let config = SimConfig {
         motion: MotionModel::by_name("px4").unwrap(),
-        planner: crate::lfs::PlannerParams {
-            fov_estimate: crate::lfs::fov_estimate::FovEstimate::FromMaxima,
+        planner: prgenuav_planner::PlannerParams {
+            fov_estimate: prgenuav_planner::fov_estimate::FovEstimate::FromMaxima,
             ..Default::default()
         },
         ..Default::default()

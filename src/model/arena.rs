@@ -28,7 +28,8 @@ impl Range {
     }
 }
 
-/// The competition's arena and rules (competition.md section 3), in the local frame (`x` North, `y` East).
+/// The competition's arena and rules (`docs/formats.md`, rules; the values are [`Arena::COMPETITION`]), in the
+/// local frame (`x` North, `y` East).
 ///
 /// The footprint of every obstacle must lie strictly inside `x` x `y` (the ODA). "Bottom" and "top" of the
 /// arena are its `y` borders (`y.min`, `y.max`), "left" and "right" its `x` borders.
@@ -60,18 +61,6 @@ impl Default for Arena {
 }
 
 impl Arena {
-    /// The 2025/2026 competition's rules.
-    pub const COMPETITION: Arena = Arena {
-        x: Range::new(-40.0, 30.0),
-        y: Range::new(10.0, 40.0),
-        l: Range::new(2.0, 20.0),
-        w: Range::new(2.0, 20.0),
-        h: Range::new(10.0, 25.0),
-        r: Range::new(0.0, 90.0),
-        flight_altitude_m: 10.0,
-        max_obstacles: 3,
-    };
-
     /// The ODA's middle line `x` (North), metres.
     pub fn middle_x(&self) -> f64 {
         self.x.mid()

@@ -60,21 +60,3 @@ impl ModelError {
 
 /// Result of reading a model file.
 pub type Result<T> = std::result::Result<T, ModelError>;
-
-/// Reads a whole file as UTF-8 text, naming the file on failure.
-pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|source| ModelError::Io {
-        path: path.to_path_buf(),
-        action: "cannot read",
-        source,
-    })?;
-    String::from_utf8(bytes).map_err(|e| ModelError::Syntax {
-        path: path.to_path_buf(),
-        line: None,
-        column: None,
-        message: format!(
-            "not UTF-8 text (invalid byte at offset {})",
-            e.utf8_error().valid_up_to()
-        ),
-    })
-}

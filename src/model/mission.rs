@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use num_traits::FromPrimitive;
 use serde_json::Value;
 
-use super::error::{ModelError, Result, read_text};
+use super::error::{ModelError, Result};
+use super::files::read_text;
 use super::geo::{GeoPoint, LocalProjection};
 
 /// MAV_CMD_NAV_WAYPOINT.
@@ -201,6 +202,26 @@ fn parse_item(item: &Value, projection: &LocalProjection) -> std::result::Result
         Some(f) if f <= 21 => f as u8,
         other => return Err((".frame".into(), format!("{other:?} is not a MAV_FRAME id"))),
     };
+    let params = parse_params(item)?;
+    let auto_continue = item.get("autoContinue").and_then(Value::as_bool).unwrap_or(true);
+    let (global, local) = if POSITIONAL.contains(&command) {
+        let (global, local) = parse_position(frame, &params, projection)?;
+        (Some(global), Some(local))
+    } else {
+        (None, None)
+    };
+    Ok(MissionItem {
+        command,
+        frame,
+        params,
+        auto_continue,
+        global,
+        local,
+    })
+}
+
+/// The item's seven `params`, each a number or null.
+fn parse_params(item: &Value) -> std::result::Result<[Option<f64>; 7], ItemError> {
     let raw = item
         .get("params")
         .and_then(Value::as_array)
@@ -218,48 +239,47 @@ fn parse_item(item: &Value, projection: &LocalProjection) -> std::result::Result
             ),
         };
     }
-    let auto_continue = item.get("autoContinue").and_then(Value::as_bool).unwrap_or(true);
-    let (mut global, mut local) = (None, None);
-    if POSITIONAL.contains(&command) {
-        let (lat, lon, alt) = match (params[4], params[5], params[6]) {
-            (Some(a), Some(b), Some(c)) => (a, b, c),
-            _ => {
-                return Err((
-                    ".params".into(),
-                    "a positional command needs lat, lon and altitude in params[4..7]".into(),
-                ));
-            }
-        };
-        check_geo(lat, lon).map_err(|m| (".params".to_string(), m))?;
-        let home_alt = projection.reference().alt_m;
-        let alt_rel = match frame {
-            3 | 6 => alt,            // GLOBAL_RELATIVE_ALT(_INT): relative to home
-            0 | 5 => alt - home_alt, // GLOBAL(_INT): AMSL
-            f => {
-                return Err((
-                    ".frame".into(),
-                    format!("frame {f} is not a global frame PX4 accepts for a position (use 3)"),
-                ));
-            }
-        };
-        let (n, e) = projection.project(lat, lon);
-        global = Some(GeoPoint {
-            lat_deg: lat,
-            lon_deg: lon,
-            alt_m: alt,
-        });
-        local = Some(LocalPoint {
-            north_m: n,
-            east_m: e,
-            alt_m: alt_rel,
-        });
-    }
-    Ok(MissionItem {
-        command,
-        frame,
-        params,
-        auto_continue,
-        global,
-        local,
-    })
+    Ok(params)
+}
+
+/// A positional item's place: as written (latitude, longitude in degrees, the altitude in metres of its
+/// `frame`) and projected to local North/East metres with the altitude above home.
+fn parse_position(
+    frame: u8,
+    params: &[Option<f64>; 7],
+    projection: &LocalProjection,
+) -> std::result::Result<(GeoPoint, LocalPoint), ItemError> {
+    let (lat, lon, alt) = match (params[4], params[5], params[6]) {
+        (Some(a), Some(b), Some(c)) => (a, b, c),
+        _ => {
+            return Err((
+                ".params".into(),
+                "a positional command needs lat, lon and altitude in params[4..7]".into(),
+            ));
+        }
+    };
+    check_geo(lat, lon).map_err(|m| (".params".to_string(), m))?;
+    let home_alt = projection.reference().alt_m;
+    let alt_rel = match frame {
+        3 | 6 => alt,            // GLOBAL_RELATIVE_ALT(_INT): relative to home
+        0 | 5 => alt - home_alt, // GLOBAL(_INT): AMSL
+        f => {
+            return Err((
+                ".frame".into(),
+                format!("frame {f} is not a global frame PX4 accepts for a position (use 3)"),
+            ));
+        }
+    };
+    let (n, e) = projection.project(lat, lon);
+    let global = GeoPoint {
+        lat_deg: lat,
+        lon_deg: lon,
+        alt_m: alt,
+    };
+    let local = LocalPoint {
+        north_m: n,
+        east_m: e,
+        alt_m: alt_rel,
+    };
+    Ok((global, local))
 }

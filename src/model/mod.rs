@@ -3,8 +3,10 @@
 
 mod anchor;
 mod arena;
+pub mod competition;
 mod error;
 mod fields;
+mod files;
 pub mod geo;
 mod mission;
 mod obstacle;
@@ -14,11 +16,13 @@ mod trajectory;
 mod ulog;
 
 pub use arena::{Arena, Range};
+pub use competition::AERIALIST_BIN_S;
 pub use error::{ModelError, Result};
+pub use files::write_atomic;
 pub use geo::{GeoPoint, LocalProjection, SIM_HOME};
 pub use mission::{CMD_LAND, CMD_TAKEOFF, CMD_WAYPOINT, LocalPoint, Mission, MissionItem};
 pub use obstacle::{Obstacle, Position, Size};
 pub use tables::{Command, Param, parse_commands_csv, parse_params_csv};
 pub use test_case::{Spelling, TestCase};
-pub use trajectory::{AERIALIST_BIN_S, Sample, Trajectory};
+pub use trajectory::{Sample, Trajectory};
 pub use ulog::{load_flight, load_ulog_trajectory};

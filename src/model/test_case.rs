@@ -4,10 +4,11 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Map, Value};
 
-use super::error::{ModelError, Result, read_text};
+use super::error::{ModelError, Result};
 use super::fields::{
     FieldError, FieldResult, as_map, describe, fail, join, known_keys, number, opt_number, opt_string, req_number,
 };
+use super::files::read_text;
 use super::geo::{GeoPoint, SIM_HOME};
 use super::mission::Mission;
 use super::obstacle::{Obstacle, Position, Size};
@@ -200,7 +201,7 @@ impl TestCase {
 
     /// Writes [`TestCase::to_yaml`] to `path` atomically (a temporary file, then a rename).
     pub fn save(&self, path: &Path, spelling: Spelling) -> Result<()> {
-        crate::io::write_atomic(path, self.to_yaml(spelling).as_bytes())
+        super::files::write_atomic(path, self.to_yaml(spelling).as_bytes())
     }
 
     /// A copy with other obstacles.

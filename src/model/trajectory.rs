@@ -3,7 +3,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::error::{ModelError, Result, read_text};
+use super::error::{ModelError, Result};
+use super::files::read_text;
 
 /// One position: `x` North, `y` East (metres, local NED), `z` **height up** (metres), `r` heading (radians, as
 /// PX4's `heading`: clockwise from North), `t_s` seconds from the first sample.
@@ -27,9 +28,6 @@ pub struct Trajectory {
     /// The samples, in time order.
     pub samples: Vec<Sample>,
 }
-
-/// Aerialist's resampling period: 0.5 s.
-pub const AERIALIST_BIN_S: f64 = 0.5;
 
 impl Trajectory {
     /// A trajectory of `samples`.

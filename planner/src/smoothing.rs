@@ -1,4 +1,4 @@
-//! Un-normalised conic smoothing of a polar cost matrix with pole mirroring (3dvfh.md §5.4, AV
+//! Un-normalised conic smoothing of a polar cost matrix with pole mirroring (docs/planner.md §5.4, AV
 //! `smoothPolarMatrix` / `padPolarMatrix` / `getConicKernel`).
 //!
 //! Matrices are row-major `rows x cols` (rows = elevation, cols = azimuth). The kernel weight of offset `k` is
@@ -287,7 +287,7 @@ fn double_into(cur: &[f64], d: usize, valid: usize, out: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lfs::polar::{GRID_E, GRID_Z};
+    use crate::polar::{GRID_E, GRID_Z};
 
     #[rustfmt::skip]
     const AV_SMOOTH_EXPECTED: [f32; 200] = [

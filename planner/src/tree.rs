@@ -1,4 +1,4 @@
-//! The star planner's look-ahead tree (3dvfh.md §6, AV `StarPlanner::buildLookAheadTree`): rebuilt from scratch
+//! The star planner's look-ahead tree (docs/planner.md §6, AV `StarPlanner::buildLookAheadTree`): rebuilt from scratch
 //! every iteration; each expansion builds a histogram at the node from the whole memory cloud, takes the 8 best
 //! directions and adds 2 m children; the path ends at the deepest open node.
 //!
@@ -146,13 +146,29 @@ impl StarPlanner {
         params: &PlannerParams,
         root_hist: Option<&Histogram>,
     ) -> &[Vector3<f32>] {
+        self.reset(inputs, params);
+        let close2 = sqrt_threshold(CLOSE_NODE_M);
+        let radius2 = sqrt_threshold(params.max_sensor_range_m);
+        let mut origin = 0;
+        for _ in 0..params.n_expanded_nodes {
+            // The root (index 0) is expanded first and only once.
+            let root_hist = root_hist.filter(|_| origin == 0);
+            self.expand(origin, cloud, root_hist, inputs, params, close2);
+            match self.cheapest_open_within(&inputs.position, radius2) {
+                Some(i) => origin = i,
+                None => break,
+            }
+        }
+        self.trace_deepest()
+    }
+
+    /// Empties the tree down to its root at the vehicle.
+    fn reset(&mut self, inputs: &TreeInputs, params: &PlannerParams) {
         self.nodes.clear();
         self.nx.clear();
         self.ny.clear();
         self.nz.clear();
         self.expanded = 0;
-        let close2 = sqrt_threshold(CLOSE_NODE_M);
-        let radius2 = sqrt_threshold(params.max_sensor_range_m);
         let h0 = self.heuristic(&inputs.position, &inputs.goal, params);
         self.push(TreeNode {
             position_enu: inputs.position,
@@ -163,80 +179,90 @@ impl StarPlanner {
             depth: 0,
             closed: false,
         });
-        let (xs, ys, zs) = cloud.soa();
-        let radius = params.smoothing_radius();
-        let mut origin = 0;
-        for _ in 0..params.n_expanded_nodes {
-            let o = self.nodes[origin];
-            // The root (index 0) is expanded first and only once.
-            let hist = match root_hist {
-                Some(h) if origin == 0 => h,
-                _ => {
-                    self.hist
-                        .build_from_soa(xs, ys, zs, &o.position_enu, &mut self.hist_scratch);
-                    &self.hist
-                }
-            };
-            let cost_inputs = CostInputs {
-                goal: inputs.goal,
-                origin: o.position_enu,
-                velocity: o.velocity_enu,
-                closest_pt: inputs.closest_pt,
-            };
-            let mut candidates = std::mem::take(&mut self.candidates);
-            best_candidates_lazy(
-                hist,
-                &cost_inputs,
-                &params.cost,
-                radius,
-                params.min_sensor_range_m,
-                params.max_sensor_range_m,
-                params.children_per_node,
-                &mut self.select_scratch,
-                &mut candidates,
-            );
-            if candidates.is_empty() {
-                self.nodes[origin].total_cost = f32::INFINITY;
-            }
-            for c in &candidates {
-                let polar = PolarDeg::new(c.e_deg, c.z_deg, params.tree_node_distance_m);
-                let location = polar_histogram_to_cartesian(&polar, &o.position_enu);
-                if self.has_close_node(&location, close2) {
-                    continue;
-                }
-                let h = self.heuristic(&location, &inputs.goal, params);
-                self.push(TreeNode {
-                    position_enu: location,
-                    velocity_enu: location - o.position_enu,
-                    parent: origin,
-                    total_cost: o.total_cost - o.heuristic + c.cost + h,
-                    heuristic: h,
-                    depth: o.depth + 1,
-                    closed: false,
-                });
-            }
-            self.candidates = candidates;
-            self.nodes[origin].closed = true;
-            self.expanded += 1;
+    }
 
-            // Next: the cheapest open node within the sensor range of the vehicle.
-            let mut best: Option<(usize, f32)> = None;
-            for (i, n) in self.nodes.iter().enumerate() {
-                if n.closed {
-                    continue;
-                }
-                let within = (n.position_enu - inputs.position).norm_squared() < radius2;
-                if within && n.total_cost < best.map_or(f32::INFINITY, |b| b.1) {
-                    best = Some((i, n.total_cost));
-                }
+    /// Expands node `origin`: its cheapest directions (from `root_hist` if given, else from the histogram of
+    /// `cloud` at the node) become children unless a node is already within `close2` (squared metres).
+    fn expand(
+        &mut self,
+        origin: usize,
+        cloud: &PointMemory,
+        root_hist: Option<&Histogram>,
+        inputs: &TreeInputs,
+        params: &PlannerParams,
+        close2: f32,
+    ) {
+        let o = self.nodes[origin];
+        let hist = match root_hist {
+            Some(h) => h,
+            None => {
+                let (xs, ys, zs) = cloud.soa();
+                self.hist
+                    .build_from_soa(xs, ys, zs, &o.position_enu, &mut self.hist_scratch);
+                &self.hist
             }
-            match best {
-                Some((i, _)) => origin = i,
-                None => break,
+        };
+        let cost_inputs = CostInputs {
+            goal: inputs.goal,
+            origin: o.position_enu,
+            velocity: o.velocity_enu,
+            closest_pt: inputs.closest_pt,
+        };
+        let mut candidates = std::mem::take(&mut self.candidates);
+        best_candidates_lazy(
+            hist,
+            &cost_inputs,
+            &params.cost,
+            params.smoothing_radius(),
+            params.min_sensor_range_m,
+            params.max_sensor_range_m,
+            params.children_per_node,
+            &mut self.select_scratch,
+            &mut candidates,
+        );
+        if candidates.is_empty() {
+            self.nodes[origin].total_cost = f32::INFINITY;
+        }
+        for c in &candidates {
+            let polar = PolarDeg::new(c.e_deg, c.z_deg, params.tree_node_distance_m);
+            let location = polar_histogram_to_cartesian(&polar, &o.position_enu);
+            if self.has_close_node(&location, close2) {
+                continue;
+            }
+            let h = self.heuristic(&location, &inputs.goal, params);
+            self.push(TreeNode {
+                position_enu: location,
+                velocity_enu: location - o.position_enu,
+                parent: origin,
+                total_cost: o.total_cost - o.heuristic + c.cost + h,
+                heuristic: h,
+                depth: o.depth + 1,
+                closed: false,
+            });
+        }
+        self.candidates = candidates;
+        self.nodes[origin].closed = true;
+        self.expanded += 1;
+    }
+
+    /// The cheapest open node closer than `sqrt(radius2)` to the vehicle at `position` (lowest index on ties).
+    fn cheapest_open_within(&self, position: &Vector3<f32>, radius2: f32) -> Option<usize> {
+        let mut best: Option<(usize, f32)> = None;
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.closed {
+                continue;
+            }
+            let within = (n.position_enu - position).norm_squared() < radius2;
+            if within && n.total_cost < best.map_or(f32::INFINITY, |b| b.1) {
+                best = Some((i, n.total_cost));
             }
         }
+        best.map(|b| b.0)
+    }
 
-        // Deepest open node (strict >, so the lowest index wins ties); the root if none is deeper than 0.
+    /// The path from the deepest open node (strict >, so the lowest index wins ties; the root if none is
+    /// deeper than 0) back to the root.
+    fn trace_deepest(&mut self) -> &[Vector3<f32>] {
         let mut end = 0;
         let mut max_depth = 0;
         for (i, n) in self.nodes.iter().enumerate() {

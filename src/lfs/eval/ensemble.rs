@@ -20,11 +20,11 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::fidelity::FAIL_BELOW_M;
-use super::mission::Phase;
-use super::sim::{MotionModel, SimConfig, SimError, World, step};
 use crate::geometry::P2;
 use crate::judge::judge_in_frame;
+use crate::lfs::mission::Phase;
+use crate::lfs::sim::{MotionModel, SimConfig, SimError, World, step};
+use crate::model::competition::FAIL_BELOW_M;
 use crate::model::{Mission, Obstacle, Param};
 
 /// Most members one ensemble may have (a guard against typos; 4096 members of a test take minutes).

@@ -1,7 +1,7 @@
 //! Straightforward (slow) transcriptions of the hot planner stages, kept only for tests: the optimised code in
 //! [`super::histogram`], [`super::cost`] and [`super::smoothing`] must give **bit-identical** results.
 //!
-//! Each function follows 3dvfh.md §4-5 literally, cell by cell, with the exact formulas of the public API
+//! Each function follows docs/planner.md §4-5 literally, cell by cell, with the exact formulas of the public API
 //! ([`cost_function`], [`polar_to_index`], [`cartesian_to_polar_histogram`]).
 
 use nalgebra::Vector3;

@@ -13,8 +13,8 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::fidelity::{Aggregates, FlightCase, aggregate, evaluate};
-use super::motion::{PaperParams, Px4Params};
-use super::sim::{MotionModel, SimConfig};
+use crate::lfs::motion::{PaperParams, Px4Params};
+use crate::lfs::sim::{MotionModel, SimConfig};
 
 /// One candidate set of constants.
 #[derive(Debug, Clone, PartialEq)]

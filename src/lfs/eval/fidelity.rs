@@ -14,13 +14,11 @@ use serde_json::Value;
 
 use super::calibration::{brier, roc_auc};
 use super::ensemble::{Ensemble, EnsembleError, EnsembleParams, run_ensemble};
-use super::sim::{SimConfig, Status, simulate_parts};
+use crate::lfs::sim::{SimConfig, Status, simulate_parts};
 use crate::model::{GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, Param, Position, SIM_HOME, Size};
 
-/// "Below 1.5 m" is a soft failure in the competition.
-pub const FAIL_BELOW_M: f64 = 1.5;
-/// Half the vehicle width Aerialist subtracts since October 2024 (tier B).
-pub const HALF_VEHICLE_WIDTH_M: f64 = 0.125;
+use crate::model::competition::MISSION_PARAMS;
+pub use crate::model::competition::{FAIL_BELOW_M, HALF_VEHICLE_WIDTH_M};
 /// Box height used where a flight did not record it (above the 10 m flight altitude, as the rules require).
 pub const DEFAULT_HEIGHT_M: f64 = 15.0;
 
@@ -68,24 +66,15 @@ pub struct FlightCase {
     pub repeat_group: Option<String>,
 }
 
-/// The competition's `mission-params.csv`.
+/// The competition's `mission-params.csv` ([`MISSION_PARAMS`]), for flights that did not record theirs.
 pub fn competition_params() -> Vec<Param> {
-    [
-        ("NAV_ACC_RAD", 0.5),
-        ("NAV_MC_ALT_RAD", 0.5),
-        ("NAV_RCL_ACT", 3.0),
-        ("NAV_DLL_ACT", 0.0),
-        ("MIS_YAW_ERR", 12.0),
-        ("MIS_TAKEOFF_ALT", 1.0),
-        ("MPC_YAW_MODE", 0.0),
-        ("SDLOG_PROFILE", 7.0),
-    ]
-    .into_iter()
-    .map(|(n, v)| Param {
-        name: n.into(),
-        value: v,
-    })
-    .collect()
+    MISSION_PARAMS
+        .into_iter()
+        .map(|(n, v)| Param {
+            name: n.into(),
+            value: v,
+        })
+        .collect()
 }
 
 fn num(v: &Value) -> Option<f64> {
@@ -98,77 +87,13 @@ pub fn load_flight(path: &Path) -> Result<Option<FlightCase>, FidelityError> {
         path: path.into(),
         source,
     })?;
-    let bad = |m: &str| FidelityError::Format {
-        path: path.into(),
-        message: m.into(),
-    };
+    let bad = |m: &str| format_error(path, m);
     let doc: Value = serde_json::from_str(&text).map_err(|e| bad(&format!("not JSON: {e}")))?;
     let id = doc["id"].as_str().ok_or_else(|| bad("missing id"))?.to_string();
     let tier = doc["tier"].as_str().ok_or_else(|| bad("missing tier"))?;
     let tier = tier.get(..1).unwrap_or("?").to_string();
-    let wps = doc["mission"]["waypoints"]
-        .as_array()
-        .ok_or_else(|| bad("missing mission.waypoints"))?;
-    let mut items = Vec::new();
-    for w in wps {
-        let cmd = w["cmd"]
-            .as_u64()
-            .filter(|c| *c <= u64::from(u16::MAX))
-            .ok_or_else(|| bad("waypoint without cmd"))?;
-        let local = match (num(&w["x"]), num(&w["y"]), num(&w["z"])) {
-            (Some(n), Some(e), Some(a)) => Some(LocalPoint {
-                north_m: n,
-                east_m: e,
-                alt_m: a,
-            }),
-            _ => None,
-        };
-        let global = match (num(&w["lat"]), num(&w["lon"])) {
-            (Some(lat), Some(lon)) => Some(GeoPoint {
-                lat_deg: lat,
-                lon_deg: lon,
-                alt_m: local.map_or(0.0, |l| l.alt_m),
-            }),
-            _ => None,
-        };
-        items.push(MissionItem {
-            command: cmd as u16,
-            frame: w["frame"].as_u64().unwrap_or(3).min(255) as u8,
-            params: [None; 7],
-            auto_continue: true,
-            global,
-            local,
-        });
-    }
-    if !items.iter().any(|i| i.local.is_some()) {
-        return Err(bad("the mission has no positional waypoint"));
-    }
-    let mission = Mission {
-        items,
-        planned_home: None,
-        home: SIM_HOME,
-        source: path.into(),
-    };
-    let mut obstacles = Vec::new();
-    for o in doc["obstacles"].as_array().ok_or_else(|| bad("missing obstacles"))? {
-        let f = |k: &str| num(&o[k]);
-        let (Some(l), Some(w), Some(x), Some(y)) = (f("l"), f("w"), f("x"), f("y")) else {
-            return Err(bad("obstacle without l, w, x or y"));
-        };
-        obstacles.push(Obstacle {
-            size: Size {
-                l,
-                w,
-                h: f("h").unwrap_or(DEFAULT_HEIGHT_M),
-            },
-            position: Position {
-                x,
-                y,
-                z: f("z").unwrap_or(0.0),
-                r: f("r").unwrap_or(0.0),
-            },
-        });
-    }
+    let mission = flight_mission(&doc, path)?;
+    let obstacles = flight_obstacles(&doc, path)?;
     let real = num(&doc["hfs_min_distance_aerialist"]).or_else(|| num(&doc["hfs_min_distance_digitized"]));
     let Some(real_m) = real else { return Ok(None) };
     if obstacles.is_empty() {
@@ -196,6 +121,91 @@ pub fn load_flight(path: &Path) -> Result<Option<FlightCase>, FidelityError> {
         real_m,
         repeat_group,
     }))
+}
+
+fn format_error(path: &Path, message: &str) -> FidelityError {
+    FidelityError::Format {
+        path: path.into(),
+        message: message.into(),
+    }
+}
+
+/// The flight's `mission.waypoints` as a mission from the simulator's home.
+fn flight_mission(doc: &Value, path: &Path) -> Result<Mission, FidelityError> {
+    let wps = doc["mission"]["waypoints"]
+        .as_array()
+        .ok_or_else(|| format_error(path, "missing mission.waypoints"))?;
+    let items = wps
+        .iter()
+        .map(|w| flight_item(w).ok_or_else(|| format_error(path, "waypoint without cmd")))
+        .collect::<Result<Vec<_>, _>>()?;
+    if !items.iter().any(|i| i.local.is_some()) {
+        return Err(format_error(path, "the mission has no positional waypoint"));
+    }
+    Ok(Mission {
+        items,
+        planned_home: None,
+        home: SIM_HOME,
+        source: path.into(),
+    })
+}
+
+/// One waypoint: its command, and its local (`x` North, `y` East, `z` altitude, metres) and global positions
+/// where given; `None` without a command.
+fn flight_item(w: &Value) -> Option<MissionItem> {
+    let cmd = w["cmd"].as_u64().filter(|c| *c <= u64::from(u16::MAX))?;
+    let local = match (num(&w["x"]), num(&w["y"]), num(&w["z"])) {
+        (Some(n), Some(e), Some(a)) => Some(LocalPoint {
+            north_m: n,
+            east_m: e,
+            alt_m: a,
+        }),
+        _ => None,
+    };
+    let global = match (num(&w["lat"]), num(&w["lon"])) {
+        (Some(lat), Some(lon)) => Some(GeoPoint {
+            lat_deg: lat,
+            lon_deg: lon,
+            alt_m: local.map_or(0.0, |l| l.alt_m),
+        }),
+        _ => None,
+    };
+    Some(MissionItem {
+        command: cmd as u16,
+        frame: w["frame"].as_u64().unwrap_or(3).min(255) as u8,
+        params: [None; 7],
+        auto_continue: true,
+        global,
+        local,
+    })
+}
+
+/// The flight's boxes (metres, degrees); a missing height is [`DEFAULT_HEIGHT_M`], missing `z` and `r` are 0.
+fn flight_obstacles(doc: &Value, path: &Path) -> Result<Vec<Obstacle>, FidelityError> {
+    let list = doc["obstacles"]
+        .as_array()
+        .ok_or_else(|| format_error(path, "missing obstacles"))?;
+    let mut obstacles = Vec::new();
+    for o in list {
+        let f = |k: &str| num(&o[k]);
+        let (Some(l), Some(w), Some(x), Some(y)) = (f("l"), f("w"), f("x"), f("y")) else {
+            return Err(format_error(path, "obstacle without l, w, x or y"));
+        };
+        obstacles.push(Obstacle {
+            size: Size {
+                l,
+                w,
+                h: f("h").unwrap_or(DEFAULT_HEIGHT_M),
+            },
+            position: Position {
+                x,
+                y,
+                z: f("z").unwrap_or(0.0),
+                r: f("r").unwrap_or(0.0),
+            },
+        });
+    }
+    Ok(obstacles)
 }
 
 /// Reads every `*.json` flight of `dir` (sorted by name); returns the usable cases and the skipped file names.

@@ -1,4 +1,4 @@
-//! Point-cloud processing and memory (`processPointcloud`, 3dvfh.md §3): 2-degree subsampling of each new frame
+//! Point-cloud processing and memory (`processPointcloud`, docs/planner.md §3): 2-degree subsampling of each new frame
 //! plus remembered points that are outside the camera FOV, younger than the age limit and within range.
 //!
 //! Points are ENU (x East, y North, z Up, metres) in the world frame; ages are seconds. Storage is
@@ -266,7 +266,7 @@ mod tests {
 
     #[test]
     fn known_answer_av_process_pointcloud() {
-        // 3dvfh.md §3 / AV test processPointcloud: 6 + 3 new points (one too far, one too close), one memory
+        // docs/planner.md §3 / AV test processPointcloud: 6 + 3 new points (one too far, one too close), one memory
         // point 1.4 m East (straight ahead for yaw 0) aged 5 s.
         let position = Vector3::new(1.5, 1.0, 4.5);
         let offs = [

@@ -1,7 +1,7 @@
-//! Tests of the waypoint generator: path-following known answers (3dvfh.md §15), states and the speed rules.
+//! Tests of the waypoint generator: path-following known answers (docs/planner.md §15), states and the speed rules.
 
 use super::*;
-use crate::lfs::params::PlannerParams;
+use crate::params::PlannerParams;
 
 fn path_nodes() -> Vec<Vector3<f32>> {
     // AV getSetpointFromPath: 1 m segments n0 (root) .. n4, returned deepest first.

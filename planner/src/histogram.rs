@@ -1,4 +1,4 @@
-//! The 6-degree polar histogram (3dvfh.md §4): mean obstacle distance per (elevation, azimuth) cell.
+//! The 6-degree polar histogram (docs/planner.md §4): mean obstacle distance per (elevation, azimuth) cell.
 //!
 //! Layout is row-major `(e, z)`: `dist[e * 60 + z]`, row 0 = -87 deg elevation, column 0 = -177 deg azimuth
 //! (South, then clockwise: West 15, North 30, East 45). 0 means "no obstacle / unknown".
@@ -254,7 +254,7 @@ impl Histogram {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lfs::polar::{PolarDeg, index_to_polar, polar_histogram_to_cartesian};
+    use crate::polar::{PolarDeg, index_to_polar, polar_histogram_to_cartesian};
     use proptest::prelude::*;
 
     #[test]

@@ -1,7 +1,7 @@
 //! Tests of the star planner: AV's bar-obstacle known answer, path ordering and obstacle avoidance.
 
 use super::*;
-use crate::lfs::params::CostParams;
+use crate::params::CostParams;
 
 fn bar_cloud() -> Vec<Vector3<f32>> {
     // AV StarPlannerTests: a horizontal bar x 0..2.5, y = 2, z 3.5..4.5 sampled every 5 cm.

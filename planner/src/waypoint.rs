@@ -1,4 +1,4 @@
-//! The waypoint generator (3dvfh.md §8, AV `waypoint_generator.cpp`): turns the planner's path into one position
+//! The waypoint generator (docs/planner.md §8, AV `waypoint_generator.cpp`): turns the planner's path into one position
 //! and yaw setpoint per tick, with a four-state machine, the FOV speed taper, a speed low-pass and critically
 //! damped smoothing. Time is injected (`now_s`); nothing reads a clock.
 //!

@@ -1,4 +1,4 @@
-//! Angles, wraps and histogram index maps of 3DVFH* (3dvfh.md §1.2-1.4 and §4), in f32 as the original.
+//! Angles, wraps and histogram index maps of 3DVFH* (docs/planner.md §1.2-1.4 and §4), in f32 as the original.
 //!
 //! Two polar conventions exist, both about an origin in the planner's ENU world frame (x East, y North, z Up):
 //! * **histogram polar** ([`cartesian_to_polar_histogram`]): azimuth `z_deg` is a compass bearing (0 = North (+y),
@@ -212,7 +212,7 @@ mod tests {
 
     #[test]
     fn known_angle_to_index_from_spec() {
-        // 3dvfh.md §15, AV test_common polarToHistogramIndex.
+        // docs/planner.md §15, AV test_common polarToHistogramIndex.
         assert_eq!(idx(0.0, 0.0, 3), (30, 60));
         assert_eq!(idx(34.0, 34.0, 3), (41, 71));
         assert_eq!(idx(0.0, 0.0, 12), (7, 15));

@@ -1,4 +1,4 @@
-//! The cost matrix of 3DVFH* (3dvfh.md §5, AV `getCostMatrix` / `costFunction` /
+//! The cost matrix of 3DVFH* (docs/planner.md §5, AV `getCostMatrix` / `costFunction` /
 //! `getBestCandidatesFromCostMatrix`): per direction, a distance cost from the histogram (smoothed) plus velocity,
 //! yaw, yaw-to-line and pitch costs (not smoothed). Lower is better.
 //!
@@ -26,7 +26,7 @@ pub struct CostInputs {
     pub origin: Vector3<f32>,
     /// Velocity at the origin: the vehicle velocity at the root, the 2 m edge vector at tree nodes.
     pub velocity: Vector3<f32>,
-    /// Closest point on the previous-goal-to-goal line (3dvfh.md §7.3), or the goal.
+    /// Closest point on the previous-goal-to-goal line (docs/planner.md §7.3), or the goal.
     pub closest_pt: Vector3<f32>,
 }
 

@@ -1,4 +1,4 @@
-//! The camera field-of-view model of 3DVFH* (3dvfh.md §3.4, §8.3): inside tests and the edge-of-FOV speed scale.
+//! The camera field-of-view model of 3DVFH* (docs/planner.md §3.4, §8.3): inside tests and the edge-of-FOV speed scale.
 //!
 //! All angles are in degrees in the vehicle body ("fcu") frame, expressed as FCU polar (azimuth counter-clockwise
 //! from the body's forward axis, elevation positive **below** the horizon).

@@ -1,7 +1,7 @@
 use proptest::prelude::*;
 
 use super::*;
-use crate::lfs::fidelity::load_dir;
+use crate::lfs::eval::fidelity::load_dir;
 
 fn truth(v: &[(f64, &str)]) -> Vec<Truth> {
     v.iter()

@@ -1,4 +1,4 @@
-//! The original's data-driven camera FOV (3dvfh.md §3.4): each cloud's six extreme points (min/max x, y, z in
+//! The original's data-driven camera FOV (docs/planner.md §3.4): each cloud's six extreme points (min/max x, y, z in
 //! the camera's optical frame, AV `removeNaNAndGetMaxima`) are turned into body-frame FCU polar, and their
 //! angular spread widens the FOV, which never shrinks (AV `updateFOVFromMaxima`, run by the nodelet's cloud
 //! transform thread before the planner sees the cloud). It starts at zero (AV `FOV()`).
@@ -30,7 +30,8 @@ pub enum FovEstimate {
     /// As the original: zero at start, widened by every frame's extreme points, never narrowed. The LFS feeds
     /// it its planner frame (the first pixel of each 2-degree cell within the 15 m sensor range), not every
     /// pixel up to the 18 m far clip: after a ground-only takeoff that gives 58.9 x 21.2 deg centred 11.4 deg
-    /// below the horizon where the full render gives 58.9 x 19.5 centred 10.5 (tests in `fov_estimate_tests`).
+    /// below the horizon where the full render gives 58.9 x 19.5 centred 10.5
+    /// (tested in the simulator's `fov_takeoff_tests`).
     FromMaxima,
 }
 

@@ -1,4 +1,4 @@
-//! The cheapest directions of one tree expansion (3dvfh.md §5-6) without smoothing the whole cost matrix: the
+//! The cheapest directions of one tree expansion (docs/planner.md §5-6) without smoothing the whole cost matrix: the
 //! same candidates, with the same bits, as [`cost_matrix`] followed by [`best_candidates`].
 //!
 //! The smoothed distance cost is never negative, so a cell's total cost is at least its unsmoothed "other" cost.

@@ -1,8 +1,8 @@
-//! Tests of the cost matrix: known answers from 3dvfh.md §5 / §15 and AV's unit tests, plus per-term checks.
+//! Tests of the cost matrix: known answers from docs/planner.md §5 / §15 and AV's unit tests, plus per-term checks.
 
 use super::*;
-use crate::lfs::polar::{CellIndex, polar_histogram_to_cartesian, polar_to_index};
-use crate::lfs::smoothing::pad_polar_matrix;
+use crate::polar::{CellIndex, polar_histogram_to_cartesian, polar_to_index};
+use crate::smoothing::pad_polar_matrix;
 
 fn av_params() -> CostParams {
     CostParams {
@@ -155,7 +155,7 @@ fn obstacle_facing_goal_window() {
 
 #[test]
 fn known_answer_empty_histogram_minimum_at_goal_and_growing_away() {
-    // 3dvfh.md §15 / AV getCostMatrixNoObstacles: goal 5 m North, velocity 1 m/s East, smoothing 30 deg.
+    // docs/planner.md §15 / AV getCostMatrixNoObstacles: goal 5 m North, velocity 1 m/s East, smoothing 30 deg.
     let inputs = CostInputs {
         goal: Vector3::new(0.0, 5.0, 0.0),
         origin: Vector3::zeros(),

@@ -1,9 +1,9 @@
-//! One planner iteration (3dvfh.md §7, AV `LocalPlanner::runPlanner` / `determineStrategy` /
+//! One planner iteration (docs/planner.md §7, AV `LocalPlanner::runPlanner` / `determineStrategy` /
 //! `getAvoidanceOutput`) behind a pure API: points and poses in, path out; time is always a parameter.
 
 use nalgebra::{Vector2, Vector3};
 
-use super::LfsError;
+use super::PlannerError;
 use super::cloud::{CloudPose, PointMemory};
 use super::fov::Fov;
 use super::fov_estimate::{BodyPose, FovEstimate, update_from_cloud};
@@ -26,7 +26,7 @@ pub struct VehicleState {
 }
 
 impl VehicleState {
-    fn check(&self) -> Result<(), LfsError> {
+    fn check(&self) -> Result<(), PlannerError> {
         let finite = self
             .position_enu
             .iter()
@@ -37,7 +37,7 @@ impl VehicleState {
         if finite {
             Ok(())
         } else {
-            Err(LfsError::InvalidInput {
+            Err(PlannerError::InvalidInput {
                 name: "vehicle state",
                 detail: format!("not finite: {self:?}"),
             })
@@ -88,7 +88,7 @@ pub struct Planner {
 
 impl Planner {
     /// A planner with validated parameters.
-    pub fn new(mut params: PlannerParams) -> Result<Self, LfsError> {
+    pub fn new(mut params: PlannerParams) -> Result<Self, PlannerError> {
         params.validate()?;
         if params.fov_estimate == FovEstimate::FromMaxima {
             // The original's FOV() before the first cloud: nothing is inside it.
@@ -127,10 +127,10 @@ impl Planner {
         points_enu: &[Vector3<f32>],
         state: &VehicleState,
         elapsed_s: f32,
-    ) -> Result<(), LfsError> {
+    ) -> Result<(), PlannerError> {
         state.check()?;
         if !elapsed_s.is_finite() || elapsed_s < 0.0 {
-            return Err(LfsError::InvalidInput {
+            return Err(PlannerError::InvalidInput {
                 name: "elapsed_s",
                 detail: format!("{elapsed_s} is not >= 0"),
             });
@@ -158,7 +158,7 @@ impl Planner {
 
     /// Runs one planning iteration on the current memory. If the histogram at the vehicle is empty, no tree is
     /// built and the previous path (with its old time) is returned, as the original does.
-    pub fn plan(&mut self, input: &PlanInput) -> Result<&Plan, LfsError> {
+    pub fn plan(&mut self, input: &PlanInput) -> Result<&Plan, PlannerError> {
         input.state.check()?;
         let finite = input
             .goal_enu
@@ -166,7 +166,7 @@ impl Planner {
             .chain(input.prev_goal_enu.iter())
             .all(|v| v.is_finite());
         if !finite || !input.now_s.is_finite() {
-            return Err(LfsError::InvalidInput {
+            return Err(PlannerError::InvalidInput {
                 name: "plan input",
                 detail: format!("not finite: {input:?}"),
             });
@@ -228,7 +228,7 @@ impl Planner {
     }
 }
 
-/// The vehicle's xy projection onto the line prev_goal -> goal with z = goal.z (3dvfh.md §7.3); the goal itself
+/// The vehicle's xy projection onto the line prev_goal -> goal with z = goal.z (docs/planner.md §7.3); the goal itself
 /// when the vehicle is nearer the line than `mpc_xy_cruise` (a speed used as a distance, as in the original) or
 /// the two goals coincide in xy.
 pub fn closest_point_on_line(

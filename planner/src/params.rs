@@ -1,11 +1,12 @@
-//! One parameter struct for the 3DVFH* port, holding the effective defaults of PX4-Avoidance HEAD (3dvfh.md §14).
+//! One parameter struct for the 3DVFH* port, holding the effective defaults of PX4-Avoidance HEAD
+//! (docs/planner.md §14).
 
-use super::LfsError;
+use super::PlannerError;
 use super::fov::Fov;
 use super::fov_estimate::FovEstimate;
 
-/// Weights of the per-direction cost function (3dvfh.md §5.2). Defaults are the dynamic-reconfigure (cfg) values,
-/// which overwrite the C++ struct defaults at start-up.
+/// Weights of the per-direction cost function (docs/planner.md §5.2). Defaults are the dynamic-reconfigure (cfg)
+/// values, which overwrite the C++ struct defaults at start-up.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CostParams {
     /// k_yaw, cost per squared degree of azimuth away from the goal (or line).
@@ -105,9 +106,9 @@ impl Default for PlannerParams {
 
 impl PlannerParams {
     /// Checks that every parameter is finite and in a range the algorithm can work with.
-    pub fn validate(&self) -> Result<(), LfsError> {
+    pub fn validate(&self) -> Result<(), PlannerError> {
         let bad = |name: &'static str, value: f32| {
-            Err(LfsError::InvalidParam {
+            Err(PlannerError::InvalidParam {
                 name,
                 value: value as f64,
             })
@@ -164,7 +165,7 @@ impl PlannerParams {
         (self.smoothing_margin_deg / super::polar::ALPHA_RES as f32).ceil() as usize
     }
 
-    /// Cruise speed handed to the waypoint generator (3dvfh.md §7.6): the mission speed or MPC_XY_CRUISE, capped
+    /// Cruise speed handed to the waypoint generator (docs/planner.md §7.6): the mission speed or MPC_XY_CRUISE, capped
     /// by the speed from which the vehicle can stop within the sensor range.
     pub fn cruise_speed_m_s(&self) -> f32 {
         let a = self.mpc_acc_hor_m_s2;
@@ -192,7 +193,7 @@ mod tests {
 
     #[test]
     fn sensor_range_speed_limit_known_answers() {
-        // 3dvfh.md §7.6: A = 5, J = 20, R = 15 -> ~11.1 m/s; A = 3, J = 8 -> ~8.4 m/s.
+        // docs/planner.md §7.6: A = 5, J = 20, R = 15 -> ~11.1 m/s; A = 3, J = 8 -> ~8.4 m/s.
         let mut p = PlannerParams {
             mpc_xy_cruise_m_s: 100.0,
             mpc_acc_hor_m_s2: 5.0,
