@@ -17,13 +17,16 @@
 //! 12 it held only from 4 failing tests on, and a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30) ended
 //! with a parent and two of its children at diversity 0.708.
 
+use super::config::CampaignConfig;
 use super::journal::FlightRecord;
-use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
-use super::run::CampaignConfig;
 use crate::geometry::{Footprint, union_iou};
 use crate::judge::diversity;
 use crate::model::Obstacle;
 
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
+/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
+/// which counts the failures still to come, binds from the first failure.)
+pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Expected diversity a child must leave above the user's floor: the expectation is over one round's children,
 /// and the flights' failures scatter around it.
 pub const DIVERSITY_MARGIN: f64 = 0.02;

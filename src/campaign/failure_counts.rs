@@ -11,6 +11,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::candidate::{Candidate, unit_of};
+use super::config::FAIL_M;
+use super::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, bin_of};
 
 /// Bins per draw (coarser than the generator's distribution: a campaign sees few failures).
@@ -60,6 +63,32 @@ impl FailureCounts {
         }
         add(&mut self.total);
     }
+}
+
+/// Flights and failures of the candidates `is_arm` picks and of the others (flights of candidates this run did
+/// not draw count as others).
+pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(u64) -> bool) -> (BinCount, BinCount) {
+    let (mut near, mut other) = (BinCount::default(), BinCount::default());
+    for r in done {
+        if let Some(d) = r.min_distance {
+            let arm = if is_arm(r.candidate) { &mut near } else { &mut other };
+            arm.flights += 1;
+            arm.failures += u32::from(d < FAIL_M);
+        }
+    }
+    (near, other)
+}
+
+/// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
+/// longer resumed run, are skipped).
+pub fn counted_failures(done: &[FlightRecord], candidates: &[Candidate]) -> FailureCounts {
+    let mut m = FailureCounts::default();
+    for r in done {
+        if let (Some(u), Some(flown)) = (unit_of(candidates, r.candidate), r.min_distance) {
+            m.observe(&u, flown < FAIL_M);
+        }
+    }
+    m
 }
 
 #[cfg(test)]

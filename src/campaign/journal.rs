@@ -91,6 +91,15 @@ impl Journal {
         self.file.sync_data().map_err(io)
     }
 
+    /// `record` as [`Self::read`] gives it back (a non-finite optional distance is stored as `null`), so a
+    /// campaign keeping its journal in memory sees what a resumed one reads.
+    pub fn read_back(record: &FlightRecord) -> FlightRecord {
+        serde_json::to_string(record)
+            .ok()
+            .and_then(|line| serde_json::from_str(&line).ok())
+            .unwrap_or_else(|| record.clone())
+    }
+
     /// Reads every complete record; a torn last line (the process died mid-write) is ignored.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
         let file = match File::open(path) {

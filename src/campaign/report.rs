@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::config::CampaignInput;
 use super::failure_counts::FAIL_BINS;
 use super::journal::FlightRecord;
 use super::learn::Learnt;
@@ -158,29 +159,54 @@ pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
     out
 }
 
-/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and report.md.
+/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and
+/// report.md, for the campaign `input` that drew `candidates_screened` candidates and flew `records`.
 /// Returns the report.
-#[allow(clippy::too_many_arguments)]
 pub fn write_outputs(
-    folder: &Path,
-    case: &TestCase,
-    seed: u64,
-    budget: usize,
+    input: &CampaignInput,
     candidates_screened: usize,
     records: &[FlightRecord],
     mut stages: StageTimes,
-    spelling: Spelling,
-    screened: bool,
-    lfs_path: &(dyn Fn(&TestCase) -> Option<Trajectory> + Sync),
-    judge: Judge,
     learning: Option<&Learnt>,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
+    let cfg = input.cfg;
     let failing = failing_best_first(records);
+    let reported = write_failing_tests(input, &failing)?;
+    let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
+    let mut suite = summary(records, &failing, &flights, cfg.screen);
+    suite.candidates_screened = candidates_screened;
+    suite.screening_per_s = if stages.screen_s > 0.0 {
+        candidates_screened as f64 / stages.screen_s
+    } else {
+        0.0
+    };
+    stages.report_s = t0.elapsed().as_secs_f64();
+    let report = Report {
+        case: input.case.path.display().to_string(),
+        judge: cfg.judge,
+        judge_definition: cfg.judge.description(),
+        seed: cfg.seed,
+        budget: cfg.budget,
+        flights,
+        suite,
+        stages,
+        learning: learning.cloned(),
+    };
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+    write_atomic(&input.folder.join("report.json"), json.as_bytes())?;
+    write_atomic(&input.folder.join("report.md"), markdown(&report).as_bytes())?;
+    Ok(report)
+}
+
+/// Writes each failing flight as `test_N` (YAML, its trajectory CSV and a plot); returns (candidate, file name).
+fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Result<Vec<(u64, String)>, ModelError> {
+    let folder = input.folder;
+    let spelling = if input.cfg.old_spelling { Spelling::Old } else { Spelling::New };
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, r) in failing.iter().enumerate() {
         let name = format!("test_{i}");
-        let test = case.with_obstacles(r.obstacles.clone());
+        let test = input.case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
         let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
         if let Ok(bytes) = std::fs::read(folder.join(&r.trajectory)) {
@@ -190,34 +216,40 @@ pub fn write_outputs(
             "{name}: flew {}",
             r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
         );
-        let svg = plot(&test, lfs_path(&test).as_ref(), flown.as_ref(), &title, judge);
+        let lfs = input.screener.path(&test);
+        let svg = plot(&test, lfs.as_ref(), flown.as_ref(), &title, input.cfg.judge);
         write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
         reported.push((r.candidate, format!("{name}.yaml")));
     }
-    let flights: Vec<FlownTest> = records
-        .iter()
-        .map(|r| {
-            let d = r.min_distance.unwrap_or(f64::INFINITY);
-            FlownTest {
-                candidate: r.candidate,
-                predicted_min_distance: r.predicted_min_distance,
-                predicted_p_fail: r.predicted_p_fail,
-                min_distance: r.min_distance,
-                min_distance_raw: r.min_distance_raw,
-                status: r.status.clone(),
-                reason: r.reason.clone(),
-                flight_time_s: r.flight_time_s,
-                points: points(d),
-                test_score: if r.min_distance.is_some() {
-                    test_score(&[d], &[r.flight_time_s], r.obstacles.len())
-                } else {
-                    0.0
-                },
-                reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
-                vehicle: r.vehicle.clone(),
-            }
-        })
-        .collect();
+    Ok(reported)
+}
+
+/// One flight in the report; `reported` names the failing tests written.
+fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
+    let d = r.min_distance.unwrap_or(f64::INFINITY);
+    FlownTest {
+        candidate: r.candidate,
+        predicted_min_distance: r.predicted_min_distance,
+        predicted_p_fail: r.predicted_p_fail,
+        min_distance: r.min_distance,
+        min_distance_raw: r.min_distance_raw,
+        status: r.status.clone(),
+        reason: r.reason.clone(),
+        flight_time_s: r.flight_time_s,
+        points: points(d),
+        test_score: if r.min_distance.is_some() {
+            test_score(&[d], &[r.flight_time_s], r.obstacles.len())
+        } else {
+            0.0
+        },
+        reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
+        vehicle: r.vehicle.clone(),
+    }
+}
+
+/// The suite's numbers over the flights (the screening counts are left at 0 for the caller); the LFS's
+/// accuracy only if the campaign `screened`.
+fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[FlownTest], screened: bool) -> SuiteSummary {
     let predicted_fail: Vec<&FlightRecord> = records
         .iter()
         .filter(|r| r.predicted_min_distance < FAIL_DISTANCE_M)
@@ -238,8 +270,8 @@ pub fn write_outputs(
         .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_DISTANCE_M)))
         .unzip();
     let failing_obstacles: Vec<Vec<Obstacle>> = failing.iter().map(|r| r.obstacles.clone()).collect();
-    let suite = SuiteSummary {
-        candidates_screened,
+    SuiteSummary {
+        candidates_screened: 0,
         flown: records.len(),
         failing: failing.len(),
         failure_score: flights
@@ -257,28 +289,8 @@ pub fn write_outputs(
         lfs_p_fail_brier: crate::lfs::calibration::brier(&p_fail, &failed),
         lfs_error_first_quarter_m: quarter_error(records, false).filter(|_| screened),
         lfs_error_last_quarter_m: quarter_error(records, true).filter(|_| screened),
-        screening_per_s: if stages.screen_s > 0.0 {
-            candidates_screened as f64 / stages.screen_s
-        } else {
-            0.0
-        },
-    };
-    stages.report_s = t0.elapsed().as_secs_f64();
-    let report = Report {
-        case: case.path.display().to_string(),
-        judge,
-        judge_definition: judge.description(),
-        seed,
-        budget,
-        flights,
-        suite,
-        stages,
-        learning: learning.cloned(),
-    };
-    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    write_atomic(&folder.join("report.json"), json.as_bytes())?;
-    write_atomic(&folder.join("report.md"), markdown(&report).as_bytes())?;
-    Ok(report)
+        screening_per_s: 0.0,
+    }
 }
 
 /// Top-down plot: arena, obstacles, mission, the LFS's path and the flown path with its closest approach.

@@ -9,11 +9,13 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::candidate::{Candidate, Screened};
+use super::config::{CampaignConfig, CampaignError};
 use super::journal::{FlightRecord, Journal};
 use super::parallel::{available_threads, parallel_map};
 use super::pool::{Job, Vehicle, fly_all};
-use super::rank::{Screened, rank};
-use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
+use super::rank::{rank, too_similar};
+use super::screener::{Progress, Screener};
 use crate::generator::{DrawDistribution, Neighbourhood};
 use crate::io::write_atomic;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
@@ -28,7 +30,7 @@ pub struct Stage<'a> {
     /// The case study.
     pub case: &'a TestCase,
     /// Every candidate drawn so far, by index.
-    pub candidates: &'a [Vec<Obstacle>],
+    pub candidates: &'a [Candidate],
     /// The campaign folder (caches).
     pub folder: &'a Path,
     /// The LFS.
@@ -87,7 +89,7 @@ pub fn screen_all(
         ctx.cancel,
         &|n| ctx.progress.tick(n),
         |&i| {
-            let test = ctx.case.with_obstacles(ctx.candidates[i as usize].clone());
+            let test = ctx.case.with_obstacles(ctx.candidates[i as usize].obstacles.clone());
             let (min_distance, flight_time_s, status) = ctx.screener.screen(&test);
             Screened::point(i, min_distance, flight_time_s, status)
         },
@@ -140,7 +142,7 @@ pub fn ensemble_shortlist(
             ctx.cancel,
             &|n| ctx.progress.tick(n),
             |&c| {
-                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].clone());
+                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].obstacles.clone());
                 (c, ctx.screener.ensemble(&test, cfg.ensemble, member_seed(cfg.seed, c)))
             },
         );
@@ -192,7 +194,7 @@ pub fn member_seed(seed: u64, c: u64) -> u64 {
 pub fn rank_unflown(
     fresh: &[Screened],
     done: &[FlightRecord],
-    candidates: &[Vec<Obstacle>],
+    candidates: &[Candidate],
     cfg: &CampaignConfig,
     remaining: usize,
 ) -> Vec<Screened> {
@@ -204,17 +206,17 @@ pub fn rank_unflown(
 pub fn rank_unflown_within(
     fresh: &[Screened],
     done: &[FlightRecord],
-    candidates: &[Vec<Obstacle>],
+    candidates: &[Candidate],
     cfg: &CampaignConfig,
     remaining: usize,
     flown_max_iou: f64,
 ) -> Vec<Screened> {
-    let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
+    let footprints = |c: u64| candidates[c as usize].obstacles.iter().map(Obstacle::footprint).collect();
     let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
     ranked.retain(|s| {
         !done
             .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], flown_max_iou))
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
     });
     ranked.truncate(remaining);
     ranked
@@ -225,7 +227,7 @@ pub struct FlightStage<'a> {
     /// The case study.
     pub case: &'a TestCase,
     /// Every candidate drawn so far, by index.
-    pub candidates: &'a [Vec<Obstacle>],
+    pub candidates: &'a [Candidate],
     /// The campaign folder (journal, trajectories).
     pub folder: &'a Path,
     /// Progress output.
@@ -234,7 +236,8 @@ pub struct FlightStage<'a> {
     pub cancel: &'a AtomicBool,
 }
 
-/// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made.
+/// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made,
+/// as the journal reads them back, in its order.
 /// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
 /// an earlier round's), keeping the flights journaled so far for `--resume`. (A learning campaign on two PX4
 /// SITL instances went on with none after both were dropped after 10 flights, and ended "0 failing tests of 10
@@ -244,16 +247,16 @@ pub fn fly_ranked(
     ranked: Vec<Screened>,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     remaining: usize,
-) -> Result<usize, CampaignError> {
+) -> Result<Vec<FlightRecord>, CampaignError> {
     let jobs: Vec<Job> = ranked
         .into_iter()
         .map(|s| Job {
-            test: ctx.case.with_obstacles(ctx.candidates[s.candidate as usize].clone()),
+            test: ctx.case.with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone()),
             screened: s,
         })
         .collect();
     if jobs.is_empty() {
-        return Ok(0);
+        return Ok(Vec::new());
     }
     let no_vehicle_left = |why: String| {
         CampaignError::NoVehicle(format!(
@@ -300,5 +303,5 @@ pub fn fly_ranked(
     if vehicles.is_empty() {
         return Err(no_vehicle_left(outcome.dropped.join("; ")));
     }
-    Ok(outcome.flown)
+    Ok(outcome.records)
 }
