@@ -101,4 +101,3 @@ impl Screened {
         self.expected_points.map(|p| p / (self.flight_time_s.max(1.0) / 60.0))
     }
 }
-

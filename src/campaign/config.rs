@@ -5,9 +5,9 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
+use super::screener::{Progress, Screener};
 use crate::generator::{GenerateError, GeneratorConfig};
 use crate::judge::Judge;
-use super::screener::{Progress, Screener};
 use crate::model::{ModelError, TestCase};
 
 /// Below this flown distance, metres, a test failed (the competition's failure distance).
@@ -143,7 +143,6 @@ pub enum CampaignError {
     #[error("no reachable vehicle: {0}")]
     NoVehicle(String),
 }
-
 
 /// What a campaign run reads that stays the same from its first stage to its last.
 pub struct CampaignInput<'a> {

@@ -178,5 +178,4 @@ mod tests {
         assert_eq!((m.total.flights, m.total.failures), (2, 1));
         assert_eq!(m.draws[4][0].failures, 1);
     }
-
 }

@@ -11,11 +11,11 @@
 //! from their parent by IoU <= 0.5).
 
 use super::candidate::{Candidate, Lineage, Screened};
+use super::config::CampaignConfig;
 pub use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
-use super::config::CampaignConfig;
 use super::stages::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 
@@ -135,7 +135,9 @@ pub fn rank_split(
         if chosen.len() >= remaining {
             break;
         }
-        if chosen.iter().all(|c| c.candidate != s.candidate) && guard.admit(&candidates[s.candidate as usize].obstacles, rate) {
+        if chosen.iter().all(|c| c.candidate != s.candidate)
+            && guard.admit(&candidates[s.candidate as usize].obstacles, rate)
+        {
             chosen.push(s);
         }
     }

@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
-use super::journal::{FlightRecord, Journal};
 use super::candidate::Screened;
+use super::journal::{FlightRecord, Journal};
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -172,7 +172,8 @@ impl Pool<'_> {
         while let Some(job) = self.next_job() {
             let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
             let t0 = Instant::now();
-            let result = fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
+            let result =
+                fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
             let mut l = self.lock();
             l.in_flight -= 1;
             match result {
@@ -190,7 +191,11 @@ impl Pool<'_> {
                     l.queue.push_front(job);
                     drop(l);
                     self.changed.notify_all();
-                    self.outcome.lock().unwrap_or_else(|p| p.into_inner()).dropped.push(e.to_string());
+                    self.outcome
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .dropped
+                        .push(e.to_string());
                     self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
                     return;
                 }

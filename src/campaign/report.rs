@@ -202,7 +202,11 @@ pub fn write_outputs(
 /// Writes each failing flight as `test_N` (YAML, its trajectory CSV and a plot); returns (candidate, file name).
 fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Result<Vec<(u64, String)>, ModelError> {
     let folder = input.folder;
-    let spelling = if input.cfg.old_spelling { Spelling::Old } else { Spelling::New };
+    let spelling = if input.cfg.old_spelling {
+        Spelling::Old
+    } else {
+        Spelling::New
+    };
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, r) in failing.iter().enumerate() {
         let name = format!("test_{i}");
@@ -323,6 +327,17 @@ pub fn markdown(r: &Report) -> String {
         "seed {}, budget {} flights, {} candidates screened; judge {}: {}\n",
         r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
     );
+    summary_table(&mut md, r);
+    if let Some(l) = &r.learning {
+        learning_section(&mut md, l);
+    }
+    flights_table(&mut md, r);
+    md
+}
+
+/// The suite's numbers and the stages' wall times.
+fn summary_table(md: &mut String, r: &Report) {
+    let s = &r.suite;
     let _ = writeln!(md, "| metric | value |\n|---|---|");
     let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);
     let _ = writeln!(
@@ -351,92 +366,103 @@ pub fn markdown(r: &Report) -> String {
         "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
         st.sample_s, st.screen_s, st.ensemble_s, st.learn_s, st.fly_s, st.report_s
     );
-    if let Some(l) = &r.learning {
+}
+
+/// What a learning campaign learnt: the calibration, the kernel, the rounds and where the flights failed.
+fn learning_section(md: &mut String, l: &Learnt) {
+    let _ = writeln!(
+        md,
+        "## Learning\n\nLFS bias learnt: {:+.3} m from {} flights (prior {:+.3} m weighing {} flights).\n",
+        l.calibration.bias_m(),
+        l.calibration.flights,
+        l.calibration.prior_bias_m,
+        l.calibration.prior_flights
+    );
+    if let Some(k) = &l.surrogate {
         let _ = writeln!(
             md,
-            "## Learning\n\nLFS bias learnt: {:+.3} m from {} flights (prior {:+.3} m weighing {} flights).\n",
-            l.calibration.bias_m(),
-            l.calibration.flights,
-            l.calibration.prior_bias_m,
-            l.calibration.prior_flights
+            "Flights' kernel at the end: bandwidth {:.2} (unit draws), LFS weight {:.2}; leave-one-out error {:.3} m \
+             against {:.3} m for the calibrated LFS alone, over {} flights.\n",
+            k.bandwidth, k.lfs_weight, k.loo_error_m, k.lfs_error_m, k.flights
         );
-        if let Some(k) = &l.surrogate {
-            let _ = writeln!(
-                md,
-                "Flights' kernel at the end: bandwidth {:.2} (unit draws), LFS weight {:.2}; leave-one-out error {:.3} m \
-                 against {:.3} m for the calibrated LFS alone, over {} flights.\n",
-                k.bandwidth, k.lfs_weight, k.loo_error_m, k.lfs_error_m, k.flights
-            );
-        }
-        let _ = writeln!(
-            md,
-            "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
-            DRAW_NAMES.join(", ")
-        );
-        let _ = writeln!(md, "|---|---|---|---|---|---|");
-        for round in &l.rounds {
-            let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
-            let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
-                format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
-            });
-            let near = if round.near_miss_parents {
-                format!("{} near misses", round.local_candidates)
-            } else {
-                round.local_candidates.to_string()
-            };
-            let _ = writeln!(
-                md,
-                "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
-                round.round + 1,
-                round.candidates,
-                near,
-                round.flights,
-                round.local_flight_share,
-                round.bias_m,
-                kernel,
-                means.join(", ")
-            );
-        }
-        let fm = &l.failure_counts;
-        let _ = writeln!(
-            md,
-            "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",
-            fm.total.failures, fm.total.flights
-        );
-        let edges: Vec<String> = (0..FAIL_BINS)
-            .map(|k| {
-                format!(
-                    "{:.1}-{:.1}",
-                    k as f64 / FAIL_BINS as f64,
-                    (k + 1) as f64 / FAIL_BINS as f64
-                )
-            })
-            .collect();
-        let _ = writeln!(md, "| draw | {} |", edges.join(" | "));
-        let _ = writeln!(md, "|---|{}", "---|".repeat(FAIL_BINS));
-        for (name, row) in DRAW_NAMES.iter().zip(&fm.draws) {
-            let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
-            let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
-        }
-        let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
-        if near.flights + misses.flights > 0 {
-            let _ = writeln!(
-                md,
-                "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
-                 --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
-                 {}.",
-                near.failures,
-                near.flights,
-                l.drawn_close.failures,
-                l.drawn_close.flights,
-                misses.failures,
-                misses.flights,
-                other.failures,
-                other.flights
-            );
-        }
-        let _ = writeln!(md);
     }
+    let _ = writeln!(
+        md,
+        "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
+        DRAW_NAMES.join(", ")
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for round in &l.rounds {
+        let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
+        let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
+            format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
+        });
+        let near = if round.near_miss_parents {
+            format!("{} near misses", round.local_candidates)
+        } else {
+            round.local_candidates.to_string()
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
+            round.round + 1,
+            round.candidates,
+            near,
+            round.flights,
+            round.local_flight_share,
+            round.bias_m,
+            kernel,
+            means.join(", ")
+        );
+    }
+    failure_bins(md, l);
+}
+
+/// Failures per bin of each draw, and per arm (near failures, near misses, elsewhere).
+fn failure_bins(md: &mut String, l: &Learnt) {
+    let fm = &l.failure_counts;
+    let _ = writeln!(
+        md,
+        "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",
+        fm.total.failures, fm.total.flights
+    );
+    let edges: Vec<String> = (0..FAIL_BINS)
+        .map(|k| {
+            format!(
+                "{:.1}-{:.1}",
+                k as f64 / FAIL_BINS as f64,
+                (k + 1) as f64 / FAIL_BINS as f64
+            )
+        })
+        .collect();
+    let _ = writeln!(md, "| draw | {} |", edges.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(FAIL_BINS));
+    for (name, row) in DRAW_NAMES.iter().zip(&fm.draws) {
+        let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
+        let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
+    }
+    let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
+    if near.flights + misses.flights > 0 {
+        let _ = writeln!(
+            md,
+            "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
+             --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
+             {}.",
+            near.failures,
+            near.flights,
+            l.drawn_close.failures,
+            l.drawn_close.flights,
+            misses.failures,
+            misses.flights,
+            other.failures,
+            other.flights
+        );
+    }
+    let _ = writeln!(md);
+}
+
+/// Every flight, in flight order.
+fn flights_table(md: &mut String, r: &Report) {
     let _ = writeln!(
         md,
         "## Flights\n\n| candidate | predicted m | p_fail | flown m | raw m | status | time s | points | score | reported as |"
@@ -462,7 +488,6 @@ pub fn markdown(r: &Report) -> String {
             f.reported_as.as_deref().unwrap_or("")
         );
     }
-    md
 }
 
 /// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.

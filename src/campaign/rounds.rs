@@ -206,14 +206,24 @@ impl<'a> Rounds<'a> {
         // Below the diversity floor the children go on: the guard admits only those that do not lower it, so
         // the failures keep getting children for the rest of the campaign.
         let (around, lineage) = if cfg.adapt {
-            neighbours::parents(&self.journal, |c| self.candidates.get(c as usize).map(|x| x.unit), FAIL_M)
+            neighbours::parents(
+                &self.journal,
+                |c| self.candidates.get(c as usize).map(|x| x.unit),
+                FAIL_M,
+            )
         } else {
             (Vec::new(), Lineage::Failures)
         };
-        let children = if around.is_empty() { 0 } else { neighbours::CHILDREN.min(own) };
+        let children = if around.is_empty() {
+            0
+        } else {
+            neighbours::CHILDREN.min(own)
+        };
         // Children are measured against their own lineage: a near miss's children fail at about the base rate
         // on the mock, and counting them with the failures' children would starve the latter of flights.
-        let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage)).0.rate();
+        let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage))
+            .0
+            .rate();
         let planned = cfg.budget * (index + 1).min(ROUNDS) / ROUNDS;
         let later = cfg.budget - planned;
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
@@ -318,7 +328,10 @@ impl<'a> Rounds<'a> {
             Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
         };
         if !cfg.adapt {
-            return (rank_unflown(fresh, &self.journal, &self.candidates, cfg, remaining), share);
+            return (
+                rank_unflown(fresh, &self.journal, &self.candidates, cfg, remaining),
+                share,
+            );
         }
         let mut guard = DiversityGuard::for_round(&self.journal, FAIL_M, cfg, round.later);
         let ranked = rank_split(

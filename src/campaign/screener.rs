@@ -34,4 +34,3 @@ pub trait Progress: Sync {
     /// A line for the user.
     fn note(&self, message: &str);
 }
-

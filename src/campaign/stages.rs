@@ -211,7 +211,13 @@ pub fn rank_unflown_within(
     remaining: usize,
     flown_max_iou: f64,
 ) -> Vec<Screened> {
-    let footprints = |c: u64| candidates[c as usize].obstacles.iter().map(Obstacle::footprint).collect();
+    let footprints = |c: u64| {
+        candidates[c as usize]
+            .obstacles
+            .iter()
+            .map(Obstacle::footprint)
+            .collect()
+    };
     let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
     ranked.retain(|s| {
         !done
@@ -251,7 +257,9 @@ pub fn fly_ranked(
     let jobs: Vec<Job> = ranked
         .into_iter()
         .map(|s| Job {
-            test: ctx.case.with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone()),
+            test: ctx
+                .case
+                .with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone()),
             screened: s,
         })
         .collect();

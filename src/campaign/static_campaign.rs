@@ -49,7 +49,11 @@ fn draw_all(input: &CampaignInput) -> Result<Vec<Candidate>, CampaignError> {
     let generator = Generator::new(input.case, cfg.generator.clone(), cfg.seed)?;
     input.progress.stage("sample", cfg.candidates);
     let candidates = (0..cfg.candidates as u64)
-        .map(|i| generator.sample(i).map(|p| Candidate::drawn(p.obstacles.to_vec(), p.draw.unit)))
+        .map(|i| {
+            generator
+                .sample(i)
+                .map(|p| Candidate::drawn(p.obstacles.to_vec(), p.draw.unit))
+        })
         .collect::<Result<_, _>>()?;
     input.progress.tick(cfg.candidates);
     Ok(candidates)
