@@ -44,7 +44,7 @@ pub struct CampaignConfig {
     #[serde(default = "default_mock_speed")]
     pub mock_speed: f64,
     /// The embedded mocks hold their clock for each avoidance answer (`mock_speed` is then an upper bound).
-    /// Campaign files written before lockstep existed lack the key: their flights were free-running.
+    /// Off when the key is absent: such campaign files' flights were free-running, and a resume must match.
     #[serde(default)]
     pub mock_lockstep: bool,
     /// In lockstep, the companion plans on the pose this old (vehicle milliseconds), as a real companion's
@@ -54,7 +54,7 @@ pub struct CampaignConfig {
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,
-    /// The judge edition of the flights (campaign files written before editions existed were judged by 2025's).
+    /// The judge edition of the flights (2025's when the key is absent: the edition those files were judged by).
     #[serde(default = "judge_before_editions")]
     pub judge: Judge,
     /// Re-anchor each test at the vehicle's home (`--anchor-at-vehicle-home`).
@@ -67,7 +67,7 @@ pub struct CampaignConfig {
     #[serde(default = "default_flight_timeout_s")]
     pub flight_timeout_s: f64,
     /// Members of the LFS ensemble run on the shortlisted candidates to rank them by expected points per
-    /// minute; 0 ranks by the point prediction (campaign files written before ensembles existed).
+    /// minute; 0 (also when the key is absent) ranks by the point prediction.
     #[serde(default)]
     pub ensemble: usize,
     /// Learn the vehicle as the campaign flies (online calibration of the LFS, flights in rounds).
@@ -83,8 +83,8 @@ pub struct CampaignConfig {
     #[serde(default = "default_min_diversity")]
     pub min_diversity: f64,
     /// With `adapt`, a child of a failing flight may overlap a flown test up to this IoU (above `max_iou`)
-    /// while the failing tests would keep `min_diversity` ([`super::diversity_guard`]); `None` (campaign files
-    /// written before): children obey `max_iou` like every candidate.
+    /// while the failing tests would keep `min_diversity` ([`super::diversity_guard`]); `None` (also when the
+    /// key is absent): children obey `max_iou` like every candidate.
     #[serde(default)]
     pub child_max_iou: Option<f64>,
 }

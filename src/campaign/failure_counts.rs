@@ -6,8 +6,8 @@
 //! failure rate) was tried on the embedded mock, missions 1-3, seeds 0-2, budget 100: 43 failing tests over the
 //! 9 runs, the same as static screening and fewer than the elite rule the campaign uses (49). On the mock the
 //! failures are rare (about 6 in 100 flights) and a per-bin rate learnt from a handful of them is mostly noise.
-//! The counts still show a user where their stack failed: over the 289 distinct mission-2 flights of the
-//! issue-13 campaigns, 70 % of the failures had obstacle 1 turned 48-60 degrees.
+//! The counts still show a user where their stack failed: over 289 distinct mission-2 flights on the mock, 70 %
+//! of the failures had obstacle 1 turned 48-60 degrees.
 
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +39,7 @@ impl BinCount {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FailureCounts {
     /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`
-    /// (older files hold only the paper's five draws).
+    /// (files with only the paper's five draws are padded with empty counts).
     #[serde(deserialize_with = "padded_counts")]
     pub draws: [[BinCount; FAIL_BINS]; DIMS],
     /// All flights.

@@ -37,7 +37,7 @@ pub struct FlightRecord {
     /// Warnings of the flight side (e.g. the avoidance planner falling behind).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
-    /// Why the flight stopped, in words, when it did not land (journals before session 11 have none).
+    /// Why the flight stopped, in words, when it did not land (optional: journals without it still resume).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     /// The vehicle (MAVLink URL or `mock`) that flew it.

@@ -28,7 +28,7 @@ pub const PARENTS: usize = 12;
 pub const HALF_WIDTH: f64 = 0.15;
 /// Half the side of a parent's narrow box, in unit draws: once close children may fly, every second pass over
 /// the parents draws there, for close variants of the failure ([`child_box`]). The closer a flight is to a
-/// failure the likelier it fails (mission 2 on the mock, 6660 flights of sessions 7-10: 45 % at IoU 0.7-0.8
+/// failure the likelier it fails (mission 2 on the mock, 6660 flights: 45 % at IoU 0.7-0.8
 /// with an earlier failure, 39 % at 0.6-0.7, 20 % at 0.4-0.5, 9 % below 0.1), and few draws of the wide box
 /// come that close.
 pub const NARROW_HALF_WIDTH: f64 = 0.05;

@@ -66,7 +66,7 @@ pub fn screen_all(
             .ok()
             .filter(|c| &c.distribution == distribution && c.around == around)
             .map(|c| c.screened)
-            // Campaigns before adaptive generators cached the bare list (always the uniform distribution).
+            // A bare list is a cache of the uniform distribution with no parents: accepted so such folders resume.
             .or_else(|| {
                 serde_json::from_str::<Vec<Screened>>(&text)
                     .ok()
@@ -245,9 +245,8 @@ pub struct FlightStage<'a> {
 /// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made,
 /// as the journal reads them back, in its order.
 /// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
-/// an earlier round's), keeping the flights journaled so far for `--resume`. (A learning campaign on two PX4
-/// SITL instances went on with none after both were dropped after 10 flights, and ended "0 failing tests of 10
-/// flights" with exit code 0.)
+/// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
+/// must not end as a clean run that found no failing test.
 pub fn fly_ranked(
     ctx: &FlightStage,
     ranked: Vec<Screened>,
