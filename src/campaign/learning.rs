@@ -10,9 +10,9 @@
 
 use super::candidate::{Candidate, Screened, unit_of};
 use super::config::{CampaignConfig, FAIL_M};
+use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::journal::FlightRecord;
 use super::learn::Calibration;
-use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
 use super::surrogate::{Flown, Surrogate};
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::judge::diversity;
