@@ -16,7 +16,7 @@ pub use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
-use super::stages::{rank_unflown, rank_unflown_within};
+use super::rank::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 
 /// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out

@@ -1,7 +1,11 @@
 //! Ranking screened candidates: the most expected competition points per minute of flight first (from the
-//! LFS ensemble), else the most severe point prediction first; near-duplicates skipped.
+//! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
+//! tests skipped.
 
+use super::candidate::Candidate;
 pub use super::candidate::Screened;
+use super::config::CampaignConfig;
+use super::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
 use crate::model::Obstacle;
 
@@ -44,6 +48,45 @@ pub(super) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool 
     let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
     let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
     union_iou(&fa, &fb) > max_iou
+}
+
+/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
+/// most `remaining`.
+pub fn rank_unflown(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Vec<Screened> {
+    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
+}
+
+/// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
+/// failing flights admitted by [`super::diversity_guard`]); among themselves they still obey `max_iou`.
+pub fn rank_unflown_within(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+    flown_max_iou: f64,
+) -> Vec<Screened> {
+    let footprints = |c: u64| {
+        candidates[c as usize]
+            .obstacles
+            .iter()
+            .map(Obstacle::footprint)
+            .collect()
+    };
+    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
+    });
+    ranked.truncate(remaining);
+    ranked
 }
 
 #[cfg(test)]

@@ -24,16 +24,15 @@ use super::config::{CampaignError, CampaignInput, FAIL_M};
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
+use super::flights::{FlightStage, fly_ranked};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};
 use super::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use super::pool::Vehicle;
+use super::rank::rank_unflown;
 use super::report::StageTimes;
-use super::stages::{
-    ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
-    screen_all,
-};
+use super::screening::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
 use super::surrogate::Surrogate;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};

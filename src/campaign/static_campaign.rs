@@ -8,13 +8,12 @@ use std::time::Instant;
 
 use super::candidate::{Candidate, Screened};
 use super::config::{CampaignError, CampaignInput};
+use super::flights::{FlightStage, fly_ranked};
 use super::journal::Journal;
 use super::pool::Vehicle;
+use super::rank::rank_unflown;
 use super::report::StageTimes;
-use super::stages::{
-    ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
-    screen_all,
-};
+use super::screening::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
 use crate::generator::{DrawDistribution, Generator};
 
 /// Draws, screens, ranks and flies; returns the number of candidates drawn.
