@@ -13,17 +13,20 @@
 //! The expectation is over the campaign's *final* failing tests: the failures still to come (the flights after
 //! this round at the campaign's failure rate so far, overlapping everything like the flown tests, or like the
 //! failing tests so far when those overlap more: [`projection`]) are counted too. So the rule holds from the
-//! first failure on, lenient early (many failures to come dilute a close pair) and strict late. Up to session
-//! 12 it held only from 4 failing tests on, and a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30) ended
-//! with a parent and two of its children at diversity 0.708.
+//! first failure on, lenient early (many failures to come dilute a close pair) and strict late. Held only from
+//! 4 failing tests on, it let a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30) end with a parent and two of
+//! its children at diversity 0.708.
 
+use super::config::CampaignConfig;
 use super::journal::FlightRecord;
-use super::neighbours::MIN_FAILING_FOR_DIVERSITY;
-use super::run::CampaignConfig;
 use crate::geometry::{Footprint, union_iou};
 use crate::judge::diversity;
 use crate::model::Obstacle;
 
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
+/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
+/// which counts the failures still to come, binds from the first failure.)
+pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Expected diversity a child must leave above the user's floor: the expectation is over one round's children,
 /// and the flights' failures scatter around it.
 pub const DIVERSITY_MARGIN: f64 = 0.02;
@@ -141,7 +144,7 @@ impl DiversityGuard {
         let (sum, weight) = self.pairs_with(&p, w);
         let expected = 1.0 - (self.pair_sum + sum) / (self.pair_weight + weight).max(f64::MIN_POSITIVE);
         // Below the floor, a candidate that does not lower the expectation is still flown: refusing it too would
-        // leave the rest of the budget unflown (mission 2 seed 2 once stopped at 50 of 100 flights this way).
+        // leave the rest of the budget unflown (on mission 2 seed 2, half of a budget of 100).
         let now = 1.0 - self.pair_sum / self.pair_weight.max(f64::MIN_POSITIVE);
         if self.failures > 0 && expected < self.floor + DIVERSITY_MARGIN && (close || expected < now) {
             return false;
@@ -251,7 +254,7 @@ mod tests {
                 .admit(&at(2.0), 0.3)
         );
         // Two failures 40 m apart, no failure to come: a candidate failing at 0.5 at IoU 1/3 of one leaves
-        // 1 - (0.5 / 3) / 2 = 0.917. (Below 4 failures nothing was checked up to session 12.)
+        // 1 - (0.5 / 3) / 2 = 0.917: the rule binds below 4 failures too.
         let two = [flown(0.0, 1.0), flown(40.0, 1.0)];
         let last = |floor: f64| DiversityGuard::new(&two, 1.5, (0.5, 0.75), floor);
         assert!(last(0.8).admit(&at(-2.0), 0.5));

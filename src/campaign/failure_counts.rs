@@ -6,11 +6,14 @@
 //! failure rate) was tried on the embedded mock, missions 1-3, seeds 0-2, budget 100: 43 failing tests over the
 //! 9 runs, the same as static screening and fewer than the elite rule the campaign uses (49). On the mock the
 //! failures are rare (about 6 in 100 flights) and a per-bin rate learnt from a handful of them is mostly noise.
-//! The counts still show a user where their stack failed: over the 289 distinct mission-2 flights of the
-//! issue-13 campaigns, 70 % of the failures had obstacle 1 turned 48-60 degrees.
+//! The counts still show a user where their stack failed: over 289 distinct mission-2 flights on the mock, 70 %
+//! of the failures had obstacle 1 turned 48-60 degrees.
 
 use serde::{Deserialize, Serialize};
 
+use super::candidate::{Candidate, unit_of};
+use super::config::FAIL_M;
+use super::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, bin_of};
 
 /// Bins per draw (coarser than the generator's distribution: a campaign sees few failures).
@@ -36,7 +39,7 @@ impl BinCount {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct FailureCounts {
     /// `draws[d][k]`: flights whose draw `d` (a unit number) fell in `[k / FAIL_BINS, (k + 1) / FAIL_BINS)`
-    /// (older files hold only the paper's five draws).
+    /// (files with only the paper's five draws are padded with empty counts).
     #[serde(deserialize_with = "padded_counts")]
     pub draws: [[BinCount; FAIL_BINS]; DIMS],
     /// All flights.
@@ -60,6 +63,32 @@ impl FailureCounts {
         }
         add(&mut self.total);
     }
+}
+
+/// Flights and failures of the candidates `is_arm` picks and of the others (flights of candidates this run did
+/// not draw count as others).
+pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(u64) -> bool) -> (BinCount, BinCount) {
+    let (mut near, mut other) = (BinCount::default(), BinCount::default());
+    for r in done {
+        if let Some(d) = r.min_distance {
+            let arm = if is_arm(r.candidate) { &mut near } else { &mut other };
+            arm.flights += 1;
+            arm.failures += u32::from(d < FAIL_M);
+        }
+    }
+    (near, other)
+}
+
+/// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
+/// longer resumed run, are skipped).
+pub fn counted_failures(done: &[FlightRecord], candidates: &[Candidate]) -> FailureCounts {
+    let mut m = FailureCounts::default();
+    for r in done {
+        if let (Some(u), Some(flown)) = (unit_of(candidates, r.candidate), r.min_distance) {
+            m.observe(&u, flown < FAIL_M);
+        }
+    }
+    m
 }
 
 #[cfg(test)]

@@ -37,7 +37,7 @@ pub struct FlightRecord {
     /// Warnings of the flight side (e.g. the avoidance planner falling behind).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
-    /// Why the flight stopped, in words, when it did not land (journals before session 11 have none).
+    /// Why the flight stopped, in words, when it did not land (optional: journals without it still resume).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     /// The vehicle (MAVLink URL or `mock`) that flew it.
@@ -89,6 +89,15 @@ impl Journal {
         line.push('\n');
         self.file.write_all(line.as_bytes()).map_err(io)?;
         self.file.sync_data().map_err(io)
+    }
+
+    /// `record` as [`Self::read`] gives it back (a non-finite optional distance is stored as `null`), so a
+    /// campaign keeping its journal in memory sees what a resumed one reads.
+    pub fn read_back(record: &FlightRecord) -> FlightRecord {
+        serde_json::to_string(record)
+            .ok()
+            .and_then(|line| serde_json::from_str(&line).ok())
+            .unwrap_or_else(|| record.clone())
     }
 
     /// Reads every complete record; a torn last line (the process died mid-write) is ignored.

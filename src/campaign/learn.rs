@@ -167,7 +167,7 @@ pub struct RoundLog {
     /// The flights' kernel used to rank its flights (`None`: the calibrated LFS alone).
     #[serde(default)]
     pub surrogate: Option<Surrogate>,
-    /// Mean of each unit draw of its distribution (0.5 = uniform; older files hold only the paper's five).
+    /// Mean of each unit draw of its distribution (0.5 = uniform; files with only the paper's five are padded).
     #[serde(deserialize_with = "uniform_means")]
     pub draw_means: [f64; DIMS],
 }

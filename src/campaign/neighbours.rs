@@ -10,19 +10,15 @@
 //! would drop them before flight otherwise (at half width [`HALF_WIDTH`] only 31 % of plain children differ
 //! from their parent by IoU <= 0.5).
 
+use super::candidate::{Candidate, Lineage, Screened};
+use super::config::CampaignConfig;
+pub use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
-use super::rank::Screened;
-use super::run::CampaignConfig;
-use super::stages::{rank_unflown, rank_unflown_within};
+use super::rank::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
-use crate::model::Obstacle;
 
-/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
-/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
-/// which counts the failures still to come, binds from the first failure.)
-pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out
 /// among them in turn.
 pub const CHILDREN: usize = 36;
@@ -32,7 +28,7 @@ pub const PARENTS: usize = 12;
 pub const HALF_WIDTH: f64 = 0.15;
 /// Half the side of a parent's narrow box, in unit draws: once close children may fly, every second pass over
 /// the parents draws there, for close variants of the failure ([`child_box`]). The closer a flight is to a
-/// failure the likelier it fails (mission 2 on the mock, 6660 flights of sessions 7-10: 45 % at IoU 0.7-0.8
+/// failure the likelier it fails (mission 2 on the mock, 6660 flights: 45 % at IoU 0.7-0.8
 /// with an earlier failure, 39 % at 0.6-0.7, 20 % at 0.4-0.5, 9 % below 0.1), and few draws of the wide box
 /// come that close.
 pub const NARROW_HALF_WIDTH: f64 = 0.05;
@@ -55,32 +51,17 @@ pub const NEAR_MISS_PARENTS: usize = 4;
 /// seeds 0-5: 8 of 72 against 18 of 231), so they get no more than the floor whatever their rate.
 pub const NEAR_MISS_FLIGHT_SHARE: f64 = LOCAL_FLIGHT_SHARE.0;
 
-/// Where a round's children come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Lineage {
-    /// The failing flights so far.
-    Failures,
-    /// No flight has failed yet: the closest flights within [`NEAR_MISS_M`] of failing.
-    NearMisses,
-}
-
-impl Lineage {
-    /// Which candidates are this lineage's children: `failures_children` or `near_misses_children`.
-    pub fn children<'a>(self, failures_children: &'a [bool], near_misses_children: &'a [bool]) -> &'a [bool] {
-        match self {
-            Lineage::Failures => failures_children,
-            Lineage::NearMisses => near_misses_children,
-        }
-    }
-}
-
 /// The neighbourhoods of the failing flights in `done` (flown closer than `fail_m`; at most [`PARENTS`],
 /// closest first, ties by candidate); with no failure, of the closest near misses (below `fail_m` +
 /// [`NEAR_MISS_M`], at most [`NEAR_MISS_PARENTS`]). Flights of candidates this run did not draw are skipped.
-pub fn parents(done: &[FlightRecord], units: &[[f64; DIMS]], fail_m: f64) -> (Vec<Neighbourhood>, Lineage) {
+pub fn parents(
+    done: &[FlightRecord],
+    unit_of: impl Fn(u64) -> Option<[f64; DIMS]>,
+    fail_m: f64,
+) -> (Vec<Neighbourhood>, Lineage) {
     let mut flown: Vec<(f64, u64, [f64; DIMS])> = done
         .iter()
-        .filter_map(|r| Some((r.min_distance?, r.candidate, *units.get(r.candidate as usize)?)))
+        .filter_map(|r| Some((r.min_distance?, r.candidate, unit_of(r.candidate)?)))
         .filter(|(d, _, _)| *d < fail_m + NEAR_MISS_M)
         .collect();
     flown.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -128,7 +109,7 @@ pub fn rank_split(
     fresh: &[Screened],
     is_local: impl Fn(u64) -> bool,
     share: f64,
-    (done, candidates): (&[FlightRecord], &[Vec<Obstacle>]),
+    (done, candidates): (&[FlightRecord], &[Candidate]),
     cfg: &CampaignConfig,
     remaining: usize,
     (guard, (near_rate, other_rate)): (&mut DiversityGuard, (f64, f64)),
@@ -139,7 +120,7 @@ pub fn rank_split(
     let mut chosen: Vec<Screened> = Vec::new();
     let mut later = Vec::new();
     for s in near {
-        if chosen.len() < quota && guard.admit(&candidates[s.candidate as usize], near_rate) {
+        if chosen.len() < quota && guard.admit(&candidates[s.candidate as usize].obstacles, near_rate) {
             chosen.push(s);
         } else {
             later.push(s);
@@ -154,7 +135,9 @@ pub fn rank_split(
         if chosen.len() >= remaining {
             break;
         }
-        if chosen.iter().all(|c| c.candidate != s.candidate) && guard.admit(&candidates[s.candidate as usize], rate) {
+        if chosen.iter().all(|c| c.candidate != s.candidate)
+            && guard.admit(&candidates[s.candidate as usize].obstacles, rate)
+        {
             chosen.push(s);
         }
     }
@@ -169,6 +152,10 @@ mod tests {
         crate::campaign::journal::test_record(candidate, 1.0, flown)
     }
 
+    fn at(units: &[[f64; DIMS]]) -> impl Fn(u64) -> Option<[f64; DIMS]> + '_ {
+        |c| units.get(c as usize).copied()
+    }
+
     #[test]
     fn the_failing_flights_are_the_parents() {
         let units: Vec<[f64; DIMS]> = (0..20).map(|i| [i as f64 / 20.0; DIMS]).collect();
@@ -176,7 +163,7 @@ mod tests {
         let mut done: Vec<FlightRecord> = (0..16).map(|i| record(i, Some(1.0 + i as f64 * 0.05))).collect();
         done.push(record(16, None));
         done.push(record(42, Some(0.1)));
-        let (p, lineage) = parents(&done, &units, 1.5);
+        let (p, lineage) = parents(&done, at(&units), 1.5);
         assert_eq!(lineage, Lineage::Failures);
         assert_eq!(
             p.len(),
@@ -188,10 +175,10 @@ mod tests {
         assert!(p.iter().all(|n| n.half_width == HALF_WIDTH));
         // More failures than PARENTS: the closest.
         let many: Vec<FlightRecord> = (0..20).map(|i| record(i, Some(1.4 - i as f64 * 0.01))).collect();
-        let (p, _) = parents(&many, &units, 1.5);
+        let (p, _) = parents(&many, at(&units), 1.5);
         assert_eq!(p.len(), PARENTS);
         assert_eq!(p[0].centre, units[19]);
-        assert!(parents(&[], &units, 1.5).0.is_empty());
+        assert!(parents(&[], at(&units), 1.5).0.is_empty());
     }
 
     #[test]
@@ -199,7 +186,7 @@ mod tests {
         let units: Vec<[f64; DIMS]> = (0..20).map(|i| [i as f64 / 20.0; DIMS]).collect();
         // Candidates 0-15 flew 1.5, 1.55, ... 2.25 m: none failed; 0-5 are within 0.3 m of failing.
         let done: Vec<FlightRecord> = (0..16).rev().map(|i| record(i, Some(1.5 + i as f64 * 0.05))).collect();
-        let (p, lineage) = parents(&done, &units, 1.5);
+        let (p, lineage) = parents(&done, at(&units), 1.5);
         assert_eq!(lineage, Lineage::NearMisses);
         assert_eq!(p.len(), NEAR_MISS_PARENTS);
         let centres: Vec<_> = p.iter().map(|n| n.centre).collect();
@@ -211,17 +198,17 @@ mod tests {
             record(9, Some(1.75)),
             record(1, Some(2.5)),
         ];
-        let (p, lineage) = parents(&few, &units, 1.5);
+        let (p, lineage) = parents(&few, at(&units), 1.5);
         assert_eq!(lineage, Lineage::NearMisses);
         assert_eq!(p.iter().map(|n| n.centre).collect::<Vec<_>>(), vec![units[9], units[7]]);
         // One failure takes over from every near miss.
         let mut one = few.clone();
         one.push(record(12, Some(1.49)));
-        let (p, lineage) = parents(&one, &units, 1.5);
+        let (p, lineage) = parents(&one, at(&units), 1.5);
         assert_eq!((p.len(), lineage), (1, Lineage::Failures));
         assert_eq!(p[0].centre, units[12]);
         // Far flights only: no parent.
-        assert!(parents(&few[3..], &units, 1.5).0.is_empty());
+        assert!(parents(&few[3..], at(&units), 1.5).0.is_empty());
     }
 
     #[test]

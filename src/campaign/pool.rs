@@ -2,13 +2,13 @@
 //! journaled before the vehicle takes the next one.
 
 use std::collections::VecDeque;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
+use super::candidate::Screened;
 use super::journal::{FlightRecord, Journal};
-use super::rank::Screened;
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -63,6 +63,8 @@ pub struct Job {
 pub struct PoolOutcome {
     /// Flights finished (journaled) in this run.
     pub flown: usize,
+    /// Those flights' records in journal order, as the journal reads them back.
+    pub records: Vec<FlightRecord>,
     /// Vehicles dropped as unreachable, with the reason.
     pub dropped: Vec<String>,
     /// Journal errors (the flight happened but could not be recorded): the campaign stops on the first.
@@ -82,6 +84,22 @@ struct Ledger {
     finished: usize,
 }
 
+/// What the pool's workers share.
+struct Pool<'a> {
+    ledger: Mutex<Ledger>,
+    changed: Condvar,
+    /// The journal and the records appended to it, in its order.
+    journal: Mutex<(Journal, Vec<FlightRecord>)>,
+    outcome: Mutex<PoolOutcome>,
+    stop: AtomicBool,
+    /// Indices of the vehicles dropped.
+    dead: Mutex<Vec<usize>>,
+    budget: usize,
+    folder: &'a Path,
+    cancel: &'a AtomicBool,
+    on_flight: &'a (dyn Fn(&FlightRecord) + Sync),
+}
+
 /// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
 /// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
 ///
@@ -98,146 +116,197 @@ pub fn fly_all(
     cancel: &AtomicBool,
     on_flight: &(dyn Fn(&FlightRecord) + Sync),
 ) -> PoolOutcome {
-    let ledger = Mutex::new(Ledger {
-        queue: jobs.into_iter().collect(),
-        in_flight: 0,
-        finished: 0,
-    });
-    let changed = Condvar::new();
-    let journal = Mutex::new(journal);
-    let outcome = Mutex::new(PoolOutcome::default());
-    let stop = AtomicBool::new(false);
-    let lock = || ledger.lock().unwrap_or_else(|p| p.into_inner());
-    let dead: Mutex<Vec<usize>> = Mutex::new(Vec::new());
     // Rejections count across calls (a learning campaign's rounds) and resumes: the journal holds them.
-    let history = journal
-        .lock()
-        .ok()
-        .and_then(|j| Journal::read(j.path()).ok())
-        .unwrap_or_default();
+    let history = Journal::read(journal.path()).unwrap_or_default();
+    let pool = Pool {
+        ledger: Mutex::new(Ledger {
+            queue: jobs.into_iter().collect(),
+            in_flight: 0,
+            finished: 0,
+        }),
+        changed: Condvar::new(),
+        journal: Mutex::new((journal, Vec::new())),
+        outcome: Mutex::new(PoolOutcome::default()),
+        stop: AtomicBool::new(false),
+        dead: Mutex::new(Vec::new()),
+        budget,
+        folder,
+        cancel,
+        on_flight,
+    };
     std::thread::scope(|scope| {
         for (index, vehicle) in vehicles.iter_mut().enumerate() {
-            let name = vehicle.name();
-            let mut rejected_in_a_row = history
-                .iter()
-                .rev()
-                .filter(|r| r.vehicle == name)
-                .take_while(|r| r.status == "rejected")
-                .count();
-            let (journal, outcome, stop, changed, lock, dead) = (&journal, &outcome, &stop, &changed, &lock, &dead);
-            scope.spawn(move || {
-                loop {
-                    // Take the next job, or learn there will be none.
-                    let job = {
-                        let mut l = lock();
-                        loop {
-                            if cancel.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed) {
-                                return;
-                            }
-                            let budget_left = l.finished + l.in_flight < budget;
-                            if budget_left && let Some(job) = l.queue.pop_front() {
-                                l.in_flight += 1;
-                                break job;
-                            }
-                            if l.in_flight == 0 {
-                                return; // budget spent or queue empty, and nothing can come back
-                            }
-                            // A flight in the air may yet hand its job back; wait, bounded so cancel is seen.
-                            l = changed
-                                .wait_timeout(l, std::time::Duration::from_millis(200))
-                                .map(|(g, _)| g)
-                                .unwrap_or_else(|p| p.into_inner().0);
-                        }
-                    };
-                    let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
-                    let t0 = Instant::now();
-                    let result = match vehicle.fly(&job.test, &folder.join(&rel), cancel) {
-                        Ok(flown) if flown.status == "rejected" => {
-                            rejected_in_a_row += 1;
-                            if rejected_in_a_row >= REJECTED_IN_A_ROW_TO_DROP {
-                                Err(VehicleError::Unreachable {
-                                    vehicle: vehicle.name(),
-                                    reason: format!(
-                                        "rejected {rejected_in_a_row} flights in a row at setup (last: {})",
-                                        flown.reason.as_deref().unwrap_or("no reason given")
-                                    ),
-                                })
-                            } else {
-                                Ok(flown)
-                            }
-                        }
-                        other => {
-                            rejected_in_a_row = 0;
-                            other
-                        }
-                    };
-                    let mut l = lock();
-                    l.in_flight -= 1;
-                    match result {
-                        Ok(flown) => {
-                            l.finished += 1;
-                            drop(l);
-                            changed.notify_all();
-                            let record = FlightRecord {
-                                candidate: job.screened.candidate,
-                                obstacles: job.test.obstacles.clone(),
-                                predicted_min_distance: job.screened.min_distance,
-                                predicted_flight_time_s: job.screened.flight_time_s,
-                                predicted_p_fail: job.screened.p_fail,
-                                predicted_raw_min_distance: job.screened.raw_min_distance,
-                                min_distance: flown.min_distance,
-                                min_distance_raw: flown.min_distance_raw,
-                                status: flown.status,
-                                flight_time_s: flown.flight_time_s,
-                                warnings: flown.warnings,
-                                reason: flown.reason,
-                                vehicle: vehicle.name(),
-                                trajectory: rel,
-                                wall_s: t0.elapsed().as_secs_f64(),
-                            };
-                            let written = journal
-                                .lock()
-                                .map_err(|_| "journal lock poisoned".to_string())
-                                .and_then(|mut j| j.append(&record).map_err(|e| e.to_string()));
-                            let mut o = outcome.lock().unwrap_or_else(|p| p.into_inner());
-                            match written {
-                                Ok(()) => {
-                                    o.flown += 1;
-                                    drop(o);
-                                    on_flight(&record);
-                                }
-                                Err(e) => {
-                                    o.errors.push(e);
-                                    stop.store(true, Ordering::Relaxed);
-                                    return;
-                                }
-                            }
-                        }
-                        Err(e) => {
-                            // Give the job back for another vehicle; this one is out.
-                            l.queue.push_front(job);
-                            drop(l);
-                            changed.notify_all();
-                            outcome
-                                .lock()
-                                .unwrap_or_else(|p| p.into_inner())
-                                .dropped
-                                .push(e.to_string());
-                            dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
-                            return;
-                        }
-                    }
-                }
-            });
+            let rejected = rejected_in_a_row(&history, &vehicle.name());
+            let pool = &pool;
+            scope.spawn(move || pool.work(index, vehicle.as_mut(), rejected));
         }
     });
-    let dead = dead.into_inner().unwrap_or_else(|p| p.into_inner());
+    let dead = pool.dead.into_inner().unwrap_or_else(|p| p.into_inner());
     let mut index = 0;
     vehicles.retain(|_| {
         index += 1;
         !dead.contains(&(index - 1))
     });
-    outcome.into_inner().unwrap_or_else(|p| p.into_inner())
+    let mut outcome = pool.outcome.into_inner().unwrap_or_else(|p| p.into_inner());
+    outcome.records = pool.journal.into_inner().unwrap_or_else(|p| p.into_inner()).1;
+    outcome
+}
+
+/// The setup rejections `vehicle` ended its journaled flights with.
+fn rejected_in_a_row(history: &[FlightRecord], vehicle: &str) -> usize {
+    history
+        .iter()
+        .rev()
+        .filter(|r| r.vehicle == vehicle)
+        .take_while(|r| r.status == "rejected")
+        .count()
+}
+
+impl Pool<'_> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Ledger> {
+        self.ledger.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// One vehicle's worker: flies jobs until there are none, the budget is spent, or the vehicle is dropped.
+    fn work(&self, index: usize, vehicle: &mut dyn Vehicle, mut rejected: usize) {
+        while let Some(job) = self.next_job() {
+            let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
+            let t0 = Instant::now();
+            let result =
+                fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
+            let mut l = self.lock();
+            l.in_flight -= 1;
+            match result {
+                Ok(flown) => {
+                    l.finished += 1;
+                    drop(l);
+                    self.changed.notify_all();
+                    let record = job.record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
+                    if !self.journal(&record) {
+                        return;
+                    }
+                }
+                Err(e) => {
+                    // Give the job back for another vehicle; this one is out.
+                    l.queue.push_front(job);
+                    drop(l);
+                    self.changed.notify_all();
+                    self.outcome
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .dropped
+                        .push(e.to_string());
+                    self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
+                    return;
+                }
+            }
+        }
+    }
+
+    /// The next job, or `None` when there will be none (cancelled, stopped, budget spent or queue empty).
+    fn next_job(&self) -> Option<Job> {
+        let mut l = self.lock();
+        loop {
+            if self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) {
+                return None;
+            }
+            let budget_left = l.finished + l.in_flight < self.budget;
+            if budget_left && let Some(job) = l.queue.pop_front() {
+                l.in_flight += 1;
+                return Some(job);
+            }
+            if l.in_flight == 0 {
+                return None; // budget spent or queue empty, and nothing can come back
+            }
+            // A flight in the air may yet hand its job back; wait, bounded so cancel is seen.
+            l = self
+                .changed
+                .wait_timeout(l, std::time::Duration::from_millis(200))
+                .map(|(g, _)| g)
+                .unwrap_or_else(|p| p.into_inner().0);
+        }
+    }
+
+    /// Appends `record` to the journal; on failure stops the pool and returns false.
+    fn journal(&self, record: &FlightRecord) -> bool {
+        let written = self
+            .journal
+            .lock()
+            .map_err(|_| "journal lock poisoned".to_string())
+            .and_then(|mut j| {
+                j.0.append(record).map_err(|e| e.to_string())?;
+                j.1.push(Journal::read_back(record));
+                Ok(())
+            });
+        let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
+        match written {
+            Ok(()) => {
+                o.flown += 1;
+                drop(o);
+                (self.on_flight)(record);
+                true
+            }
+            Err(e) => {
+                o.errors.push(e);
+                self.stop.store(true, Ordering::Relaxed);
+                false
+            }
+        }
+    }
+}
+
+/// Flies `test` on `vehicle`; the [`REJECTED_IN_A_ROW_TO_DROP`]th setup rejection in a row makes the vehicle
+/// unreachable.
+fn fly_counting_rejections(
+    vehicle: &mut dyn Vehicle,
+    test: &TestCase,
+    csv: &Path,
+    cancel: &AtomicBool,
+    rejected_in_a_row: &mut usize,
+) -> Result<Flown, VehicleError> {
+    match vehicle.fly(test, csv, cancel) {
+        Ok(flown) if flown.status == "rejected" => {
+            *rejected_in_a_row += 1;
+            if *rejected_in_a_row >= REJECTED_IN_A_ROW_TO_DROP {
+                Err(VehicleError::Unreachable {
+                    vehicle: vehicle.name(),
+                    reason: format!(
+                        "rejected {rejected_in_a_row} flights in a row at setup (last: {})",
+                        flown.reason.as_deref().unwrap_or("no reason given")
+                    ),
+                })
+            } else {
+                Ok(flown)
+            }
+        }
+        other => {
+            *rejected_in_a_row = 0;
+            other
+        }
+    }
+}
+
+impl Job {
+    /// The journal record of this job flown by `vehicle`.
+    fn record(self, flown: Flown, vehicle: String, trajectory: PathBuf, wall_s: f64) -> FlightRecord {
+        FlightRecord {
+            candidate: self.screened.candidate,
+            obstacles: self.test.obstacles,
+            predicted_min_distance: self.screened.min_distance,
+            predicted_flight_time_s: self.screened.flight_time_s,
+            predicted_p_fail: self.screened.p_fail,
+            predicted_raw_min_distance: self.screened.raw_min_distance,
+            min_distance: flown.min_distance,
+            min_distance_raw: flown.min_distance_raw,
+            status: flown.status,
+            flight_time_s: flown.flight_time_s,
+            warnings: flown.warnings,
+            reason: flown.reason,
+            vehicle,
+            trajectory,
+            wall_s,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -1,52 +1,13 @@
 //! Ranking screened candidates: the most expected competition points per minute of flight first (from the
-//! LFS ensemble), else the most severe point prediction first; near-duplicates skipped.
+//! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
+//! tests skipped.
 
-use serde::{Deserialize, Serialize};
-
+use super::candidate::Candidate;
+pub use super::candidate::Screened;
+use super::config::CampaignConfig;
+use super::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
-
-/// What the low-fidelity simulator predicted for one candidate.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Screened {
-    /// The candidate's generator index.
-    pub candidate: u64,
-    /// Predicted minimum distance (competition definition), metres.
-    pub min_distance: f64,
-    /// Predicted flight time, seconds.
-    pub flight_time_s: f64,
-    /// How the simulated flight ended.
-    pub status: String,
-    /// The ensemble's probability of a flight below 1.5 m (`None`: no ensemble ran for it).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub p_fail: Option<f64>,
-    /// The ensemble's expected competition points of one flight.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub expected_points: Option<f64>,
-    /// The LFS's own prediction when `min_distance` is a calibrated one (a learning campaign).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub raw_min_distance: Option<f64>,
-}
-
-impl Screened {
-    /// A point prediction without an ensemble.
-    pub fn point(candidate: u64, min_distance: f64, flight_time_s: f64, status: String) -> Self {
-        Screened {
-            candidate,
-            min_distance,
-            flight_time_s,
-            status,
-            p_fail: None,
-            expected_points: None,
-            raw_min_distance: None,
-        }
-    }
-
-    /// Expected points per minute of predicted flight: what a flight adds to the competition's test score
-    /// (points x 10 / (obstacles^2 x minutes), the obstacle count being the same for every candidate).
-    pub fn points_per_minute(&self) -> Option<f64> {
-        self.expected_points.map(|p| p / (self.flight_time_s.max(1.0) / 60.0))
-    }
-}
+use crate::model::Obstacle;
 
 /// Orders candidates with an ensemble by expected points per minute (most first), then those without by
 /// predicted distance (then shorter flight, then index), keeping only those predicted below `threshold_m`
@@ -80,6 +41,52 @@ pub fn rank(
         }
     }
     chosen.into_iter().map(|(s, _)| s).collect()
+}
+
+/// Whether two tests' footprints overlap by more than `max_iou`.
+pub(super) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
+    let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
+    let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
+    union_iou(&fa, &fb) > max_iou
+}
+
+/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
+/// most `remaining`.
+pub fn rank_unflown(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Vec<Screened> {
+    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
+}
+
+/// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
+/// failing flights admitted by [`super::diversity_guard`]); among themselves they still obey `max_iou`.
+pub fn rank_unflown_within(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+    flown_max_iou: f64,
+) -> Vec<Screened> {
+    let footprints = |c: u64| {
+        candidates[c as usize]
+            .obstacles
+            .iter()
+            .map(Obstacle::footprint)
+            .collect()
+    };
+    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
+    });
+    ranked.truncate(remaining);
+    ranked
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::config::CampaignInput;
 use super::failure_counts::FAIL_BINS;
 use super::journal::FlightRecord;
 use super::learn::Learnt;
@@ -158,29 +159,58 @@ pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
     out
 }
 
-/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and report.md.
+/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and
+/// report.md, for the campaign `input` that drew `candidates_screened` candidates and flew `records`.
 /// Returns the report.
-#[allow(clippy::too_many_arguments)]
 pub fn write_outputs(
-    folder: &Path,
-    case: &TestCase,
-    seed: u64,
-    budget: usize,
+    input: &CampaignInput,
     candidates_screened: usize,
     records: &[FlightRecord],
     mut stages: StageTimes,
-    spelling: Spelling,
-    screened: bool,
-    lfs_path: &(dyn Fn(&TestCase) -> Option<Trajectory> + Sync),
-    judge: Judge,
     learning: Option<&Learnt>,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
+    let cfg = input.cfg;
     let failing = failing_best_first(records);
+    let reported = write_failing_tests(input, &failing)?;
+    let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
+    let mut suite = summary(records, &failing, &flights, cfg.screen);
+    suite.candidates_screened = candidates_screened;
+    suite.screening_per_s = if stages.screen_s > 0.0 {
+        candidates_screened as f64 / stages.screen_s
+    } else {
+        0.0
+    };
+    stages.report_s = t0.elapsed().as_secs_f64();
+    let report = Report {
+        case: input.case.path.display().to_string(),
+        judge: cfg.judge,
+        judge_definition: cfg.judge.description(),
+        seed: cfg.seed,
+        budget: cfg.budget,
+        flights,
+        suite,
+        stages,
+        learning: learning.cloned(),
+    };
+    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
+    write_atomic(&input.folder.join("report.json"), json.as_bytes())?;
+    write_atomic(&input.folder.join("report.md"), markdown(&report).as_bytes())?;
+    Ok(report)
+}
+
+/// Writes each failing flight as `test_N` (YAML, its trajectory CSV and a plot); returns (candidate, file name).
+fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Result<Vec<(u64, String)>, ModelError> {
+    let folder = input.folder;
+    let spelling = if input.cfg.old_spelling {
+        Spelling::Old
+    } else {
+        Spelling::New
+    };
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, r) in failing.iter().enumerate() {
         let name = format!("test_{i}");
-        let test = case.with_obstacles(r.obstacles.clone());
+        let test = input.case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
         let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
         if let Ok(bytes) = std::fs::read(folder.join(&r.trajectory)) {
@@ -190,34 +220,40 @@ pub fn write_outputs(
             "{name}: flew {}",
             r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
         );
-        let svg = plot(&test, lfs_path(&test).as_ref(), flown.as_ref(), &title, judge);
+        let lfs = input.screener.path(&test);
+        let svg = plot(&test, lfs.as_ref(), flown.as_ref(), &title, input.cfg.judge);
         write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
         reported.push((r.candidate, format!("{name}.yaml")));
     }
-    let flights: Vec<FlownTest> = records
-        .iter()
-        .map(|r| {
-            let d = r.min_distance.unwrap_or(f64::INFINITY);
-            FlownTest {
-                candidate: r.candidate,
-                predicted_min_distance: r.predicted_min_distance,
-                predicted_p_fail: r.predicted_p_fail,
-                min_distance: r.min_distance,
-                min_distance_raw: r.min_distance_raw,
-                status: r.status.clone(),
-                reason: r.reason.clone(),
-                flight_time_s: r.flight_time_s,
-                points: points(d),
-                test_score: if r.min_distance.is_some() {
-                    test_score(&[d], &[r.flight_time_s], r.obstacles.len())
-                } else {
-                    0.0
-                },
-                reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
-                vehicle: r.vehicle.clone(),
-            }
-        })
-        .collect();
+    Ok(reported)
+}
+
+/// One flight in the report; `reported` names the failing tests written.
+fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
+    let d = r.min_distance.unwrap_or(f64::INFINITY);
+    FlownTest {
+        candidate: r.candidate,
+        predicted_min_distance: r.predicted_min_distance,
+        predicted_p_fail: r.predicted_p_fail,
+        min_distance: r.min_distance,
+        min_distance_raw: r.min_distance_raw,
+        status: r.status.clone(),
+        reason: r.reason.clone(),
+        flight_time_s: r.flight_time_s,
+        points: points(d),
+        test_score: if r.min_distance.is_some() {
+            test_score(&[d], &[r.flight_time_s], r.obstacles.len())
+        } else {
+            0.0
+        },
+        reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
+        vehicle: r.vehicle.clone(),
+    }
+}
+
+/// The suite's numbers over the flights (the screening counts are left at 0 for the caller); the LFS's
+/// accuracy only if the campaign `screened`.
+fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[FlownTest], screened: bool) -> SuiteSummary {
     let predicted_fail: Vec<&FlightRecord> = records
         .iter()
         .filter(|r| r.predicted_min_distance < FAIL_DISTANCE_M)
@@ -238,8 +274,8 @@ pub fn write_outputs(
         .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_DISTANCE_M)))
         .unzip();
     let failing_obstacles: Vec<Vec<Obstacle>> = failing.iter().map(|r| r.obstacles.clone()).collect();
-    let suite = SuiteSummary {
-        candidates_screened,
+    SuiteSummary {
+        candidates_screened: 0,
         flown: records.len(),
         failing: failing.len(),
         failure_score: flights
@@ -257,28 +293,8 @@ pub fn write_outputs(
         lfs_p_fail_brier: crate::lfs::calibration::brier(&p_fail, &failed),
         lfs_error_first_quarter_m: quarter_error(records, false).filter(|_| screened),
         lfs_error_last_quarter_m: quarter_error(records, true).filter(|_| screened),
-        screening_per_s: if stages.screen_s > 0.0 {
-            candidates_screened as f64 / stages.screen_s
-        } else {
-            0.0
-        },
-    };
-    stages.report_s = t0.elapsed().as_secs_f64();
-    let report = Report {
-        case: case.path.display().to_string(),
-        judge,
-        judge_definition: judge.description(),
-        seed,
-        budget,
-        flights,
-        suite,
-        stages,
-        learning: learning.cloned(),
-    };
-    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    write_atomic(&folder.join("report.json"), json.as_bytes())?;
-    write_atomic(&folder.join("report.md"), markdown(&report).as_bytes())?;
-    Ok(report)
+        screening_per_s: 0.0,
+    }
 }
 
 /// Top-down plot: arena, obstacles, mission, the LFS's path and the flown path with its closest approach.
@@ -311,6 +327,17 @@ pub fn markdown(r: &Report) -> String {
         "seed {}, budget {} flights, {} candidates screened; judge {}: {}\n",
         r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
     );
+    summary_table(&mut md, r);
+    if let Some(l) = &r.learning {
+        learning_section(&mut md, l);
+    }
+    flights_table(&mut md, r);
+    md
+}
+
+/// The suite's numbers and the stages' wall times.
+fn summary_table(md: &mut String, r: &Report) {
+    let s = &r.suite;
     let _ = writeln!(md, "| metric | value |\n|---|---|");
     let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);
     let _ = writeln!(
@@ -339,92 +366,103 @@ pub fn markdown(r: &Report) -> String {
         "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
         st.sample_s, st.screen_s, st.ensemble_s, st.learn_s, st.fly_s, st.report_s
     );
-    if let Some(l) = &r.learning {
+}
+
+/// What a learning campaign learnt: the calibration, the kernel, the rounds and where the flights failed.
+fn learning_section(md: &mut String, l: &Learnt) {
+    let _ = writeln!(
+        md,
+        "## Learning\n\nLFS bias learnt: {:+.3} m from {} flights (prior {:+.3} m weighing {} flights).\n",
+        l.calibration.bias_m(),
+        l.calibration.flights,
+        l.calibration.prior_bias_m,
+        l.calibration.prior_flights
+    );
+    if let Some(k) = &l.surrogate {
         let _ = writeln!(
             md,
-            "## Learning\n\nLFS bias learnt: {:+.3} m from {} flights (prior {:+.3} m weighing {} flights).\n",
-            l.calibration.bias_m(),
-            l.calibration.flights,
-            l.calibration.prior_bias_m,
-            l.calibration.prior_flights
+            "Flights' kernel at the end: bandwidth {:.2} (unit draws), LFS weight {:.2}; leave-one-out error {:.3} m \
+             against {:.3} m for the calibrated LFS alone, over {} flights.\n",
+            k.bandwidth, k.lfs_weight, k.loo_error_m, k.lfs_error_m, k.flights
         );
-        if let Some(k) = &l.surrogate {
-            let _ = writeln!(
-                md,
-                "Flights' kernel at the end: bandwidth {:.2} (unit draws), LFS weight {:.2}; leave-one-out error {:.3} m \
-                 against {:.3} m for the calibrated LFS alone, over {} flights.\n",
-                k.bandwidth, k.lfs_weight, k.loo_error_m, k.lfs_error_m, k.flights
-            );
-        }
-        let _ = writeln!(
-            md,
-            "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
-            DRAW_NAMES.join(", ")
-        );
-        let _ = writeln!(md, "|---|---|---|---|---|---|");
-        for round in &l.rounds {
-            let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
-            let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
-                format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
-            });
-            let near = if round.near_miss_parents {
-                format!("{} near misses", round.local_candidates)
-            } else {
-                round.local_candidates.to_string()
-            };
-            let _ = writeln!(
-                md,
-                "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
-                round.round + 1,
-                round.candidates,
-                near,
-                round.flights,
-                round.local_flight_share,
-                round.bias_m,
-                kernel,
-                means.join(", ")
-            );
-        }
-        let fm = &l.failure_counts;
-        let _ = writeln!(
-            md,
-            "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",
-            fm.total.failures, fm.total.flights
-        );
-        let edges: Vec<String> = (0..FAIL_BINS)
-            .map(|k| {
-                format!(
-                    "{:.1}-{:.1}",
-                    k as f64 / FAIL_BINS as f64,
-                    (k + 1) as f64 / FAIL_BINS as f64
-                )
-            })
-            .collect();
-        let _ = writeln!(md, "| draw | {} |", edges.join(" | "));
-        let _ = writeln!(md, "|---|{}", "---|".repeat(FAIL_BINS));
-        for (name, row) in DRAW_NAMES.iter().zip(&fm.draws) {
-            let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
-            let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
-        }
-        let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
-        if near.flights + misses.flights > 0 {
-            let _ = writeln!(
-                md,
-                "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
-                 --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
-                 {}.",
-                near.failures,
-                near.flights,
-                l.drawn_close.failures,
-                l.drawn_close.flights,
-                misses.failures,
-                misses.flights,
-                other.failures,
-                other.flights
-            );
-        }
-        let _ = writeln!(md);
     }
+    let _ = writeln!(
+        md,
+        "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
+        DRAW_NAMES.join(", ")
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for round in &l.rounds {
+        let means: Vec<String> = round.draw_means.iter().map(|m| format!("{m:.2}")).collect();
+        let kernel = round.surrogate.map_or("LFS alone".to_string(), |k| {
+            format!("{:.2} / {:.3}", k.bandwidth, k.loo_error_m)
+        });
+        let near = if round.near_miss_parents {
+            format!("{} near misses", round.local_candidates)
+        } else {
+            round.local_candidates.to_string()
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
+            round.round + 1,
+            round.candidates,
+            near,
+            round.flights,
+            round.local_flight_share,
+            round.bias_m,
+            kernel,
+            means.join(", ")
+        );
+    }
+    failure_bins(md, l);
+}
+
+/// Failures per bin of each draw, and per arm (near failures, near misses, elsewhere).
+fn failure_bins(md: &mut String, l: &Learnt) {
+    let fm = &l.failure_counts;
+    let _ = writeln!(
+        md,
+        "\nWhere the flights failed (failures / flights per bin of each draw's unit range; {} of {} overall):\n",
+        fm.total.failures, fm.total.flights
+    );
+    let edges: Vec<String> = (0..FAIL_BINS)
+        .map(|k| {
+            format!(
+                "{:.1}-{:.1}",
+                k as f64 / FAIL_BINS as f64,
+                (k + 1) as f64 / FAIL_BINS as f64
+            )
+        })
+        .collect();
+    let _ = writeln!(md, "| draw | {} |", edges.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(FAIL_BINS));
+    for (name, row) in DRAW_NAMES.iter().zip(&fm.draws) {
+        let cells: Vec<String> = row.iter().map(|c| format!("{} / {}", c.failures, c.flights)).collect();
+        let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
+    }
+    let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
+    if near.flights + misses.flights > 0 {
+        let _ = writeln!(
+            md,
+            "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
+             --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
+             {}.",
+            near.failures,
+            near.flights,
+            l.drawn_close.failures,
+            l.drawn_close.flights,
+            misses.failures,
+            misses.flights,
+            other.failures,
+            other.flights
+        );
+    }
+    let _ = writeln!(md);
+}
+
+/// Every flight, in flight order.
+fn flights_table(md: &mut String, r: &Report) {
     let _ = writeln!(
         md,
         "## Flights\n\n| candidate | predicted m | p_fail | flown m | raw m | status | time s | points | score | reported as |"
@@ -450,7 +488,6 @@ pub fn markdown(r: &Report) -> String {
             f.reported_as.as_deref().unwrap_or("")
         );
     }
-    md
 }
 
 /// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.

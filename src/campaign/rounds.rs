@@ -1,65 +1,49 @@
 //! The learning campaign: flights in [`ROUNDS`] rounds (and up to [`EXTRA_ROUNDS`] more while near-duplicates
-//! left budget unflown). Before each round the LFS is calibrated on every flight so far ([`super::learn`]),
-//! its predictions are moved towards the flown distances of the flights near each candidate in draw space
-//! ([`super::surrogate`], a kernel chosen by leave-one-out on the campaign's own flights), and the unflown
-//! candidates are re-ranked with these predictions and the ensembles.
+//! left budget unflown). Each round is a pipeline over the campaign's [`Candidate`]s: draw ([`super::draw`]),
+//! screen, learn and rank, fly, then learn from the new flights ([`super::learning`]). Before a round ranks,
+//! the LFS is calibrated on every flight so far ([`super::learn`]), its predictions are moved towards the
+//! flown distances of the flights near each candidate in draw space ([`super::surrogate`], a kernel chosen by
+//! leave-one-out on the campaign's own flights), and the unflown candidates are re-ranked with these
+//! predictions and the ensembles.
 //!
 //! With `adapt`, the generator moves towards failures in two ways. Some of a round's new candidates are drawn
 //! in small boxes around the failing flights so far (before the first failure, around the closest near misses:
-//! [`super::neighbours`]), and a share of its flights that
-//! follows their failure rate is offered to them. The others come from a univariate
-//! marginal distribution algorithm ([`crate::generator::adaptive`]): elites are the best [`ELITE_SHARE`] of the
-//! screened candidates by prediction, plus the closest quarter of the flights and every flown failure at
-//! [`FLOWN_FAILURE_WEIGHT`]; each draw's histogram moves [`FIT_RATE`] of the way to theirs and keeps
-//! [`UNIFORM_FLOOR`] of uniform mass. Every child drawn and every candidate flown must keep the final failing
-//! tests' expected diversity above the user's floor ([`DiversityGuard`]). When the failing tests' diversity
-//! falls below it (counted from [`neighbours::MIN_FAILING_FOR_DIVERSITY`] failing tests on), the fit backs off
-//! (more uniform mass, a smaller step); it also backs off when a round could not fill its share of the budget
-//! (its candidates were near-duplicates of flown tests).
+//! [`super::neighbours`]), and a share of its flights that follows their failure rate is offered to them. The
+//! others come from the histogram refitted on the elites after each round ([`super::learning::refit`]). Every
+//! child drawn and every candidate flown must keep the final failing tests' expected diversity above the
+//! user's floor ([`DiversityGuard`]).
+//!
+//! The journal is read once; each round's flights are added to it in memory in the order they were journaled.
 
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+use super::candidate::{Candidate, Lineage, Screened, is_child};
+use super::config::{CampaignError, CampaignInput, FAIL_M};
 use super::diversity_guard::DiversityGuard;
-use super::failure_counts::{BinCount, FailureCounts};
+use super::draw::{DrawPlan, draw};
+use super::failure_counts::{arm_counts, counted_failures};
+use super::flights::{FlightStage, fly_ranked};
 use super::journal::{FlightRecord, Journal};
 use super::learn::{Calibration, Learnt, RoundLog};
-use super::neighbours::{self, Lineage};
+use super::learning::{Learning, refit};
+use super::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use super::pool::Vehicle;
-use super::rank::Screened;
+use super::rank::rank_unflown;
 use super::report::StageTimes;
-use super::run::{CampaignConfig, CampaignError, Progress, Screener};
-use super::stages::{
-    ENSEMBLE_SHORTLIST_PER_FLIGHT, FlightStage, Stage, apply_ensemble, ensemble_shortlist, fly_ranked, rank_unflown,
-    screen_all,
-};
-use super::surrogate::{Flown, Surrogate};
+use super::screening::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
+use super::surrogate::Surrogate;
 use crate::generator::Generator;
-use crate::generator::adaptive::{DIMS, DrawDistribution, Proposal};
+use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_atomic;
-use crate::judge::diversity;
-use crate::model::{ModelError, Obstacle, TestCase};
+use crate::model::ModelError;
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
 /// Rounds added (each drawing as many candidates as a planned one) while the budget is not yet flown because
 /// the near-duplicate filter rejected the ranking's tail.
 pub const EXTRA_ROUNDS: usize = 4;
-/// Share of the screened candidates that are elites.
-pub const ELITE_SHARE: f64 = 0.1;
-/// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
-/// a prediction.
-pub const FLOWN_FAILURE_WEIGHT: f64 = 5.0;
-/// How far each fit moves the distribution towards the elites'.
-pub const FIT_RATE: f64 = 0.7;
-/// Uniform mass every fitted draw keeps.
-pub const UNIFORM_FLOOR: f64 = 0.2;
-/// The backed-off fit (rate, uniform floor) when the failures' diversity is below the user's floor or a round
-/// could not fill its share of the budget.
-const BACKOFF: (f64, f64) = (0.3, 0.5);
-/// Below this, a flown test failed.
-const FAIL_M: f64 = crate::model::competition::FAIL_BELOW_M;
 
 /// Reads `folder/learnt.json` (a previous campaign's), naming the file and the field on error.
 pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
@@ -79,439 +63,371 @@ pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
     Ok(learnt)
 }
 
-/// The campaign's inputs that stay the same over the rounds.
-pub struct RoundsInput<'a> {
-    /// Settings.
-    pub cfg: &'a CampaignConfig,
-    /// The campaign folder.
-    pub folder: &'a Path,
-    /// The case study.
-    pub case: &'a TestCase,
-    /// The LFS.
-    pub screener: &'a dyn Screener,
-    /// Progress output.
-    pub progress: &'a dyn Progress,
-    /// Stops the campaign.
-    pub cancel: &'a AtomicBool,
-}
-
 /// Runs every round; returns what was learnt and the number of candidates drawn.
 pub fn run_rounds(
-    input: &RoundsInput,
+    input: &CampaignInput,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     stages: &mut StageTimes,
 ) -> Result<(Learnt, usize), CampaignError> {
-    let RoundsInput {
-        cfg,
-        folder,
-        case,
-        screener,
-        progress,
-        cancel,
-    } = *input;
-    let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
-    let start_calibration = prior
-        .as_ref()
-        .map_or_else(Calibration::default, |p| p.calibration.carried());
-    let mut distribution = match &prior {
-        Some(p) if cfg.adapt => p.distribution.clone(),
-        _ => DrawDistribution::uniform(),
-    };
-    let journal_path = folder.join("journal.jsonl");
-    let resumed = Journal::read(&journal_path)?.len();
-    if resumed > 0 {
-        progress.note(&format!(
-            "resuming: {resumed} flights already journaled, {} left in the budget",
-            cfg.budget.saturating_sub(resumed)
-        ));
-    }
-    let mut candidates: Vec<Vec<Obstacle>> = Vec::new();
-    let mut units: Vec<[f64; DIMS]> = Vec::new();
-    // Per candidate: a child of a failing flight; a child of a near miss (drawn before the first failure).
-    let mut is_local: Vec<bool> = Vec::new();
-    let mut is_near_miss: Vec<bool> = Vec::new();
-    // Per candidate: a child closer to a flown test than `max_iou` (admitted by the diversity guard).
-    let mut is_close: Vec<bool> = Vec::new();
-    let mut screened: Vec<Screened> = Vec::new();
-    let mut rounds = Vec::new();
-    let mut calibration = start_calibration.clone();
-    let mut surrogate = None;
-    let mut carried: Option<Learning> = None;
-    let per_round = cfg.candidates.div_ceil(ROUNDS);
-    let mut next: u64 = 0;
-    for round in 0..ROUNDS + EXTRA_ROUNDS {
+    let mut campaign = Rounds::start(input)?;
+    for index in 0..ROUNDS + EXTRA_ROUNDS {
         // Past the planned rounds only while the near-duplicate filter left budget unflown.
-        if round >= ROUNDS && Journal::read(&journal_path)?.len() >= cfg.budget {
+        if index >= ROUNDS && campaign.journal.len() >= input.cfg.budget {
             break;
         }
-        let count = if round < ROUNDS {
-            cfg.candidates * (round + 1) / ROUNDS - cfg.candidates * round / ROUNDS
+        if !campaign.round(index, vehicles, stages)? {
+            break;
+        }
+    }
+    campaign.finish()
+}
+
+/// The learning campaign between rounds.
+struct Rounds<'a> {
+    input: &'a CampaignInput<'a>,
+    /// The generator with the campaign's settings and seed.
+    base: Generator,
+    /// The calibration before any flight of this campaign (the prior's, carried).
+    start_calibration: Calibration,
+    /// The draw distribution of the next round.
+    distribution: DrawDistribution,
+    /// Every journaled flight, in journal order.
+    journal: Vec<FlightRecord>,
+    /// Every candidate drawn, by generator index.
+    candidates: Vec<Candidate>,
+    log: Vec<RoundLog>,
+    calibration: Calibration,
+    surrogate: Option<Surrogate>,
+    /// The last round's learning, reused while no flight has landed since.
+    carried: Option<Learning>,
+}
+
+/// One round's plan, from its draw on.
+struct Round {
+    index: usize,
+    /// Generator index of its first candidate, and how many it drew.
+    first: u64,
+    drawn: usize,
+    /// Children drawn around the parents.
+    children: usize,
+    around: Vec<Neighbourhood>,
+    lineage: Lineage,
+    /// Flights the budget plans by the end of this round, and after it.
+    planned: usize,
+    later: usize,
+}
+
+/// A round's ranking and what it was made with.
+struct Ranking {
+    ranked: Vec<Screened>,
+    /// Flights left in the round's share of the budget.
+    remaining: usize,
+    /// Share of the flights offered to the children.
+    share: f64,
+    bias_m: f64,
+}
+
+impl<'a> Rounds<'a> {
+    /// Loads the prior and the journal.
+    fn start(input: &'a CampaignInput<'a>) -> Result<Self, CampaignError> {
+        let cfg = input.cfg;
+        let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
+        let start_calibration = prior
+            .as_ref()
+            .map_or_else(Calibration::default, |p| p.calibration.carried());
+        let distribution = match &prior {
+            Some(p) if cfg.adapt => p.distribution.clone(),
+            _ => DrawDistribution::uniform(),
+        };
+        let journal = Journal::read(&input.folder.join("journal.jsonl"))?;
+        if !journal.is_empty() {
+            input.progress.note(&format!(
+                "resuming: {} flights already journaled, {} left in the budget",
+                journal.len(),
+                cfg.budget.saturating_sub(journal.len())
+            ));
+        }
+        Ok(Self {
+            input,
+            base: Generator::new(input.case, cfg.generator.clone(), cfg.seed)?,
+            calibration: start_calibration.clone(),
+            start_calibration,
+            distribution,
+            journal,
+            candidates: Vec::new(),
+            log: Vec::new(),
+            surrogate: None,
+            carried: None,
+        })
+    }
+
+    /// Round `index`: draw, screen, rank, fly, learn. Returns false when the campaign was cancelled.
+    fn round(
+        &mut self,
+        index: usize,
+        vehicles: &mut Vec<Box<dyn Vehicle>>,
+        stages: &mut StageTimes,
+    ) -> Result<bool, CampaignError> {
+        let round = self.draw(index, stages)?;
+        self.screen(&round, stages)?;
+        let ranking = self.rank(&round, stages)?;
+        self.note(&round, &ranking);
+        let t = Instant::now();
+        let flight = FlightStage {
+            case: self.input.case,
+            candidates: &self.candidates,
+            folder: self.input.folder,
+            progress: self.input.progress,
+            cancel: self.input.cancel,
+        };
+        let flown = fly_ranked(&flight, ranking.ranked, vehicles, ranking.remaining)?;
+        let flights = flown.len();
+        self.journal.extend(flown);
+        stages.fly_s += t.elapsed().as_secs_f64();
+        self.log_round(&round, flights, ranking.share, ranking.bias_m);
+        if self.input.cancel.load(Ordering::Relaxed) {
+            return Ok(false);
+        }
+        self.learn(flights < ranking.remaining, stages);
+        Ok(true)
+    }
+
+    /// Draws round `index`'s candidates: its share of `--candidates` from the histogram, and with `adapt`
+    /// children around the parents on top (as many as the round's own draws, at most [`neighbours::CHILDREN`]).
+    fn draw(&mut self, index: usize, stages: &mut StageTimes) -> Result<Round, CampaignError> {
+        let cfg = self.input.cfg;
+        let own = if index < ROUNDS {
+            cfg.candidates * (index + 1) / ROUNDS - cfg.candidates * index / ROUNDS
         } else {
-            per_round
+            cfg.candidates.div_ceil(ROUNDS)
         };
         let t = Instant::now();
-        let before = Journal::read(&journal_path)?;
-        // Below the diversity floor the children go on: the guard admits only those that do not lower it. (Up to
-        // session 10 they paused; with close children allowed, mission 1 seed 0 fell to 0.79 at 4 failing tests
-        // in round 3 and drew no child in the 5 rounds left.)
+        // Below the diversity floor the children go on: the guard admits only those that do not lower it, so
+        // the failures keep getting children for the rest of the campaign.
         let (around, lineage) = if cfg.adapt {
-            neighbours::parents(&before, &units, FAIL_M)
+            neighbours::parents(
+                &self.journal,
+                |c| self.candidates.get(c as usize).map(|x| x.unit),
+                FAIL_M,
+            )
         } else {
             (Vec::new(), Lineage::Failures)
         };
-        // As many children as the round's own draws (a small campaign stays small), at most CHILDREN.
-        let local = if around.is_empty() {
+        let children = if around.is_empty() {
             0
         } else {
-            neighbours::CHILDREN.min(count)
+            neighbours::CHILDREN.min(own)
         };
-        let count = count + local;
-        let (lo, hi) = (next, next + count as u64);
-        next = hi;
-        let base = Generator::new(case, cfg.generator.clone(), cfg.seed)?;
-        let histogram = base.clone().with_distribution(distribution.clone());
-        // A child must differ from its siblings and from every flown test (or come close where the failing tests'
-        // diversity can afford it), and keep their expected diversity above the floor ([`DiversityGuard`]).
         // Children are measured against their own lineage: a near miss's children fail at about the base rate
         // on the mock, and counting them with the failures' children would starve the latter of flights.
-        let child_rate = arm_counts(&before, lineage.children(&is_local, &is_near_miss)).0.rate();
-        // Flights the budget plans by the end of this round, and after it.
-        let planned = cfg.budget * (round + 1).min(ROUNDS) / ROUNDS;
+        let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage))
+            .0
+            .rate();
+        let planned = cfg.budget * (index + 1).min(ROUNDS) / ROUNDS;
         let later = cfg.budget - planned;
-        let mut rule = DiversityGuard::for_round(if local == 0 { &[] } else { &before }, FAIL_M, cfg, later);
-        // Every parent's wide box, then every narrow one (`neighbours::child_box`'s order).
-        let close = rule.close_children_may_fly();
-        let near: Vec<Generator> = (0..2 * around.len())
-            .filter_map(|j| neighbours::child_box(&around, j, close))
-            .map(|n| base.clone().with_proposal(Proposal::Around(n)))
-            .collect();
-        for (k, i) in (lo..hi).enumerate() {
-            // The round's last `local` candidates come from the parents' boxes, in turn (wide, then narrow).
-            // A parent's box with no room left (or no admissible child) falls back to the histogram.
-            let child = k
-                .checked_sub(count - local)
-                .map(|j| near[j % near.len()].sample_where(i, neighbours::CHILD_TRIES, |o| rule.admit(o, child_rate)));
-            let (p, from_box) = match child {
-                Some(Ok(p)) => (p, true),
-                _ => (histogram.sample(i)?, false),
-            };
-            is_close.push(from_box && rule.last_was_close());
-            candidates.push(p.obstacles.to_vec());
-            units.push(p.draw.unit);
-            is_local.push(from_box && lineage == Lineage::Failures);
-            is_near_miss.push(from_box && lineage == Lineage::NearMisses);
-        }
+        // A child must differ from its siblings and from every flown test (or come close where the failing tests'
+        // diversity can afford it), and keep their expected diversity above the floor.
+        let flown: &[FlightRecord] = if children == 0 { &[] } else { &self.journal };
+        let mut guard = DiversityGuard::for_round(flown, FAIL_M, cfg, later);
+        let first = self.candidates.len() as u64;
+        let plan = DrawPlan {
+            first,
+            count: own + children,
+            children,
+            around: &around,
+            lineage,
+            child_rate,
+        };
+        let drawn = draw(&self.base, &self.distribution, &plan, &mut guard)?;
+        self.candidates.extend(drawn);
         stages.sample_s += t.elapsed().as_secs_f64();
-        let ctx = Stage {
-            case,
-            candidates: &candidates,
-            folder,
-            screener,
-            progress,
-            cancel,
-        };
-        let t = Instant::now();
-        screened.extend(screen_all(
-            &ctx,
-            lo..hi,
-            &format!("screening_round{round}.json"),
-            &distribution,
-            &around,
-        )?);
-        stages.screen_s += t.elapsed().as_secs_f64();
+        Ok(Round {
+            index,
+            first,
+            drawn: own + children,
+            children,
+            around,
+            lineage,
+            planned,
+            later,
+        })
+    }
 
-        // Learn from every flight so far, then rank the unflown candidates with the calibrated LFS, moved
-        // towards the flights near them.
+    fn stage(&self) -> Stage<'_> {
+        Stage {
+            case: self.input.case,
+            candidates: &self.candidates,
+            folder: self.input.folder,
+            screener: self.input.screener,
+            progress: self.input.progress,
+            cancel: self.input.cancel,
+        }
+    }
+
+    /// Screens the round's candidates (cached per round, with the distribution and the parents they came from).
+    fn screen(&mut self, round: &Round, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let t = Instant::now();
-        let done = Journal::read(&journal_path)?;
-        // The last round's learning still holds when no flight has landed since.
-        let taught = match carried.take() {
-            Some(l) if l.journaled == done.len() => l,
-            _ => Learning::from(&start_calibration, &done, &units),
+        let range = round.first..round.first + round.drawn as u64;
+        let cache = format!("screening_round{}.json", round.index);
+        let screened = screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?;
+        for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
+            c.screened = Some(s);
+        }
+        stages.screen_s += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Learns from every flight so far, then ranks the unflown candidates with the calibrated LFS moved towards
+    /// the flights near them (and the ensembles), within the round's share of the budget.
+    fn rank(&mut self, round: &Round, stages: &mut StageTimes) -> Result<Ranking, CampaignError> {
+        let cfg = self.input.cfg;
+        let t = Instant::now();
+        let taught = match self.carried.take() {
+            Some(l) if l.journaled == self.journal.len() => l,
+            _ => Learning::from(&self.start_calibration, &self.journal, &self.candidates),
         };
-        calibration = taught.calibration.clone();
-        surrogate = taught.kernel;
-        let bias = calibration.bias_m();
-        let predict = |s: &Screened| taught.predict(s, &units);
-        let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
-        let mut fresh: Vec<Screened> = screened
-            .iter()
+        self.calibration = taught.calibration.clone();
+        self.surrogate = taught.kernel;
+        let flown: Vec<u64> = self.journal.iter().map(|r| r.candidate).collect();
+        let mut fresh: Vec<Screened> = (self.candidates.iter())
+            .filter_map(|c| c.screened.as_ref())
             .filter(|s| !flown.contains(&s.candidate))
             .map(|s| Screened {
-                min_distance: predict(s),
+                min_distance: taught.predict(s, &self.candidates),
                 raw_min_distance: Some(s.min_distance),
                 ..s.clone()
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = planned.saturating_sub(done.len());
+        let remaining = round.planned.saturating_sub(self.journal.len());
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
-            let members = ensemble_shortlist(&ctx, &fresh, cfg, remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT)?;
-            apply_ensemble(&mut fresh, &members, &screener.ensemble_params());
+            let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;
+            let members = ensemble_shortlist(&self.stage(), &fresh, cfg, shortlist)?;
+            apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let arm = lineage.children(&is_local, &is_near_miss);
-        let (near_flown, other_flown) = arm_counts(&done, arm);
-        let share = match lineage {
-            Lineage::Failures => neighbours::local_flight_share(near_flown, other_flown),
-            Lineage::NearMisses => neighbours::NEAR_MISS_FLIGHT_SHARE,
+        let (ranked, share) = self.choose(round, &fresh, remaining);
+        Ok(Ranking {
+            ranked,
+            remaining,
+            share,
+            bias_m: self.calibration.bias_m(),
+        })
+    }
+
+    /// The round's flights among `fresh`: with `adapt`, a share for the children that follows their failure
+    /// rate, each admitted by the diversity guard; else the ranking's best distinct ones.
+    fn choose(&self, round: &Round, fresh: &[Screened], remaining: usize) -> (Vec<Screened>, f64) {
+        let cfg = self.input.cfg;
+        let is_arm = |c| is_child(&self.candidates, c, round.lineage);
+        let (near_flown, other_flown) = arm_counts(&self.journal, is_arm);
+        let share = match round.lineage {
+            Lineage::Failures => local_flight_share(near_flown, other_flown),
+            Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
         };
-        let ranked = if cfg.adapt {
-            let mut guard = DiversityGuard::for_round(&done, FAIL_M, cfg, later);
-            neighbours::rank_split(
-                &fresh,
-                |c| arm.get(c as usize).copied().unwrap_or(false),
+        if !cfg.adapt {
+            return (
+                rank_unflown(fresh, &self.journal, &self.candidates, cfg, remaining),
                 share,
-                (&done, &candidates),
-                cfg,
-                remaining,
-                (&mut guard, (near_flown.rate(), other_flown.rate())),
-            )
-        } else {
-            rank_unflown(&fresh, &done, &candidates, cfg, remaining)
-        };
-        progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates ({local} near the {}), LFS bias {bias:+.2} m learnt \
-             from {} flights{}; flying {}",
-            round + 1,
-            hi - lo,
-            match lineage {
+            );
+        }
+        let mut guard = DiversityGuard::for_round(&self.journal, FAIL_M, cfg, round.later);
+        let ranked = rank_split(
+            fresh,
+            is_arm,
+            share,
+            (&self.journal, &self.candidates),
+            cfg,
+            remaining,
+            (&mut guard, (near_flown.rate(), other_flown.rate())),
+        );
+        (ranked, share)
+    }
+
+    fn note(&self, round: &Round, ranking: &Ranking) {
+        self.input.progress.note(&format!(
+            "round {} of {ROUNDS}: {} candidates ({} near the {}), LFS bias {:+.2} m learnt from {} flights{}; \
+             flying {}",
+            round.index + 1,
+            round.drawn,
+            round.children,
+            match round.lineage {
                 Lineage::Failures => "failing flights",
                 Lineage::NearMisses => "closest flights, none failing yet",
             },
-            done.len(),
-            surrogate.map_or(String::new(), |k| format!(
+            ranking.bias_m,
+            self.journal.len(),
+            self.surrogate.map_or(String::new(), |k| format!(
                 ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
                 k.bandwidth, k.loo_error_m, k.lfs_error_m
             )),
-            ranked.len()
+            ranking.ranked.len()
         ));
-        let t = Instant::now();
-        let flight = FlightStage {
-            case,
-            candidates: &candidates,
-            folder,
-            progress,
-            cancel,
-        };
-        let flights = fly_ranked(&flight, ranked, vehicles, remaining)?;
-        stages.fly_s += t.elapsed().as_secs_f64();
-        rounds.push(RoundLog {
-            round,
-            first_candidate: lo,
-            candidates: (hi - lo) as usize,
-            local_candidates: (lo as usize..hi as usize)
-                .filter(|&c| is_local[c] || is_near_miss[c])
+    }
+
+    fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
+        let adapt = self.input.cfg.adapt;
+        self.log.push(RoundLog {
+            round: round.index,
+            first_candidate: round.first,
+            candidates: round.drawn,
+            local_candidates: (self.candidates[round.first as usize..].iter())
+                .filter(|c| c.parents.is_some())
                 .count(),
-            local_flight_share: if cfg.adapt { share } else { 0.0 },
-            near_miss_parents: local > 0 && lineage == Lineage::NearMisses,
+            local_flight_share: if adapt { share } else { 0.0 },
+            near_miss_parents: round.children > 0 && round.lineage == Lineage::NearMisses,
             flights,
-            bias_m: bias,
-            surrogate,
-            draw_means: std::array::from_fn(|d| distribution.mean(d)),
+            bias_m,
+            surrogate: self.surrogate,
+            draw_means: std::array::from_fn(|d| self.distribution.mean(d)),
         });
-        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
-            break;
-        }
+    }
+
+    /// Learns from every flight so far; with `adapt`, refits the histogram (backed off when the round flew
+    /// fewer than its share of the budget: `starved`).
+    fn learn(&mut self, starved: bool, stages: &mut StageTimes) {
         let t = Instant::now();
-        let done = Journal::read(&journal_path)?;
-        let taught = Learning::from(&start_calibration, &done, &units);
-        calibration = taught.calibration.clone();
-        if cfg.adapt {
-            // Back off when the failures grow alike (once there are enough of them to say so), or when the
-            // round could not fill its share of the budget (a narrow distribution's candidates are
-            // near-duplicates of the flown tests).
-            let failing: Vec<Vec<Obstacle>> = done
-                .iter()
-                .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_M))
-                .map(|r| r.obstacles.clone())
-                .collect();
-            let starved = flights < remaining;
-            let below_floor = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
-            let alike = below_floor && failing.len() >= neighbours::MIN_FAILING_FOR_DIVERSITY;
-            let (rate, floor) = if starved || alike {
-                BACKOFF
-            } else {
-                (FIT_RATE, UNIFORM_FLOOR)
-            };
-            let predict = |s: &Screened| taught.predict(s, &units);
-            distribution = distribution.fitted(&elites(&screened, &done, &units, predict), rate, floor);
+        let taught = Learning::from(&self.start_calibration, &self.journal, &self.candidates);
+        self.calibration = taught.calibration.clone();
+        if self.input.cfg.adapt {
+            let fit = (self.input.cfg, starved);
+            self.distribution = refit(&self.distribution, &self.candidates, &self.journal, &taught, fit);
         }
-        carried = Some(taught);
+        self.carried = Some(taught);
         stages.learn_s += t.elapsed().as_secs_f64();
     }
-    let done = Journal::read(&journal_path)?;
-    let failure_counts = counted_failures(&done, &units);
-    let (drawn_near_failures, _) = arm_counts(&done, &is_local);
-    let (drawn_near_misses, _) = arm_counts(&done, &is_near_miss);
-    let any_child: Vec<bool> = is_local.iter().zip(&is_near_miss).map(|(l, n)| *l || *n).collect();
-    let (_, drawn_elsewhere) = arm_counts(&done, &any_child);
-    let (drawn_close, _) = arm_counts(&done, &is_close);
-    let learnt = Learnt {
-        calibration,
-        surrogate,
-        distribution,
-        rounds,
-        failure_counts,
-        drawn_near_failures,
-        drawn_near_misses,
-        drawn_elsewhere,
-        drawn_close,
-    };
-    let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
-    write_atomic(&folder.join("learnt.json"), json.as_bytes())?;
-    Ok((learnt, candidates.len()))
-}
 
-/// The prior calibration updated with every journaled flight's raw prediction and flown distance, in order.
-fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
-    let mut c = prior.clone();
-    for r in done {
-        if let (Some(raw), Some(flown)) = (r.predicted_raw_min_distance, r.min_distance) {
-            c.observe(raw, flown);
-        }
-    }
-    c
-}
-
-/// Flights and failures of the neighbour candidates and of the others (flights of candidates this run did
-/// not draw count as others).
-fn arm_counts(done: &[FlightRecord], is_local: &[bool]) -> (BinCount, BinCount) {
-    let (mut near, mut other) = (BinCount::default(), BinCount::default());
-    for r in done {
-        if let Some(d) = r.min_distance {
-            let arm = if is_local.get(r.candidate as usize).copied().unwrap_or(false) {
-                &mut near
-            } else {
-                &mut other
-            };
-            arm.flights += 1;
-            arm.failures += u32::from(d < FAIL_M);
-        }
-    }
-    (near, other)
-}
-
-/// What the journal teaches: the calibration, and the flights' kernel over the flights this run drew.
-struct Learning {
-    /// Journal records it learnt from.
-    journaled: usize,
-    calibration: Calibration,
-    points: Vec<Flown>,
-    kernel: Option<Surrogate>,
-}
-
-impl Learning {
-    fn from(start: &Calibration, done: &[FlightRecord], units: &[[f64; DIMS]]) -> Self {
-        // Parallel vehicles journal a round's flights in the order they land; learning in candidate order
-        // keeps the campaign a function of its seed.
-        let mut done = done.to_vec();
-        done.sort_by_key(|r| r.candidate);
-        let done = &done[..];
-        let calibration = calibrated(start, done);
-        let points: Vec<Flown> = done
-            .iter()
-            .filter_map(|r| {
-                Some(Flown {
-                    unit: *units.get(r.candidate as usize)?,
-                    lfs_m: calibration.predict(r.predicted_raw_min_distance?),
-                    flown_m: r.min_distance.filter(|d| d.is_finite())?,
-                })
-            })
-            .collect();
-        let kernel = Surrogate::fit(&points);
-        Self {
-            journaled: done.len(),
-            calibration,
-            points,
-            kernel,
-        }
-    }
-
-    /// What a round ranks a screened candidate by: the calibrated LFS, moved towards the flights near it.
-    fn predict(&self, s: &Screened, units: &[[f64; DIMS]]) -> f64 {
-        let lfs = self.calibration.predict(s.min_distance);
-        match (&self.kernel, units.get(s.candidate as usize)) {
-            (Some(k), Some(u)) => k.predict(u, lfs, &self.points),
-            _ => lfs,
-        }
+    /// What the campaign learnt, also written to `learnt.json` (a later campaign's `--prior`).
+    fn finish(self) -> Result<(Learnt, usize), CampaignError> {
+        let (done, drawn) = (&self.journal, &self.candidates);
+        let child_of = |lineage| move |c| is_child(drawn, c, lineage);
+        let any_child = |c: u64| drawn.get(c as usize).is_some_and(|x| x.parents.is_some());
+        let close = |c: u64| drawn.get(c as usize).is_some_and(|x| x.close);
+        let learnt = Learnt {
+            calibration: self.calibration,
+            surrogate: self.surrogate,
+            distribution: self.distribution,
+            rounds: self.log,
+            failure_counts: counted_failures(done, drawn),
+            drawn_near_failures: arm_counts(done, child_of(Lineage::Failures)).0,
+            drawn_near_misses: arm_counts(done, child_of(Lineage::NearMisses)).0,
+            drawn_elsewhere: arm_counts(done, any_child).1,
+            drawn_close: arm_counts(done, close).0,
+        };
+        let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
+        write_atomic(&self.input.folder.join("learnt.json"), json.as_bytes())?;
+        Ok((learnt, drawn.len()))
     }
 }
-
-/// Where the journaled flights failed, per draw bin (flights of candidates this run did not draw, e.g. from a
-/// longer resumed run, are skipped).
-fn counted_failures(done: &[FlightRecord], units: &[[f64; DIMS]]) -> FailureCounts {
-    let mut m = FailureCounts::default();
-    for r in done {
-        if let (Some(u), Some(flown)) = (units.get(r.candidate as usize), r.min_distance) {
-            m.observe(u, flown < FAIL_M);
-        }
-    }
-    m
-}
-
-/// The elites: the best share of the screened candidates by calibrated prediction, and the flown failures.
-fn elites(
-    screened: &[Screened],
-    done: &[FlightRecord],
-    units: &[[f64; DIMS]],
-    predict: impl Fn(&Screened) -> f64,
-) -> Vec<([f64; DIMS], f64)> {
-    let mut order: Vec<(&Screened, f64)> = screened.iter().map(|s| (s, predict(s))).collect();
-    order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
-    let take = ((order.len() as f64 * ELITE_SHARE).ceil() as usize).max(1);
-    let mut out: Vec<([f64; DIMS], f64)> = order
-        .iter()
-        .take(take)
-        .filter_map(|(s, _)| units.get(s.candidate as usize).map(|u| (*u, 1.0)))
-        .collect();
-    // The flights are the truth: the closest quarter of them (and every failure) weigh more than a prediction.
-    let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.min_distance?))).collect();
-    flown.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
-    let closest = flown.len().div_ceil(4);
-    for (k, (r, d)) in flown.iter().enumerate() {
-        if (k < closest || *d < FAIL_M)
-            && let Some(u) = units.get(r.candidate as usize)
-        {
-            out.push((*u, FLOWN_FAILURE_WEIGHT));
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn record(candidate: u64, raw: f64, flown: f64) -> FlightRecord {
-        crate::campaign::journal::test_record(candidate, raw, Some(flown))
-    }
+    use crate::campaign::failure_counts::{BinCount, FailureCounts};
+    use crate::generator::adaptive::DIMS;
 
     #[test]
-    fn calibration_replays_the_journal_and_elites_weigh_flown_failures() {
-        let done = vec![record(0, 1.0, 2.0), record(1, 1.0, 1.2)];
-        let c = calibrated(&Calibration::with_prior(0.0, 1.0), &done);
-        // (0 + 1.0 + 0.2) / (1 + 2)
-        assert!((c.bias_m() - 0.4).abs() < 1e-12);
-        let screened: Vec<Screened> = (0..10)
-            .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
-            .collect();
-        let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
-        let e = elites(&screened, &done, &units, |s| c.predict(s.min_distance));
-        // The best 10 % (candidate 0), then the closest quarter of the flights, which is also the one failure
-        // (candidate 1, 1.2 m), at the flights' weight.
-        assert_eq!(e.len(), 2);
-        assert_eq!(e[0], ([0.0; DIMS], 1.0));
-        assert_eq!(e[1], ([0.1; DIMS], FLOWN_FAILURE_WEIGHT));
-        // The report's failure counts: candidate 1 failed in bin 0 of every draw.
-        let m = counted_failures(&done, &units);
-        assert_eq!((m.total.flights, m.total.failures), (2, 1));
-        assert_eq!(m.draws[4][0].failures, 1);
-    }
-
-    #[test]
-    fn a_prior_written_before_the_extra_draws_still_seeds_a_campaign() {
+    fn a_prior_with_only_the_paper_draws_still_seeds_a_campaign() {
         let dir = tempfile::tempdir().unwrap();
         let mut distribution = DrawDistribution::uniform();
         distribution.weights[2] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0];
@@ -528,7 +444,7 @@ mod tests {
             drawn_elsewhere: BinCount::default(),
             drawn_close: BinCount::default(),
         };
-        // As session 11 wrote it: one row per paper draw.
+        // A prior learnt before the generator had extra draws: one row per paper draw.
         let mut json = serde_json::to_value(&l).unwrap();
         for (field, rows) in [("distribution", "weights"), ("failure_counts", "draws")] {
             let rows = json[field][rows].as_array_mut().unwrap();

@@ -329,12 +329,12 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
     distinct.dedup();
     assert_eq!(distinct.len(), seeds.len());
     assert_ne!(
-        crate::campaign::stages::member_seed(3, 0),
-        crate::campaign::stages::member_seed(4, 0)
+        crate::campaign::screening::member_seed(3, 0),
+        crate::campaign::screening::member_seed(4, 0)
     );
     assert_eq!(
-        crate::campaign::stages::member_seed(3, 7),
-        crate::campaign::stages::member_seed(3, 7)
+        crate::campaign::screening::member_seed(3, 7),
+        crate::campaign::screening::member_seed(3, 7)
     );
 }
 

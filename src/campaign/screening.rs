@@ -1,6 +1,5 @@
-//! The campaign's LFS stages, shared by the static and the learning campaign: screening candidates with one
-//! simulation each, and an ensemble for the shortlisted ones. Both cache their results in the campaign folder
-//! for a resume.
+//! The campaign's LFS stages: screening candidates with one simulation each, and an ensemble for the
+//! shortlisted ones. Both cache their results in the campaign folder for a resume.
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -9,26 +8,25 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use super::journal::{FlightRecord, Journal};
+use super::candidate::{Candidate, Screened};
+use super::config::{CampaignConfig, CampaignError};
 use super::parallel::{available_threads, parallel_map};
-use super::pool::{Job, Vehicle, fly_all};
-use super::rank::{Screened, rank};
-use super::run::{CampaignConfig, CampaignError, Progress, Screener, too_similar};
+use super::screener::{Progress, Screener};
 use crate::generator::{DrawDistribution, Neighbourhood};
 use crate::io::write_atomic;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
-use crate::model::{Obstacle, TestCase};
+use crate::model::TestCase;
 
 /// Ensembles are run on at most this many of the most severe point predictions per flight left in the budget
 /// (the near-duplicate filter thins the ranking, so it needs more than one candidate per flight).
 pub const ENSEMBLE_SHORTLIST_PER_FLIGHT: usize = 2;
 
-/// What the stages read.
+/// What the screening stages read.
 pub struct Stage<'a> {
     /// The case study.
     pub case: &'a TestCase,
     /// Every candidate drawn so far, by index.
-    pub candidates: &'a [Vec<Obstacle>],
+    pub candidates: &'a [Candidate],
     /// The campaign folder (caches).
     pub folder: &'a Path,
     /// The LFS.
@@ -64,7 +62,7 @@ pub fn screen_all(
             .ok()
             .filter(|c| &c.distribution == distribution && c.around == around)
             .map(|c| c.screened)
-            // Campaigns before adaptive generators cached the bare list (always the uniform distribution).
+            // A bare list is a cache of the uniform distribution with no parents: accepted so such folders resume.
             .or_else(|| {
                 serde_json::from_str::<Vec<Screened>>(&text)
                     .ok()
@@ -87,7 +85,7 @@ pub fn screen_all(
         ctx.cancel,
         &|n| ctx.progress.tick(n),
         |&i| {
-            let test = ctx.case.with_obstacles(ctx.candidates[i as usize].clone());
+            let test = ctx.case.with_obstacles(ctx.candidates[i as usize].obstacles.clone());
             let (min_distance, flight_time_s, status) = ctx.screener.screen(&test);
             Screened::point(i, min_distance, flight_time_s, status)
         },
@@ -140,7 +138,7 @@ pub fn ensemble_shortlist(
             ctx.cancel,
             &|n| ctx.progress.tick(n),
             |&c| {
-                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].clone());
+                let test = ctx.case.with_obstacles(ctx.candidates[c as usize].obstacles.clone());
                 (c, ctx.screener.ensemble(&test, cfg.ensemble, member_seed(cfg.seed, c)))
             },
         );
@@ -185,120 +183,4 @@ pub fn member_seed(seed: u64, c: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
-/// most `remaining`.
-pub fn rank_unflown(
-    fresh: &[Screened],
-    done: &[FlightRecord],
-    candidates: &[Vec<Obstacle>],
-    cfg: &CampaignConfig,
-    remaining: usize,
-) -> Vec<Screened> {
-    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
-}
-
-/// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
-/// failing flights admitted by [`super::diversity_guard`]); among themselves they still obey `max_iou`.
-pub fn rank_unflown_within(
-    fresh: &[Screened],
-    done: &[FlightRecord],
-    candidates: &[Vec<Obstacle>],
-    cfg: &CampaignConfig,
-    remaining: usize,
-    flown_max_iou: f64,
-) -> Vec<Screened> {
-    let footprints = |c: u64| candidates[c as usize].iter().map(Obstacle::footprint).collect();
-    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
-    ranked.retain(|s| {
-        !done
-            .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize], flown_max_iou))
-    });
-    ranked.truncate(remaining);
-    ranked
-}
-
-/// What the flight stage reads.
-pub struct FlightStage<'a> {
-    /// The case study.
-    pub case: &'a TestCase,
-    /// Every candidate drawn so far, by index.
-    pub candidates: &'a [Vec<Obstacle>],
-    /// The campaign folder (journal, trajectories).
-    pub folder: &'a Path,
-    /// Progress output.
-    pub progress: &'a dyn Progress,
-    /// Stops the flights (vehicles in the air land).
-    pub cancel: &'a AtomicBool,
-}
-
-/// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made.
-/// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
-/// an earlier round's), keeping the flights journaled so far for `--resume`. (A learning campaign on two PX4
-/// SITL instances went on with none after both were dropped after 10 flights, and ended "0 failing tests of 10
-/// flights" with exit code 0.)
-pub fn fly_ranked(
-    ctx: &FlightStage,
-    ranked: Vec<Screened>,
-    vehicles: &mut Vec<Box<dyn Vehicle>>,
-    remaining: usize,
-) -> Result<usize, CampaignError> {
-    let jobs: Vec<Job> = ranked
-        .into_iter()
-        .map(|s| Job {
-            test: ctx.case.with_obstacles(ctx.candidates[s.candidate as usize].clone()),
-            screened: s,
-        })
-        .collect();
-    if jobs.is_empty() {
-        return Ok(0);
-    }
-    let no_vehicle_left = |why: String| {
-        CampaignError::NoVehicle(format!(
-            "{why}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
-            ctx.folder.display()
-        ))
-    };
-    if vehicles.is_empty() {
-        return Err(no_vehicle_left("every vehicle was dropped in an earlier round".into()));
-    }
-    let progress = ctx.progress;
-    progress.stage("fly", jobs.len());
-    let count = std::sync::atomic::AtomicUsize::new(0);
-    let on_flight = |r: &FlightRecord| {
-        let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        progress.tick(n);
-        progress.note(&format!(
-            "flight {n}: candidate {} predicted {:.2} m, flew {} ({})",
-            r.candidate,
-            r.predicted_min_distance,
-            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
-            r.status
-        ));
-        for w in &r.warnings {
-            progress.note(&format!("  warning: {w}"));
-        }
-    };
-    let journal_path = ctx.folder.join("journal.jsonl");
-    let outcome = fly_all(
-        vehicles,
-        jobs,
-        remaining,
-        ctx.folder,
-        Journal::open(&journal_path)?,
-        ctx.cancel,
-        &on_flight,
-    );
-    for d in &outcome.dropped {
-        progress.note(&format!("dropped {d}"));
-    }
-    if let Some(e) = outcome.errors.first() {
-        return Err(CampaignError::Config(format!("journal: {e}")));
-    }
-    if vehicles.is_empty() {
-        return Err(no_vehicle_left(outcome.dropped.join("; ")));
-    }
-    Ok(outcome.flown)
 }
