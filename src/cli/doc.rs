@@ -155,7 +155,14 @@ fn campaign_toml(s: &mut String) {
             } else {
                 format!("`{}`", k.flag)
             };
-            let _ = writeln!(s, "| `{}` | `{}` | {flag} | {} |", k.key, k.default, k.help);
+            // A default that is a TOML value is shown as code; one that depends on the campaign, as prose.
+            let literal = toml::from_str::<toml::Table>(&format!("v = {}", k.default)).is_ok();
+            let default = if literal {
+                format!("`{}`", k.default)
+            } else {
+                k.default.to_string()
+            };
+            let _ = writeln!(s, "| `{}` | {default} | {flag} | {} |", k.key, k.help);
         }
         s.push('\n');
     }

@@ -108,7 +108,7 @@ impl Loaded {
     }
 
     /// Parses the text of `path`. A file without sections whose keys are all the generator's is read as
-    /// `[generator]`, the format `--config` took before the campaign had sections.
+    /// `[generator]`, so a generator-only file works wherever a campaign file does.
     pub fn parse(text: &str, path: &Path) -> Result<Self, String> {
         let raw: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
         let generator_only = !raw.is_empty() && raw.keys().all(|k| !SECTIONS.contains(&k.as_str()));
@@ -361,7 +361,7 @@ pub const KEYS: &[KeyDoc] = &[
         "screening",
         "ensemble",
         "0",
-        "0 for `--connect mock`, 8 for MAVLink vehicles",
+        "0 with mock vehicles, 8 with MAVLink ones",
         "--ensemble",
         "Members of the simulator ensemble run on the 2 x BUDGET most severe candidates, which are then flown in \
          order of expected points per minute; 0 ranks by the point prediction. An ensemble costs about 1 s of CPU \

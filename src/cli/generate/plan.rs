@@ -81,30 +81,25 @@ impl Recorder<'_> {
         });
     }
 
-    /// The flag's value if given, else the file's, recording which under campaign.json `key` (`None`: a
-    /// setting campaign.json does not store).
-    fn pick<T>(
-        &mut self,
-        flag: Option<T>,
-        name: &str,
-        file: Option<T>,
-        file_key: &str,
-        key: Option<&str>,
-    ) -> Option<T> {
-        match (flag, file, key) {
-            (Some(v), _, Some(key)) => {
+    /// The flag's value if given, else the file's, recording which.
+    fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
+        match (flag, file) {
+            (Some(v), _) if !key.is_empty() => {
                 self.flag(name, key);
                 Some(v)
             }
-            (None, Some(v), Some(key)) => {
+            (None, Some(v)) if !key.is_empty() => {
                 self.file_key(file_key, key);
                 Some(v)
             }
-            (flag, file, None) => flag.or(file),
-            (None, None, _) => None,
+            (flag, file) => flag.or(file),
         }
     }
 }
+
+/// A setting's flag, its key in the TOML file, and its key in campaign.json (empty: campaign.json does not
+/// store it, so a resumed campaign may change it).
+type Names = (&'static str, &'static str, &'static str);
 
 /// Reads the TOML file and lays the flags over it; `--resume` then compares, a new campaign builds.
 pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
@@ -176,128 +171,112 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
 /// The flags laid over the file's sections (a flag wins).
 fn lay_over(args: &Args, f: &CampaignToml, r: &mut Recorder) -> CampaignToml {
     let e = &args.expert;
-    let (sc, mo, fl, le) = (&f.screening, &f.mock, &f.flight, &f.learning);
+    let (sc, mo) = (&f.screening, &f.mock);
     CampaignToml {
         generator: None,
         output: Output {
             spelling: r.pick(
                 e.spelling,
-                "--spelling",
                 f.output.spelling,
-                "output.spelling",
-                Some("old_spelling"),
+                ("--spelling", "output.spelling", "old_spelling"),
             ),
         },
         screening: Screening {
             candidates: r.pick(
                 args.candidates,
-                "--candidates",
                 sc.candidates,
-                "screening.candidates",
-                Some("candidates"),
+                ("--candidates", "screening.candidates", "candidates"),
             ),
             threshold_m: r.pick(
                 e.threshold,
-                "--threshold",
                 sc.threshold_m,
-                "screening.threshold_m",
-                Some("threshold_m"),
+                ("--threshold", "screening.threshold_m", "threshold_m"),
             ),
-            max_iou: r.pick(e.max_iou, "--max-iou", sc.max_iou, "screening.max_iou", Some("max_iou")),
-            motion: r.pick(e.motion, "--motion", sc.motion, "screening.motion", Some("motion")),
+            max_iou: r.pick(e.max_iou, sc.max_iou, ("--max-iou", "screening.max_iou", "max_iou")),
+            motion: r.pick(e.motion, sc.motion, ("--motion", "screening.motion", "motion")),
             ensemble: r.pick(
                 e.ensemble,
-                "--ensemble",
                 sc.ensemble,
-                "screening.ensemble",
-                Some("ensemble"),
+                ("--ensemble", "screening.ensemble", "ensemble"),
             ),
             screen: r.pick(
                 e.no_screen.then_some(false),
-                "--no-screen",
                 sc.screen,
-                "screening.screen",
-                Some("screen"),
+                ("--no-screen", "screening.screen", "screen"),
             ),
         },
         mock: Mock {
-            speed: r.pick(e.mock_speed, "--mock-speed", mo.speed, "mock.speed", Some("mock_speed")),
+            speed: r.pick(e.mock_speed, mo.speed, ("--mock-speed", "mock.speed", "mock_speed")),
             lockstep: r.pick(
                 e.mock_free_running.then_some(false),
-                "--mock-free-running",
                 mo.lockstep,
-                "mock.lockstep",
-                Some("mock_lockstep"),
+                ("--mock-free-running", "mock.lockstep", "mock_lockstep"),
             ),
             latency_ms: r.pick(
                 e.mock_latency,
-                "--mock-latency",
                 mo.latency_ms,
-                "mock.latency_ms",
-                Some("mock_latency_ms"),
+                ("--mock-latency", "mock.latency_ms", "mock_latency_ms"),
             ),
-            vehicles: r.pick(e.mock_vehicles, "--mock-vehicles", mo.vehicles, "mock.vehicles", None),
+            vehicles: r.pick(e.mock_vehicles, mo.vehicles, ("--mock-vehicles", "mock.vehicles", "")),
         },
-        flight: Flight {
-            timeout_s: r.pick(
-                e.timeout,
-                "--timeout",
-                fl.timeout_s,
-                "flight.timeout_s",
-                Some("flight_timeout_s"),
-            ),
-            connect_timeout_s: r.pick(
-                e.connect_timeout,
-                "--connect-timeout",
-                fl.connect_timeout_s,
-                "flight.connect_timeout_s",
-                None,
-            ),
-            connect_time_scale: r.pick(
-                e.connect_time_scale,
-                "--connect-time-scale",
-                fl.connect_time_scale,
-                "flight.connect_time_scale",
-                Some("hfs_time_scale"),
-            ),
-            anchor_at_vehicle_home: r.pick(
-                e.anchor_at_vehicle_home.then_some(true),
+        flight: flight(args, &f.flight, r),
+        learning: learning(args, &f.learning, r),
+    }
+}
+
+fn flight(args: &Args, fl: &Flight, r: &mut Recorder) -> Flight {
+    let e = &args.expert;
+    Flight {
+        timeout_s: r.pick(
+            e.timeout,
+            fl.timeout_s,
+            ("--timeout", "flight.timeout_s", "flight_timeout_s"),
+        ),
+        connect_timeout_s: r.pick(
+            e.connect_timeout,
+            fl.connect_timeout_s,
+            ("--connect-timeout", "flight.connect_timeout_s", ""),
+        ),
+        connect_time_scale: r.pick(
+            e.connect_time_scale,
+            fl.connect_time_scale,
+            ("--connect-time-scale", "flight.connect_time_scale", "hfs_time_scale"),
+        ),
+        anchor_at_vehicle_home: r.pick(
+            e.anchor_at_vehicle_home.then_some(true),
+            fl.anchor_at_vehicle_home,
+            (
                 "--anchor-at-vehicle-home",
-                fl.anchor_at_vehicle_home,
                 "flight.anchor_at_vehicle_home",
-                Some("anchor_at_vehicle_home"),
+                "anchor_at_vehicle_home",
             ),
-        },
-        learning: Learning {
-            learn: r.pick(
-                args.no_learn.then_some(false),
-                "--no-learn",
-                le.learn,
-                "learning.learn",
-                Some("learn"),
-            ),
-            adapt: r.pick(
-                e.no_adapt.then_some(false),
-                "--no-adapt",
-                le.adapt,
-                "learning.adapt",
-                Some("adapt"),
-            ),
-            min_diversity: r.pick(
-                e.min_diversity,
-                "--min-diversity",
-                le.min_diversity,
-                "learning.min_diversity",
-                Some("min_diversity"),
-            ),
-            child_max_iou: r.pick(
-                e.child_max_iou,
-                "--child-max-iou",
-                le.child_max_iou,
-                "learning.child_max_iou",
-                Some("child_max_iou"),
-            ),
-        },
+        ),
+    }
+}
+
+fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
+    let e = &args.expert;
+    Learning {
+        learn: r.pick(
+            args.no_learn.then_some(false),
+            le.learn,
+            ("--no-learn", "learning.learn", "learn"),
+        ),
+        adapt: r.pick(
+            e.no_adapt.then_some(false),
+            le.adapt,
+            ("--no-adapt", "learning.adapt", "adapt"),
+        ),
+        min_diversity: r.pick(
+            e.min_diversity,
+            le.min_diversity,
+            ("--min-diversity", "learning.min_diversity", "min_diversity"),
+        ),
+        child_max_iou: r.pick(
+            e.child_max_iou,
+            le.child_max_iou,
+            ("--child-max-iou", "learning.child_max_iou", "child_max_iou"),
+        ),
     }
 }
 
