@@ -4,12 +4,9 @@ mod cli;
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
 fn main() -> ExitCode {
     restore_sigpipe();
-    let args = cli::Cli::parse();
-    match cli::run(args) {
+    match cli::main() {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");

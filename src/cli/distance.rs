@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::bail;
 use prgenuav::judge::{Judge, judge_flight};
+
+use super::values::JudgeEdition;
 use prgenuav::model::{TestCase, Trajectory};
 
 /// Arguments of `distance`.
@@ -17,16 +19,17 @@ pub struct Args {
     /// Print `{"judge", "min_distance", "min_distance_raw", "per_obstacle", ...}`.
     #[arg(long)]
     json: bool,
-    /// Judge edition: 2026 (path buffered by half the vehicle width, horizontal) or 2025 (bare path,
-    /// height-gap rule). Both origin-align the log first (Aerialist's rule for logs that start at home).
-    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
-    judge: Judge,
+    /// Judge edition of the distance. Both editions origin-align the log first (Aerialist's rule for logs that
+    /// start at home).
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let judge = Judge::from(args.judge);
     let test = TestCase::load(&args.test)?;
     let flight = Trajectory::load_csv(&args.flight)?;
-    let Some(verdict) = judge_flight(&flight, &test.obstacles, args.judge) else {
+    let Some(verdict) = judge_flight(&flight, &test.obstacles, judge) else {
         bail!("{}: the test has no obstacles to measure against", args.test.display());
     };
     if args.json {
@@ -35,8 +38,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         println!(
             "min_distance      {:.3} m (judge {}: origin-aligned, 0.5 s bins; {})",
             verdict.min_distance,
-            args.judge,
-            args.judge.description()
+            judge,
+            judge.description()
         );
         println!("min_distance_raw  {:.3} m (every sample)", verdict.min_distance_raw);
         for d in &verdict.per_obstacle {

@@ -9,18 +9,19 @@ use std::process::ExitCode;
 use anyhow::bail;
 use prgenuav::lfs::cv::{CvReport, Truth, assign_folds, cross_validate, default_grid, obstacle_sets, predict_grid};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
-use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FlightCase, evaluate_with, load_dir};
-use prgenuav::lfs::fov_estimate::FovEstimate;
-use prgenuav::lfs::sim::{MotionModel, SimConfig};
+use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FidelityReport, FlightCase, evaluate_with, load_dir};
+use prgenuav::lfs::sim::SimConfig;
+
+use super::values::{FovEstimate, Motion, name_of};
 
 /// Arguments of `fidelity`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Folder of flight JSON files (the format of the competition flights in tests/data/hfs-flights).
     dir: PathBuf,
-    /// Motion model: paper or px4.
-    #[arg(long, default_value = "paper")]
-    motion: String,
+    /// Motion model of the simulated vehicle.
+    #[arg(long, value_enum, default_value_t = Motion::Paper)]
+    motion: Motion,
     /// Print `{"cases": [...], "mae", "spearman", "precision", "recall", "tiers", ...}`.
     #[arg(long)]
     json: bool,
@@ -41,10 +42,9 @@ pub struct Args {
     /// Seed of the ensembles' perturbations.
     #[arg(long, default_value_t = 0, requires = "ensemble")]
     seed: u64,
-    /// Camera FOV of the planner: fixed (the pinhole span) or maxima (estimated from each frame's extreme points,
-    /// as PX4-Avoidance does). Default: the planner's default.
-    #[arg(long, value_name = "fixed|maxima")]
-    fov_estimate: Option<String>,
+    /// Where the planner's camera FOV comes from (default: the planner's default).
+    #[arg(long, value_enum)]
+    fov_estimate: Option<FovEstimate>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -67,9 +67,6 @@ fn line(name: &str, a: &Aggregates) -> String {
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let Some(motion) = MotionModel::by_name(&args.motion) else {
-        bail!("unknown motion model {:?} (use paper or px4)", args.motion);
-    };
     if args.jobs == 0 {
         bail!("--jobs must be at least 1");
     }
@@ -84,11 +81,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         seed: args.seed,
     });
     let mut base = SimConfig::default();
-    if let Some(name) = &args.fov_estimate {
-        let Some(e) = FovEstimate::by_name(name) else {
-            bail!("--fov-estimate {name:?}: use fixed or maxima");
-        };
-        base.planner.fov_estimate = e;
+    if let Some(e) = args.fov_estimate {
+        base.planner.fov_estimate = e.into();
     }
     let (cases, skipped) = load_dir(&args.dir)?;
     if cases.is_empty() {
@@ -100,12 +94,20 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(k) = args.cv {
         return run_cv(&args, &cases, &base, k);
     }
-    let config = SimConfig { motion, ..base };
+    let config = SimConfig {
+        motion: args.motion.model(),
+        ..base
+    };
     let report = evaluate_with(&cases, skipped, &config, spec.as_ref(), args.jobs);
     if args.json {
         super::print_json(&report)?;
-        return Ok(ExitCode::SUCCESS);
+    } else {
+        print_report(&report);
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_report(report: &FidelityReport) {
     println!(
         "{:<28} {:<5} {:<9} {:>8} {:>9} {:>7} {:>7}  status",
         "case", "tier", "mission", "real", "predicted", "error", "p_fail"
@@ -145,12 +147,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             report.skipped.join(", ")
         );
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 fn run_cv(args: &Args, cases: &[FlightCase], base: &SimConfig, k: usize) -> anyhow::Result<ExitCode> {
-    let Some(grid) = default_grid(&args.motion) else {
-        bail!("unknown motion model {:?} (use paper or px4)", args.motion);
+    let motion = name_of(&args.motion);
+    let Some(grid) = default_grid(&motion) else {
+        bail!("no cross-validation grid for motion model {motion}");
     };
     let sets = obstacle_sets(cases);
     let Some(folds) = assign_folds(cases, k, args.cv_seed) else {

@@ -2,29 +2,21 @@
 //! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence] [--judge 2025|2026]
 //! [--anchor-at-vehicle-home] [--strict]`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::session::gazebo::world_sdf;
 use prgenuav::bridge::wire::notices::NoticeSink;
-use prgenuav::bridge::{CancelToken, DEFAULT_URL, FlyMode, FlyOptions, LinkAddress, Status, fly, predict};
+use prgenuav::bridge::{
+    CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
+};
 use prgenuav::io::write_atomic;
-use prgenuav::judge::Judge;
-use prgenuav::lfs::sim::MotionModel;
+use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
-/// Obstacle mode on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Mode {
-    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; we are its avoidance companion.
-    Avoidance,
-    /// We fly the waypoints in OFFBOARD mode with the planner's setpoints (any PX4).
-    Offboard,
-    /// PX4 flies the plain mission (baseline, no avoidance).
-    Mission,
-}
+use super::values::{JudgeEdition, Mode, Motion};
 
 /// Arguments of `fly`.
 #[derive(Debug, clap::Args)]
@@ -32,25 +24,25 @@ pub struct Args {
     /// The test YAML (mission, parameters, commands and the virtual obstacles).
     test: PathBuf,
     /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
-    #[arg(long, default_value = DEFAULT_URL)]
+    #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
-    /// How the virtual obstacles are avoided.
-    #[arg(long, value_enum, default_value = "avoidance")]
+    /// How the flight avoids the virtual obstacles.
+    #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
     mode: Mode,
     /// Give up after this many seconds of flight (LAND is commanded).
-    #[arg(long, default_value_t = 500.0)]
+    #[arg(long, value_name = "S", default_value_t = 500.0)]
     timeout: f64,
     /// Print the report as JSON.
     #[arg(long)]
     json: bool,
     /// Append the flown trajectory to this Aerialist CSV as it arrives.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.csv")]
     trajectory: Option<PathBuf>,
     /// Write a top-down SVG of the flown and the predicted paths.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
     /// Write the obstacles as a Gazebo Classic world (before flying).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.world")]
     world: Option<PathBuf>,
     /// Only write the `--world` file, do not fly (to start Gazebo with it first).
     #[arg(long, requires = "world")]
@@ -59,7 +51,7 @@ pub struct Args {
     #[arg(long)]
     no_fence: bool,
     /// The vehicle's simulated time runs this many times faster (PX4_SIM_SPEED_FACTOR, mock --speed-factor).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, value_name = "K", default_value_t = 1.0)]
     time_scale: f64,
     /// Skip the low-fidelity prediction.
     #[arg(long)]
@@ -68,10 +60,9 @@ pub struct Args {
     /// pose this many milliseconds old (--time-scale is then the mock's upper bound).
     #[arg(long, value_name = "LATENCY_MS")]
     lockstep: Option<f64>,
-    /// Judge edition of the distances (and of the LFS prediction): 2026 measures from the path buffered by
-    /// half the vehicle width, horizontally; 2025 from the bare path with the height-gap rule.
-    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
-    judge: Judge,
+    /// Judge edition of the distances (and of the low-fidelity prediction).
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
     /// Re-anchor the test (mission, obstacles, fence) at the vehicle's home (HOME_POSITION), keeping its local
     /// geometry, and print where the boxes now are. Without it, a vehicle whose home is farther from the
     /// test's home than its MIS_DIST_1WP is refused before anything is uploaded (exit code 2).
@@ -106,42 +97,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let prediction = if args.no_predict {
         None
     } else {
-        match predict(
-            &test,
-            MotionModel::by_name("px4").context("px4 motion model")?,
-            args.judge,
-        ) {
-            Ok(p) => Some(p),
-            Err(e) => {
-                eprintln!("warning: no LFS prediction: {e}");
-                None
-            }
-        }
+        predict(&test, Motion::Px4.model(), args.judge.into())
+            .inspect_err(|e| eprintln!("warning: no LFS prediction: {e}"))
+            .ok()
     };
-    let opts = FlyOptions {
-        connect: args.connect.clone(),
-        mode: match args.mode {
-            Mode::Avoidance => FlyMode::Avoidance,
-            Mode::Offboard => FlyMode::Offboard,
-            Mode::Mission => FlyMode::Mission,
-        },
-        timeout_s: args.timeout,
-        trajectory_csv: args.trajectory.clone(),
-        fence: !args.no_fence,
-        time_scale: args.time_scale,
-        lfs_min_distance: prediction.as_ref().and_then(|p| p.min_distance),
-        lockstep: match args.lockstep {
-            None => None,
-            Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
-            Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
-        },
-        judge: args.judge,
-        anchor_at_vehicle_home: args.anchor_at_vehicle_home,
-        ready_timeout_s: args.ready_timeout,
-        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
-        ..FlyOptions::default()
-    };
-    opts.validate()?;
+    let opts = options(&args, prediction.as_ref())?;
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
     let report = runtime.block_on(async {
         let cancel = CancelToken::new();
@@ -158,19 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         fly(&test, &opts, cancel).await
     })?;
     if let Some(path) = &args.plot {
-        let mut plot = FlightPlot::new(&test);
-        if let Some(p) = &prediction {
-            plot.add_path(&p.trajectory, PathStyle::Simulated, "LFS prediction");
-        }
-        plot.add_path(
-            &report.trajectory,
-            PathStyle::Flown,
-            &format!("flown ({:?})", opts.mode),
-        );
-        if let Some(c) = &report.closest_approach {
-            plot.mark_closest(c);
-        }
-        write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
     if let Some(p) = report.placement.as_ref().filter(|p| p.anchored) {
         eprintln!(
@@ -184,62 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.json {
         super::print_json(&report)?;
     } else {
-        let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
-        println!(
-            "status            {}{}",
-            report.status.as_str(),
-            report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default()
-        );
-        println!(
-            "min_distance      {} (judge {}: 0.5 s bins; {})",
-            m(report.min_distance),
-            report.judge,
-            report.judge_definition
-        );
-        if let (Some(src), Some([n, e])) = (report.frame_source, report.frame_origin_offset_m) {
-            println!(
-                "frame             {} ({src:?}: EKF origin at N {n:.2} m, E {e:.2} m)",
-                report.frame
-            );
-        }
-        println!("min_distance_raw  {}", m(report.min_distance_raw));
-        println!("lfs_min_distance  {}", m(report.lfs_min_distance));
-        for d in &report.per_obstacle {
-            println!(
-                "  obstacle {}: {:.3} m (raw {:.3} m)",
-                d.index, d.distance, d.distance_raw
-            );
-        }
-        if let Some(c) = &report.closest_approach {
-            println!(
-                "closest approach  t = {:.2} s at x = {:.2}, y = {:.2}, z = {:.2} (obstacle {})",
-                c.t_s, c.x, c.y, c.z, c.obstacle
-            );
-        }
-        println!(
-            "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
-            report.flight_time_s,
-            report.samples,
-            report.link.packets_received,
-            report.link.retries,
-            if report.fence_uploaded {
-                "on the vehicle"
-            } else {
-                "not uploaded"
-            }
-        );
-        if let Some(w) = report.ready_wait_s {
-            println!("ready after       {w:.1} s");
-        }
-        if let Some(w) = report.clock.as_ref().and_then(|c| c.warning.as_ref()) {
-            println!("clock             {w}");
-        }
-        if let Some(t) = &report.companion_timing {
-            println!("companion         {t}");
-        }
-        for w in &report.warnings {
-            println!("warning           {w}");
-        }
+        print_text(&report);
     }
     // 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete; 2: the vehicle
     // stands too far from the test's home to fly it without --anchor-at-vehicle-home.
@@ -249,4 +142,107 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Status::Rejected if too_far => ExitCode::from(super::EXIT_ERROR),
         _ => ExitCode::from(super::EXIT_FAIL),
     })
+}
+
+/// The bridge's options from the flags, checked before anything is contacted.
+fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOptions> {
+    let opts = FlyOptions {
+        connect: args.connect.clone(),
+        mode: args.mode.into(),
+        timeout_s: args.timeout,
+        trajectory_csv: args.trajectory.clone(),
+        fence: !args.no_fence,
+        time_scale: args.time_scale,
+        lfs_min_distance: prediction.and_then(|p| p.min_distance),
+        lockstep: match args.lockstep {
+            None => None,
+            Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
+            Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
+        },
+        judge: args.judge.into(),
+        anchor_at_vehicle_home: args.anchor_at_vehicle_home,
+        ready_timeout_s: args.ready_timeout,
+        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
+        ..FlyOptions::default()
+    };
+    opts.validate()?;
+    Ok(opts)
+}
+
+/// `--plot`: the flown path over the predicted one.
+fn write_plot(
+    path: &Path,
+    test: &TestCase,
+    prediction: Option<&Prediction>,
+    report: &FlightReport,
+    mode: FlyMode,
+) -> anyhow::Result<()> {
+    let mut plot = FlightPlot::new(test);
+    if let Some(p) = prediction {
+        plot.add_path(&p.trajectory, PathStyle::Simulated, "LFS prediction");
+    }
+    plot.add_path(&report.trajectory, PathStyle::Flown, &format!("flown ({mode:?})"));
+    if let Some(c) = &report.closest_approach {
+        plot.mark_closest(c);
+    }
+    write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+fn print_text(report: &FlightReport) {
+    let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
+    println!(
+        "status            {}{}",
+        report.status.as_str(),
+        report.reason.as_deref().map(|r| format!(" ({r})")).unwrap_or_default()
+    );
+    println!(
+        "min_distance      {} (judge {}: 0.5 s bins; {})",
+        m(report.min_distance),
+        report.judge,
+        report.judge_definition
+    );
+    if let (Some(src), Some([n, e])) = (report.frame_source, report.frame_origin_offset_m) {
+        println!(
+            "frame             {} ({src:?}: EKF origin at N {n:.2} m, E {e:.2} m)",
+            report.frame
+        );
+    }
+    println!("min_distance_raw  {}", m(report.min_distance_raw));
+    println!("lfs_min_distance  {}", m(report.lfs_min_distance));
+    for d in &report.per_obstacle {
+        println!(
+            "  obstacle {}: {:.3} m (raw {:.3} m)",
+            d.index, d.distance, d.distance_raw
+        );
+    }
+    if let Some(c) = &report.closest_approach {
+        println!(
+            "closest approach  t = {:.2} s at x = {:.2}, y = {:.2}, z = {:.2} (obstacle {})",
+            c.t_s, c.x, c.y, c.z, c.obstacle
+        );
+    }
+    println!(
+        "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
+        report.flight_time_s,
+        report.samples,
+        report.link.packets_received,
+        report.link.retries,
+        if report.fence_uploaded {
+            "on the vehicle"
+        } else {
+            "not uploaded"
+        }
+    );
+    if let Some(w) = report.ready_wait_s {
+        println!("ready after       {w:.1} s");
+    }
+    if let Some(w) = report.clock.as_ref().and_then(|c| c.warning.as_ref()) {
+        println!("clock             {w}");
+    }
+    if let Some(t) = &report.companion_timing {
+        println!("companion         {t}");
+    }
+    for w in &report.warnings {
+        println!("warning           {w}");
+    }
 }

@@ -2,6 +2,8 @@
 
 mod check;
 mod distance;
+#[cfg(test)]
+mod doc;
 mod fidelity;
 mod fly;
 mod generate;
@@ -9,11 +11,13 @@ mod progress;
 mod render;
 mod sample;
 mod score;
+mod settings;
 mod simulate;
+mod values;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Exit code: the input broke a rule (or a flight failed a check).
 pub const EXIT_FAIL: u8 = 1;
@@ -22,7 +26,7 @@ pub const EXIT_ERROR: u8 = 2;
 
 /// Pseudo-random UAV test generation with a low-fidelity simulator, and flights over MAVLink.
 #[derive(Debug, Parser)]
-#[command(name = "prgenuav", version, about, propagate_version = true)]
+#[command(name = "prgenuav", version, about)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -52,28 +56,26 @@ enum Command {
     Fly(fly::Args),
 }
 
-/// Key spelling of written YAML files.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Spelling {
-    /// `robot:` and `mission:` (Aerialist since 2025-09).
-    New,
-    /// `drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's).
-    Old,
+/// The command line's definition, with a fixed help width so `--help` and docs/cli.md read the same on every
+/// terminal.
+pub fn command() -> clap::Command {
+    Cli::command().term_width(100)
 }
 
-impl From<Spelling> for prgenuav::model::Spelling {
-    fn from(s: Spelling) -> Self {
-        match s {
-            Spelling::New => Self::New,
-            Spelling::Old => Self::Old,
-        }
-    }
+/// Parses the process's arguments (exiting with clap's message on a usage error) and runs the subcommand.
+pub fn main() -> anyhow::Result<ExitCode> {
+    let matches = command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    run(cli, &matches)
 }
 
-/// Runs the parsed command line.
-pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+/// Runs the parsed command line; `matches` tells flags given from defaults.
+fn run(cli: Cli, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Generate(a) => generate::run(*a),
+        Command::Generate(a) => {
+            let empty = ArgMatches::default();
+            generate::run(*a, matches.subcommand_matches("generate").unwrap_or(&empty))
+        }
         Command::Check(a) => check::run(a),
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),
@@ -83,13 +85,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Fidelity(a) => fidelity::run(a),
         Command::Fly(a) => fly::run(a),
     }
-}
-
-/// A depth-camera preset by name, or an error listing the presets.
-pub fn camera_preset(name: &str) -> anyhow::Result<prgenuav::lfs::camera::Camera> {
-    use prgenuav::lfs::camera::{Camera, PRESET_NAMES};
-    Camera::preset(name)
-        .ok_or_else(|| anyhow::anyhow!("unknown camera {name:?} (use one of {})", PRESET_NAMES.join(", ")))
 }
 
 /// Loads a test and applies the competition's rules; an invalid test gets `check`'s violations on stderr
@@ -105,11 +100,6 @@ pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav
         eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
     }
     Ok(None)
-}
-
-/// `--judge 2025|2026`.
-pub fn parse_judge(s: &str) -> Result<prgenuav::judge::Judge, String> {
-    s.parse()
 }
 
 /// Loads a test for `fly` or `simulate`: a test that breaks the current competition rules (older editions

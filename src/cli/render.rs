@@ -1,4 +1,4 @@
-//! `prgenuav render TEST.yaml --pose X,Y,Z,YAW [--camera NAME] --out depth.npy [--points cloud.csv]`.
+//! `prgenuav render TEST.yaml --pose X,Y,Z,YAW [--camera NAME] --out-file depth.npy [--points cloud.csv]`.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -10,6 +10,8 @@ use prgenuav::io::write_atomic;
 use prgenuav::lfs::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
 use prgenuav::lfs::render::{CameraPose, Scene, cloud_from_depth, render_depth};
 
+use super::values::Camera;
+
 /// Arguments of `render`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -17,16 +19,17 @@ pub struct Args {
     test: PathBuf,
     /// Vehicle pose `X,Y,Z,YAW`: X North and Y East in metres (local NED), Z height above ground in metres
     /// (positive up), YAW in degrees clockwise from North (as PX4).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_name = "X,Y,Z,YAW")]
     pose: String,
-    /// Camera preset: hfs (default; 59 deg, 640 x 480), 2019 (64 x 48), d455 (86 deg, 848 x 480).
-    #[arg(long, default_value = "hfs")]
-    camera: String,
-    /// Output depth image: float32 NumPy .npy, shape (H, W), metres along the optical axis, NaN = no return.
-    #[arg(long)]
-    out: PathBuf,
+    /// Camera preset.
+    #[arg(long, value_enum, default_value_t = Camera::Hfs)]
+    camera: Camera,
+    /// The depth image to write: float32 NumPy .npy, shape (H, W), metres along the optical axis, NaN = no
+    /// return.
+    #[arg(long, value_name = "FILE.npy")]
+    out_file: PathBuf,
     /// Also write the point cloud as CSV `x,y,z` in local NED metres (z down), as the planner receives it.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.csv")]
     points: Option<PathBuf>,
 }
 
@@ -48,14 +51,14 @@ fn parse_pose(s: &str) -> anyhow::Result<[f64; 4]> {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let [x, y, z, yaw_deg] = parse_pose(&args.pose)?;
-    let camera = super::camera_preset(&args.camera)?;
+    let camera = args.camera.model();
     let Some(test) = super::load_valid_test(&args.test)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
     let pose = CameraPose::level(north_east_up_to_enu(x, y, z), yaw_ned_deg_to_enu_rad(yaw_deg));
     let scene = Scene::new(&test.obstacles);
     let depth = render_depth(&scene, &camera, &pose).with_context(|| format!("cannot render pose {}", args.pose))?;
-    write_atomic(&args.out, &depth.to_npy()).with_context(|| format!("writing {}", args.out.display()))?;
+    write_atomic(&args.out_file, &depth.to_npy()).with_context(|| format!("writing {}", args.out_file.display()))?;
     let valid = depth.data.iter().filter(|d| d.is_finite()).count();
     if let Some(path) = &args.points {
         let cloud = cloud_from_depth(&camera, &pose, &depth);
@@ -70,7 +73,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     println!(
         "{}: {} x {} depth image ({} camera), {} pixels with a return",
-        args.out.display(),
+        args.out_file.display(),
         camera.width_px,
         camera.height_px,
         camera.name,

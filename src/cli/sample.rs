@@ -3,12 +3,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, bail};
-use prgenuav::generator::{Family, Generator, GeneratorConfig, Placement};
+use anyhow::bail;
+use prgenuav::generator::{Generator, GeneratorConfig, Placement};
 use prgenuav::judge::diversity;
 use prgenuav::model::{Range, TestCase};
 
-use super::Spelling;
+use super::settings::{GeneratorFlags, Loaded, parse_range};
+use super::values::{Family, Spelling};
 
 /// Arguments of `sample`.
 #[derive(Debug, clap::Args)]
@@ -21,8 +22,8 @@ pub struct Args {
     /// Seed of every random draw: the same seed gives byte-identical tests.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Output folder for test_0.yaml, test_1.yaml, ...
-    #[arg(long, default_value = "generated_tests/samples")]
+    /// Folder the tests are written to (test_0.yaml, test_1.yaml, ...).
+    #[arg(long, value_name = "DIR", default_value = "generated_tests/samples")]
     out: PathBuf,
     /// Print a JSON summary instead of text.
     #[arg(long)]
@@ -31,10 +32,10 @@ pub struct Args {
     generator: GeneratorArgs,
 }
 
-/// Generator parameters: a TOML file and single overrides (see `GeneratorConfig`).
+/// Generator parameters: the campaign TOML's `[generator]` and `[output]`, and single overrides.
 #[derive(Debug, clap::Args)]
 pub struct GeneratorArgs {
-    /// TOML file with generator parameters (keys of GeneratorConfig); flags below override it.
+    /// Campaign TOML: its [generator] keys and [output] spelling apply (see docs/cli.md); flags override it.
     #[arg(long, value_name = "FILE.toml")]
     pub config: Option<PathBuf>,
     /// Diagonal of obstacle 1's base, metres: MIN,MAX.
@@ -47,54 +48,30 @@ pub struct GeneratorArgs {
     #[arg(long, value_name = "MIN,MAX", value_parser = parse_range)]
     pub gap: Option<Range>,
     /// Box height, metres.
-    #[arg(long)]
+    #[arg(long, value_name = "M")]
     pub height: Option<f64>,
-    /// Construction: paper (two obstacles, the paper's split) or extended (the split drawn too, and a third
-    /// obstacle beyond the pair where the mission leaves room).
+    /// The obstacle construction.
     #[arg(long, value_enum)]
-    pub family: Option<FamilyArg>,
-    /// Key spelling of the written YAML: new (robot/mission) or old (drone/test, Aerialist before 2025-09).
-    #[arg(long, value_enum, default_value_t = Spelling::New)]
-    pub spelling: Spelling,
+    pub family: Option<Family>,
+    /// Key spelling of the written YAML (default: new, or the file's [output] spelling).
+    #[arg(long, value_enum)]
+    pub spelling: Option<Spelling>,
 }
 
 impl GeneratorArgs {
-    /// The configuration: defaults, then the TOML file, then the flags.
-    pub fn config(&self) -> anyhow::Result<GeneratorConfig> {
-        let mut c = match &self.config {
-            Some(path) => {
-                let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-                GeneratorConfig::from_toml(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
-            }
-            None => GeneratorConfig::default(),
+    /// The configuration (defaults, then the TOML file, then the flags) and the spelling to write.
+    pub fn config(&self) -> anyhow::Result<(GeneratorConfig, Spelling)> {
+        let file = Loaded::read(self.config.as_deref())?;
+        let flags = GeneratorFlags {
+            diagonal: self.diagonal,
+            angle: self.angle,
+            gap: self.gap,
+            height: self.height,
+            family: self.family,
         };
-        c.diagonal_m = self.diagonal.unwrap_or(c.diagonal_m);
-        c.angle_deg = self.angle.unwrap_or(c.angle_deg);
-        c.gap_m = self.gap.unwrap_or(c.gap_m);
-        c.height_m = self.height.unwrap_or(c.height_m);
-        c.family = match self.family {
-            Some(FamilyArg::Paper) => Family::Paper,
-            Some(FamilyArg::Extended) => Family::Extended,
-            None => c.family,
-        };
-        c.validate().map_err(|e| anyhow::anyhow!("generator parameters: {e}"))?;
-        Ok(c)
+        let spelling = self.spelling.or(file.toml.output.spelling).unwrap_or(Spelling::New);
+        Ok((flags.apply(&file)?, spelling))
     }
-}
-
-/// `--family`'s values.
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum FamilyArg {
-    /// The paper's two-obstacle S.
-    Paper,
-    /// The split drawn, and a third obstacle where the case allows.
-    Extended,
-}
-
-fn parse_range(s: &str) -> Result<Range, String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("{s:?}: expected MIN,MAX"))?;
-    let num = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
-    Ok(Range::new(num(a)?, num(b)?))
 }
 
 #[derive(serde::Serialize)]
@@ -108,15 +85,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.count == 0 {
         bail!("--count must be at least 1");
     }
-    let config = args.generator.config()?;
+    let (config, spelling) = args.generator.config()?;
     let case = TestCase::load(&args.case)?;
     let generator = Generator::new(&case, config, args.seed)?;
     let placements: Vec<Placement> = (0..args.count).map(|i| generator.sample(i)).collect::<Result<_, _>>()?;
     let mut files = Vec::new();
     for p in &placements {
         let path = args.out.join(format!("test_{}.yaml", p.index));
-        case.with_obstacles(p.obstacles.to_vec())
-            .save(&path, args.generator.spelling.into())?;
+        case.with_obstacles(p.obstacles.to_vec()).save(&path, spelling.into())?;
         files.push(path.display().to_string());
     }
     let suites: Vec<_> = placements.iter().map(|p| p.obstacles.to_vec()).collect();

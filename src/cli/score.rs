@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use super::values::JudgeEdition;
 use anyhow::bail;
 use prgenuav::campaign::score::score_folder;
-use prgenuav::judge::Judge;
 
 /// Arguments of `score`.
 #[derive(Debug, clap::Args)]
@@ -15,14 +15,13 @@ pub struct Args {
     /// Print the full result as JSON.
     #[arg(long)]
     json: bool,
-    /// Judge edition of the distances and points: 2026 (path buffered by half the vehicle width,
-    /// horizontal) or 2025 (bare path, height-gap rule).
-    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
-    judge: Judge,
+    /// Judge edition of the distances and points.
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let suite = score_folder(&args.folder, args.judge)?;
+    let suite = score_folder(&args.folder, args.judge.into())?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());
     }

@@ -10,34 +10,36 @@ use prgenuav::io::write_atomic;
 use prgenuav::judge::{Judge, ObstacleDistance};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS, run_ensemble};
 use prgenuav::lfs::fidelity::FAIL_BELOW_M;
-use prgenuav::lfs::sim::{MotionModel, SimConfig, Status, simulate};
+use prgenuav::lfs::sim::{SimConfig, SimResult, Status, simulate};
+use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
+
+use super::values::{Camera, JudgeEdition, Motion};
 
 /// Arguments of `simulate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The test YAML (obstacles + mission).
     test: PathBuf,
-    /// Motion model: `paper` (the paper's kinematic rule) or `px4` (waypoint generator + PX4-like tracking).
-    #[arg(long, default_value = "paper")]
-    motion: String,
-    /// Depth camera preset: hfs (default), 2019, d455.
-    #[arg(long, default_value = "hfs")]
-    camera: String,
+    /// Motion model of the simulated vehicle.
+    #[arg(long, value_enum, default_value_t = Motion::Paper)]
+    motion: Motion,
+    /// Depth camera preset.
+    #[arg(long, value_enum, default_value_t = Camera::Hfs)]
+    camera: Camera,
     /// Print `{"min_distance", "min_distance_raw", "per_obstacle", "status", "flight_time_s", "cycles", "wall_ms"}`, with
     /// `"ensemble": {"n", "seed", "p_fail", "member_min_distances"}` under `--ensemble`.
     #[arg(long)]
     json: bool,
     /// Write the simulated trajectory as an Aerialist CSV (`timestamp,x,y,z,r`).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.csv")]
     trajectory: Option<PathBuf>,
     /// Write a top-down SVG plot of the flight.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
-    /// Judge edition of the predicted distance: 2026 (path buffered by half the vehicle width, horizontal) or
-    /// 2025 (bare path, height-gap rule).
-    #[arg(long, default_value = "2026", value_parser = super::parse_judge)]
-    judge: Judge,
+    /// Judge edition of the predicted distance.
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
     /// Refuse a test that breaks the current competition rules (default: warn and simulate it anyway).
     #[arg(long)]
     strict: bool,
@@ -74,10 +76,7 @@ struct Report {
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let Some(motion) = MotionModel::by_name(&args.motion) else {
-        bail!("unknown motion model {:?} (use paper or px4)", args.motion);
-    };
-    let camera = super::camera_preset(&args.camera)?;
+    let judge = Judge::from(args.judge);
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -93,57 +92,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let config = SimConfig {
-        motion,
-        camera,
-        judge: args.judge,
+        motion: args.motion.model(),
+        camera: args.camera.model(),
+        judge,
         ..Default::default()
     };
     let start = Instant::now();
     let result = simulate(&test, &config)?;
     let wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    if let Some(path) = &args.trajectory {
-        write_atomic(path, result.trajectory.to_csv().as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    if let Some(path) = &args.plot {
-        let mut plot = FlightPlot::new(&test);
-        plot.add_path(
-            &result.trajectory,
-            PathStyle::Simulated,
-            &format!("simulated ({})", motion.name()),
-        );
-        if let Some(d) = &result.distance {
-            plot.mark_closest(&d.closest);
-        }
-        write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
-    }
+    write_files(&args, &test, &result)?;
     let ensemble = match args.ensemble {
-        Some(n) => {
-            let params = EnsembleParams::default();
-            let jobs = std::thread::available_parallelism().map_or(1, |j| j.get());
-            let e = run_ensemble(
-                &test.mission,
-                &test.obstacles,
-                &test.params,
-                &config,
-                &params,
-                n,
-                args.seed,
-                jobs,
-            )?;
-            Some(EnsembleReport {
-                n,
-                seed: args.seed,
-                p_fail: e.p_fail(&params),
-                member_min_distances: e.member_min_distances,
-            })
-        }
+        Some(n) => Some(ensemble(&test, &config, n, args.seed)?),
         None => None,
     };
     let d = result.distance.as_ref();
     let report = Report {
-        judge: args.judge,
-        judge_definition: args.judge.description(),
+        judge,
+        judge_definition: judge.description(),
         min_distance: d.map(|d| d.min_distance),
         min_distance_raw: d.map(|d| d.min_distance_raw),
         per_obstacle: d.map(|d| d.per_obstacle.clone()).unwrap_or_default(),
@@ -156,48 +121,91 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.json {
         super::print_json(&report)?;
     } else {
-        match d {
-            Some(d) => println!(
-                "min_distance      {:.3} m (judge {}: 0.5 s bins; {})",
-                d.min_distance,
-                args.judge,
-                args.judge.description()
-            ),
-            None => println!("min_distance      - (no obstacles)"),
+        print_text(&report, &result, config.motion.name());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--trajectory` and `--plot`.
+fn write_files(args: &Args, test: &TestCase, result: &SimResult) -> anyhow::Result<()> {
+    if let Some(path) = &args.trajectory {
+        write_atomic(path, result.trajectory.to_csv().as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        let mut plot = FlightPlot::new(test);
+        plot.add_path(
+            &result.trajectory,
+            PathStyle::Simulated,
+            &format!("simulated ({})", args.motion.model().name()),
+        );
+        if let Some(d) = &result.distance {
+            plot.mark_closest(&d.closest);
         }
-        if let Some(d) = d {
+        write_atomic(path, plot.to_svg().as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// `--ensemble N`: the members' minimum distances and the failure probability.
+fn ensemble(test: &TestCase, config: &SimConfig, n: usize, seed: u64) -> anyhow::Result<EnsembleReport> {
+    let params = EnsembleParams::default();
+    let jobs = std::thread::available_parallelism().map_or(1, |j| j.get());
+    let e = run_ensemble(
+        &test.mission,
+        &test.obstacles,
+        &test.params,
+        config,
+        &params,
+        n,
+        seed,
+        jobs,
+    )?;
+    Ok(EnsembleReport {
+        n,
+        seed,
+        p_fail: e.p_fail(&params),
+        member_min_distances: e.member_min_distances,
+    })
+}
+
+fn print_text(report: &Report, result: &SimResult, motion: &str) {
+    let judge = report.judge;
+    match &result.distance {
+        Some(d) => {
+            println!(
+                "min_distance      {:.3} m (judge {judge}: 0.5 s bins; {})",
+                d.min_distance,
+                judge.description()
+            );
             println!("min_distance_raw  {:.3} m", d.min_distance_raw);
             for o in &d.per_obstacle {
                 println!("  obstacle {}: {:.3} m", o.index, o.distance);
             }
         }
+        None => println!("min_distance      - (no obstacles)"),
+    }
+    println!(
+        "status            {:?} after {:.1} s simulated, {} cycles, {:.0} ms wall ({motion} motion)",
+        result.status, result.flight_time_s, result.cycles, report.wall_ms
+    );
+    if let Some(e) = &report.ensemble {
+        let mut v = e.member_min_distances.clone();
+        v.sort_by(f64::total_cmp);
+        let below = v.iter().filter(|d| **d < FAIL_BELOW_M).count();
         println!(
-            "status            {:?} after {:.1} s simulated, {} cycles, {:.0} ms wall ({} motion)",
-            result.status,
-            result.flight_time_s,
-            result.cycles,
-            wall_ms,
-            motion.name()
+            "p_fail            {} ({below} of {} members below {FAIL_BELOW_M} m, seed {}; Beta prior)",
+            e.p_fail.map_or("-".into(), |p| format!("{p:.3}")),
+            e.n,
+            e.seed
         );
-        if let Some(e) = &report.ensemble {
-            let mut v = e.member_min_distances.clone();
-            v.sort_by(f64::total_cmp);
-            let below = v.iter().filter(|d| **d < FAIL_BELOW_M).count();
+        if let (Some(lo), Some(hi)) = (v.first(), v.last()) {
             println!(
-                "p_fail            {} ({below} of {} members below {FAIL_BELOW_M} m, seed {}; Beta prior)",
-                e.p_fail.map_or("-".into(), |p| format!("{p:.3}")),
-                e.n,
-                e.seed
-            );
-            println!(
-                "members           min {:.3} m, median {:.3} m, max {:.3} m",
-                v[0],
-                median(&v),
-                v[v.len() - 1]
+                "members           min {lo:.3} m, median {:.3} m, max {hi:.3} m",
+                median(&v)
             );
         }
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// Median of sorted, non-empty values.

@@ -268,7 +268,7 @@ fn bad_input_fails_fast_and_clearly() {
             "1",
             "--candidates",
             "2",
-            "--hfs",
+            "--connect",
             &format!("udpin:127.0.0.1:{dead}"),
             "--connect-timeout",
             "1",
@@ -303,7 +303,7 @@ fn an_unreachable_endpoint_is_dropped_and_the_campaign_goes_on() {
     // Budget 2 and two vehicles in one static round: both take a job at the start, so the dead one is tried
     // (and dropped) and its job goes to the live one. (A learning campaign's rounds fly at most one of these
     // 2 flights each, which either vehicle may take: the dead one was then not always tried.)
-    let hfs = format!("udpin:127.0.0.1:{dead},udpout:127.0.0.1:{port}");
+    let connect = format!("udpin:127.0.0.1:{dead},udpout:127.0.0.1:{port}");
     let (code, stdout, stderr) = run_bounded(
         &[
             "generate",
@@ -314,8 +314,8 @@ fn an_unreachable_endpoint_is_dropped_and_the_campaign_goes_on() {
             "--mode",
             "mission",
             "--no-learn",
-            "--hfs",
-            &hfs,
+            "--connect",
+            &connect,
             "--connect-timeout",
             "1",
             "--out",

@@ -186,3 +186,157 @@ fn yaml_doc() -> impl Strategy<Value = String> {
     });
     proptest::collection::vec(block, 0..5).prop_map(|b| b.join(""))
 }
+
+/// A typo in a closed set of values fails while parsing, listing the values.
+#[test]
+fn a_typo_in_a_value_lists_the_values() {
+    for (args, values) in [
+        (
+            &["generate", "missions/mission2.yaml", "2", "--mode", "avoid"][..],
+            "avoidance, offboard, mission",
+        ),
+        (
+            &["generate", "missions/mission2.yaml", "2", "--judge", "2024"][..],
+            "2026, 2025",
+        ),
+        (
+            &["simulate", "missions/mission2.yaml", "--camera", "d435"][..],
+            "hfs, 2019, d455",
+        ),
+        (
+            &["simulate", "missions/mission2.yaml", "--motion", "teleport"][..],
+            "px4, paper",
+        ),
+        (
+            &["fidelity", "tests/data/hfs-flights", "--fov-estimate", "max"][..],
+            "fixed, maxima",
+        ),
+    ] {
+        let (code, _, err) = prgenuav(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains("invalid value") && err.contains(values), "{args:?}: {err}");
+    }
+}
+
+/// `generate --help` shows the flags a campaign is usually run with; the expert knobs are in the TOML.
+#[test]
+fn generate_help_shows_at_most_15_options() {
+    let (code, help, err) = prgenuav(&["generate", "--help"]);
+    assert_eq!(code, 0, "{err}");
+    let options: Vec<&str> = help
+        .lines()
+        .map(str::trim_start)
+        .filter(|l| l.starts_with("--") || l.starts_with("-h"))
+        .collect();
+    assert!(options.len() <= 15, "{} options: {options:?}", options.len());
+    for flag in [
+        "--seed",
+        "--out",
+        "--connect",
+        "--no-learn",
+        "--resume",
+        "--config",
+        "--json",
+    ] {
+        assert!(options.iter().any(|o| o.starts_with(flag)), "{flag} not shown: {help}");
+    }
+}
+
+/// The old name of `--connect` still works on `generate`: hidden, same meaning.
+#[test]
+fn generate_takes_hfs_as_the_old_name_of_connect() {
+    let (code, _, err) = prgenuav(&[
+        "generate",
+        "missions/mission2.yaml",
+        "2",
+        "--hfs",
+        "mock,udpin:127.0.0.1:9",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--connect takes either `mock` or MAVLink URLs"), "{err}");
+}
+
+/// A campaign TOML with a key or a section the format does not know: refused, naming the file and the key.
+#[test]
+fn a_bad_campaign_toml_names_the_file_and_key() {
+    for (text, needle) in [
+        ("[screening]\nthreshold = 2.0\n", "threshold"),
+        ("[mocks]\nspeed = 10.0\n", "mocks"),
+        ("[generator]\ngap = { min = 2.0, max = 3.0 }\n", "gap"),
+        ("[flight]\ntimeout_s = \"long\"\n", "timeout_s"),
+    ] {
+        let (_d, path) = temp_file("campaign.toml", text.as_bytes());
+        let (code, _, err) = prgenuav(&[
+            "generate",
+            "missions/mission2.yaml",
+            "2",
+            "--config",
+            path.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{text}: {err}");
+        assert!(err.contains("campaign.toml") && err.contains(needle), "{text}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+/// A campaign folder whose campaign.json stores seed 0, mission mode and a case that is not there (so a resume
+/// the settings allow fails right after the check, without flying).
+fn stored_campaign() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let json = r#"{"case": "missions/absent.yaml", "seed": 0, "budget": 2, "candidates": 4, "threshold_m": 3.0,
+        "max_iou": 0.5, "generator": {}, "old_spelling": false, "hfs": ["mock"], "mode": "mission", "learn": true, "adapt": true}"#;
+    std::fs::write(dir.path().join("campaign.json"), json).unwrap();
+    dir
+}
+
+/// `--resume` refuses a flag that would change a stored setting, naming the flag and the file; flags that do
+/// not change one are accepted.
+#[test]
+fn resume_refuses_flags_that_conflict_with_the_stored_settings() {
+    let dir = stored_campaign();
+    let folder = dir.path().to_str().unwrap();
+    let stored = dir.path().join("campaign.json");
+    let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--seed", "3", "--mode", "offboard"]);
+    assert_eq!(code, 2, "{err}");
+    for needle in [
+        format!("--seed 3 conflicts with seed 0 stored in {}", stored.display()),
+        format!(
+            "--mode offboard conflicts with mode mission stored in {}",
+            stored.display()
+        ),
+        "drop it or start a new campaign".to_string(),
+    ] {
+        assert!(err.contains(&needle), "{needle:?} not in {err}");
+    }
+    let (_t, toml) = temp_file("knobs.toml", b"[screening]\nthreshold_m = 2.0\n");
+    let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--config", toml.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("screening.threshold_m in") && err.contains("knobs.toml") && err.contains("threshold_m 3"),
+        "{err}"
+    );
+    let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--no-learn"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--no-learn conflicts with learn"), "{err}");
+    let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--out", folder]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--out"), "{err}");
+    // The same values, and flags that change no stored setting: accepted (the run then stops at the case).
+    let (code, _, err) = prgenuav(&[
+        "generate",
+        "--resume",
+        folder,
+        "--seed",
+        "0",
+        "--mode",
+        "mission",
+        "--threshold",
+        "3",
+        "--mock-vehicles",
+        "1",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(!err.contains("conflicts") && err.contains("absent.yaml"), "{err}");
+}

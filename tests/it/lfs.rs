@@ -26,7 +26,7 @@ fn render_writes_depth_and_points() {
         "-12,13,5,45",
         "--camera",
         "2019",
-        "--out",
+        "--out-file",
         out.to_str().unwrap(),
         "--points",
         pts.to_str().unwrap(),
@@ -65,7 +65,7 @@ fn render_rejects_bad_poses_and_options() {
             pose,
             "--camera",
             camera,
-            "--out",
+            "--out-file",
             out.to_str().unwrap(),
         ])
     };
@@ -150,7 +150,7 @@ fn simulate_rejects_invalid_tests_like_check() {
     assert!(err.contains("bad.yaml") && !err.contains("panicked"), "{err}");
     let (code, _, err) = prgenuav(&["simulate", "missions/mission2.yaml", "--motion", "teleport"]);
     assert_eq!(code, 2);
-    assert!(err.contains("unknown motion model"), "{err}");
+    assert!(err.contains("possible values: px4, paper"), "{err}");
 }
 
 #[test]

@@ -1,0 +1,303 @@
+//! `prgenuav generate CASE.yaml BUDGET`: the competition's main job. `--help` shows the flags a campaign is
+//! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
+//! in docs/cli.md.
+
+mod plan;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use anyhow::{Context, bail};
+use clap::ArgMatches;
+use prgenuav::bridge::FlyMode;
+use prgenuav::campaign::parallel::available_threads;
+use prgenuav::campaign::pool::Vehicle;
+use prgenuav::campaign::report::{DISTINCT_IOU, Report};
+use prgenuav::campaign::run::{CampaignConfig, run_campaign};
+use prgenuav::campaign::screen::LfsScreener;
+use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
+use prgenuav::lfs::ensemble::EnsembleParams;
+use prgenuav::lfs::sim::SimConfig;
+use prgenuav::model::Range;
+use tokio::runtime::Runtime;
+
+use super::progress::Reporter;
+use super::settings::{GeneratorFlags, parse_range};
+use super::values::{Family, JudgeEdition, Mode, Motion, Spelling, parse_stored};
+use plan::Plan;
+
+/// Arguments of `generate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The case study YAML (mission, params, commands).
+    #[arg(value_name = "CASE.yaml")]
+    case: Option<PathBuf>,
+    /// High-fidelity flights allowed (the competition's budget).
+    budget: Option<usize>,
+    /// Seed of the generator: the same seed draws the same candidates.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Folder in which the campaign's timestamped output folder is created.
+    #[arg(long, value_name = "DIR", default_value = "generated_tests")]
+    out: PathBuf,
+    /// The vehicles: `mock` (embedded mock autopilots) or MAVLink URLs separated by commas, one flight per
+    /// vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).
+    #[arg(long, alias = "hfs", value_name = "mock|URL,...", default_value = "mock")]
+    connect: String,
+    /// How the flights avoid the virtual obstacles.
+    #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
+    mode: Mode,
+    /// Judge edition of the distances (and of the low-fidelity prediction).
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
+    /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20).
+    #[arg(long, value_name = "N")]
+    candidates: Option<usize>,
+    /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in
+    /// rounds, calibrating the simulator on every flight and adapting the generator towards failures.
+    #[arg(long)]
+    no_learn: bool,
+    /// Start from what an earlier campaign learnt (its output folder's learnt.json).
+    #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
+    prior: Option<PathBuf>,
+    /// Continue a killed campaign in FOLDER with the settings in its campaign.json (a flag asking for a
+    /// different value is refused).
+    #[arg(long, value_name = "FOLDER")]
+    resume: Option<PathBuf>,
+    /// Campaign TOML with the expert knobs ([generator], [output], [screening], [mock], [flight], [learning];
+    /// see docs/cli.md); flags override it.
+    #[arg(long, value_name = "FILE.toml")]
+    config: Option<PathBuf>,
+    /// No progress output.
+    #[arg(long)]
+    quiet: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    expert: Expert,
+}
+
+/// The expert knobs as flags: hidden from `--help` (each is a key of the campaign TOML, which docs/cli.md
+/// documents), still accepted so scripts can set one knob without a file.
+#[derive(Debug, clap::Args)]
+struct Expert {
+    /// Fly only candidates the simulator predicts closer than this, metres (screening.threshold_m).
+    #[arg(long, hide = true, value_name = "M")]
+    threshold: Option<f64>,
+    /// Skip a candidate overlapping an already chosen one by more than this IoU (screening.max_iou).
+    #[arg(long, hide = true, value_name = "IOU")]
+    max_iou: Option<f64>,
+    /// The simulator's motion model for screening (screening.motion).
+    #[arg(long, hide = true, value_enum)]
+    motion: Option<Motion>,
+    /// Skip the simulator: fly candidates in the order drawn (screening.screen = false).
+    #[arg(long, hide = true)]
+    no_screen: bool,
+    /// Ensemble members ranking the shortlist (screening.ensemble).
+    #[arg(long, hide = true, value_name = "N")]
+    ensemble: Option<usize>,
+    /// Clock speed of the embedded mock autopilots, times real time (mock.speed).
+    #[arg(long, hide = true, value_name = "K")]
+    mock_speed: Option<f64>,
+    /// Let the embedded mocks' clocks run free, no lockstep (mock.lockstep = false).
+    #[arg(long, hide = true)]
+    mock_free_running: bool,
+    /// In lockstep, the companion plans on the pose this many vehicle milliseconds old (mock.latency_ms).
+    #[arg(long, hide = true, value_name = "MS")]
+    mock_latency: Option<f64>,
+    /// Embedded mock autopilots flying at once (mock.vehicles).
+    #[arg(long, hide = true, value_name = "N")]
+    mock_vehicles: Option<usize>,
+    /// Clock rate of the --connect vehicles (flight.connect_time_scale).
+    #[arg(long, hide = true, alias = "hfs-time-scale", value_name = "K")]
+    connect_time_scale: Option<f64>,
+    /// Give a flight up (LAND) after this many vehicle seconds (flight.timeout_s).
+    #[arg(long, hide = true, value_name = "S")]
+    timeout: Option<f64>,
+    /// Seconds to wait for each MAVLink vehicle's first heartbeat (flight.connect_timeout_s).
+    #[arg(long, hide = true, value_name = "S")]
+    connect_timeout: Option<f64>,
+    /// Re-anchor every test at each vehicle's home (flight.anchor_at_vehicle_home).
+    #[arg(long, hide = true)]
+    anchor_at_vehicle_home: bool,
+    /// Learn the simulator's calibration but keep the paper's uniform draws (learning.adapt = false).
+    #[arg(long, hide = true, conflicts_with = "no_learn")]
+    no_adapt: bool,
+    /// Floor of the failing tests' diversity (learning.min_diversity).
+    #[arg(long, hide = true, value_name = "D")]
+    min_diversity: Option<f64>,
+    /// IoU up to which a child of a failing flight may overlap a flown test (learning.child_max_iou).
+    #[arg(long, hide = true, value_name = "IOU")]
+    child_max_iou: Option<f64>,
+    /// Diagonal of obstacle 1's base, metres (generator.diagonal_m).
+    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
+    diagonal: Option<Range>,
+    /// Acute angle between obstacle 1's A part and the direction of flight, degrees (generator.angle_deg).
+    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
+    angle: Option<Range>,
+    /// Gap between obstacle 1's A end and obstacle 2, metres (generator.gap_m).
+    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
+    gap: Option<Range>,
+    /// Box height, metres (generator.height_m).
+    #[arg(long, hide = true, value_name = "M")]
+    height: Option<f64>,
+    /// The obstacle construction (generator.family).
+    #[arg(long, hide = true, value_enum)]
+    family: Option<Family>,
+    /// Key spelling of the written YAML (output.spelling).
+    #[arg(long, hide = true, value_enum)]
+    spelling: Option<Spelling>,
+}
+
+impl Expert {
+    fn generator_flags(&self) -> GeneratorFlags {
+        GeneratorFlags {
+            diagonal: self.diagonal,
+            angle: self.angle,
+            gap: self.gap,
+            height: self.height,
+            family: self.family,
+        }
+    }
+}
+
+pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
+    let plan = plan::plan(&args, matches)?;
+    let cfg = &plan.cfg;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let on_signal = stop.clone();
+    runtime.spawn(async move {
+        if tokio::signal::ctrl_c().await.is_ok() {
+            eprintln!("Ctrl-C: landing the vehicles in flight, keeping every finished flight; resume with --resume");
+            on_signal.store(true, Ordering::SeqCst);
+        }
+    });
+    let vehicles = vehicles(&plan, &runtime)?;
+    let progress = Reporter::new(args.quiet || args.json);
+    let screener = LfsScreener {
+        config: SimConfig {
+            motion: parse_stored::<Motion>(&cfg.motion, "motion")?.model(),
+            judge: cfg.judge,
+            ..SimConfig::default()
+        },
+        ensemble: EnsembleParams::default(),
+    };
+    let report = run_campaign(cfg, &plan.folder, &screener, vehicles, &progress, &stop)?;
+    print_summary(&report, &plan, args.json)?;
+    if let Some(w) = floor_warning(report.suite.diversity, cfg.adapt, cfg.min_diversity) {
+        eprintln!("warning: {w}");
+    }
+    if stop.load(Ordering::SeqCst) {
+        eprintln!(
+            "interrupted: resume with  prgenuav generate --resume {}",
+            plan.folder.display()
+        );
+        return Ok(ExitCode::from(super::EXIT_FAIL));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The vehicles that fly: embedded mocks, or one per MAVLink URL.
+fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
+    let cfg: &CampaignConfig = &plan.cfg;
+    let mode: FlyMode = parse_stored::<Mode>(&cfg.mode, "mode")?.into();
+    if cfg.hfs == ["mock"] {
+        let count = plan.mock_vehicles.unwrap_or_else(available_threads);
+        if count == 0 {
+            bail!("--mock-vehicles (mock.vehicles) must be at least 1");
+        }
+        let lockstep = cfg
+            .mock_lockstep
+            .then(|| Duration::from_secs_f64(cfg.mock_latency_ms / 1000.0));
+        return Ok((0..count)
+            .map(|i| {
+                Box::new(
+                    MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
+                        .judged(cfg.judge, cfg.anchor_at_vehicle_home)
+                        .with_timeout(cfg.flight_timeout_s),
+                ) as Box<dyn Vehicle>
+            })
+            .collect());
+    }
+    Ok(cfg
+        .hfs
+        .iter()
+        .map(|url| {
+            Box::new(
+                LinkVehicle::new(
+                    runtime.handle().clone(),
+                    url,
+                    mode,
+                    plan.connect_timeout_s,
+                    cfg.hfs_time_scale,
+                    cfg.flight_timeout_s,
+                )
+                .judged(cfg.judge, cfg.anchor_at_vehicle_home),
+            ) as Box<dyn Vehicle>
+        })
+        .collect())
+}
+
+/// The report on stdout: JSON, or a line of figures and the output folder.
+fn print_summary(report: &Report, plan: &Plan, json: bool) -> anyhow::Result<()> {
+    let folder = &plan.folder;
+    if json {
+        let mut value = serde_json::to_value(report)?;
+        value["output_folder"] = serde_json::json!(folder.display().to_string());
+        return super::print_json(&value);
+    }
+    let s = &report.suite;
+    let three = if s.failing_with_three > 0 {
+        format!(", {} with three obstacles", s.failing_with_three)
+    } else {
+        String::new()
+    };
+    println!(
+        "{} failing tests ({} distinct at IoU {DISTINCT_IOU}{three}) of {} flights ({} candidates screened), \
+         failure score {:.2}, diversity {}",
+        s.failing,
+        s.distinct_failing,
+        s.flown,
+        s.candidates_screened,
+        s.failure_score,
+        s.diversity.map_or("n/a".into(), |d| format!("{d:.3}"))
+    );
+    println!("output folder: {}", folder.display());
+    Ok(())
+}
+
+/// The floor bounds an expectation: what to say when a learning campaign's failing tests still ended below it.
+fn floor_warning(diversity: Option<f64>, adapt: bool, floor: f64) -> Option<String> {
+    let d = diversity.filter(|&d| adapt && d < floor)?;
+    Some(format!(
+        "the failing tests' diversity {d:.3} ended below --min-diversity {floor} (the campaign kept their expected \
+         diversity above it; the failures fell closer together than expected)"
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::floor_warning;
+
+    #[test]
+    fn a_learning_campaign_below_its_diversity_floor_says_so() {
+        let w = floor_warning(Some(0.708), true, 0.8).unwrap();
+        assert!(w.contains("0.708") && w.contains("--min-diversity 0.8"), "{w}");
+        assert_eq!(floor_warning(Some(0.81), true, 0.8), None);
+        assert_eq!(floor_warning(None, true, 0.8), None, "fewer than two failing tests");
+        assert_eq!(
+            floor_warning(Some(0.5), false, 0.8),
+            None,
+            "static campaigns have no floor"
+        );
+    }
+}

@@ -1,0 +1,462 @@
+//! From the command line and the campaign TOML to the campaign's settings: a new campaign's, or a resumed
+//! campaign's stored ones once no flag asks for a different value. A resumed campaign must fly as it started
+//! (its journal, learnt state and report assume it), so a flag that would change a stored setting is refused
+//! by name rather than silently ignored.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::ArgMatches;
+use clap::parser::ValueSource;
+use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
+use prgenuav::generator::GeneratorConfig;
+use prgenuav::lfs::ensemble::MAX_MEMBERS;
+use serde_json::Value;
+
+use super::Args;
+use crate::cli::settings::{CampaignToml, Flight, Learning, Loaded, Mock, Output, Screening};
+use crate::cli::values::{Mode, Motion, Spelling, name_of, parse_stored};
+
+/// Defaults of the settings neither a flag nor the file gives.
+const THRESHOLD_M: f64 = 3.0;
+const MAX_IOU: f64 = 0.5;
+const MOCK_SPEED: f64 = 100.0;
+const FLIGHT_TIMEOUT_S: f64 = 500.0;
+const CONNECT_TIMEOUT_S: f64 = 15.0;
+const MIN_DIVERSITY: f64 = 0.8;
+const CHILD_MAX_IOU: f64 = 0.85;
+/// Ensemble members ranking the shortlist when the vehicles are MAVLink ones (an ensemble costs more CPU than
+/// a mock flight, far less than a PX4 or hardware flight).
+const LINK_ENSEMBLE: usize = 8;
+
+/// The campaign to run.
+pub struct Plan {
+    pub cfg: CampaignConfig,
+    pub folder: PathBuf,
+    /// Embedded mock autopilots at once (not stored: a resumed campaign may change it).
+    pub mock_vehicles: Option<usize>,
+    /// Seconds to wait for each MAVLink vehicle's first heartbeat (not stored either).
+    pub connect_timeout_s: f64,
+}
+
+/// A setting given explicitly, by a flag or by the TOML file.
+struct Given {
+    /// `--seed`, or `screening.threshold_m in FILE`.
+    origin: String,
+    /// A switch (`--no-learn`) is named without a value.
+    switch: bool,
+    /// Its key in campaign.json (`seed`, `generator.gap_m`).
+    key: String,
+}
+
+/// What the command line and the TOML file ask for: the flags laid over the file.
+struct Requested {
+    settings: CampaignToml,
+    generator: GeneratorConfig,
+    given: Vec<Given>,
+    out_given: bool,
+}
+
+/// Records where each setting came from while the flags are laid over the file.
+struct Recorder<'a> {
+    file: &'a Loaded,
+    given: Vec<Given>,
+}
+
+impl Recorder<'_> {
+    fn flag(&mut self, flag: &str, key: &str) {
+        let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home"].contains(&flag);
+        self.given.push(Given {
+            origin: flag.to_string(),
+            switch,
+            key: key.to_string(),
+        });
+    }
+
+    fn file_key(&mut self, file_key: &str, key: &str) {
+        self.given.push(Given {
+            origin: self.file.origin(file_key),
+            switch: false,
+            key: key.to_string(),
+        });
+    }
+
+    /// The flag's value if given, else the file's, recording which.
+    fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
+        match (flag, file) {
+            (Some(v), _) if !key.is_empty() => {
+                self.flag(name, key);
+                Some(v)
+            }
+            (None, Some(v)) if !key.is_empty() => {
+                self.file_key(file_key, key);
+                Some(v)
+            }
+            (flag, file) => flag.or(file),
+        }
+    }
+}
+
+/// A setting's flag, its key in the TOML file, and its key in campaign.json (empty: campaign.json does not
+/// store it, so a resumed campaign may change it).
+type Names = (&'static str, &'static str, &'static str);
+
+/// Reads the TOML file and lays the flags over it; `--resume` then compares, a new campaign builds.
+pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
+    let file = Loaded::read(args.config.as_deref())?;
+    let req = request(args, matches, &file)?;
+    let (cfg, folder) = match &args.resume {
+        Some(folder) => (resumed(folder, args, &req)?, folder.clone()),
+        None => {
+            let cfg = fresh(args, &req)?;
+            let folder = prgenuav::campaign::report::timestamped_folder(&args.out, std::time::SystemTime::now());
+            (cfg, folder)
+        }
+    };
+    check(&cfg)?;
+    let s = &req.settings;
+    let connect_timeout_s = s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S);
+    if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
+        bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
+    }
+    Ok(Plan {
+        cfg,
+        folder,
+        mock_vehicles: s.mock.vehicles,
+        connect_timeout_s,
+    })
+}
+
+fn given(m: &ArgMatches, id: &str) -> bool {
+    m.value_source(id) == Some(ValueSource::CommandLine)
+}
+
+fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Requested> {
+    let mut r = Recorder {
+        file,
+        given: Vec::new(),
+    };
+    for (id, flag, key) in [
+        ("case", "CASE", "case"),
+        ("budget", "BUDGET", "budget"),
+        ("seed", "--seed", "seed"),
+        ("connect", "--connect", "hfs"),
+        ("mode", "--mode", "mode"),
+        ("judge", "--judge", "judge"),
+        ("prior", "--prior", "prior"),
+    ] {
+        if given(m, id) {
+            r.flag(flag, key);
+        }
+    }
+    let settings = lay_over(args, &file.toml, &mut r);
+    let flags = args.expert.generator_flags();
+    let by_flag = flags.given();
+    for key in &file.generator_keys {
+        if !by_flag.iter().any(|(_, k)| k == key) {
+            r.file_key(&format!("generator.{key}"), &format!("generator.{key}"));
+        }
+    }
+    for (flag, key) in by_flag {
+        r.flag(flag, &format!("generator.{key}"));
+    }
+    Ok(Requested {
+        settings,
+        generator: flags.apply(file)?,
+        given: r.given,
+        out_given: given(m, "out"),
+    })
+}
+
+/// The flags laid over the file's sections (a flag wins).
+fn lay_over(args: &Args, f: &CampaignToml, r: &mut Recorder) -> CampaignToml {
+    let e = &args.expert;
+    let (sc, mo) = (&f.screening, &f.mock);
+    CampaignToml {
+        generator: None,
+        output: Output {
+            spelling: r.pick(
+                e.spelling,
+                f.output.spelling,
+                ("--spelling", "output.spelling", "old_spelling"),
+            ),
+        },
+        screening: Screening {
+            candidates: r.pick(
+                args.candidates,
+                sc.candidates,
+                ("--candidates", "screening.candidates", "candidates"),
+            ),
+            threshold_m: r.pick(
+                e.threshold,
+                sc.threshold_m,
+                ("--threshold", "screening.threshold_m", "threshold_m"),
+            ),
+            max_iou: r.pick(e.max_iou, sc.max_iou, ("--max-iou", "screening.max_iou", "max_iou")),
+            motion: r.pick(e.motion, sc.motion, ("--motion", "screening.motion", "motion")),
+            ensemble: r.pick(
+                e.ensemble,
+                sc.ensemble,
+                ("--ensemble", "screening.ensemble", "ensemble"),
+            ),
+            screen: r.pick(
+                e.no_screen.then_some(false),
+                sc.screen,
+                ("--no-screen", "screening.screen", "screen"),
+            ),
+        },
+        mock: Mock {
+            speed: r.pick(e.mock_speed, mo.speed, ("--mock-speed", "mock.speed", "mock_speed")),
+            lockstep: r.pick(
+                e.mock_free_running.then_some(false),
+                mo.lockstep,
+                ("--mock-free-running", "mock.lockstep", "mock_lockstep"),
+            ),
+            latency_ms: r.pick(
+                e.mock_latency,
+                mo.latency_ms,
+                ("--mock-latency", "mock.latency_ms", "mock_latency_ms"),
+            ),
+            vehicles: r.pick(e.mock_vehicles, mo.vehicles, ("--mock-vehicles", "mock.vehicles", "")),
+        },
+        flight: flight(args, &f.flight, r),
+        learning: learning(args, &f.learning, r),
+    }
+}
+
+fn flight(args: &Args, fl: &Flight, r: &mut Recorder) -> Flight {
+    let e = &args.expert;
+    Flight {
+        timeout_s: r.pick(
+            e.timeout,
+            fl.timeout_s,
+            ("--timeout", "flight.timeout_s", "flight_timeout_s"),
+        ),
+        connect_timeout_s: r.pick(
+            e.connect_timeout,
+            fl.connect_timeout_s,
+            ("--connect-timeout", "flight.connect_timeout_s", ""),
+        ),
+        connect_time_scale: r.pick(
+            e.connect_time_scale,
+            fl.connect_time_scale,
+            ("--connect-time-scale", "flight.connect_time_scale", "hfs_time_scale"),
+        ),
+        anchor_at_vehicle_home: r.pick(
+            e.anchor_at_vehicle_home.then_some(true),
+            fl.anchor_at_vehicle_home,
+            (
+                "--anchor-at-vehicle-home",
+                "flight.anchor_at_vehicle_home",
+                "anchor_at_vehicle_home",
+            ),
+        ),
+    }
+}
+
+fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
+    let e = &args.expert;
+    Learning {
+        learn: r.pick(
+            args.no_learn.then_some(false),
+            le.learn,
+            ("--no-learn", "learning.learn", "learn"),
+        ),
+        adapt: r.pick(
+            e.no_adapt.then_some(false),
+            le.adapt,
+            ("--no-adapt", "learning.adapt", "adapt"),
+        ),
+        min_diversity: r.pick(
+            e.min_diversity,
+            le.min_diversity,
+            ("--min-diversity", "learning.min_diversity", "min_diversity"),
+        ),
+        child_max_iou: r.pick(
+            e.child_max_iou,
+            le.child_max_iou,
+            ("--child-max-iou", "learning.child_max_iou", "child_max_iou"),
+        ),
+    }
+}
+
+/// The campaign's settings: what was asked for, defaults for the rest.
+fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
+    let s = &req.settings;
+    let hfs: Vec<String> = args
+        .connect
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .collect();
+    let screen = s.screening.screen.unwrap_or(true);
+    let learn = screen && s.learning.learn.unwrap_or(true);
+    CampaignConfig {
+        case,
+        seed: args.seed,
+        budget,
+        candidates: s.screening.candidates.unwrap_or((3 * budget).max(20)),
+        threshold_m: s.screening.threshold_m.unwrap_or(THRESHOLD_M),
+        max_iou: s.screening.max_iou.unwrap_or(MAX_IOU),
+        generator: req.generator.clone(),
+        old_spelling: s.output.spelling == Some(Spelling::Old),
+        ensemble: s
+            .screening
+            .ensemble
+            .unwrap_or(if hfs == ["mock"] { 0 } else { LINK_ENSEMBLE }),
+        hfs,
+        mode: name_of(&args.mode),
+        motion: name_of(&s.screening.motion.unwrap_or(Motion::Px4)),
+        mock_speed: s.mock.speed.unwrap_or(MOCK_SPEED),
+        mock_lockstep: s.mock.lockstep.unwrap_or(true),
+        mock_latency_ms: s.mock.latency_ms.unwrap_or(DEFAULT_MOCK_LATENCY_MS),
+        screen,
+        judge: args.judge.into(),
+        anchor_at_vehicle_home: s.flight.anchor_at_vehicle_home.unwrap_or(false),
+        hfs_time_scale: s.flight.connect_time_scale,
+        flight_timeout_s: s.flight.timeout_s.unwrap_or(FLIGHT_TIMEOUT_S),
+        learn,
+        adapt: learn && s.learning.adapt.unwrap_or(true),
+        prior: args.prior.clone(),
+        min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
+        child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
+    }
+}
+
+/// A new campaign: CASE and BUDGET required, every setting checked before anything is sampled or flown.
+fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
+    let (Some(case), Some(budget)) = (args.case.clone(), args.budget) else {
+        bail!("give CASE.yaml and BUDGET, or --resume FOLDER");
+    };
+    if budget == 0 {
+        bail!("BUDGET must be at least 1 flight");
+    }
+    let cfg = build(case, budget, args, req);
+    if !(0.0..=1.0).contains(&cfg.min_diversity) {
+        bail!("--min-diversity (learning.min_diversity) must be within 0..1");
+    }
+    if !(cfg.threshold_m.is_finite() && cfg.threshold_m > 0.0) {
+        bail!("--threshold (screening.threshold_m) must be a positive number of metres");
+    }
+    if !(0.0..=1.0).contains(&cfg.max_iou) || !cfg.child_max_iou.is_some_and(|c| (0.0..=1.0).contains(&c)) {
+        bail!("--max-iou (screening.max_iou) and --child-max-iou (learning.child_max_iou) must be within 0..1");
+    }
+    if let Some(p) = &cfg.prior {
+        if !cfg.learn {
+            bail!("--prior needs a learning campaign (the settings turn learning off)");
+        }
+        // Refuse a bad prior before anything is sampled or flown.
+        prgenuav::campaign::rounds::load_prior(p)?;
+    }
+    Ok(cfg)
+}
+
+/// A resumed campaign: its stored settings, once every setting asked for agrees with them.
+fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
+    if req.out_given {
+        bail!(
+            "--out: a resumed campaign writes into {} (its own folder); drop --out",
+            folder.display()
+        );
+    }
+    let path = folder.join("campaign.json");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let stored: CampaignConfig =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a campaign file", path.display()))?;
+    let case = args.case.clone().unwrap_or_else(|| stored.case.clone());
+    let wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    let conflicts = conflicts(&stored, &wanted, &req.given, &path)?;
+    if !conflicts.is_empty() {
+        bail!("{}", conflicts.join("\n"));
+    }
+    Ok(stored)
+}
+
+/// One line per setting asked for that differs from the stored one.
+fn conflicts(
+    stored: &CampaignConfig,
+    wanted: &CampaignConfig,
+    given: &[Given],
+    path: &Path,
+) -> anyhow::Result<Vec<String>> {
+    let (stored, wanted) = (serde_json::to_value(stored)?, serde_json::to_value(wanted)?);
+    let at = |v: &Value, key: &str| key.split('.').try_fold(v.clone(), |v, k| v.get(k).cloned());
+    let mut lines = Vec::new();
+    for g in given {
+        let (s, w) = (at(&stored, &g.key), at(&wanted, &g.key));
+        if s == w {
+            continue;
+        }
+        let asked = match (&w, g.switch) {
+            (Some(w), false) => format!("{} {}", g.origin, show(w)),
+            _ => g.origin.clone(),
+        };
+        lines.push(format!(
+            "{asked} conflicts with {} {} stored in {}; drop it or start a new campaign",
+            g.key,
+            s.as_ref().map_or("(none)".into(), show),
+            path.display()
+        ));
+    }
+    Ok(lines)
+}
+
+/// A stored value as a user would type it: strings bare, lists comma-separated, ranges `MIN,MAX`.
+fn show(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.clone(),
+        Value::Null => "(none)".into(),
+        Value::Array(a) => a.iter().map(show).collect::<Vec<_>>().join(","),
+        Value::Object(o) if o.len() == 2 && o.contains_key("min") && o.contains_key("max") => {
+            format!("{},{}", show(&o["min"]), show(&o["max"]))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// Checks a new or stored campaign's settings, naming the flag and the TOML key of each.
+fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
+    parse_stored::<Motion>(&cfg.motion, "motion (--motion, screening.motion)")?;
+    parse_stored::<Mode>(&cfg.mode, "mode (--mode)")?;
+    if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
+        bail!("--mock-speed (mock.speed) must be at least 1");
+    }
+    if cfg.hfs_time_scale.is_some_and(|k| !(k.is_finite() && k > 0.0)) {
+        bail!("--connect-time-scale (flight.connect_time_scale) must be a positive number");
+    }
+    if !(cfg.flight_timeout_s.is_finite() && cfg.flight_timeout_s > 0.0) {
+        bail!("--timeout (flight.timeout_s) must be a positive number of seconds");
+    }
+    if !(cfg.mock_latency_ms.is_finite() && (0.0..=1000.0).contains(&cfg.mock_latency_ms)) {
+        bail!(
+            "--mock-latency (mock.latency_ms) {} must be between 0 and 1000 ms",
+            cfg.mock_latency_ms
+        );
+    }
+    if cfg.ensemble > MAX_MEMBERS {
+        bail!(
+            "--ensemble (screening.ensemble) {}: at most {MAX_MEMBERS} members",
+            cfg.ensemble
+        );
+    }
+    if cfg.hfs.is_empty() {
+        bail!("--connect names no vehicle");
+    }
+    if cfg.hfs.len() > 1 && cfg.hfs.iter().any(|u| u == "mock") {
+        bail!("--connect takes either `mock` or MAVLink URLs, not both");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::show;
+
+    #[test]
+    fn stored_values_are_shown_as_typed() {
+        assert_eq!(show(&serde_json::json!("avoidance")), "avoidance");
+        assert_eq!(show(&serde_json::json!(["udpin:a", "udpin:b"])), "udpin:a,udpin:b");
+        assert_eq!(show(&serde_json::json!({"min": 2.0, "max": 4.0})), "2.0,4.0");
+        assert_eq!(show(&serde_json::json!(3)), "3");
+    }
+}

@@ -1,0 +1,546 @@
+//! The campaign TOML (`generate --config FILE`, `sample --config FILE`): the expert knobs of a campaign, one
+//! section per stage, so `generate --help` stays short while every knob stays reachable and can be kept with
+//! the campaign it was run with. A flag given on the command line overrides the file. A key the file does not
+//! know is an error naming the file and the key: a misspelt knob must not silently fall back to its default.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use prgenuav::generator::GeneratorConfig;
+use prgenuav::model::Range;
+use serde::{Deserialize, Serialize};
+
+use super::values::{Family, Motion, Spelling};
+
+/// The file's sections; every key is optional (a key left out keeps its default, or the flag's value).
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignToml {
+    /// The obstacle construction (the keys of the generator's own configuration).
+    #[serde(default)]
+    pub generator: Option<GeneratorConfig>,
+    /// How the tests are written.
+    #[serde(default)]
+    pub output: Output,
+    /// The low-fidelity screening of the candidates.
+    #[serde(default)]
+    pub screening: Screening,
+    /// The embedded mock autopilots (`--connect mock`).
+    #[serde(default)]
+    pub mock: Mock,
+    /// Every flight, on any vehicle.
+    #[serde(default)]
+    pub flight: Flight,
+    /// Learning from the flights as the campaign goes.
+    #[serde(default)]
+    pub learning: Learning,
+}
+
+/// `[output]`.
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    pub spelling: Option<Spelling>,
+}
+
+/// `[screening]`.
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Screening {
+    pub candidates: Option<usize>,
+    pub threshold_m: Option<f64>,
+    pub max_iou: Option<f64>,
+    pub motion: Option<Motion>,
+    pub ensemble: Option<usize>,
+    pub screen: Option<bool>,
+}
+
+/// `[mock]`.
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mock {
+    pub speed: Option<f64>,
+    pub lockstep: Option<bool>,
+    pub latency_ms: Option<f64>,
+    pub vehicles: Option<usize>,
+}
+
+/// `[flight]`.
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Flight {
+    pub timeout_s: Option<f64>,
+    pub connect_timeout_s: Option<f64>,
+    pub connect_time_scale: Option<f64>,
+    pub anchor_at_vehicle_home: Option<bool>,
+}
+
+/// `[learning]`.
+#[derive(Debug, Default, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Learning {
+    pub learn: Option<bool>,
+    pub adapt: Option<bool>,
+    pub min_diversity: Option<f64>,
+    pub child_max_iou: Option<f64>,
+}
+
+/// A campaign TOML as read: its values, and which `[generator]` keys it sets (to compare them with a resumed
+/// campaign's).
+#[derive(Debug, Default, Clone)]
+pub struct Loaded {
+    pub path: Option<PathBuf>,
+    pub toml: CampaignToml,
+    pub generator_keys: Vec<String>,
+}
+
+/// The sections a campaign TOML may have.
+pub const SECTIONS: [&str; 6] = ["generator", "output", "screening", "mock", "flight", "learning"];
+
+impl Loaded {
+    /// Reads `path`, or nothing when `None`.
+    pub fn read(path: Option<&Path>) -> anyhow::Result<Self> {
+        let Some(path) = path else {
+            return Ok(Self::default());
+        };
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        Self::parse(&text, path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
+    /// Parses the text of `path`. A file without sections whose keys are all the generator's is read as
+    /// `[generator]`, so a generator-only file works wherever a campaign file does.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, String> {
+        let raw: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
+        let generator_only = !raw.is_empty() && raw.keys().all(|k| !SECTIONS.contains(&k.as_str()));
+        let (toml, generator_keys) = if generator_only {
+            let g = GeneratorConfig::from_toml(text)?;
+            let c = CampaignToml {
+                generator: Some(g),
+                ..CampaignToml::default()
+            };
+            (c, raw.keys().cloned().collect())
+        } else {
+            let c: CampaignToml = toml::from_str(text).map_err(|e| e.to_string())?;
+            if let Some(g) = &c.generator {
+                g.validate().map_err(|e| format!("[generator] {e}"))?;
+            }
+            let keys = raw.get("generator").and_then(toml::Value::as_table);
+            (c, keys.map(|t| t.keys().cloned().collect()).unwrap_or_default())
+        };
+        Ok(Self {
+            path: Some(path.to_path_buf()),
+            toml,
+            generator_keys,
+        })
+    }
+
+    /// `KEY in FILE`, naming where a setting came from.
+    pub fn origin(&self, key: &str) -> String {
+        let file = self
+            .path
+            .as_deref()
+            .map_or_else(String::new, |p| p.display().to_string());
+        format!("{key} in {file}")
+    }
+}
+
+/// Generator flags (`--diagonal` ...), each overriding its `[generator]` key.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct GeneratorFlags {
+    pub diagonal: Option<Range>,
+    pub angle: Option<Range>,
+    pub gap: Option<Range>,
+    pub height: Option<f64>,
+    pub family: Option<Family>,
+}
+
+impl GeneratorFlags {
+    /// The flags given, as (flag, `[generator]` key).
+    pub fn given(&self) -> Vec<(&'static str, &'static str)> {
+        [
+            (self.diagonal.is_some(), "--diagonal", "diagonal_m"),
+            (self.angle.is_some(), "--angle", "angle_deg"),
+            (self.gap.is_some(), "--gap", "gap_m"),
+            (self.height.is_some(), "--height", "height_m"),
+            (self.family.is_some(), "--family", "family"),
+        ]
+        .into_iter()
+        .filter(|(given, _, _)| *given)
+        .map(|(_, flag, key)| (flag, key))
+        .collect()
+    }
+
+    /// The generator's configuration: its defaults, then the file's `[generator]`, then these flags.
+    pub fn apply(&self, file: &Loaded) -> anyhow::Result<GeneratorConfig> {
+        let mut c = file.toml.generator.clone().unwrap_or_default();
+        c.diagonal_m = self.diagonal.unwrap_or(c.diagonal_m);
+        c.angle_deg = self.angle.unwrap_or(c.angle_deg);
+        c.gap_m = self.gap.unwrap_or(c.gap_m);
+        c.height_m = self.height.unwrap_or(c.height_m);
+        c.family = self.family.map_or(c.family, Into::into);
+        c.validate().map_err(|e| anyhow::anyhow!("generator parameters: {e}"))?;
+        Ok(c)
+    }
+}
+
+/// `--diagonal 6,11` and the like: a range as `MIN,MAX`.
+pub fn parse_range(s: &str) -> Result<Range, String> {
+    let (a, b) = s.split_once(',').ok_or_else(|| format!("{s:?}: expected MIN,MAX"))?;
+    let num = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
+    Ok(Range::new(num(a)?, num(b)?))
+}
+
+/// One key of the campaign TOML, for docs/cli.md.
+#[cfg(test)]
+pub struct KeyDoc {
+    pub section: &'static str,
+    pub key: &'static str,
+    /// A valid TOML value (the default where it is a constant).
+    pub example: &'static str,
+    pub default: &'static str,
+    /// The `generate` flag that overrides it (empty: none).
+    pub flag: &'static str,
+    pub help: &'static str,
+}
+
+#[cfg(test)]
+const fn key(
+    section: &'static str,
+    key: &'static str,
+    example: &'static str,
+    default: &'static str,
+    flag: &'static str,
+    help: &'static str,
+) -> KeyDoc {
+    KeyDoc {
+        section,
+        key,
+        example,
+        default,
+        flag,
+        help,
+    }
+}
+
+/// Every key, in file order. A test parses them all, so a key documented here exists in the file format, and
+/// every key of the format is documented here.
+#[cfg(test)]
+pub const KEYS: &[KeyDoc] = &[
+    key(
+        "generator",
+        "diagonal_m",
+        "{ min = 6.0, max = 11.6 }",
+        "{ min = 6.0, max = 11.6 }",
+        "--diagonal",
+        "Diagonal of obstacle 1's base, metres; the upper bound keeps obstacle 2 (1.75 x as long) within the 20 m rule.",
+    ),
+    key("generator", "width_m", "2.0", "2.0", "", "Width of both bases, metres."),
+    key(
+        "generator",
+        "split",
+        "0.3333333333333333",
+        "1/3",
+        "",
+        "Share of obstacle 1's length on the A side of the segment of interest (the paper family's).",
+    ),
+    key(
+        "generator",
+        "length_factor",
+        "1.75",
+        "1.75",
+        "",
+        "Obstacle 2's length as a multiple of obstacle 1's, so the drone cannot circle it.",
+    ),
+    key(
+        "generator",
+        "height_m",
+        "20.0",
+        "20.0",
+        "--height",
+        "Height of both boxes, metres (above the 10 m flight altitude, so the drone cannot fly over).",
+    ),
+    key(
+        "generator",
+        "angle_deg",
+        "{ min = 20.0, max = 70.0 }",
+        "{ min = 20.0, max = 70.0 }",
+        "--angle",
+        "Acute angle between obstacle 1's A part and the direction of flight, degrees.",
+    ),
+    key(
+        "generator",
+        "gap_m",
+        "{ min = 2.0, max = 4.0 }",
+        "{ min = 2.0, max = 4.0 }",
+        "--gap",
+        "Gap between obstacle 1's A end and obstacle 2, metres.",
+    ),
+    key(
+        "generator",
+        "overhang",
+        "{ min = 0.0, max = 0.3333333333333333 }",
+        "{ min = 0.0, max = 1/3 }",
+        "",
+        "How far obstacle 2 reaches past obstacle 1's far face, as a share of its length.",
+    ),
+    key(
+        "generator",
+        "family",
+        "\"paper\"",
+        "\"paper\"",
+        "--family",
+        "`paper` (two obstacles, the paper's split) or `extended` (the split drawn from `adapted_split`, and a \
+         third obstacle beyond the pair where the mission leaves room).",
+    ),
+    key(
+        "generator",
+        "adapted_split",
+        "{ min = 0.2, max = 0.45 }",
+        "{ min = 0.2, max = 0.45 }",
+        "",
+        "The extended family's range of `split`.",
+    ),
+    key(
+        "generator",
+        "third_ahead_m",
+        "{ min = 2.0, max = 8.0 }",
+        "{ min = 2.0, max = 8.0 }",
+        "",
+        "The extended family's clear distance along the segment of interest from the pair to the third obstacle, \
+         metres.",
+    ),
+    key(
+        "generator",
+        "max_attempts",
+        "10000",
+        "10000",
+        "",
+        "Draws per test before the generator reports that the mission leaves no room.",
+    ),
+    key(
+        "output",
+        "spelling",
+        "\"new\"",
+        "\"new\"",
+        "--spelling",
+        "Key spelling of the written YAML: `new` (robot/mission) or `old` (drone/test, Aerialist before 2025-09).",
+    ),
+    key(
+        "screening",
+        "candidates",
+        "60",
+        "3 x BUDGET, at least 20",
+        "--candidates",
+        "Candidates to draw and screen with the low-fidelity simulator.",
+    ),
+    key(
+        "screening",
+        "threshold_m",
+        "3.0",
+        "3.0",
+        "--threshold",
+        "Fly only candidates the simulator predicts closer than this, metres.",
+    ),
+    key(
+        "screening",
+        "max_iou",
+        "0.5",
+        "0.5",
+        "--max-iou",
+        "Skip a candidate whose footprints overlap an already chosen one by more than this IoU.",
+    ),
+    key(
+        "screening",
+        "motion",
+        "\"px4\"",
+        "\"px4\"",
+        "--motion",
+        "The simulator's motion model: `px4` or `paper`.",
+    ),
+    key(
+        "screening",
+        "ensemble",
+        "0",
+        "0 with mock vehicles, 8 with MAVLink ones",
+        "--ensemble",
+        "Members of the simulator ensemble run on the 2 x BUDGET most severe candidates, which are then flown in \
+         order of expected points per minute; 0 ranks by the point prediction. An ensemble costs about 1 s of CPU \
+         per candidate: more than a mock flight, far less than a PX4 or hardware flight.",
+    ),
+    key(
+        "screening",
+        "screen",
+        "true",
+        "true",
+        "--no-screen",
+        "`false` skips the simulator and flies candidates in the order drawn (the baseline that shows what \
+         screening buys); it also turns learning off.",
+    ),
+    key(
+        "mock",
+        "speed",
+        "100.0",
+        "100.0",
+        "--mock-speed",
+        "Clock speed of the embedded mock autopilots, times real time; in lockstep an upper bound.",
+    ),
+    key(
+        "mock",
+        "lockstep",
+        "true",
+        "true",
+        "--mock-free-running",
+        "The mock holds its clock until each avoidance answer, so flights do not depend on the CPU. `false` lets \
+         the clocks run free, as on a real vehicle (use a low speed, e.g. 20, with it).",
+    ),
+    key(
+        "mock",
+        "latency_ms",
+        "0.0",
+        "0.0",
+        "--mock-latency",
+        "In lockstep, the companion plans on the pose this many vehicle milliseconds old (0 to 1000).",
+    ),
+    key(
+        "mock",
+        "vehicles",
+        "2",
+        "one per core",
+        "--mock-vehicles",
+        "Embedded mock autopilots flying at once. Flights mostly wait on the mock's clock, so more vehicles than \
+         cores can help while the planner keeps up. Not stored: a resumed campaign may change it.",
+    ),
+    key(
+        "flight",
+        "timeout_s",
+        "500.0",
+        "500.0",
+        "--timeout",
+        "Give a flight up (LAND) after this many vehicle seconds.",
+    ),
+    key(
+        "flight",
+        "connect_timeout_s",
+        "15.0",
+        "15.0",
+        "--connect-timeout",
+        "Seconds to wait for each MAVLink vehicle's first heartbeat. Not stored: a resumed campaign may change it.",
+    ),
+    key(
+        "flight",
+        "connect_time_scale",
+        "1.0",
+        "measured on each vehicle as it connects",
+        "--connect-time-scale",
+        "Clock rate of the `--connect` vehicles (PX4_SIM_SPEED_FACTOR).",
+    ),
+    key(
+        "flight",
+        "anchor_at_vehicle_home",
+        "false",
+        "false",
+        "--anchor-at-vehicle-home",
+        "Re-anchor every test (mission, obstacles, fence) at each vehicle's home instead of refusing a vehicle \
+         farther from the test's home than its MIS_DIST_1WP (bench drones anywhere).",
+    ),
+    key(
+        "learning",
+        "learn",
+        "true",
+        "true",
+        "--no-learn",
+        "Fly in rounds (8, up to 12 while near-duplicates leave budget unflown), calibrating the simulator on \
+         every flight. `false`: screen once and fly the ranking (the static campaign).",
+    ),
+    key(
+        "learning",
+        "adapt",
+        "true",
+        "true",
+        "--no-adapt",
+        "While learning, also adapt the generator towards failures (draws around failing flights, a draw \
+         distribution moved towards the best candidates). `false` keeps the paper's uniform draws.",
+    ),
+    key(
+        "learning",
+        "min_diversity",
+        "0.8",
+        "0.8",
+        "--min-diversity",
+        "Floor of the failing tests' diversity (1 - mean pairwise IoU): the adapted generator draws and flies \
+         only candidates that keep the expected final diversity above it (0 to 1).",
+    ),
+    key(
+        "learning",
+        "child_max_iou",
+        "0.85",
+        "0.85",
+        "--child-max-iou",
+        "A candidate drawn next to a failing flight may overlap a flown test up to this IoU (more than \
+         `max_iou`) while the failing tests would keep `min_diversity`: near copies of a failure fail most \
+         often. Set it to `max_iou` to hold every candidate to `max_iou`.",
+    ),
+];
+
+/// The documented keys as a TOML file, each set to its example value.
+#[cfg(test)]
+pub fn example_toml() -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for section in SECTIONS {
+        let _ = writeln!(s, "[{section}]");
+        for k in KEYS.iter().filter(|k| k.section == section) {
+            let _ = writeln!(s, "{} = {}", k.key, k.example);
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_documented_key_parses_and_every_key_is_documented() {
+        let text = example_toml();
+        let loaded = Loaded::parse(&text, Path::new("example.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let json = serde_json::to_value(&loaded.toml).unwrap();
+        for section in SECTIONS {
+            let keys = json[section].as_object().unwrap();
+            for (k, v) in keys {
+                assert!(!v.is_null(), "[{section}] {k} is not documented in KEYS");
+            }
+            let documented = KEYS.iter().filter(|k| k.section == section).count();
+            assert_eq!(documented, keys.len(), "[{section}]");
+        }
+        assert_eq!(
+            loaded.generator_keys.len(),
+            KEYS.iter().filter(|k| k.section == "generator").count()
+        );
+    }
+
+    #[test]
+    fn unknown_keys_and_sections_are_named() {
+        let p = Path::new("c.toml");
+        let e = Loaded::parse("[screening]\nthreshold = 2\n", p).unwrap_err();
+        assert!(e.contains("threshold") && e.contains("threshold_m"), "{e}");
+        let e = Loaded::parse("[screenng]\nthreshold_m = 2\n", p).unwrap_err();
+        assert!(e.contains("screenng"), "{e}");
+        let e = Loaded::parse("[generator]\ngap_m = { min = 5.0, max = 1.0 }\n", p).unwrap_err();
+        assert!(e.contains("gap_m"), "{e}");
+        let e = Loaded::parse("[mock]\nspeed = \"fast\"\n", p).unwrap_err();
+        assert!(e.contains("speed"), "{e}");
+    }
+
+    #[test]
+    fn a_file_of_generator_keys_alone_is_the_generator_section() {
+        let l = Loaded::parse("family = \"extended\"\n", Path::new("g.toml")).unwrap();
+        assert_eq!(
+            l.toml.generator.map(|g| g.family),
+            Some(prgenuav::generator::Family::Extended)
+        );
+        assert_eq!(l.generator_keys, ["family"]);
+        let e = Loaded::parse("gap_m = { min = 2.5, max = 3.0 }\nbogus = 1\n", Path::new("g.toml")).unwrap_err();
+        assert!(e.contains("bogus"), "{e}");
+    }
+}

@@ -1,0 +1,194 @@
+//! The closed sets of values the command line takes. Each is a `ValueEnum`, so `--help` lists the values and a
+//! typo fails while parsing, before any file is read or any vehicle contacted. The library keeps its own types;
+//! these convert at the boundary.
+
+use clap::ValueEnum;
+use prgenuav::bridge::FlyMode;
+use prgenuav::judge::Judge;
+use prgenuav::lfs::camera::Camera as CameraModel;
+use prgenuav::lfs::fov_estimate::FovEstimate as FovEstimateModel;
+use prgenuav::lfs::sim::MotionModel;
+use serde::{Deserialize, Serialize};
+
+/// The command-line name of a value (what `--help` lists and what campaign files store).
+pub fn name_of(v: &impl ValueEnum) -> String {
+    v.to_possible_value()
+        .map(|p| p.get_name().to_string())
+        .unwrap_or_default()
+}
+
+/// Parses a value stored as text (campaign.json keeps `mode` and `motion` as strings), naming `what` and the
+/// accepted values when it is none of them.
+pub fn parse_stored<T: ValueEnum>(text: &str, what: &str) -> anyhow::Result<T> {
+    T::from_str(text, false).map_err(|_| {
+        let names: Vec<String> = T::value_variants().iter().map(name_of).collect();
+        anyhow::anyhow!("{what} {text:?} is not one of {}", names.join(", "))
+    })
+}
+
+/// Key spelling of written YAML files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Spelling {
+    /// `robot:` and `mission:` (Aerialist since 2025-09).
+    New,
+    /// `drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's).
+    Old,
+}
+
+impl From<Spelling> for prgenuav::model::Spelling {
+    fn from(s: Spelling) -> Self {
+        match s {
+            Spelling::New => Self::New,
+            Spelling::Old => Self::Old,
+        }
+    }
+}
+
+/// The low-fidelity simulator's motion model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Motion {
+    /// PX4's waypoint generator and a PX4-like position tracker.
+    Px4,
+    /// The paper's kinematic rule towards the planner's first tree node.
+    Paper,
+}
+
+impl Motion {
+    /// The model with its fitted constants.
+    pub fn model(self) -> MotionModel {
+        match self {
+            Motion::Px4 => MotionModel::Px4(Default::default()),
+            Motion::Paper => MotionModel::Paper(Default::default()),
+        }
+    }
+}
+
+/// How a flight avoids the virtual obstacles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Mode {
+    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; prgenuav is its avoidance companion.
+    Avoidance,
+    /// prgenuav flies the waypoints in OFFBOARD mode with the planner's setpoints (any PX4).
+    Offboard,
+    /// PX4 flies the plain mission, no avoidance (the baseline).
+    Mission,
+}
+
+impl From<Mode> for FlyMode {
+    fn from(m: Mode) -> Self {
+        match m {
+            Mode::Avoidance => FlyMode::Avoidance,
+            Mode::Offboard => FlyMode::Offboard,
+            Mode::Mission => FlyMode::Mission,
+        }
+    }
+}
+
+/// The judge edition: which definition of a flight's distance to an obstacle counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum JudgeEdition {
+    /// From the path buffered by half the vehicle width, horizontally (the current edition).
+    #[value(name = "2026")]
+    E2026,
+    /// From the bare path, with the height-gap rule when the path passes over a box.
+    #[value(name = "2025")]
+    E2025,
+}
+
+impl From<JudgeEdition> for Judge {
+    fn from(j: JudgeEdition) -> Self {
+        match j {
+            JudgeEdition::E2026 => Judge::E2026,
+            JudgeEdition::E2025 => Judge::E2025,
+        }
+    }
+}
+
+/// A depth-camera preset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Camera {
+    /// The competition's camera: 59 deg, 640 x 480.
+    Hfs,
+    /// The 2019 model PX4-Avoidance was tuned with: the competition's camera at 64 x 48.
+    #[value(name = "2019")]
+    V2019,
+    /// The current SITL model (D455-like): 86 deg, 848 x 480.
+    D455,
+}
+
+impl Camera {
+    /// The preset's intrinsics and clipping.
+    pub fn model(self) -> CameraModel {
+        match self {
+            Camera::Hfs => CameraModel::hfs(),
+            Camera::V2019 => CameraModel::v2019(),
+            Camera::D455 => CameraModel::d455(),
+        }
+    }
+}
+
+/// Where the planner's camera field of view comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FovEstimate {
+    /// The pinhole span of the camera, fixed for the flight.
+    Fixed,
+    /// Estimated from each frame's extreme points, widened and never narrowed (as PX4-Avoidance does).
+    Maxima,
+}
+
+impl From<FovEstimate> for FovEstimateModel {
+    fn from(f: FovEstimate) -> Self {
+        match f {
+            FovEstimate::Fixed => FovEstimateModel::Fixed,
+            FovEstimate::Maxima => FovEstimateModel::FromMaxima,
+        }
+    }
+}
+
+/// `--family`'s values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Family {
+    /// The paper's two-obstacle S.
+    Paper,
+    /// The split drawn too, and a third obstacle where the case allows.
+    Extended,
+}
+
+impl From<Family> for prgenuav::generator::Family {
+    fn from(f: Family) -> Self {
+        match f {
+            Family::Paper => Self::Paper,
+            Family::Extended => Self::Extended,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The names match the library's own parsers, so campaign files and the library agree on them.
+    #[test]
+    fn names_match_the_library() {
+        for m in Motion::value_variants() {
+            assert_eq!(
+                MotionModel::by_name(&name_of(m)).map(|x| x.name()),
+                Some(m.model().name())
+            );
+        }
+        for c in Camera::value_variants() {
+            assert_eq!(CameraModel::preset(&name_of(c)).map(|x| x.name), Some(c.model().name));
+        }
+        for f in FovEstimate::value_variants() {
+            assert_eq!(FovEstimateModel::by_name(&name_of(f)), Some((*f).into()));
+        }
+        for j in JudgeEdition::value_variants() {
+            assert_eq!(name_of(j).parse::<Judge>(), Ok((*j).into()));
+        }
+        assert_eq!(parse_stored::<Mode>("offboard", "mode").ok(), Some(Mode::Offboard));
+        let e = parse_stored::<Mode>("ofboard", "mode").unwrap_err().to_string();
+        assert!(e.contains("avoidance, offboard, mission"), "{e}");
+    }
+}
