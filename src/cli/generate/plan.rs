@@ -41,8 +41,10 @@ pub struct Plan {
 
 /// A setting given explicitly, by a flag or by the TOML file.
 struct Given {
-    /// `--seed`, or `screening.threshold_m in FILE`.
-    origin: String,
+    /// `--seed`, or `screening.threshold_m`.
+    name: String,
+    /// The TOML file that gave it (`None`: the command line).
+    file: Option<String>,
     /// A switch (`--no-learn`) is named without a value.
     switch: bool,
     /// Its key in campaign.json (`seed`, `generator.gap_m`).
@@ -67,7 +69,8 @@ impl Recorder<'_> {
     fn flag(&mut self, flag: &str, key: &str) {
         let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home"].contains(&flag);
         self.given.push(Given {
-            origin: flag.to_string(),
+            name: flag.to_string(),
+            file: None,
             switch,
             key: key.to_string(),
         });
@@ -75,7 +78,8 @@ impl Recorder<'_> {
 
     fn file_key(&mut self, file_key: &str, key: &str) {
         self.given.push(Given {
-            origin: self.file.origin(file_key),
+            name: file_key.to_string(),
+            file: Some(self.file.name()),
             switch: false,
             key: key.to_string(),
         });
@@ -387,9 +391,11 @@ fn conflicts(
         if s == w {
             continue;
         }
-        let asked = match (&w, g.switch) {
-            (Some(w), false) => format!("{} {}", g.origin, show(w)),
-            _ => g.origin.clone(),
+        let value = w.as_ref().map_or("(none)".into(), |w| asked(&g.key, w));
+        let asked = match (&g.file, g.switch) {
+            (Some(file), _) => format!("{} = {value} in {file}", g.name),
+            (None, true) => g.name.clone(),
+            (None, false) => format!("{} {value}", g.name),
         };
         lines.push(format!(
             "{asked} conflicts with {} {} stored in {}; drop it or start a new campaign",
@@ -399,6 +405,14 @@ fn conflicts(
         ));
     }
     Ok(lines)
+}
+
+/// The value asked for, as it was typed: campaign.json stores the spelling as `old_spelling`.
+fn asked(key: &str, v: &Value) -> String {
+    match (key, v) {
+        ("old_spelling", Value::Bool(old)) => name_of(if *old { &Spelling::Old } else { &Spelling::New }),
+        _ => show(v),
+    }
 }
 
 /// A stored value as a user would type it: strings bare, lists comma-separated, ranges `MIN,MAX`.
