@@ -134,13 +134,11 @@ impl Loaded {
         })
     }
 
-    /// `KEY in FILE`, naming where a setting came from.
-    pub fn origin(&self, key: &str) -> String {
-        let file = self
-            .path
+    /// The file's name as given, to say where a setting came from.
+    pub fn name(&self) -> String {
+        self.path
             .as_deref()
-            .map_or_else(String::new, |p| p.display().to_string());
-        format!("{key} in {file}")
+            .map_or_else(String::new, |p| p.display().to_string())
     }
 }
 

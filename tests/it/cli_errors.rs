@@ -312,7 +312,7 @@ fn resume_refuses_flags_that_conflict_with_the_stored_settings() {
     let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--config", toml.to_str().unwrap()]);
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("screening.threshold_m in") && err.contains("knobs.toml") && err.contains("threshold_m 3"),
+        err.contains("screening.threshold_m = 2.0 in") && err.contains("knobs.toml") && err.contains("threshold_m 3"),
         "{err}"
     );
     let (code, _, err) = prgenuav(&["generate", "--resume", folder, "--no-learn"]);

@@ -82,7 +82,7 @@ fn render_rejects_bad_poses_and_options() {
     }
     let (code, _, err) = run("0,0,5,0", "kinect");
     assert_eq!(code, 2);
-    assert!(err.contains("unknown camera"), "{err}");
+    assert!(err.contains("possible values: hfs, 2019, d455"), "{err}");
     assert!(!out.exists(), "no output on error");
 }
 

@@ -41,8 +41,10 @@ pub struct Plan {
 
 /// A setting given explicitly, by a flag or by the TOML file.
 struct Given {
-    /// `--seed`, or `screening.threshold_m in FILE`.
-    origin: String,
+    /// `--seed`, or `screening.threshold_m`.
+    name: String,
+    /// The TOML file that gave it (`None`: the command line).
+    file: Option<String>,
     /// A switch (`--no-learn`) is named without a value.
     switch: bool,
     /// Its key in campaign.json (`seed`, `generator.gap_m`).
@@ -67,7 +69,8 @@ impl Recorder<'_> {
     fn flag(&mut self, flag: &str, key: &str) {
         let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home"].contains(&flag);
         self.given.push(Given {
-            origin: flag.to_string(),
+            name: flag.to_string(),
+            file: None,
             switch,
             key: key.to_string(),
         });
@@ -75,7 +78,8 @@ impl Recorder<'_> {
 
     fn file_key(&mut self, file_key: &str, key: &str) {
         self.given.push(Given {
-            origin: self.file.origin(file_key),
+            name: file_key.to_string(),
+            file: Some(self.file.name()),
             switch: false,
             key: key.to_string(),
         });
@@ -387,9 +391,11 @@ fn conflicts(
         if s == w {
             continue;
         }
-        let asked = match (&w, g.switch) {
-            (Some(w), false) => format!("{} {}", g.origin, show(w)),
-            _ => g.origin.clone(),
+        let value = w.as_ref().map_or("(none)".into(), |w| asked(&g.key, w));
+        let asked = match (&g.file, g.switch) {
+            (Some(file), _) => format!("{} = {value} in {file}", g.name),
+            (None, true) => g.name.clone(),
+            (None, false) => format!("{} {value}", g.name),
         };
         lines.push(format!(
             "{asked} conflicts with {} {} stored in {}; drop it or start a new campaign",
@@ -399,6 +405,14 @@ fn conflicts(
         ));
     }
     Ok(lines)
+}
+
+/// The value asked for, as it was typed: campaign.json stores the spelling as `old_spelling`.
+fn asked(key: &str, v: &Value) -> String {
+    match (key, v) {
+        ("old_spelling", Value::Bool(old)) => name_of(if *old { &Spelling::Old } else { &Spelling::New }),
+        _ => show(v),
+    }
 }
 
 /// A stored value as a user would type it: strings bare, lists comma-separated, ranges `MIN,MAX`.
@@ -450,7 +464,41 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::show;
+    use std::path::Path;
+
+    use clap::FromArgMatches;
+
+    use super::{Args, Requested, build, request, show};
+    use crate::cli::settings::{Loaded, example_toml};
+
+    fn requested(argv: &[&str], file: &Loaded) -> (Args, Requested) {
+        let m = crate::cli::command().try_get_matches_from(argv).unwrap();
+        let m = m.subcommand_matches("generate").unwrap();
+        let args = Args::from_arg_matches(m).unwrap();
+        let req = request(&args, m, file).unwrap();
+        (args, req)
+    }
+
+    /// docs/cli.md's example file sets every key to its documented default (or, where the default depends on
+    /// the campaign, to what it is for budget 20 on the mock): it must give the campaign no file gives.
+    #[test]
+    fn the_documented_defaults_are_the_defaults() {
+        let argv = ["prgenuav", "generate", "missions/mission2.yaml", "20"];
+        let (args, none) = requested(&argv, &Loaded::default());
+        let file = Loaded::parse(&example_toml(), Path::new("example.toml")).unwrap();
+        let (_, all) = requested(&argv, &file);
+        let case = || args.case.clone().unwrap();
+        let mut a = serde_json::to_value(build(case(), 20, &args, &none)).unwrap();
+        let mut b = serde_json::to_value(build(case(), 20, &args, &all)).unwrap();
+        // The one default no value can spell: measured on each vehicle.
+        assert_eq!(b["hfs_time_scale"], 1.0);
+        a["hfs_time_scale"] = serde_json::Value::Null;
+        b["hfs_time_scale"] = serde_json::Value::Null;
+        assert_eq!(a, b);
+        // Every key but the two campaign.json does not store, and CASE and BUDGET.
+        assert_eq!(all.given.len(), crate::cli::settings::KEYS.len() - 2 + 2);
+        assert!(none.given.iter().all(|g| g.key == "case" || g.key == "budget"));
+    }
 
     #[test]
     fn stored_values_are_shown_as_typed() {
