@@ -67,8 +67,8 @@ pub struct Args {
     /// different value is refused).
     #[arg(long, value_name = "FOLDER")]
     resume: Option<PathBuf>,
-    /// Campaign TOML with the expert knobs ([generator], [output], [screening], [mock], [flight], [learning];
-    /// see docs/cli.md); flags override it.
+    /// Campaign TOML with the expert knobs: [generator], [output], [screening], [mock], [flight], [learning].
+    /// Each knob also has a flag, hidden here; flags override the file. docs/cli.md lists both.
     #[arg(long, value_name = "FILE.toml")]
     config: Option<PathBuf>,
     /// No progress output.
