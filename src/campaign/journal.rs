@@ -1,12 +1,14 @@
 //! The campaign's journal: one JSON line per finished flight, synced to disk before anything else happens,
 //! so a killed campaign can resume without flying a test twice.
 
+use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::io::write_atomic;
 use crate::model::{ModelError, Obstacle};
 
 /// One finished flight.
@@ -100,47 +102,118 @@ impl Journal {
             .unwrap_or_else(|| record.clone())
     }
 
-    /// Reads every complete record; a torn last line (the process died mid-write) is ignored.
+    /// Reads every record. A torn last line (no newline, not a record: the process died mid-write) is left
+    /// out, as [`Self::heal`] drops it; a damaged line elsewhere, or a candidate journaled twice, is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
-        let file = match File::open(path) {
-            Ok(f) => f,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-            Err(source) => {
-                return Err(ModelError::Io {
-                    path: path.to_path_buf(),
-                    action: "cannot read",
-                    source,
-                });
+        Ok(parse(&read_bytes(path)?, path)?.records)
+    }
+
+    /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so
+    /// the next record starts on a line of its own; says what was dropped, for the user. Errors as
+    /// [`Self::read`].
+    pub fn heal(path: &Path) -> Result<Option<String>, ModelError> {
+        let bytes = read_bytes(path)?;
+        let parsed = parse(&bytes, path)?;
+        let Some(tail) = parsed.unterminated else {
+            return Ok(None);
+        };
+        let (kept, message) = match parsed.torn {
+            Some(line) => {
+                let dropped = String::from_utf8_lossy(&bytes[tail..]);
+                let preview: String = dropped.chars().take(60).collect();
+                let message = format!(
+                    "{}:{line}: dropped a torn last line ({} bytes, {preview:?}...): the flight being written \
+                     when the campaign stopped; it is flown again",
+                    path.display(),
+                    bytes.len() - tail
+                );
+                (bytes[..tail].to_vec(), Some(message))
+            }
+            None => ([bytes.as_slice(), b"\n"].concat(), None),
+        };
+        write_atomic(path, &kept)?;
+        Ok(message)
+    }
+}
+
+/// The journal's bytes; none when there is no journal yet.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
+    match std::fs::read(path) {
+        Ok(b) => Ok(b),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(source) => Err(ModelError::Io {
+            path: path.to_path_buf(),
+            action: "cannot read",
+            source,
+        }),
+    }
+}
+
+/// A journal's records, checked line by line.
+struct Parsed {
+    records: Vec<FlightRecord>,
+    /// Where the last line starts when it has no newline.
+    unterminated: Option<usize>,
+    /// That line's number when it is not a record (a torn write).
+    torn: Option<usize>,
+}
+
+fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
+    let syntax = |line: usize, message: String| ModelError::Syntax {
+        path: path.to_path_buf(),
+        line: Some(line),
+        column: None,
+        message,
+    };
+    let mut parsed = Parsed {
+        records: Vec::new(),
+        unterminated: None,
+        torn: None,
+    };
+    let mut lines_of: HashMap<u64, usize> = HashMap::new();
+    let mut offset = 0;
+    for (i, line) in bytes.split(|b| *b == b'\n').enumerate() {
+        let (number, start) = (i + 1, offset);
+        offset += line.len() + 1;
+        let last = offset > bytes.len();
+        if last && !line.is_empty() {
+            parsed.unterminated = Some(start);
+        }
+        if line.trim_ascii().is_empty() {
+            continue;
+        }
+        let record = std::str::from_utf8(line)
+            .map_err(|e| e.to_string())
+            .and_then(|text| serde_json::from_str::<FlightRecord>(text).map_err(|e| e.to_string()));
+        let record = match record {
+            Ok(r) => r,
+            Err(_) if last => {
+                parsed.torn = Some(number);
+                break;
+            }
+            Err(e) => {
+                return Err(syntax(
+                    number,
+                    format!(
+                        "not a journal record ({e}); only a torn last line is dropped on resume: delete this \
+                         line (its flight is flown again) or restore the journal, then resume"
+                    ),
+                ));
             }
         };
-        let lines: Vec<String> = BufReader::new(file)
-            .lines()
-            .collect::<Result<_, _>>()
-            .map_err(|source| ModelError::Io {
-                path: path.to_path_buf(),
-                action: "cannot read",
-                source,
-            })?;
-        let mut out = Vec::new();
-        for (i, line) in lines.iter().enumerate() {
-            if line.trim().is_empty() {
-                continue;
-            }
-            match serde_json::from_str::<FlightRecord>(line) {
-                Ok(r) => out.push(r),
-                Err(_) if i + 1 == lines.len() => break, // torn final write
-                Err(e) => {
-                    return Err(ModelError::Syntax {
-                        path: path.to_path_buf(),
-                        line: Some(i + 1),
-                        column: None,
-                        message: format!("not a journal record: {e}"),
-                    });
-                }
-            }
+        if let Some(first) = lines_of.insert(record.candidate, number) {
+            return Err(syntax(
+                number,
+                format!(
+                    "candidate {} is journaled twice (lines {first} and {number}); a flight is journaled once: \
+                     delete one of the two lines, then resume",
+                    record.candidate
+                ),
+            ));
         }
-        Ok(out)
+        parsed.records.push(record);
     }
+    Ok(parsed)
 }
 
 /// A landed flight with no obstacles for tests: `raw` predicted, `flown` measured.
@@ -169,7 +242,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
 mod tests {
     use super::*;
 
-    fn record(candidate: u64) -> FlightRecord {
+    pub(super) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {
             candidate,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
@@ -187,6 +260,10 @@ mod tests {
             trajectory: "flights/candidate_1.csv".into(),
             wall_s: 0.3,
         }
+    }
+
+    pub(super) fn line(candidate: u64) -> String {
+        serde_json::to_string(&record(candidate)).unwrap() + "\n"
     }
 
     #[test]
@@ -234,3 +311,7 @@ mod tests {
         assert!(e.contains("journal.jsonl:2"), "{e}");
     }
 }
+
+#[cfg(test)]
+#[path = "journal_tests.rs"]
+mod healing_tests;

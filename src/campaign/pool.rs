@@ -117,7 +117,15 @@ pub fn fly_all(
     on_flight: &(dyn Fn(&FlightRecord) + Sync),
 ) -> PoolOutcome {
     // Rejections count across calls (a learning campaign's rounds) and resumes: the journal holds them.
-    let history = Journal::read(journal.path()).unwrap_or_default();
+    let history = match Journal::read(journal.path()) {
+        Ok(h) => h,
+        Err(e) => {
+            return PoolOutcome {
+                errors: vec![e.to_string()],
+                ..PoolOutcome::default()
+            };
+        }
+    };
     let pool = Pool {
         ledger: Mutex::new(Ledger {
             queue: jobs.into_iter().collect(),

@@ -10,7 +10,7 @@ use super::failure_counts::FAIL_BINS;
 use super::journal::FlightRecord;
 use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
-use crate::io::write_atomic;
+use crate::io::{write_atomic, write_json};
 use crate::judge::{Judge, distinct_tests, diversity, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Obstacle, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
@@ -193,8 +193,7 @@ pub fn write_outputs(
         stages,
         learning: learning.cloned(),
     };
-    let json = serde_json::to_string_pretty(&report).unwrap_or_default();
-    write_atomic(&input.folder.join("report.json"), json.as_bytes())?;
+    write_json(&input.folder.join("report.json"), &report, true)?;
     write_atomic(&input.folder.join("report.md"), markdown(&report).as_bytes())?;
     Ok(report)
 }

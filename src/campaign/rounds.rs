@@ -36,7 +36,7 @@ use super::screening::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ens
 use super::surrogate::Surrogate;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
-use crate::io::write_atomic;
+use crate::io::write_json;
 use crate::model::ModelError;
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
@@ -415,8 +415,7 @@ impl<'a> Rounds<'a> {
             drawn_elsewhere: arm_counts(done, any_child).1,
             drawn_close: arm_counts(done, close).0,
         };
-        let json = serde_json::to_string_pretty(&learnt).unwrap_or_default();
-        write_atomic(&self.input.folder.join("learnt.json"), json.as_bytes())?;
+        write_json(&self.input.folder.join("learnt.json"), &learnt, true)?;
         Ok((learnt, drawn.len()))
     }
 }

@@ -14,7 +14,7 @@ use super::report::{StageTimes, write_outputs};
 use super::rounds::run_rounds;
 pub use super::screener::{Progress, Screener};
 use super::static_campaign::run_static;
-use crate::io::write_atomic;
+use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
 
 /// Runs (or resumes) a campaign in `folder`.
@@ -32,8 +32,13 @@ pub fn run_campaign(
     if cfg.candidates == 0 {
         return Err(CampaignError::Config("--candidates must be at least 1".into()));
     }
+    check_paths_are_text(cfg)?;
     let case = TestCase::load(&cfg.case)?;
     prepare_folder(cfg, folder)?;
+    // Before anything reads or appends: a record must never follow a torn line.
+    if let Some(dropped) = Journal::heal(&folder.join("journal.jsonl"))? {
+        progress.warn(&dropped);
+    }
     let input = CampaignInput {
         cfg,
         folder,
@@ -51,6 +56,21 @@ pub fn run_campaign(
     finish(&input, drawn, stages, None)
 }
 
+/// `campaign.json` keeps its paths as JSON text, so a path that is not UTF-8 could never be resumed.
+fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
+    let paths = [("the case", Some(&cfg.case)), ("--prior", cfg.prior.as_ref())];
+    for (what, path) in paths {
+        if let Some(p) = path.filter(|p| p.to_str().is_none()) {
+            return Err(CampaignError::Config(format!(
+                "{what} {}: the path is not UTF-8, and campaign.json stores paths as text for --resume; \
+                 rename or move the file to a UTF-8 path",
+                p.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Creates the folder and saves the settings as `campaign.json` (what `--resume` continues).
 fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<(), CampaignError> {
     std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
@@ -58,8 +78,7 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<(), CampaignErr
         action: "cannot create",
         source,
     })?;
-    let config_json = serde_json::to_string_pretty(cfg).unwrap_or_default();
-    write_atomic(&folder.join("campaign.json"), config_json.as_bytes())?;
+    write_json(&folder.join("campaign.json"), cfg, true)?;
     Ok(())
 }
 

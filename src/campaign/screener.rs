@@ -33,4 +33,8 @@ pub trait Progress: Sync {
     fn tick(&self, done: usize);
     /// A line for the user.
     fn note(&self, message: &str);
+    /// A line the user must see even when progress is quiet (the campaign changed something of theirs).
+    fn warn(&self, message: &str) {
+        eprintln!("warning: {message}");
+    }
 }

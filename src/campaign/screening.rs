@@ -13,7 +13,7 @@ use super::config::{CampaignConfig, CampaignError};
 use super::parallel::{available_threads, parallel_map};
 use super::screener::{Progress, Screener};
 use crate::generator::{DrawDistribution, Neighbourhood};
-use crate::io::write_atomic;
+use crate::io::write_json;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
 use crate::model::TestCase;
 
@@ -94,13 +94,12 @@ pub fn screen_all(
     if screened.len() < want {
         return Err(CampaignError::Config("interrupted during screening".into()));
     }
-    let json = serde_json::to_string(&ScreenCache {
+    let entry = ScreenCache {
         distribution: distribution.clone(),
         around: around.to_vec(),
         screened: screened.clone(),
-    })
-    .unwrap_or_default();
-    write_atomic(&cache, json.as_bytes())?;
+    };
+    write_json(&cache, &entry, false)?;
     Ok(screened)
 }
 
@@ -148,8 +147,7 @@ pub fn ensemble_shortlist(
             ));
         }
         cache.extend(results.into_iter().flatten().filter_map(|(c, v)| Some((c, v?))));
-        let json = serde_json::to_string(&cache).unwrap_or_default();
-        write_atomic(&cache_path, json.as_bytes())?;
+        write_json(&cache_path, &cache, false)?;
     }
     ctx.progress.note(&format!(
         "ensemble of {}: {} candidates ranked by expected points per minute",

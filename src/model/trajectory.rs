@@ -59,23 +59,34 @@ impl Trajectory {
 
     /// Aerialist's `downsample_time`: consecutive bins of `period_s` from the first sample, each bin
     /// `(start, start + period]` (the first also holds its start) replaced by the mean of its samples;
-    /// empty bins are skipped.
+    /// empty bins are skipped. Linear in the samples: a long empty stretch is jumped in one step.
     pub fn binned(&self, period_s: f64) -> Self {
         let Some(first) = self.samples.first() else {
             return self.clone();
         };
+        let t = |i: usize| self.samples[i].t_s;
+        let n = self.samples.len();
         let mut out = Vec::new();
         let mut start = first.t_s;
         let mut i = 0;
-        while i < self.samples.len() {
+        while i < n {
             let from = i;
-            while i < self.samples.len() && self.samples[i].t_s <= start + period_s {
+            let mut end = start + period_s;
+            if end.partial_cmp(&start) != Some(std::cmp::Ordering::Greater) {
+                // The period is lost to rounding (or not positive): one last bin keeps the loop finite.
+                end = f64::INFINITY;
+            }
+            while i < n && (t(i) <= end || t(i).is_nan()) {
                 i += 1;
             }
             if i > from {
                 out.push(mean(&self.samples[from..i]));
             }
+            // Accumulating `start` is Aerialist's arithmetic, kept bit for bit over short gaps.
             start += period_s;
+            if i < n && t(i) > start + period_s * JUMP_BINS {
+                start = jump_to(start, t(i), period_s);
+            }
         }
         Self { samples: out }
     }
@@ -139,9 +150,9 @@ impl Trajectory {
             };
             let t_s = num(ti)? / 1e6;
             if let Some(prev) = samples.last().map(|s: &Sample| s.t_s)
-                && t_s < prev
+                && let Err(why) = check_step(prev, t_s)
             {
-                return Err(syntax(n + 1, format!("timestamp {} goes back in time", cells[ti])));
+                return Err(syntax(n + 1, format!("timestamp {}: {why}", cells[ti])));
             }
             samples.push(Sample {
                 t_s,
@@ -173,6 +184,36 @@ impl Trajectory {
         }
         out
     }
+}
+
+/// The longest pause between consecutive samples of one flight, seconds.
+pub const MAX_GAP_S: f64 = 3600.0;
+
+/// Why a sample at `t_s` cannot follow one at `prev_s`: time going back, or a pause over [`MAX_GAP_S`]
+/// (mixed clocks, such as a first row at 0 and the rest in epoch microseconds).
+pub(crate) fn check_step(prev_s: f64, t_s: f64) -> std::result::Result<(), String> {
+    if t_s < prev_s {
+        Err(format!("goes back in time ({:.6} s after {:.6} s)", t_s, prev_s))
+    } else if t_s - prev_s > MAX_GAP_S {
+        Err(format!(
+            "comes {:.0} s after the previous row (at most {MAX_GAP_S:.0} s between rows of one flight)",
+            t_s - prev_s
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Empty bins beyond which [`Trajectory::binned`] jumps instead of stepping (far longer than any pause
+/// in a real flight, so real logs bin exactly as Aerialist does).
+const JUMP_BINS: f64 = 1024.0;
+
+/// The start of the bin holding `t`, a whole number of periods after `start`.
+fn jump_to(start: f64, t: f64, period_s: f64) -> f64 {
+    let skip = ((t - start) / period_s).ceil() - 1.0;
+    let jumped = start + skip.max(0.0) * period_s;
+    // Rounding may land a bin late; never start past the sample.
+    if jumped < t { jumped } else { start.max(t - period_s) }
 }
 
 fn mean(s: &[Sample]) -> Sample {
@@ -282,3 +323,7 @@ mod tests {
         assert!(Trajectory::parse_csv("timestamp,x,y,z\n1,0,0,0\n0,0,0,0", Path::new("f.csv")).is_err());
     }
 }
+
+#[cfg(test)]
+#[path = "trajectory_tests.rs"]
+mod robust_tests;

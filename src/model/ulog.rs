@@ -5,7 +5,7 @@ use std::path::Path;
 use px4_ulog::full_parser::{SomeVec, read_file};
 
 use super::error::{ModelError, Result};
-use super::trajectory::{Sample, Trajectory};
+use super::trajectory::{Sample, Trajectory, check_step};
 
 /// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
 /// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
@@ -52,6 +52,15 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         .first()
         .copied()
         .ok_or_else(|| bad("vehicle_local_position has no samples".into()))?;
+    for i in 1..t.len() {
+        if let Err(why) = check_step(t[i - 1] / 1e6, t[i] / 1e6) {
+            return Err(bad(format!(
+                "vehicle_local_position sample {} (timestamp {} us) {why}",
+                i + 1,
+                t[i]
+            )));
+        }
+    }
     let samples = (0..t.len().min(x.len()).min(y.len()).min(z.len()))
         .filter(|&i| x[i].is_finite() && y[i].is_finite() && z[i].is_finite())
         .map(|i| Sample {

@@ -7,6 +7,7 @@ mod frame;
 mod generator;
 mod geometry_props;
 mod hygiene;
+mod journal;
 mod layering;
 mod lfs;
 mod missions;

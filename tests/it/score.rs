@@ -114,3 +114,60 @@ fn score_cli_json_and_errors() {
     assert_eq!(code, 2);
     assert!(err.contains("test_0.csv"), "{err}");
 }
+
+/// A flight whose first row is 0 and the rest epoch microseconds, as a log stitched from two clocks.
+fn mixed_clock_flight() -> String {
+    let mut s = String::from("timestamp,x,y,z,r\n0,0,0,0,\n");
+    for i in 0..100 {
+        s += &format!("{},0,{},10,\n", 1_700_000_000_000_000u64 + i * 100_000, i as f64 / 10.0);
+    }
+    s
+}
+
+#[test]
+fn flights_with_absurd_clocks_are_refused_at_once_naming_the_row() {
+    let dir = tempfile::tempdir().unwrap();
+    write_test(dir.path(), 0, vec![Obstacle::new(2.0, 2.0, 20.0, 4.0, 25.0, 0.0)]);
+    let test = dir.path().join("test_0.yaml");
+    for (csv, line) in [
+        (
+            "timestamp,x,y,z,r\n0,0,0,0,\n1000000000000000000,0,0,10,\n".to_string(),
+            ":3",
+        ),
+        (mixed_clock_flight(), ":3"),
+        (
+            "timestamp,x,y,z,r\n0,0,0,0,\n2000000,0,0,10,\n1000000,0,0,10,\n".to_string(),
+            ":4",
+        ),
+    ] {
+        std::fs::write(dir.path().join("test_0.csv"), &csv).unwrap();
+        let flight = dir.path().join("test_0.csv");
+        let clock = std::time::Instant::now();
+        let (code, _, err) = prgenuav(&["distance", test.to_str().unwrap(), flight.to_str().unwrap()]);
+        let (score_code, _, score_err) = prgenuav(&["score", dir.path().to_str().unwrap()]);
+        assert!(clock.elapsed().as_secs() < 5, "{:?}", clock.elapsed());
+        assert_eq!((code, score_code), (2, 2), "{err} / {score_err}");
+        for e in [&err, &score_err] {
+            assert!(
+                e.contains(&format!("test_0.csv{line}")) && !e.contains("panicked"),
+                "{e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_ulog_pausing_over_an_hour_is_refused_naming_the_sample() {
+    let bytes = ULogWriter::new()
+        .local_position_format()
+        .sample(1_000_000, 0.0, 0.0, -0.0, 0.5)
+        .sample(1_500_000, 1.0, 2.0, -3.0, 0.6)
+        .sample(1_000_000_000_000_000_000, 1.0, 2.0, -3.0, 0.6)
+        .finish();
+    let (_d, path) = super::temp_file("f.ulg", &bytes);
+    let e = load_ulog_trajectory(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("f.ulg") && e.contains("sample 3") && e.contains("at most 3600 s"),
+        "{e}"
+    );
+}

@@ -1,0 +1,95 @@
+//! A journal damaged by a crash: what resume drops, what it refuses, and that no byte string panics.
+
+use proptest::prelude::*;
+
+use super::tests::{line, record};
+use super::*;
+
+fn journal(bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("journal.jsonl");
+    std::fs::write(&path, bytes).unwrap();
+    (dir, path)
+}
+
+#[test]
+fn a_torn_last_line_is_dropped_and_the_next_record_starts_clean() {
+    let whole = [line(1), line(2)].concat();
+    let torn = &line(3)[..40];
+    let (_d, path) = journal(format!("{whole}{torn}").as_bytes());
+    let said = Journal::heal(&path).unwrap().unwrap();
+    assert!(
+        said.contains("journal.jsonl:3") && said.contains("40 bytes") && said.contains("flown again"),
+        "{said}"
+    );
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), whole);
+    let mut j = Journal::open(&path).unwrap();
+    j.append(&record(3)).unwrap();
+    assert_eq!(Journal::read(&path).unwrap(), vec![record(1), record(2), record(3)]);
+    assert_eq!(Journal::heal(&path).unwrap(), None, "a sound journal is left alone");
+}
+
+#[test]
+fn a_complete_last_record_without_its_newline_is_kept_and_ended() {
+    let text = [line(1), line(2)].concat();
+    let (_d, path) = journal(text.trim_end().as_bytes());
+    assert_eq!(Journal::heal(&path).unwrap(), None, "nothing dropped");
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+}
+
+#[test]
+fn a_damaged_middle_line_or_a_terminated_bad_last_line_stops_naming_the_line_and_the_fix() {
+    for (text, at) in [
+        (format!("{}garbage\n{}", line(1), line(2)), "journal.jsonl:2"),
+        (format!("{}{}\n", line(1), &line(2)[..30]), "journal.jsonl:2"),
+        (format!("\n{}\u{0}\u{ff}\n{}", line(1), line(2)), "journal.jsonl:3"),
+    ] {
+        let (_d, path) = journal(text.as_bytes());
+        for e in [Journal::read(&path).unwrap_err(), Journal::heal(&path).unwrap_err()] {
+            let e = e.to_string();
+            assert!(e.contains(at) && e.contains("delete this line"), "{e}");
+        }
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            text,
+            "an error changes nothing"
+        );
+    }
+}
+
+#[test]
+fn a_candidate_journaled_twice_is_refused_naming_both_lines() {
+    let (_d, path) = journal([line(4), line(5), line(4)].concat().as_bytes());
+    let e = Journal::read(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("journal.jsonl:3") && e.contains("lines 1 and 3") && e.contains("candidate 4"),
+        "{e}"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn any_bytes_read_or_fail_clearly(
+        bytes in prop_oneof![
+            proptest::collection::vec(any::<u8>(), 0..300),
+            (0usize..3, 0usize..400, any::<u8>()).prop_map(|(n, cut, b)| {
+                let mut v = (0..n as u64).map(line).collect::<String>().into_bytes();
+                v.push(b);
+                v.extend_from_slice(&line(9).into_bytes()[..cut.min(200)]);
+                v
+            }),
+        ]
+    ) {
+        let (_d, path) = journal(&bytes);
+        match Journal::read(&path) {
+            Ok(records) => prop_assert!(records.len() <= bytes.iter().filter(|b| **b == b'\n').count() + 1),
+            Err(e) => prop_assert!(e.to_string().contains("journal.jsonl:"), "{}", e),
+        }
+        match Journal::heal(&path) {
+            Ok(_) => prop_assert!(Journal::read(&path).is_ok() && std::fs::read(&path).unwrap().last().is_none_or(|b| *b == b'\n')),
+            Err(e) => prop_assert!(e.to_string().contains("journal.jsonl:"), "{}", e),
+        }
+    }
+}
