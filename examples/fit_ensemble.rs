@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 
 use prgenuav::lfs::calibration::{brier, roc_auc};
 use prgenuav::lfs::ensemble::{Ensemble, EnsembleParams};
-use prgenuav::lfs::fidelity::{EnsembleSpec, FAIL_BELOW_M, FlightCase, case_ensemble, case_p_fail, fold_of, load_dir};
+use prgenuav::lfs::fidelity::{EnsembleSpec, FlightCase, case_ensemble, case_p_fail, fold_of, load_dir};
 use prgenuav::lfs::sim::SimConfig;
+use prgenuav::model::competition::FAIL_BELOW_M;
 
 const FOLDS: usize = 5;
 const SEED: u64 = 0;

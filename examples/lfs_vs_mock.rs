@@ -13,10 +13,8 @@ use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly, predict};
 use prgenuav::generator::{Generator, GeneratorConfig};
 use prgenuav::lfs::sim::MotionModel;
 use prgenuav::model::TestCase;
+use prgenuav::model::competition::FAIL_BELOW_M;
 use tokio::sync::Semaphore;
-
-/// The competition's failure distance, metres.
-const THRESHOLD_M: f64 = prgenuav::model::competition::FAIL_BELOW_M;
 
 #[derive(Debug, Clone)]
 struct Row {
@@ -125,13 +123,13 @@ fn main() -> anyhow::Result<()> {
         let mae = pairs.iter().map(|(a, b)| (a - b).abs()).sum::<f64>() / k;
         let agree = pairs
             .iter()
-            .filter(|(a, b)| (*a < THRESHOLD_M) == (*b < THRESHOLD_M))
+            .filter(|(a, b)| (*a < FAIL_BELOW_M) == (*b < FAIL_BELOW_M))
             .count();
-        let below_flown = pairs.iter().filter(|(_, b)| *b < THRESHOLD_M).count();
-        let below_lfs = pairs.iter().filter(|(a, _)| *a < THRESHOLD_M).count();
+        let below_flown = pairs.iter().filter(|(_, b)| *b < FAIL_BELOW_M).count();
+        let below_lfs = pairs.iter().filter(|(a, _)| *a < FAIL_BELOW_M).count();
         println!(
-            "# LFS {model} motion vs mock-flown ({} of {} tests): MAE {mae:.3} m; agree on < {THRESHOLD_M} m in {agree}/{} \
-             ({:.0} %); below {THRESHOLD_M} m: LFS {below_lfs}, flown {below_flown}",
+            "# LFS {model} motion vs mock-flown ({} of {} tests): MAE {mae:.3} m; agree on < {FAIL_BELOW_M} m in {agree}/{} \
+             ({:.0} %); below {FAIL_BELOW_M} m: LFS {below_lfs}, flown {below_flown}",
             pairs.len(),
             rows.len(),
             pairs.len(),

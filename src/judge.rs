@@ -5,7 +5,7 @@ pub mod edition;
 
 use serde::Serialize;
 
-pub use edition::{Judge, VEHICLE_WIDTH_M};
+pub use edition::Judge;
 
 use crate::geometry::{Footprint, P2};
 use crate::model::competition::{RUN_POINTS, TEST_SCORE_SCALE};

@@ -10,9 +10,6 @@ use crate::generator::{GenerateError, GeneratorConfig};
 use crate::judge::Judge;
 use crate::model::{ModelError, TestCase};
 
-/// Below this flown distance, metres, a test failed (the competition's failure distance).
-pub const FAIL_M: f64 = crate::model::competition::FAIL_BELOW_M;
-
 /// Everything that defines a campaign; saved as `campaign.json` so `--resume` continues the same one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CampaignConfig {

@@ -12,9 +12,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::candidate::{Candidate, unit_of};
-use super::config::FAIL_M;
 use super::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, bin_of};
+use crate::model::competition::FAIL_BELOW_M;
 
 /// Bins per draw (coarser than the generator's distribution: a campaign sees few failures).
 pub const FAIL_BINS: usize = 5;
@@ -73,7 +73,7 @@ pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(u64) -> bool) -> (BinCo
         if let Some(d) = r.min_distance {
             let arm = if is_arm(r.candidate) { &mut near } else { &mut other };
             arm.flights += 1;
-            arm.failures += u32::from(d < FAIL_M);
+            arm.failures += u32::from(d < FAIL_BELOW_M);
         }
     }
     (near, other)
@@ -85,7 +85,7 @@ pub fn counted_failures(done: &[FlightRecord], candidates: &[Candidate]) -> Fail
     let mut m = FailureCounts::default();
     for r in done {
         if let (Some(u), Some(flown)) = (unit_of(candidates, r.candidate), r.min_distance) {
-            m.observe(&u, flown < FAIL_M);
+            m.observe(&u, flown < FAIL_BELOW_M);
         }
     }
     m

@@ -314,4 +314,4 @@ mod tests {
 
 #[cfg(test)]
 #[path = "journal_tests.rs"]
-mod healing_tests;
+mod journal_tests;

@@ -9,7 +9,7 @@
 //! alike or a round could not fill its share of the budget.
 
 use super::candidate::{Candidate, Screened, unit_of};
-use super::config::{CampaignConfig, FAIL_M};
+use super::config::CampaignConfig;
 use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::journal::FlightRecord;
 use super::learn::Calibration;
@@ -17,6 +17,7 @@ use super::surrogate::{Flown, Surrogate};
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::judge::diversity;
 use crate::model::Obstacle;
+use crate::model::competition::FAIL_BELOW_M;
 
 /// Share of the screened candidates that are elites.
 pub const ELITE_SHARE: f64 = 0.1;
@@ -103,7 +104,7 @@ pub fn refit(
 ) -> DrawDistribution {
     let failing: Vec<Vec<Obstacle>> = done
         .iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_M))
+        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
         .map(|r| r.obstacles.clone())
         .collect();
     let below_floor = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
@@ -138,7 +139,7 @@ pub fn elites(
     flown.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
     let closest = flown.len().div_ceil(4);
     for (k, (r, d)) in flown.iter().enumerate() {
-        if (k < closest || *d < FAIL_M)
+        if (k < closest || *d < FAIL_BELOW_M)
             && let Some(u) = unit_of(candidates, r.candidate)
         {
             out.push((u, FLOWN_FAILURE_WEIGHT));

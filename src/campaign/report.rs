@@ -12,11 +12,10 @@ use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{Judge, distinct_tests, diversity, judge_in_frame, points, test_score};
+use crate::model::competition::FAIL_BELOW_M;
 use crate::model::{ModelError, Obstacle, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
-/// The competition's failure distance, metres.
-pub const FAIL_DISTANCE_M: f64 = crate::model::competition::FAIL_BELOW_M;
 /// Two failing tests overlapping more than this (IoU) count as one place in [`SuiteSummary::distinct_failing`]:
 /// the campaign's default `--max-iou`, its near-duplicate rule.
 pub const DISTINCT_IOU: f64 = 0.5;
@@ -145,7 +144,7 @@ fn quarter_error(records: &[FlightRecord], last: bool) -> Option<f64> {
 pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
     let mut out: Vec<&FlightRecord> = records
         .iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_DISTANCE_M))
+        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
         .collect();
     out.sort_by(|a, b| {
         let (da, db) = (
@@ -255,12 +254,12 @@ fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
 fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[FlownTest], screened: bool) -> SuiteSummary {
     let predicted_fail: Vec<&FlightRecord> = records
         .iter()
-        .filter(|r| r.predicted_min_distance < FAIL_DISTANCE_M)
+        .filter(|r| r.predicted_min_distance < FAIL_BELOW_M)
         .collect();
     let precision = (!predicted_fail.is_empty()).then(|| {
         predicted_fail
             .iter()
-            .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_DISTANCE_M))
+            .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
             .count() as f64
             / predicted_fail.len() as f64
     });
@@ -270,7 +269,7 @@ fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[Flown
         .collect();
     let (p_fail, failed): (Vec<f64>, Vec<bool>) = records
         .iter()
-        .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_DISTANCE_M)))
+        .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_BELOW_M)))
         .unzip();
     let failing_obstacles: Vec<Vec<Obstacle>> = failing.iter().map(|r| r.obstacles.clone()).collect();
     SuiteSummary {

@@ -20,7 +20,7 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
-use super::config::{CampaignError, CampaignInput, FAIL_M};
+use super::config::{CampaignError, CampaignInput};
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
@@ -38,6 +38,7 @@ use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
 use crate::model::ModelError;
+use crate::model::competition::FAIL_BELOW_M;
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
@@ -208,7 +209,7 @@ impl<'a> Rounds<'a> {
             neighbours::parents(
                 &self.journal,
                 |c| self.candidates.get(c as usize).map(|x| x.unit),
-                FAIL_M,
+                FAIL_BELOW_M,
             )
         } else {
             (Vec::new(), Lineage::Failures)
@@ -228,7 +229,7 @@ impl<'a> Rounds<'a> {
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
         // diversity can afford it), and keep their expected diversity above the floor.
         let flown: &[FlightRecord] = if children == 0 { &[] } else { &self.journal };
-        let mut guard = DiversityGuard::for_round(flown, FAIL_M, cfg, later);
+        let mut guard = DiversityGuard::for_round(flown, FAIL_BELOW_M, cfg, later);
         let first = self.candidates.len() as u64;
         let plan = DrawPlan {
             first,
@@ -332,7 +333,7 @@ impl<'a> Rounds<'a> {
                 share,
             );
         }
-        let mut guard = DiversityGuard::for_round(&self.journal, FAIL_M, cfg, round.later);
+        let mut guard = DiversityGuard::for_round(&self.journal, FAIL_BELOW_M, cfg, round.later);
         let ranked = rank_split(
             fresh,
             is_arm,

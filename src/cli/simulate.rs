@@ -9,9 +9,9 @@ use anyhow::{Context, bail};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::{Judge, ObstacleDistance};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS, run_ensemble};
-use prgenuav::lfs::fidelity::FAIL_BELOW_M;
 use prgenuav::lfs::sim::{SimConfig, SimResult, Status, simulate};
 use prgenuav::model::TestCase;
+use prgenuav::model::competition::FAIL_BELOW_M;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
 use super::values::{Camera, JudgeEdition, Motion};

@@ -15,7 +15,6 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::model::competition::HALF_VEHICLE_WIDTH_M;
-pub use crate::model::competition::VEHICLE_WIDTH_M;
 
 /// Which edition's definition judges a flight.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]

@@ -326,4 +326,4 @@ mod tests {
 
 #[cfg(test)]
 #[path = "trajectory_tests.rs"]
-mod robust_tests;
+mod trajectory_tests;

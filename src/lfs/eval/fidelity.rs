@@ -18,7 +18,7 @@ use crate::lfs::sim::{SimConfig, Status, simulate_parts};
 use crate::model::{GeoPoint, LocalPoint, Mission, MissionItem, Obstacle, Param, Position, SIM_HOME, Size};
 
 use crate::model::competition::MISSION_PARAMS;
-pub use crate::model::competition::{FAIL_BELOW_M, HALF_VEHICLE_WIDTH_M};
+use crate::model::competition::{FAIL_BELOW_M, HALF_VEHICLE_WIDTH_M};
 /// Box height used where a flight did not record it (above the 10 m flight altitude, as the rules require).
 pub const DEFAULT_HEIGHT_M: f64 = 15.0;
 
