@@ -82,6 +82,65 @@ pub fn fly_ranked(
     Ok(outcome.records)
 }
 
+/// On resume, flies the flights the user interrupted before anything else (they were the most promising
+/// candidates when they took off), within what the budget has left; returns how many were flown.
+pub fn fly_interrupted(
+    ctx: &FlightStage,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    budget_left: usize,
+) -> Result<usize, CampaignError> {
+    let journal_path = ctx.folder.join("journal.jsonl");
+    let pending = Journal::interrupted(&journal_path)?;
+    if pending.is_empty() || budget_left == 0 || vehicles.is_empty() {
+        return Ok(0);
+    }
+    ctx.progress.note(&format!(
+        "resuming: flying first the {} flight(s) interrupted last time (candidates {})",
+        pending.len(),
+        pending
+            .iter()
+            .map(|r| r.candidate.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let jobs: Vec<Job> = pending
+        .into_iter()
+        .map(|r| Job {
+            test: ctx.case.with_obstacles(r.obstacles.clone()),
+            screened: Screened {
+                p_fail: r.predicted_p_fail,
+                raw_min_distance: r.predicted_raw_min_distance,
+                ..Screened::point(
+                    r.candidate,
+                    r.predicted_min_distance,
+                    r.predicted_flight_time_s,
+                    r.status,
+                )
+            },
+        })
+        .collect();
+    let progress = ctx.progress;
+    progress.stage("fly interrupted", jobs.len());
+    let count = AtomicUsize::new(0);
+    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r);
+    let outcome = fly_all(
+        vehicles,
+        jobs,
+        budget_left,
+        ctx.folder,
+        Journal::open(&journal_path)?,
+        ctx.cancel,
+        &on_flight,
+    );
+    for d in &outcome.dropped {
+        progress.note(&format!("dropped {d}"));
+    }
+    if let Some(e) = outcome.errors.first() {
+        return Err(CampaignError::Config(format!("journal: {e}")));
+    }
+    Ok(outcome.flown)
+}
+
 /// Tells the user of the `n`th flight of the stage.
 fn announce(progress: &dyn Progress, n: usize, r: &FlightRecord) {
     progress.tick(n);

@@ -1,7 +1,7 @@
 //! The campaign's journal: one JSON line per finished flight, synced to disk before anything else happens,
 //! so a killed campaign can resume without flying a test twice.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -48,6 +48,20 @@ pub struct FlightRecord {
     pub trajectory: PathBuf,
     /// Wall-clock seconds the flight took.
     pub wall_s: f64,
+}
+
+/// The status of a flight cut short by the user (Ctrl-C): journaled so the trajectory is kept, but not charged to
+/// the budget, not learnt from, and flown first on `--resume`.
+pub const INTERRUPTED: &str = "interrupted";
+
+/// Statuses of flights that are journaled but not charged to the budget: nothing was learnt about the test.
+pub const UNCHARGED: &[&str] = &[INTERRUPTED];
+
+impl FlightRecord {
+    /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
+    pub fn charged(&self) -> bool {
+        !UNCHARGED.contains(&self.status.as_str())
+    }
 }
 
 /// An append-only JSONL journal.
@@ -102,10 +116,35 @@ impl Journal {
             .unwrap_or_else(|| record.clone())
     }
 
-    /// Reads every record. A torn last line (no newline, not a record: the process died mid-write) is left
-    /// out, as [`Self::heal`] drops it; a damaged line elsewhere, or a candidate journaled twice, is an error.
+    /// Reads the flights charged to the budget, the ones a campaign learns from and reports (not those
+    /// [`UNCHARGED`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
+    /// [`Self::heal`] drops it; a damaged line elsewhere, or a candidate journaled twice, is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        Ok(Self::read_all(path)?
+            .into_iter()
+            .filter(FlightRecord::charged)
+            .collect())
+    }
+
+    /// Reads every record, charged or not, in journal order. Errors as [`Self::read`].
+    pub fn read_all(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
         Ok(parse(&read_bytes(path)?, path)?.records)
+    }
+
+    /// The interrupted flights still to fly: the last interrupted record of each candidate that has no charged
+    /// flight, in journal order.
+    pub fn interrupted(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        let all = Self::read_all(path)?;
+        let charged: HashSet<u64> = all.iter().filter(|r| r.charged()).map(|r| r.candidate).collect();
+        let mut pending: Vec<FlightRecord> = Vec::new();
+        for r in all
+            .into_iter()
+            .filter(|r| r.status == INTERRUPTED && !charged.contains(&r.candidate))
+        {
+            pending.retain(|p| p.candidate != r.candidate);
+            pending.push(r);
+        }
+        Ok(pending)
     }
 
     /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so
@@ -201,7 +240,9 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
                 ));
             }
         };
-        if let Some(first) = lines_of.insert(record.candidate, number) {
+        if record.charged()
+            && let Some(first) = lines_of.insert(record.candidate, number)
+        {
             return Err(syntax(
                 number,
                 format!(

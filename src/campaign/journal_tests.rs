@@ -93,3 +93,39 @@ proptest! {
         }
     }
 }
+
+fn interrupted_line(candidate: u64) -> String {
+    let r = FlightRecord {
+        status: INTERRUPTED.into(),
+        ..record(candidate)
+    };
+    serde_json::to_string(&r).unwrap() + "\n"
+}
+
+#[test]
+fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
+    let (_d, path) = journal(
+        [line(1), interrupted_line(2), interrupted_line(3), interrupted_line(2)]
+            .concat()
+            .as_bytes(),
+    );
+    let charged: Vec<u64> = Journal::read(&path).unwrap().iter().map(|r| r.candidate).collect();
+    assert_eq!(charged, vec![1], "only the finished flight counts against the budget");
+    assert_eq!(Journal::read_all(&path).unwrap().len(), 4);
+    let pending: Vec<u64> = Journal::interrupted(&path)
+        .unwrap()
+        .iter()
+        .map(|r| r.candidate)
+        .collect();
+    assert_eq!(pending, vec![3, 2], "one per candidate, the last interruption's place");
+    // Flying candidate 2 again settles it, and is not a duplicate.
+    let mut j = Journal::open(&path).unwrap();
+    j.append(&record(2)).unwrap();
+    let pending: Vec<u64> = Journal::interrupted(&path)
+        .unwrap()
+        .iter()
+        .map(|r| r.candidate)
+        .collect();
+    assert_eq!(pending, vec![3]);
+    assert_eq!(Journal::read(&path).unwrap().len(), 2);
+}

@@ -8,7 +8,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use super::candidate::Screened;
-use super::journal::{FlightRecord, Journal};
+use super::journal::{FlightRecord, INTERRUPTED, Journal};
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -186,7 +186,10 @@ impl Pool<'_> {
             l.in_flight -= 1;
             match result {
                 Ok(flown) => {
-                    l.finished += 1;
+                    let flown = interrupted_if_cancelled(flown, self.cancel);
+                    if flown.status != INTERRUPTED {
+                        l.finished += 1;
+                    }
                     drop(l);
                     self.changed.notify_all();
                     let record = job.record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
@@ -243,13 +246,15 @@ impl Pool<'_> {
             .map_err(|_| "journal lock poisoned".to_string())
             .and_then(|mut j| {
                 j.0.append(record).map_err(|e| e.to_string())?;
-                j.1.push(Journal::read_back(record));
+                if record.charged() {
+                    j.1.push(Journal::read_back(record));
+                }
                 Ok(())
             });
         let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
         match written {
             Ok(()) => {
-                o.flown += 1;
+                o.flown += usize::from(record.charged());
                 drop(o);
                 (self.on_flight)(record);
                 true
@@ -261,6 +266,19 @@ impl Pool<'_> {
             }
         }
     }
+}
+
+/// A flight the user's stop cut short (`aborted` after the campaign's cancel) is `interrupted`: not charged,
+/// flown again first on resume. A flight that ended on its own while the stop came keeps its status.
+fn interrupted_if_cancelled(mut flown: Flown, cancel: &AtomicBool) -> Flown {
+    if flown.status == "aborted" && cancel.load(Ordering::Relaxed) {
+        flown.status = INTERRUPTED.to_string();
+        flown.reason = Some(format!(
+            "stopped by the user ({}); not charged to the budget, flown again first on --resume",
+            flown.reason.as_deref().unwrap_or("cancelled")
+        ));
+    }
+    flown
 }
 
 /// Flies `test` on `vehicle`; the [`REJECTED_IN_A_ROW_TO_DROP`]th setup rejection in a row makes the vehicle

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS};
+use super::flights::{FlightStage, fly_interrupted};
 use super::journal::Journal;
 use super::learn::Learnt;
 use super::pool::Vehicle;
@@ -48,6 +49,15 @@ pub fn run_campaign(
         cancel,
     };
     let mut stages = StageTimes::default();
+    let charged = Journal::read(&folder.join("journal.jsonl"))?.len();
+    let first = FlightStage {
+        case: &case,
+        candidates: &[],
+        folder,
+        progress,
+        cancel,
+    };
+    fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
     if cfg.learn && cfg.screen {
         let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
         return finish(&input, drawn, stages, Some(&learnt));
