@@ -54,8 +54,12 @@ pub struct FlightRecord {
 /// the budget, not learnt from, and flown first on `--resume`.
 pub const INTERRUPTED: &str = "interrupted";
 
+/// The status of a flight whose backend failed around it (a PX4 that died or never booted, a runner job that
+/// exited non-zero or left no trajectory) after its one retry: the vehicle, not the test, is at fault.
+pub const BACKEND_FAILED: &str = "backend_failed";
+
 /// Statuses of flights that are journaled but not charged to the budget: nothing was learnt about the test.
-pub const UNCHARGED: &[&str] = &[INTERRUPTED];
+pub const UNCHARGED: &[&str] = &[INTERRUPTED, BACKEND_FAILED];
 
 impl FlightRecord {
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
