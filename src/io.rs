@@ -6,7 +6,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::model::ModelError;
-pub use crate::model::write_atomic;
+pub use crate::model::{check_writable, write_atomic};
 
 /// Writes `value` as JSON (indented when `pretty`) through [`write_atomic`]. A value JSON cannot hold (such as
 /// a path that is not UTF-8) is an error naming the file, and nothing is written.

@@ -101,3 +101,47 @@ impl Screened {
         self.expected_points.map(|p| p / (self.flight_time_s.max(1.0) / 60.0))
     }
 }
+
+/// How far a journaled obstacle may lie from the one drawn (metres or degrees): a JSON round trip, not a change.
+const SAME_OBSTACLE_TOLERANCE: f64 = 1e-6;
+
+/// Refuses journal records, among those whose candidate index is in `drawn`, that this campaign never drew
+/// (no such entry of `candidates`) or drew with other obstacles: a record of another campaign (another seed
+/// or case) would otherwise be counted as this campaign's flight.
+pub fn check_journaled_as_drawn(
+    records: &[super::journal::FlightRecord],
+    candidates: &[Candidate],
+    drawn: std::ops::Range<u64>,
+    journal: &std::path::Path,
+) -> Result<(), String> {
+    let values = |o: &Obstacle| {
+        let (s, p) = (&o.size, &o.position);
+        [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
+    };
+    let same = |a: &Obstacle, b: &Obstacle| {
+        let (a, b) = (values(a), values(b));
+        a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= SAME_OBSTACLE_TOLERANCE)
+    };
+    for r in records.iter().filter(|r| drawn.contains(&r.candidate)) {
+        let Some(c) = candidates.get(r.candidate as usize) else {
+            return Err(format!(
+                "{}: candidate {} is journaled but this campaign never drew it (it drew {}): the record comes \
+                 from another campaign; remove its line or restore the journal, then resume",
+                journal.display(),
+                r.candidate,
+                candidates.len()
+            ));
+        };
+        let matches =
+            c.obstacles.len() == r.obstacles.len() && c.obstacles.iter().zip(&r.obstacles).all(|(a, b)| same(a, b));
+        if !matches {
+            return Err(format!(
+                "{}: the record of candidate {} has other obstacles than this campaign draws for it: it comes \
+                 from another campaign (seed or case); remove its line or restore the journal, then resume",
+                journal.display(),
+                r.candidate
+            ));
+        }
+    }
+    Ok(())
+}

@@ -124,6 +124,29 @@ fn default_mock_speed() -> f64 {
     20.0
 }
 
+/// The largest budget accepted. A campaign keeps its journal in memory (about 1 KB a flight) and the report
+/// compares failing tests pairwise, so 10,000 flights stay small; on the mock they take about 5 hours.
+pub const MAX_BUDGET: usize = 10_000;
+
+/// The most candidates accepted. Each is screened by a full low-fidelity flight (about 0.2 s of one core), so
+/// 100,000 are hours of screening; they are held as a few hundred bytes each.
+pub const MAX_CANDIDATES: usize = 100_000;
+
+/// Checks the campaign's counts before anything is drawn: a count out of range is refused, naming the limit.
+pub fn check_counts(budget: usize, candidates: usize) -> Result<(), CampaignError> {
+    if !(1..=MAX_BUDGET).contains(&budget) {
+        return Err(CampaignError::Config(format!(
+            "the budget {budget} is out of range: 1 to {MAX_BUDGET} flights"
+        )));
+    }
+    if !(1..=MAX_CANDIDATES).contains(&candidates) {
+        return Err(CampaignError::Config(format!(
+            "--candidates (screening.candidates) {candidates} is out of range: 1 to {MAX_CANDIDATES}"
+        )));
+    }
+    Ok(())
+}
+
 /// Why a campaign stopped early.
 #[derive(Debug, thiserror::Error)]
 pub enum CampaignError {

@@ -6,6 +6,7 @@ pub mod diversity_guard;
 pub mod draw;
 pub mod failure_counts;
 pub mod flights;
+pub mod folder;
 pub mod journal;
 pub mod learn;
 pub mod learning;

@@ -187,15 +187,25 @@ impl Pool<'_> {
             match result {
                 Ok(flown) => {
                     let flown = interrupted_if_cancelled(flown, self.cancel);
-                    if flown.status != INTERRUPTED {
+                    let rel = if flown.status == INTERRUPTED {
+                        self.keep_interrupted(rel)
+                    } else {
                         l.finished += 1;
-                    }
+                        rel
+                    };
                     drop(l);
                     self.changed.notify_all();
                     let record = job.record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
                     if !self.journal(&record) {
                         return;
                     }
+                }
+                Err(_) if self.cancel.load(Ordering::Relaxed) => {
+                    // Stopped before it flew: the job stays unflown, the vehicle is not at fault.
+                    l.queue.push_front(job);
+                    drop(l);
+                    self.changed.notify_all();
+                    return;
                 }
                 Err(e) => {
                     // Give the job back for another vehicle; this one is out.
@@ -211,6 +221,16 @@ impl Pool<'_> {
                     return;
                 }
             }
+        }
+    }
+
+    /// Moves an interrupted flight's partial trajectory aside (`candidate_N.interrupted.csv`), so flying the
+    /// candidate again on resume keeps it; returns where it is.
+    fn keep_interrupted(&self, rel: PathBuf) -> PathBuf {
+        let aside = rel.with_extension("interrupted.csv");
+        match std::fs::rename(self.folder.join(&rel), self.folder.join(&aside)) {
+            Ok(()) => aside,
+            Err(_) => rel, // nothing was recorded: the record keeps the planned path
         }
     }
 

@@ -2,11 +2,13 @@
 //! budget (in learning rounds, [`super::rounds`], or in one pass, [`super::static_campaign`]), then report the
 //! failing ones best first. Resumable from its folder.
 
-use std::path::Path;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS};
+pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use super::flights::{FlightStage, fly_interrupted};
+use super::folder::FolderLock;
 use super::journal::Journal;
 use super::learn::Learnt;
 use super::pool::Vehicle;
@@ -27,18 +29,16 @@ pub fn run_campaign(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<Report, CampaignError> {
-    if cfg.budget == 0 {
-        return Err(CampaignError::Config("the budget must be at least 1 flight".into()));
-    }
-    if cfg.candidates == 0 {
-        return Err(CampaignError::Config("--candidates must be at least 1".into()));
-    }
+    check_counts(cfg.budget, cfg.candidates)?;
     check_paths_are_text(cfg)?;
     let case = TestCase::load(&cfg.case)?;
-    prepare_folder(cfg, folder)?;
+    let _writer = prepare_folder(cfg, folder)?;
     // Before anything reads or appends: a record must never follow a torn line.
     if let Some(dropped) = Journal::heal(&folder.join("journal.jsonl"))? {
         progress.warn(&dropped);
+    }
+    if let Some(orphans) = unjournaled_trajectories(folder)? {
+        progress.warn(&orphans);
     }
     let input = CampaignInput {
         cfg,
@@ -66,6 +66,35 @@ pub fn run_campaign(
     finish(&input, drawn, stages, None)
 }
 
+/// Says so when `flights/` holds trajectories the journal has no record of (a journal deleted or emptied, or a
+/// flight in the air when the campaign was killed): those flights are flown again, and the user should know.
+fn unjournaled_trajectories(folder: &Path) -> Result<Option<String>, CampaignError> {
+    let journal = folder.join("journal.jsonl");
+    let known: HashSet<PathBuf> = Journal::read_all(&journal)?.into_iter().map(|r| r.trajectory).collect();
+    let Ok(entries) = std::fs::read_dir(folder.join("flights")) else {
+        return Ok(None);
+    };
+    let mut orphans: Vec<String> = entries
+        .filter_map(Result::ok)
+        .map(|e| PathBuf::from("flights").join(e.file_name()))
+        .filter(|p| p.extension().is_some_and(|x| x == "csv") && !known.contains(p))
+        .map(|p| p.display().to_string())
+        .collect();
+    if orphans.is_empty() {
+        return Ok(None);
+    }
+    orphans.sort();
+    let shown = orphans.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+    Ok(Some(format!(
+        "{}: {} trajectory file(s) in flights/ have no journal record ({shown}{}): flights not journaled (the \
+         campaign was killed mid-flight, or the journal was emptied or removed); their candidates are flown \
+         again and the files overwritten",
+        journal.display(),
+        orphans.len(),
+        if orphans.len() > 5 { ", ..." } else { "" }
+    )))
+}
+
 /// `campaign.json` keeps its paths as JSON text, so a path that is not UTF-8 could never be resumed.
 fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
     let paths = [("the case", Some(&cfg.case)), ("--prior", cfg.prior.as_ref())];
@@ -81,15 +110,17 @@ fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
     Ok(())
 }
 
-/// Creates the folder and saves the settings as `campaign.json` (what `--resume` continues).
-fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<(), CampaignError> {
+/// Creates the folder, takes its one-writer lock (held while the campaign runs) and saves the settings as
+/// `campaign.json` (what `--resume` continues).
+fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, CampaignError> {
     std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
         path: folder.to_path_buf(),
         action: "cannot create",
         source,
     })?;
+    let lock = FolderLock::acquire(folder)?;
     write_json(&folder.join("campaign.json"), cfg, true)?;
-    Ok(())
+    Ok(lock)
 }
 
 /// Both campaigns end the same way: the journal's flights written out as tests and reports.

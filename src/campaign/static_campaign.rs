@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use super::candidate::{Candidate, Screened};
+use super::candidate::{Candidate, Screened, check_journaled_as_drawn};
 use super::config::{CampaignError, CampaignInput};
 use super::flights::{FlightStage, fly_ranked};
 use super::journal::Journal;
@@ -24,6 +24,9 @@ pub fn run_static(
 ) -> Result<usize, CampaignError> {
     let t = Instant::now();
     let mut candidates = draw_all(input)?;
+    let journal = input.folder.join("journal.jsonl");
+    check_journaled_as_drawn(&Journal::read_all(&journal)?, &candidates, 0..u64::MAX, &journal)
+        .map_err(CampaignError::Config)?;
     stages.sample_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     screen(input, &mut candidates)?;

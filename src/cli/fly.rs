@@ -84,6 +84,11 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     // Arguments first, resources second.
     LinkAddress::parse(&args.connect)?;
+    super::check_outputs(&[
+        ("--plot", args.plot.as_deref()),
+        ("--trajectory", args.trajectory.as_deref()),
+        ("--world", args.world.as_deref()),
+    ])?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };

@@ -102,6 +102,17 @@ pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav
     Ok(None)
 }
 
+/// Checks every output a command was given before it does any work (a flight flown for a plot that cannot be
+/// written is a flight wasted), naming the flag.
+pub fn check_outputs(outputs: &[(&str, Option<&std::path::Path>)]) -> anyhow::Result<()> {
+    for (flag, path) in outputs {
+        if let Some(path) = path {
+            prgenuav::io::check_writable(path).map_err(|e| anyhow::anyhow!("{flag}: {e}"))?;
+        }
+    }
+    Ok(())
+}
+
 /// Loads a test for `fly` or `simulate`: a test that breaks the current competition rules (older editions
 /// allowed 10 m high boxes and footprints past the arena; the recorded flights use them) is accepted with a
 /// warning naming each rule, unless `strict`, which refuses it as `check` does (`None`: exit [`EXIT_FAIL`]).

@@ -51,6 +51,10 @@ fn parse_pose(s: &str) -> anyhow::Result<[f64; 4]> {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let [x, y, z, yaw_deg] = parse_pose(&args.pose)?;
+    super::check_outputs(&[
+        ("--out-file", Some(args.out_file.as_path())),
+        ("--points", args.points.as_deref()),
+    ])?;
     let camera = args.camera.model();
     let Some(test) = super::load_valid_test(&args.test)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));

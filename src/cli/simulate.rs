@@ -77,6 +77,10 @@ struct Report {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let judge = Judge::from(args.judge);
+    super::check_outputs(&[
+        ("--trajectory", args.trajectory.as_deref()),
+        ("--plot", args.plot.as_deref()),
+    ])?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };

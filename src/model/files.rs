@@ -52,3 +52,62 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     result.map_err(io_err)
 }
+
+/// Checks before any work that [`write_atomic`] will be able to write `path`: it is not a folder, and the
+/// folder it goes in exists and takes a new file, or can be created under the nearest folder that does.
+/// Leaves nothing behind.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let refuse = |why: &str| ModelError::Io {
+        path: path.to_path_buf(),
+        action: "cannot write",
+        source: std::io::Error::other(why.to_string()),
+    };
+    if path.is_dir() {
+        return Err(refuse("it is a folder; give a file name"));
+    }
+    let mut dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    while !dir.exists() {
+        dir = match dir.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+    }
+    if !dir.is_dir() {
+        return Err(refuse(&format!("{} is a file, not a folder", dir.display())));
+    }
+    let probe = dir.join(format!(".prgenuav-write-check.{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => std::fs::remove_file(&probe).map_err(|source| ModelError::Io {
+            path: probe.clone(),
+            action: "cannot remove",
+            source,
+        }),
+        Err(e) => Err(refuse(&format!("{} does not take new files ({e})", dir.display()))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_a_file_as_folder_and_a_read_only_folder_are_refused_and_nothing_is_left() {
+        let dir = tempfile::tempdir().unwrap();
+        check_writable(&dir.path().join("plot.svg")).unwrap();
+        check_writable(&dir.path().join("new/deeper/plot.svg")).unwrap();
+        assert!(!dir.path().join("new").exists(), "the check creates no folder");
+        let e = check_writable(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+        std::fs::write(dir.path().join("f"), b"x").unwrap();
+        let e = check_writable(&dir.path().join("f/plot.svg")).unwrap_err().to_string();
+        assert!(e.contains("is a file, not a folder"), "{e}");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "no probe left behind"
+        );
+    }
+}

@@ -18,7 +18,7 @@ mod ulog;
 pub use arena::{Arena, Range};
 pub use competition::AERIALIST_BIN_S;
 pub use error::{ModelError, Result};
-pub use files::write_atomic;
+pub use files::{check_writable, write_atomic};
 pub use geo::{GeoPoint, LocalProjection, SIM_HOME};
 pub use mission::{CMD_LAND, CMD_TAKEOFF, CMD_WAYPOINT, LocalPoint, Mission, MissionItem};
 pub use obstacle::{Obstacle, Position, Size};

@@ -2,6 +2,7 @@
 
 mod bridge;
 mod campaign;
+mod campaign_folder;
 mod cli_errors;
 mod frame;
 mod generator;

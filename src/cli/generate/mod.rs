@@ -35,7 +35,7 @@ pub struct Args {
     /// The case study YAML (mission, params, commands).
     #[arg(value_name = "CASE.yaml")]
     case: Option<PathBuf>,
-    /// High-fidelity flights allowed (the competition's budget).
+    /// High-fidelity flights allowed (the competition's budget): 1 to 10000.
     budget: Option<usize>,
     /// Seed of the generator: the same seed draws the same candidates.
     #[arg(long, default_value_t = 0)]
@@ -53,7 +53,8 @@ pub struct Args {
     /// Judge edition of the distances (and of the low-fidelity prediction).
     #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
     judge: JudgeEdition,
-    /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20).
+    /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20; at
+    /// most 100000).
     #[arg(long, value_name = "N")]
     candidates: Option<usize>,
     /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in
@@ -174,13 +175,7 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
         .build()
         .context("starting the async runtime")?;
     let stop = Arc::new(AtomicBool::new(false));
-    let on_signal = stop.clone();
-    runtime.spawn(async move {
-        if tokio::signal::ctrl_c().await.is_ok() {
-            eprintln!("Ctrl-C: landing the vehicles in flight, keeping every finished flight; resume with --resume");
-            on_signal.store(true, Ordering::SeqCst);
-        }
-    });
+    runtime.spawn(watch_ctrl_c(stop.clone()));
     let vehicles = vehicles(&plan, &runtime)?;
     let progress = Reporter::new(args.quiet || args.json);
     let screener = LfsScreener {
@@ -204,6 +199,39 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// How long the campaign may take to stop after the first Ctrl-C: landing commands are bounded at a few
+/// seconds and every stage checks the stop between candidates, so this is a backstop, not the usual path.
+const STOP_WITHIN: Duration = Duration::from_secs(20);
+
+/// Exit code after a forced stop (128 + SIGINT, as a shell reports it).
+const EXIT_INTERRUPTED: i32 = 130;
+
+/// First Ctrl-C: stop the campaign (vehicles in the air land; their flights are journaled `interrupted`, not
+/// charged, flown first on resume). A second Ctrl-C, or [`STOP_WITHIN`] without stopping, exits at once: the
+/// journal keeps every finished flight, and a flight cut mid-record is a torn line the next resume drops.
+async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
+    if tokio::signal::ctrl_c().await.is_err() {
+        return;
+    }
+    eprintln!(
+        "Ctrl-C: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
+         to exit now); resume with --resume",
+        STOP_WITHIN.as_secs()
+    );
+    stop.store(true, Ordering::SeqCst);
+    tokio::select! {
+        r = tokio::signal::ctrl_c() => {
+            if r.is_ok() {
+                eprintln!("second Ctrl-C: exiting now; flights in the air are flown again on resume");
+            }
+        }
+        () = tokio::time::sleep(STOP_WITHIN) => {
+            eprintln!("did not stop within {} s: exiting now; resume with --resume", STOP_WITHIN.as_secs());
+        }
+    }
+    std::process::exit(EXIT_INTERRUPTED);
 }
 
 /// The vehicles that fly: embedded mocks, or one per MAVLink URL.

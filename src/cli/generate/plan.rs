@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
-use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
+use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
 use serde_json::Value;
@@ -109,13 +109,9 @@ type Names = (&'static str, &'static str, &'static str);
 pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     let file = Loaded::read(args.config.as_deref())?;
     let req = request(args, matches, &file)?;
-    let (cfg, folder) = match &args.resume {
-        Some(folder) => (resumed(folder, args, &req)?, folder.clone()),
-        None => {
-            let cfg = fresh(args, &req)?;
-            let folder = prgenuav::campaign::report::timestamped_folder(&args.out, std::time::SystemTime::now());
-            (cfg, folder)
-        }
+    let cfg = match &args.resume {
+        Some(folder) => resumed(folder, args, &req)?,
+        None => fresh(args, &req)?,
     };
     check(&cfg)?;
     let s = &req.settings;
@@ -123,6 +119,11 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
         bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
     }
+    // Last, once every setting is known good: a new campaign claims a folder of its own.
+    let folder = match &args.resume {
+        Some(folder) => folder.clone(),
+        None => prgenuav::campaign::folder::create_new(&args.out, std::time::SystemTime::now())?,
+    };
     Ok(Plan {
         cfg,
         folder,
@@ -299,7 +300,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         case,
         seed: args.seed,
         budget,
-        candidates: s.screening.candidates.unwrap_or((3 * budget).max(20)),
+        candidates: s.screening.candidates.unwrap_or(budget.saturating_mul(3).max(20)),
         threshold_m: s.screening.threshold_m.unwrap_or(THRESHOLD_M),
         max_iou: s.screening.max_iou.unwrap_or(MAX_IOU),
         generator: req.generator.clone(),
@@ -332,10 +333,8 @@ fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
     let (Some(case), Some(budget)) = (args.case.clone(), args.budget) else {
         bail!("give CASE.yaml and BUDGET, or --resume FOLDER");
     };
-    if budget == 0 {
-        bail!("BUDGET must be at least 1 flight");
-    }
     let cfg = build(case, budget, args, req);
+    check_counts(cfg.budget, cfg.candidates)?;
     if !(0.0..=1.0).contains(&cfg.min_diversity) {
         bail!("--min-diversity (learning.min_diversity) must be within 0..1");
     }
@@ -458,6 +457,10 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
     }
     if cfg.hfs.len() > 1 && cfg.hfs.iter().any(|u| u == "mock") {
         bail!("--connect takes either `mock` or MAVLink URLs, not both");
+    }
+    // Before anything is screened or flown: a typo in the fifth URL must not cost the first four flights.
+    for url in cfg.hfs.iter().filter(|u| *u != "mock") {
+        prgenuav::bridge::LinkAddress::parse(url).map_err(|e| anyhow::anyhow!("--connect: {e}"))?;
     }
     Ok(())
 }

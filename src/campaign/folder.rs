@@ -1,0 +1,132 @@
+//! A campaign folder has one writer: a new campaign gets a folder of its own (a suffix rather than sharing one
+//! with a campaign started in the same second), and the campaign writing it holds an advisory lock that a
+//! second `generate` or `--resume` on the folder is refused by. The kernel drops the lock when its holder dies,
+//! even by `kill -9`, so a crashed campaign never blocks its own resume.
+
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io::{ErrorKind, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use super::config::CampaignError;
+use super::report::timestamped_folder;
+use crate::model::ModelError;
+
+/// The lock file inside a campaign folder; it holds the writer's process id.
+pub const LOCK_FILE: &str = "campaign.lock";
+
+/// Suffixes tried after the timestamp itself (`-2`, `-3`, ...): far more campaigns than start in one second.
+const MAX_SUFFIX: u32 = 1000;
+
+/// Creates a new, empty campaign folder `DIR/<dd-mm-HH-MM-SS>` for `now`, or with `-2`, `-3`, ... when a
+/// campaign started in the same second already has that name. Creation is the claim: two processes racing for
+/// one name cannot both create it.
+pub fn create_new(dir: &Path, now: SystemTime) -> Result<PathBuf, CampaignError> {
+    std::fs::create_dir_all(dir).map_err(|source| ModelError::Io {
+        path: dir.to_path_buf(),
+        action: "cannot create",
+        source,
+    })?;
+    let base = timestamped_folder(dir, now);
+    for n in 1..=MAX_SUFFIX {
+        let folder = if n == 1 {
+            base.clone()
+        } else {
+            PathBuf::from(format!("{}-{n}", base.display()))
+        };
+        match std::fs::create_dir(&folder) {
+            Ok(()) => return Ok(folder),
+            Err(e) if e.kind() == ErrorKind::AlreadyExists => continue,
+            Err(source) => {
+                return Err(ModelError::Io {
+                    path: folder,
+                    action: "cannot create",
+                    source,
+                }
+                .into());
+            }
+        }
+    }
+    Err(CampaignError::Config(format!(
+        "{}: {MAX_SUFFIX} campaign folders already start with this name; use another --out",
+        base.display()
+    )))
+}
+
+/// The advisory lock of one campaign folder, held until dropped (or the process ends).
+#[derive(Debug)]
+pub struct FolderLock {
+    _file: File,
+}
+
+impl FolderLock {
+    /// Takes `folder`'s lock, or says which process holds it.
+    pub fn acquire(folder: &Path) -> Result<Self, CampaignError> {
+        let path = folder.join(LOCK_FILE);
+        let io = |action: &'static str| {
+            let path = path.clone();
+            move |source| ModelError::Io { path, action, source }
+        };
+        let mut file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(io("cannot open the lock file"))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::WouldBlock) => {
+                let mut holder = String::new();
+                // The pid is for the message only: an unreadable one still refuses.
+                let _ = file.read_to_string(&mut holder);
+                let holder = holder.trim();
+                let who = if holder.is_empty() {
+                    "another process".to_string()
+                } else {
+                    format!("pid {holder}")
+                };
+                return Err(CampaignError::Config(format!(
+                    "{}: this campaign is being written by {who}; one writer per campaign folder: wait for it \
+                     to finish or stop it, then resume",
+                    folder.display()
+                )));
+            }
+            Err(TryLockError::Error(source)) => return Err(io("cannot lock")(source).into()),
+        }
+        file.set_len(0).map_err(io("cannot write"))?;
+        file.seek(SeekFrom::Start(0)).map_err(io("cannot write"))?;
+        writeln!(file, "{}", std::process::id()).map_err(io("cannot write"))?;
+        Ok(Self { _file: file })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, UNIX_EPOCH};
+
+    #[test]
+    fn campaigns_started_in_the_same_second_get_folders_of_their_own() {
+        let dir = tempfile::tempdir().unwrap();
+        let now = UNIX_EPOCH + Duration::from_secs(1_764_115_200);
+        let a = create_new(dir.path(), now).unwrap();
+        let b = create_new(dir.path(), now).unwrap();
+        let c = create_new(dir.path(), now).unwrap();
+        assert_ne!(a, b);
+        assert_eq!(b, PathBuf::from(format!("{}-2", a.display())));
+        assert_eq!(c, PathBuf::from(format!("{}-3", a.display())));
+        assert!(a.is_dir() && b.is_dir() && c.is_dir());
+    }
+
+    #[test]
+    fn a_held_folder_is_refused_naming_the_holder_and_freed_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let held = FolderLock::acquire(dir.path()).unwrap();
+        let e = FolderLock::acquire(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(&format!("pid {}", std::process::id())), "{e}");
+        assert!(e.contains("one writer per campaign folder"), "{e}");
+        drop(held);
+        FolderLock::acquire(dir.path()).unwrap();
+    }
+}
