@@ -19,7 +19,7 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use super::candidate::{Candidate, Lineage, Screened, check_journaled_as_drawn, is_child};
+use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
@@ -241,14 +241,6 @@ impl<'a> Rounds<'a> {
         };
         let drawn = draw(&self.base, &self.distribution, &plan, &mut guard)?;
         self.candidates.extend(drawn);
-        let journal = self.input.folder.join("journal.jsonl");
-        check_journaled_as_drawn(
-            &self.journal,
-            &self.candidates,
-            first..self.candidates.len() as u64,
-            &journal,
-        )
-        .map_err(CampaignError::Config)?;
         stages.sample_s += t.elapsed().as_secs_f64();
         Ok(Round {
             index,

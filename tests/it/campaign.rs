@@ -232,7 +232,7 @@ fn killed_campaign_resumes_without_flying_twice() {
 fn bad_input_fails_fast_and_clearly() {
     let (code, _, err) = prgenuav(&["generate", "missions/mission2.yaml", "0"]);
     assert_eq!(code, 2);
-    assert!(err.contains("BUDGET"), "{err}");
+    assert!(err.contains("budget 0 is out of range"), "{err}");
     let out = tempfile::tempdir().unwrap();
     let (code, _, err) = prgenuav(&[
         "generate",
