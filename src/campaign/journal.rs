@@ -16,6 +16,10 @@ use crate::model::{ModelError, Obstacle};
 pub struct FlightRecord {
     /// The candidate's index (its generator index for the campaign's seed).
     pub candidate: u64,
+    /// Which flight of the candidate this is, from 0: a failing test is flown again to confirm it
+    /// (`--confirm`). Left out when 0, so journals without re-flights read and write as before.
+    #[serde(default, skip_serializing_if = "is_first")]
+    pub attempt: u32,
     /// Its obstacles.
     pub obstacles: Vec<Obstacle>,
     /// The LFS's predicted minimum distance, metres.
@@ -48,6 +52,16 @@ pub struct FlightRecord {
     pub trajectory: PathBuf,
     /// Wall-clock seconds the flight took.
     pub wall_s: f64,
+}
+
+/// A test's first flight (serde leaves its `attempt` out).
+pub(crate) fn is_first(attempt: &u32) -> bool {
+    *attempt == 0
+}
+
+/// The flights of `records` charged to the budget. Every budget count goes through here.
+pub fn flights_charged(records: &[FlightRecord]) -> usize {
+    records.len()
 }
 
 /// An append-only JSONL journal.
@@ -103,7 +117,8 @@ impl Journal {
     }
 
     /// Reads every record. A torn last line (no newline, not a record: the process died mid-write) is left
-    /// out, as [`Self::heal`] drops it; a damaged line elsewhere, or a candidate journaled twice, is an error.
+    /// out, as [`Self::heal`] drops it; a damaged line elsewhere, or a flight (candidate and attempt) journaled
+    /// twice, is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
         Ok(parse(&read_bytes(path)?, path)?.records)
     }
@@ -170,7 +185,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
         unterminated: None,
         torn: None,
     };
-    let mut lines_of: HashMap<u64, usize> = HashMap::new();
+    let mut lines_of: HashMap<(u64, u32), usize> = HashMap::new();
     let mut offset = 0;
     for (i, line) in bytes.split(|b| *b == b'\n').enumerate() {
         let (number, start) = (i + 1, offset);
@@ -201,12 +216,16 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
                 ));
             }
         };
-        if let Some(first) = lines_of.insert(record.candidate, number) {
+        if let Some(first) = lines_of.insert((record.candidate, record.attempt), number) {
+            let flight = match record.attempt {
+                0 => String::new(),
+                a => format!(" (flight {})", a + 1),
+            };
             return Err(syntax(
                 number,
                 format!(
-                    "candidate {} is journaled twice (lines {first} and {number}); a flight is journaled once: \
-                     delete one of the two lines, then resume",
+                    "candidate {}{flight} is journaled twice (lines {first} and {number}); a flight is journaled \
+                     once: delete one of the two lines, then resume",
                     record.candidate
                 ),
             ));
@@ -221,6 +240,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
 pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> FlightRecord {
     FlightRecord {
         candidate,
+        attempt: 0,
         obstacles: Vec::new(),
         predicted_min_distance: raw,
         predicted_flight_time_s: 60.0,
@@ -245,6 +265,7 @@ mod tests {
     pub(super) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {
             candidate,
+            attempt: 0,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
             predicted_min_distance: 0.5,
             predicted_flight_time_s: 40.0,
