@@ -454,7 +454,7 @@ mod tests {
         })
     }
 
-    fn jobs(n: u64) -> Vec<Job> {
+    pub(super) fn jobs(n: u64) -> Vec<Job> {
         let base = test_case();
         (0..n)
             .map(|i| {
@@ -627,3 +627,7 @@ mod tests {
         assert_eq!((out.flown, flown.len(), records, out.dropped.len()), (0, 0, 0, 2));
     }
 }
+
+#[cfg(test)]
+#[path = "pool_confirm_tests.rs"]
+mod pool_confirm_tests;

@@ -388,3 +388,6 @@ fn a_campaign_whose_every_vehicle_is_dropped_stops_with_an_error_and_keeps_its_f
 
 #[path = "run_learning_tests.rs"]
 mod learning;
+
+#[path = "run_confirm_tests.rs"]
+mod confirm;
