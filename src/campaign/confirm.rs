@@ -100,7 +100,9 @@ pub fn failed_again(records: &[FlightRecord]) -> (usize, usize) {
     records
         .iter()
         .filter(|r| r.attempt == 1 && first_failed.get(&r.candidate) == Some(&true))
-        .fold((0, 0), |(again, of), r| (again + usize::from(failed(r.min_distance)), of + 1))
+        .fold((0, 0), |(again, of), r| {
+            (again + usize::from(failed(r.min_distance)), of + 1)
+        })
 }
 
 /// The trajectory of a test's flight, relative to the campaign folder: `flights/candidate_N.csv` for its
@@ -192,6 +194,9 @@ mod tests {
     #[test]
     fn re_flights_have_their_own_trajectory() {
         assert_eq!(trajectory_name(12, 0), std::path::Path::new("flights/candidate_12.csv"));
-        assert_eq!(trajectory_name(12, 1), std::path::Path::new("flights/candidate_12_2.csv"));
+        assert_eq!(
+            trajectory_name(12, 1),
+            std::path::Path::new("flights/candidate_12_2.csv")
+        );
     }
 }

@@ -57,7 +57,7 @@ pub fn fly_ranked(
         }
     });
     let jobs: Vec<Job> = again.chain(fresh).collect();
-    if jobs.is_empty() {
+    if jobs.is_empty() || remaining == 0 {
         return Ok(Vec::new());
     }
     let no_vehicle_left = |why: String| {

@@ -78,10 +78,7 @@ impl Job {
     /// The test's next flight after `record` (this job's), if its majority is not settled.
     fn again(&self, record: &FlightRecord) -> Option<Job> {
         let tally = self.tally.with(record);
-        tally.wants_another(self.confirm).then(|| Job {
-            tally,
-            ..self.clone()
-        })
+        tally.wants_another(self.confirm).then(|| Job { tally, ..self.clone() })
     }
 }
 
@@ -216,7 +213,9 @@ impl Pool<'_> {
             match result {
                 Ok(flown) => {
                     l.finished += 1;
-                    let record = job.clone().record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
+                    let record = job
+                        .clone()
+                        .record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
                     // Queued before the flight is journaled, so no vehicle takes a new candidate meanwhile.
                     if let Some(next) = job.again(&Journal::read_back(&record)) {
                         l.queue.push_front(next);

@@ -37,16 +37,21 @@ impl Vehicle for Scripted {
     }
 }
 
-/// `jobs` confirmed over `k` flights on one scripted vehicle within `budget`: the journal's (candidate,
-/// attempt, failed) and the files flown to.
-fn confirm_run(script: Vec<Vec<f64>>, k: usize, budget: usize) -> (Vec<(u64, u32, bool)>, Vec<(u64, String)>) {
+/// The journal's (candidate, attempt, failed) and the flights made as (candidate, csv file name).
+type Run = (Vec<(u64, u32, bool)>, Vec<(u64, String)>);
+
+/// `jobs` confirmed over `k` flights on one scripted vehicle within `budget`.
+fn confirm_run(script: Vec<Vec<f64>>, k: usize, budget: usize) -> Run {
     let dir = tempfile::tempdir().unwrap();
     let flown = Arc::new(Mutex::new(Vec::new()));
     let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(Scripted {
         script: script.clone(),
         flown: flown.clone(),
     })];
-    let jobs = jobs(script.len() as u64).into_iter().map(|j| Job { confirm: k, ..j }).collect();
+    let jobs = jobs(script.len() as u64)
+        .into_iter()
+        .map(|j| Job { confirm: k, ..j })
+        .collect();
     let path = dir.path().join("journal.jsonl");
     let out = fly_all(
         &mut fleet,
@@ -91,8 +96,15 @@ fn a_failing_test_is_flown_again_before_the_next_candidate_until_its_majority_is
     // The re-flights are charged to the budget: 5 flights reach candidate 2 only by skipping nothing.
     let (journal, _) = confirm_run(script.clone(), 3, 5);
     assert_eq!(journal.len(), 5);
-    assert_eq!(journal.last(), Some(&(1, 1, f)), "candidate 1 confirmed before 2 is drawn");
+    assert_eq!(
+        journal.last(),
+        Some(&(1, 1, f)),
+        "candidate 1 confirmed before 2 is drawn"
+    );
     // K = 1: every candidate once, as without confirmation.
     let (journal, _) = confirm_run(script, 1, 20);
-    assert_eq!(journal.iter().map(|j| (j.0, j.1)).collect::<Vec<_>>(), [(0, 0), (1, 0), (2, 0), (3, 0)]);
+    assert_eq!(
+        journal.iter().map(|j| (j.0, j.1)).collect::<Vec<_>>(),
+        [(0, 0), (1, 0), (2, 0), (3, 0)]
+    );
 }

@@ -23,11 +23,11 @@ use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
+use super::confirm::first_flights;
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
 use super::flights::{FlightStage, fly_ranked};
-use super::confirm::first_flights;
 use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};

@@ -63,7 +63,11 @@ fn per_test(journal: &[FlightRecord]) -> Vec<(u64, usize, usize)> {
 /// What a finished confirmed campaign in `dir` must show, whatever its schedule.
 fn check_confirmed(dir: &Path, r: &crate::campaign::run::Report, budget: usize) {
     let journal = Journal::read(&dir.join("journal.jsonl")).unwrap();
-    assert_eq!((journal.len(), r.suite.flown), (budget, budget), "re-flights are charged");
+    assert_eq!(
+        (journal.len(), r.suite.flown),
+        (budget, budget),
+        "re-flights are charged"
+    );
     let tests = per_test(&journal);
     for &(c, flights, failures) in &tests {
         assert!(flights <= 3, "candidate {c} flown {flights} times");
@@ -75,7 +79,10 @@ fn check_confirmed(dir: &Path, r: &crate::campaign::run::Report, budget: usize) 
             2 // fails twice: settled
         };
         // Only the last tests flown may have been cut by the budget.
-        assert!(flights == expected || journal.iter().rev().take(3).any(|x| x.candidate == c), "{c}");
+        assert!(
+            flights == expected || journal.iter().rev().take(3).any(|x| x.candidate == c),
+            "{c}"
+        );
     }
     let confirmed: Vec<u64> = tests.iter().filter(|t| 2 * t.2 > 3).map(|t| t.0).collect();
     assert!(confirmed.iter().all(|c| c % 2 == 1), "{confirmed:?}");
@@ -91,9 +98,20 @@ fn check_confirmed(dir: &Path, r: &crate::campaign::run::Report, budget: usize) 
     assert_eq!(unconfirmed.len(), r.suite.failed_once - r.suite.failing);
     // An odd candidate is unconfirmed only when the budget ran out before its second flight.
     let pending = |t: &serde_json::Value| t["settled"] == false && t["flights"] == 1;
-    assert!(unconfirmed.iter().all(|t| t["candidate"].as_u64().unwrap() % 2 == 0 || pending(t)));
-    assert!(unconfirmed.iter().filter(|t| pending(t)).count() <= 1, "one vehicle: one test cut");
-    assert!(unconfirmed.iter().all(|t| t["failure_rate_low"].as_f64() <= t["failure_rate"].as_f64()));
+    assert!(
+        unconfirmed
+            .iter()
+            .all(|t| t["candidate"].as_u64().unwrap() % 2 == 0 || pending(t))
+    );
+    assert!(
+        unconfirmed.iter().filter(|t| pending(t)).count() <= 1,
+        "one vehicle: one test cut"
+    );
+    assert!(
+        unconfirmed
+            .iter()
+            .all(|t| t["failure_rate_low"].as_f64() <= t["failure_rate"].as_f64())
+    );
 }
 
 #[test]
@@ -107,7 +125,10 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
         };
         let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         check_confirmed(dir.path(), &r, 14);
-        assert!(r.suite.failing > 0 && r.suite.failed_once > r.suite.failing, "learn {learn}");
+        assert!(
+            r.suite.failing > 0 && r.suite.failed_once > r.suite.failing,
+            "learn {learn}"
+        );
         assert_eq!(
             r.suite.confirmation_rate.unwrap(),
             r.suite.failed_again as f64 / r.suite.flown_again as f64
@@ -117,7 +138,11 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
         let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
         for w in journal.windows(2) {
             if w[0].min_distance.unwrap() < 1.5 && w[0].attempt == 0 {
-                assert_eq!((w[1].candidate, w[1].attempt), (w[0].candidate, 1), "learn {learn}: {flown:?}");
+                assert_eq!(
+                    (w[1].candidate, w[1].attempt),
+                    (w[0].candidate, 1),
+                    "learn {learn}: {flown:?}"
+                );
             }
         }
     }
@@ -136,7 +161,10 @@ fn a_resumed_campaign_flies_the_pending_confirmation_first() {
         run_campaign(&cfg, dir.path(), &ScriptedLfs, flaky(&flown, true), &Quiet, &cancel).unwrap();
         let cut = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
         let last = cut.last().unwrap();
-        assert!(last.min_distance.unwrap() < 1.5 && last.attempt == 0, "killed after a first failure");
+        assert!(
+            last.min_distance.unwrap() < 1.5 && last.attempt == 0,
+            "killed after a first failure"
+        );
         let before = flown.lock().unwrap().len();
         let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         let flown = flown.lock().unwrap().clone();

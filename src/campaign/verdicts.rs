@@ -55,8 +55,9 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
         if tally.failures == 0 {
             continue;
         }
-        let mut flights: Vec<(usize, &FlightRecord)> =
-            (records.iter().enumerate()).filter(|(_, r)| r.candidate == candidate).collect();
+        let mut flights: Vec<(usize, &FlightRecord)> = (records.iter().enumerate())
+            .filter(|(_, r)| r.candidate == candidate)
+            .collect();
         flights.sort_by_key(|(_, r)| r.attempt);
         let first_flight = flights[0].0;
         let mut flights: Vec<&FlightRecord> = flights.into_iter().map(|(_, r)| r).collect();
@@ -177,27 +178,44 @@ mod tests {
             flight(4, 1, 1.3, 30.0),
         ];
         let v = verdicts(&records, 3);
-        let order: Vec<(u64, usize, usize, bool)> =
-            v.iter().map(|(t, _)| (t.candidate, t.failures, t.flights, t.confirmed)).collect();
+        let order: Vec<(u64, usize, usize, bool)> = v
+            .iter()
+            .map(|(t, _)| (t.candidate, t.failures, t.flights, t.confirmed))
+            .collect();
         // 2 and 4 failed 2 of 2 (2's best flight is closer), 1 failed 2 of 3; 3 never failed.
         assert_eq!(order, [(2, 2, 2, true), (4, 2, 2, true), (1, 2, 3, true)]);
         let (t4, f4) = &v[1];
-        assert_eq!((t4.best_min_distance, f4[0].attempt), (1.3, 1), "the best failing flight first");
+        assert_eq!(
+            (t4.best_min_distance, f4[0].attempt),
+            (1.3, 1),
+            "the best failing flight first"
+        );
         assert_eq!(t4.trajectories, [PathBuf::from("c4_1.csv"), PathBuf::from("c4_0.csv")]);
         let (t1, _) = &v[2];
         assert!(t1.failure_rate_low < t1.failure_rate && t1.failure_rate < t1.failure_rate_high);
         // 1 of 3: failed once, not confirmed; settled either way.
-        let one_of_three = [flight(5, 0, 1.0, 60.0), flight(5, 1, 2.0, 60.0), flight(5, 2, 2.0, 60.0)];
+        let one_of_three = [
+            flight(5, 0, 1.0, 60.0),
+            flight(5, 1, 2.0, 60.0),
+            flight(5, 2, 2.0, 60.0),
+        ];
         let v = verdicts(&one_of_three, 3);
         assert_eq!((v[0].0.confirmed, v[0].0.settled, v[0].0.failures), (false, true, 1));
         let cut = verdicts(&one_of_three[..1], 3);
         assert_eq!((cut[0].0.confirmed, cut[0].0.settled), (false, false), "pending");
-        assert!(verdicts(&one_of_three[..1], 1)[0].0.confirmed, "K = 1: one failure confirms");
+        assert!(
+            verdicts(&one_of_three[..1], 1)[0].0.confirmed,
+            "K = 1: one failure confirms"
+        );
     }
 
     #[test]
     fn one_flight_per_test_ranks_as_the_flights_do() {
-        let records = [flight(1, 0, 1.2, 60.0), flight(2, 0, 0.8, 90.0), flight(3, 0, 0.8, 40.0)];
+        let records = [
+            flight(1, 0, 1.2, 60.0),
+            flight(2, 0, 0.8, 90.0),
+            flight(3, 0, 0.8, 40.0),
+        ];
         let v = verdicts(&records, 1);
         assert_eq!(v.iter().map(|(t, _)| t.candidate).collect::<Vec<_>>(), [3, 2, 1]);
         let single = test_score(&[0.8], &[40.0], 0);

@@ -84,13 +84,21 @@ fn verify_folder(folder: &Path) -> serde_json::Value {
             let (a, b) = (confirmed[i - 1], confirmed[i]);
             let low = |t: &serde_json::Value| t["failure_rate_low"].as_f64().unwrap();
             let best = |t: &serde_json::Value| t["best_min_distance"].as_f64().unwrap();
-            assert!(low(a) > low(b) || (low(a) == low(b) && best(a) <= best(b)), "not best first at test_{i}");
+            assert!(
+                low(a) > low(b) || (low(a) == low(b) && best(a) <= best(b)),
+                "not best first at test_{i}"
+            );
         }
         // Its flights: the CSV is the closest failing one; the score is over all of them.
         let runs: Vec<&serde_json::Value> = flights.iter().filter(|f| f["reported_as"] == name.as_str()).collect();
         let (distances, times): (Vec<f64>, Vec<f64>) = runs
             .iter()
-            .map(|f| (f["min_distance"].as_f64().unwrap(), f["flight_time_s"].as_f64().unwrap()))
+            .map(|f| {
+                (
+                    f["min_distance"].as_f64().unwrap(),
+                    f["flight_time_s"].as_f64().unwrap(),
+                )
+            })
             .unzip();
         let best = distances.iter().copied().fold(f64::INFINITY, f64::min);
         assert!(
@@ -392,13 +400,19 @@ fn confirm_2_on_the_mock_flies_each_failure_again_and_writes_its_runs() {
     assert!(stderr.contains("(its flight 2)"), "re-flights are announced: {stderr}");
     let folder = output_folder(&stdout);
     let report = verify_folder(&folder);
-    assert_eq!((report["suite"]["flown"].as_u64(), report["suite"]["failing"].as_u64()), (Some(4), Some(2)));
+    assert_eq!(
+        (report["suite"]["flown"].as_u64(), report["suite"]["failing"].as_u64()),
+        (Some(4), Some(2))
+    );
     assert_eq!(report["suite"]["confirmation_rate"], 1.0);
     for (c, flights) in flights_by_candidate(&folder) {
         let files: Vec<&str> = flights.iter().map(|f| f.2.as_str()).collect();
         assert_eq!(
             files,
-            [format!("flights/candidate_{c}.csv"), format!("flights/candidate_{c}_2.csv")]
+            [
+                format!("flights/candidate_{c}.csv"),
+                format!("flights/candidate_{c}_2.csv")
+            ]
         );
     }
     for i in 0..2 {
@@ -406,13 +420,23 @@ fn confirm_2_on_the_mock_flies_each_failure_again_and_writes_its_runs() {
     }
     let unconfirmed = std::fs::read_to_string(folder.join("unconfirmed.json")).unwrap();
     assert_eq!(unconfirmed.trim(), "[]");
-    assert!(std::fs::read_to_string(folder.join("report.md")).unwrap().contains("## Tests that failed"));
+    assert!(
+        std::fs::read_to_string(folder.join("report.md"))
+            .unwrap()
+            .contains("## Tests that failed")
+    );
     // `score` reads each test's runs (test_N.csv, test_N-K.csv) and agrees with the report.
     let (code, json, err) = prgenuav(&["score", folder.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{err}");
     let s: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert!((s["failure_score"].as_f64().unwrap() - report["suite"]["failure_score"].as_f64().unwrap()).abs() < 1e-6);
-    assert!(s["tests"].as_array().unwrap().iter().all(|t| t["runs"].as_array().unwrap().len() == 2));
+    assert!(
+        s["tests"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|t| t["runs"].as_array().unwrap().len() == 2)
+    );
     // A resumed campaign keeps its confirmation: another --confirm is refused by name.
     let (code, _, err) = prgenuav(&["generate", "--resume", folder.to_str().unwrap(), "--confirm", "3"]);
     assert_eq!(code, 2);
@@ -459,7 +483,10 @@ fn confirm_3_on_free_running_mocks_keeps_every_test_within_its_majority() {
         let attempts: Vec<u64> = flights.iter().map(|f| f.0).collect();
         assert_eq!(attempts, (0..flights.len() as u64).collect::<Vec<_>>(), "candidate {c}");
         let failures = flights.iter().filter(|f| f.1).count();
-        assert!(flights.len() <= 3 && (flights.len() == 1 || flights[0].1), "only a failure is flown again");
+        assert!(
+            flights.len() <= 3 && (flights.len() == 1 || flights[0].1),
+            "only a failure is flown again"
+        );
         let verdict = tests.iter().find(|t| t["candidate"] == *c);
         assert_eq!(verdict.is_some(), failures > 0, "candidate {c}");
         if let Some(t) = verdict {
@@ -474,7 +501,11 @@ fn confirm_3_on_free_running_mocks_keeps_every_test_within_its_majority() {
         .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
         .map(|r| {
             let failed = r["min_distance"].as_f64().is_some_and(|d| d < 1.5);
-            (r["candidate"].as_u64().unwrap(), r["attempt"].as_u64().unwrap_or(0), failed)
+            (
+                r["candidate"].as_u64().unwrap(),
+                r["attempt"].as_u64().unwrap_or(0),
+                failed,
+            )
         })
         .collect();
     for w in order.windows(2) {
@@ -485,5 +516,8 @@ fn confirm_3_on_free_running_mocks_keeps_every_test_within_its_majority() {
     let unconfirmed: Vec<serde_json::Value> =
         serde_json::from_str(&std::fs::read_to_string(folder.join("unconfirmed.json")).unwrap()).unwrap();
     let failed_once = report["suite"]["failed_once"].as_u64().unwrap() as usize;
-    assert_eq!(unconfirmed.len() + report["suite"]["failing"].as_u64().unwrap() as usize, failed_once);
+    assert_eq!(
+        unconfirmed.len() + report["suite"]["failing"].as_u64().unwrap() as usize,
+        failed_once
+    );
 }

@@ -309,10 +309,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         max_iou: s.screening.max_iou.unwrap_or(MAX_IOU),
         generator: req.generator.clone(),
         old_spelling: s.output.spelling == Some(Spelling::Old),
-        ensemble: s
-            .screening
-            .ensemble
-            .unwrap_or(if mock { 0 } else { LINK_ENSEMBLE }),
+        ensemble: s.screening.ensemble.unwrap_or(if mock { 0 } else { LINK_ENSEMBLE }),
         hfs,
         mode: name_of(&args.mode),
         motion: name_of(&s.screening.motion.unwrap_or(Motion::Px4)),
