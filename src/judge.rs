@@ -2,10 +2,12 @@
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
 pub mod edition;
+pub mod wilson;
 
 use serde::Serialize;
 
 pub use edition::Judge;
+pub use wilson::{Z90, wilson_interval};
 
 use crate::geometry::{Footprint, P2};
 use crate::model::competition::{RUN_POINTS, TEST_SCORE_SCALE};

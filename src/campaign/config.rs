@@ -84,6 +84,15 @@ pub struct CampaignConfig {
     /// key is absent): children obey `max_iou` like every candidate.
     #[serde(default)]
     pub child_max_iou: Option<f64>,
+    /// Flights a failing test gets at most (`--confirm`): it is flown again until the majority of this many
+    /// flights is settled, and reported only when more than half of them fail ([`super::confirm`]). 1 (also
+    /// when the key is absent: such campaigns flew every test once) is one flight per test.
+    #[serde(default = "one_flight")]
+    pub confirm: usize,
+}
+
+fn one_flight() -> usize {
+    1
 }
 
 fn default_min_diversity() -> f64 {

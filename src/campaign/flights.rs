@@ -1,10 +1,12 @@
-//! The flight stage: a ranking flown on the vehicles within the budget, each flight journaled.
+//! The flight stage: the tests waiting for confirmation, then a ranking, flown on the vehicles within the
+//! budget, each flight journaled.
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use super::candidate::{Candidate, Screened};
 use super::config::CampaignError;
+use super::confirm::pending;
 use super::journal::{FlightRecord, Journal};
 use super::pool::{Job, Vehicle, fly_all};
 use super::screener::Progress;
@@ -22,10 +24,16 @@ pub struct FlightStage<'a> {
     pub progress: &'a dyn Progress,
     /// Stops the flights (vehicles in the air land).
     pub cancel: &'a AtomicBool,
+    /// Every flight journaled before this stage: the tests among them whose confirmation is not settled are
+    /// flown first.
+    pub done: &'a [FlightRecord],
+    /// Flights a failing test gets at most (`--confirm`).
+    pub confirm: usize,
 }
 
-/// Flies `ranked` in order on `vehicles` within `remaining` flights, journaling each; returns the flights made,
-/// as the journal reads them back, in its order.
+/// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
+/// within `remaining` flights, journaling each; returns the flights made, as the journal reads them back, in
+/// its order. A failing flight's test is flown again before the next new candidate (see [`fly_all`]).
 /// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
 /// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
 /// must not end as a clean run that found no failing test.
@@ -35,16 +43,21 @@ pub fn fly_ranked(
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     remaining: usize,
 ) -> Result<Vec<FlightRecord>, CampaignError> {
-    let jobs: Vec<Job> = ranked
-        .into_iter()
-        .map(|s| Job {
-            test: ctx
-                .case
-                .with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone()),
-            screened: s,
-        })
-        .collect();
-    if jobs.is_empty() {
+    let again = pending(ctx.done, ctx.confirm).into_iter().map(|(tally, first)| Job {
+        test: ctx.case.with_obstacles(first.obstacles.clone()),
+        screened: screened_as_flown(first),
+        tally,
+        confirm: ctx.confirm,
+    });
+    let fresh = ranked.into_iter().map(|s| {
+        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());
+        Job {
+            confirm: ctx.confirm,
+            ..Job::new(s, test)
+        }
+    });
+    let jobs: Vec<Job> = again.chain(fresh).collect();
+    if jobs.is_empty() || remaining == 0 {
         return Ok(Vec::new());
     }
     let no_vehicle_left = |why: String| {
@@ -106,17 +119,8 @@ pub fn fly_interrupted(
     let jobs: Vec<Job> = pending
         .into_iter()
         .map(|r| Job {
-            test: ctx.case.with_obstacles(r.obstacles.clone()),
-            screened: Screened {
-                p_fail: r.predicted_p_fail,
-                raw_min_distance: r.predicted_raw_min_distance,
-                ..Screened::point(
-                    r.candidate,
-                    r.predicted_min_distance,
-                    r.predicted_flight_time_s,
-                    r.status,
-                )
-            },
+            confirm: ctx.confirm,
+            ..Job::new(screened_as_flown(&r), ctx.case.with_obstacles(r.obstacles.clone()))
         })
         .collect();
     let progress = ctx.progress;
@@ -141,12 +145,30 @@ pub fn fly_interrupted(
     Ok(outcome.flown)
 }
 
+/// The prediction a test was first flown with, for its later flights' records.
+fn screened_as_flown(first: &FlightRecord) -> Screened {
+    Screened {
+        p_fail: first.predicted_p_fail,
+        raw_min_distance: first.predicted_raw_min_distance,
+        ..Screened::point(
+            first.candidate,
+            first.predicted_min_distance,
+            first.predicted_flight_time_s,
+            "landed".into(),
+        )
+    }
+}
+
 /// Tells the user of the `n`th flight of the stage.
 fn announce(progress: &dyn Progress, n: usize, r: &FlightRecord) {
     progress.tick(n);
     progress.note(&format!(
-        "flight {n}: candidate {} predicted {:.2} m, flew {} ({})",
+        "flight {n}: candidate {}{} predicted {:.2} m, flew {} ({})",
         r.candidate,
+        match r.attempt {
+            0 => String::new(),
+            a => format!(" (its flight {})", a + 1),
+        },
         r.predicted_min_distance,
         r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
         r.status

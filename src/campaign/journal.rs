@@ -16,6 +16,10 @@ use crate::model::{ModelError, Obstacle};
 pub struct FlightRecord {
     /// The candidate's index (its generator index for the campaign's seed).
     pub candidate: u64,
+    /// Which flight of the candidate this is, from 0: a failing test is flown again to confirm it
+    /// (`--confirm`). Left out when 0, so journals without re-flights read and write as before.
+    #[serde(default, skip_serializing_if = "is_first")]
+    pub attempt: u32,
     /// Its obstacles.
     pub obstacles: Vec<Obstacle>,
     /// The LFS's predicted minimum distance, metres.
@@ -66,6 +70,16 @@ impl FlightRecord {
     pub fn charged(&self) -> bool {
         !UNCHARGED.contains(&self.status.as_str())
     }
+}
+
+/// A test's first flight (serde leaves its `attempt` out).
+pub(crate) fn is_first(attempt: &u32) -> bool {
+    *attempt == 0
+}
+
+/// The flights of `records` charged to the budget. Every budget count goes through here.
+pub fn flights_charged(records: &[FlightRecord]) -> usize {
+    records.iter().filter(|r| r.charged()).count()
 }
 
 /// An append-only JSONL journal.
@@ -122,7 +136,8 @@ impl Journal {
 
     /// Reads the flights charged to the budget, the ones a campaign learns from and reports (not those
     /// [`UNCHARGED`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
-    /// [`Self::heal`] drops it; a damaged line elsewhere, or a candidate journaled twice, is an error.
+    /// [`Self::heal`] drops it; a damaged line elsewhere, or a flight (candidate and attempt) journaled twice,
+    /// is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
         Ok(Self::read_all(path)?
             .into_iter()
@@ -213,7 +228,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
         unterminated: None,
         torn: None,
     };
-    let mut lines_of: HashMap<u64, usize> = HashMap::new();
+    let mut lines_of: HashMap<(u64, u32), usize> = HashMap::new();
     let mut offset = 0;
     for (i, line) in bytes.split(|b| *b == b'\n').enumerate() {
         let (number, start) = (i + 1, offset);
@@ -245,13 +260,17 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
             }
         };
         if record.charged()
-            && let Some(first) = lines_of.insert(record.candidate, number)
+            && let Some(first) = lines_of.insert((record.candidate, record.attempt), number)
         {
+            let flight = match record.attempt {
+                0 => String::new(),
+                a => format!(" (flight {})", a + 1),
+            };
             return Err(syntax(
                 number,
                 format!(
-                    "candidate {} is journaled twice (lines {first} and {number}); a flight is journaled once: \
-                     delete one of the two lines, then resume",
+                    "candidate {}{flight} is journaled twice (lines {first} and {number}); a flight is journaled \
+                     once: delete one of the two lines, then resume",
                     record.candidate
                 ),
             ));
@@ -266,6 +285,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
 pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> FlightRecord {
     FlightRecord {
         candidate,
+        attempt: 0,
         obstacles: Vec::new(),
         predicted_min_distance: raw,
         predicted_flight_time_s: 60.0,
@@ -290,6 +310,7 @@ mod tests {
     pub(super) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {
             candidate,
+            attempt: 0,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
             predicted_min_distance: 0.5,
             predicted_flight_time_s: 40.0,

@@ -67,6 +67,30 @@ fn a_candidate_journaled_twice_is_refused_naming_both_lines() {
     );
 }
 
+#[test]
+fn re_flights_of_a_candidate_are_distinct_and_the_same_flight_twice_is_refused() {
+    let again = |attempt| FlightRecord {
+        attempt,
+        trajectory: format!("flights/candidate_4_{}.csv", attempt + 1).into(),
+        ..record(4)
+    };
+    let text = |r: &FlightRecord| serde_json::to_string(r).unwrap() + "\n";
+    assert!(!line(4).contains("attempt"), "a first flight is written as before");
+    assert!(text(&again(1)).contains("\"attempt\":1"));
+    let (_d, path) = journal([line(4), text(&again(1)), line(5), text(&again(2))].concat().as_bytes());
+    let back = Journal::read(&path).unwrap();
+    assert_eq!(
+        back.iter().map(|r| (r.candidate, r.attempt)).collect::<Vec<_>>(),
+        [(4, 0), (4, 1), (5, 0), (4, 2)]
+    );
+    let (_d, path) = journal([line(4), text(&again(1)), text(&again(1))].concat().as_bytes());
+    let e = Journal::read(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("candidate 4 (flight 2) is journaled twice (lines 2 and 3)"),
+        "{e}"
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 

@@ -2,6 +2,7 @@
 
 pub mod candidate;
 pub mod config;
+pub mod confirm;
 pub mod diversity_guard;
 pub mod draw;
 pub mod failure_counts;
@@ -24,3 +25,4 @@ pub mod screening;
 pub mod static_campaign;
 pub mod surrogate;
 pub mod vehicles;
+pub mod verdicts;

@@ -8,6 +8,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use super::candidate::Screened;
+use super::confirm::{Tally, trajectory_name};
 use super::journal::{FlightRecord, INTERRUPTED, Journal};
 use crate::model::TestCase;
 
@@ -56,6 +57,29 @@ pub struct Job {
     pub screened: Screened,
     /// The test to fly.
     pub test: TestCase,
+    /// The test's flights before this one (none for a new candidate).
+    pub tally: Tally,
+    /// Flights a failing test gets at most (`--confirm`): a failing flight whose majority is not settled puts
+    /// the test's next flight at the front of the queue.
+    pub confirm: usize,
+}
+
+impl Job {
+    /// The first flight of a candidate, not flown again (`--confirm 1`).
+    pub fn new(screened: Screened, test: TestCase) -> Self {
+        Self {
+            screened,
+            test,
+            tally: Tally::default(),
+            confirm: 1,
+        }
+    }
+
+    /// The test's next flight after `record` (this job's), if its majority is not settled.
+    fn again(&self, record: &FlightRecord) -> Option<Job> {
+        let tally = self.tally.with(record);
+        tally.wants_another(self.confirm).then(|| Job { tally, ..self.clone() })
+    }
 }
 
 /// What the pool did.
@@ -101,7 +125,9 @@ struct Pool<'a> {
 }
 
 /// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
-/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv`.
+/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv` (a test's later
+/// flights to `candidate_<n>_<flight>.csv`). A failing flight whose test is to be confirmed puts the test's
+/// next flight at the front of the queue, before the new candidates: within the budget like any flight.
 ///
 /// A vehicle that turns out unreachable, or rejects [`REJECTED_IN_A_ROW_TO_DROP`] flights in a row, gives its
 /// job back; the others wait for that (rather than stopping at a budget that is only reserved) so the job is
@@ -178,7 +204,7 @@ impl Pool<'_> {
     /// One vehicle's worker: flies jobs until there are none, the budget is spent, or the vehicle is dropped.
     fn work(&self, index: usize, vehicle: &mut dyn Vehicle, mut rejected: usize) {
         while let Some(job) = self.next_job() {
-            let rel = Path::new("flights").join(format!("candidate_{}.csv", job.screened.candidate));
+            let rel = trajectory_name(job.screened.candidate, job.tally.next_attempt);
             let t0 = Instant::now();
             let result =
                 fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
@@ -190,12 +216,20 @@ impl Pool<'_> {
                     let rel = if flown.status == INTERRUPTED {
                         self.keep_interrupted(rel)
                     } else {
-                        l.finished += 1;
                         rel
                     };
+                    let record = job
+                        .clone()
+                        .record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
+                    if record.charged() {
+                        l.finished += 1;
+                        // Queued before the flight is journaled, so no vehicle takes a new candidate meanwhile.
+                        if let Some(next) = job.again(&Journal::read_back(&record)) {
+                            l.queue.push_front(next);
+                        }
+                    }
                     drop(l);
                     self.changed.notify_all();
-                    let record = job.record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
                     if !self.journal(&record) {
                         return;
                     }
@@ -337,6 +371,7 @@ impl Job {
     fn record(self, flown: Flown, vehicle: String, trajectory: PathBuf, wall_s: f64) -> FlightRecord {
         FlightRecord {
             candidate: self.screened.candidate,
+            attempt: self.tally.next_attempt,
             obstacles: self.test.obstacles,
             predicted_min_distance: self.screened.min_distance,
             predicted_flight_time_s: self.screened.flight_time_s,
@@ -458,12 +493,14 @@ mod tests {
         })
     }
 
-    fn jobs(n: u64) -> Vec<Job> {
+    pub(super) fn jobs(n: u64) -> Vec<Job> {
         let base = test_case();
         (0..n)
-            .map(|i| Job {
-                screened: Screened::point(i, 0.5, 40.0, "landed".into()),
-                test: base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
+            .map(|i| {
+                Job::new(
+                    Screened::point(i, 0.5, 40.0, "landed".into()),
+                    base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
+                )
             })
             .collect()
     }
@@ -629,3 +666,7 @@ mod tests {
         assert_eq!((out.flown, flown.len(), records, out.dropped.len()), (0, 0, 0, 2));
     }
 }
+
+#[cfg(test)]
+#[path = "pool_confirm_tests.rs"]
+mod pool_confirm_tests;

@@ -1,4 +1,6 @@
-//! The campaign's outputs: the failing tests best first, with their flights, and report.json / report.md.
+//! The campaign's outputs: the failing tests best first, with their flights, and report.json / report.md. With
+//! `--confirm` K > 1 only the confirmed tests are written as `test_N`; the others that failed are listed in
+//! `unconfirmed.json` and the report.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -6,9 +8,11 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::config::CampaignInput;
+use super::confirm::{failed_again, first_flights};
 use super::failure_counts::FAIL_BINS;
-use super::journal::FlightRecord;
+use super::journal::{FlightRecord, flights_charged};
 use super::learn::Learnt;
+use super::verdicts::{TestVerdict, score_sum, verdicts};
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{Judge, distinct_tests, diversity, judge_in_frame, points, test_score};
@@ -37,11 +41,14 @@ pub struct StageTimes {
     pub report_s: f64,
 }
 
-/// One flown test in the report.
+/// One flight in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlownTest {
     /// The candidate index.
     pub candidate: u64,
+    /// Which flight of the candidate, from 0 (left out when 0).
+    #[serde(skip_serializing_if = "super::journal::is_first")]
+    pub attempt: u32,
     /// LFS prediction, metres.
     pub predicted_min_distance: f64,
     /// The LFS ensemble's probability of a flight below 1.5 m.
@@ -59,9 +66,9 @@ pub struct FlownTest {
     pub flight_time_s: f64,
     /// The competition's points for this run.
     pub points: u32,
-    /// The competition's test score.
+    /// The competition's test score of this flight alone.
     pub test_score: f64,
-    /// `test_N.yaml` it was reported as, if it failed.
+    /// `test_N.yaml` its test was reported as, if confirmed as failing.
     pub reported_as: Option<String>,
     /// The vehicle that flew it.
     pub vehicle: String,
@@ -74,9 +81,9 @@ pub struct SuiteSummary {
     pub candidates_screened: usize,
     /// Flights made.
     pub flown: usize,
-    /// Reported tests (flown below 1.5 m).
+    /// Reported tests: confirmed as failing (more than half of up to `confirm` flights below 1.5 m).
     pub failing: usize,
-    /// Sum of the reported tests' scores.
+    /// Sum of the reported tests' scores (each over its flights).
     pub failure_score: f64,
     /// Diversity of the reported tests (1 - mean pairwise IoU).
     pub diversity: Option<f64>,
@@ -101,6 +108,22 @@ pub struct SuiteSummary {
     pub lfs_error_last_quarter_m: Option<f64>,
     /// Candidates screened per second of screening wall time.
     pub screening_per_s: f64,
+    /// Flights a failing test gets at most (`--confirm`).
+    pub confirm: usize,
+    /// Tests that failed at least once, confirmed or not.
+    pub failed_once: usize,
+    /// The failure score over those.
+    pub failure_score_failed_once: f64,
+    /// Their diversity.
+    pub diversity_failed_once: Option<f64>,
+    /// Flights that flew a test again (its second flight on).
+    pub reflights: usize,
+    /// Tests flown again after failing their first flight.
+    pub flown_again: usize,
+    /// Of those, the ones whose second flight failed too.
+    pub failed_again: usize,
+    /// `failed_again / flown_again`: how often a first failure repeats.
+    pub confirmation_rate: Option<f64>,
 }
 
 /// The whole report.
@@ -116,8 +139,11 @@ pub struct Report {
     pub seed: u64,
     /// The flight budget.
     pub budget: usize,
-    /// Every flown test, in flight order.
+    /// Every flight, in flight order.
     pub flights: Vec<FlownTest>,
+    /// Every test that failed at least once, best first: the confirmed ones (reported as `test_N.yaml`) and
+    /// the others.
+    pub tests: Vec<TestVerdict>,
     /// Suite numbers.
     pub suite: SuiteSummary,
     /// Wall time per stage.
@@ -140,27 +166,9 @@ fn quarter_error(records: &[FlightRecord], last: bool) -> Option<f64> {
     Some(part.iter().sum::<f64>() / q as f64)
 }
 
-/// Records of flights that failed (below 1.5 m), best first: smallest distance, then shorter flight.
-pub fn failing_best_first(records: &[FlightRecord]) -> Vec<&FlightRecord> {
-    let mut out: Vec<&FlightRecord> = records
-        .iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
-        .collect();
-    out.sort_by(|a, b| {
-        let (da, db) = (
-            a.min_distance.unwrap_or(f64::INFINITY),
-            b.min_distance.unwrap_or(f64::INFINITY),
-        );
-        da.total_cmp(&db)
-            .then(a.flight_time_s.total_cmp(&b.flight_time_s))
-            .then(a.candidate.cmp(&b.candidate))
-    });
-    out
-}
-
-/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each failing flight, best first, then report.json and
-/// report.md, for the campaign `input` that drew `candidates_screened` candidates and flew `records`.
-/// Returns the report.
+/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
+/// report.json and report.md (and with `--confirm` above 1, `unconfirmed.json`), for the campaign `input` that
+/// drew `candidates_screened` candidates and flew `records`. Returns the report.
 pub fn write_outputs(
     input: &CampaignInput,
     candidates_screened: usize,
@@ -170,10 +178,12 @@ pub fn write_outputs(
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let cfg = input.cfg;
-    let failing = failing_best_first(records);
-    let reported = write_failing_tests(input, &failing)?;
+    let mut tests = verdicts(records, cfg.confirm);
+    let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
-    let mut suite = summary(records, &failing, &flights, cfg.screen);
+    let tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
+    let mut suite = summary(records, &tests, cfg.screen);
+    suite.confirm = cfg.confirm;
     suite.candidates_screened = candidates_screened;
     suite.screening_per_s = if stages.screen_s > 0.0 {
         candidates_screened as f64 / stages.screen_s
@@ -188,17 +198,26 @@ pub fn write_outputs(
         seed: cfg.seed,
         budget: cfg.budget,
         flights,
+        tests,
         suite,
         stages,
         learning: learning.cloned(),
     };
+    if cfg.confirm > 1 {
+        let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
+        write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
+    }
     write_json(&input.folder.join("report.json"), &report, true)?;
     write_atomic(&input.folder.join("report.md"), markdown(&report).as_bytes())?;
     Ok(report)
 }
 
-/// Writes each failing flight as `test_N` (YAML, its trajectory CSV and a plot); returns (candidate, file name).
-fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Result<Vec<(u64, String)>, ModelError> {
+/// Writes each confirmed failing test as `test_N` (YAML, its best failing flight's trajectory CSV and a plot;
+/// its other flights as `test_N-<flight>.csv`, the runs `score` reads); returns (candidate, file name).
+fn write_failing_tests(
+    input: &CampaignInput,
+    tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
+) -> Result<Vec<(u64, String)>, ModelError> {
     let folder = input.folder;
     let spelling = if input.cfg.old_spelling {
         Spelling::Old
@@ -206,13 +225,22 @@ fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Resu
         Spelling::New
     };
     let mut reported: Vec<(u64, String)> = Vec::new();
-    for (i, r) in failing.iter().enumerate() {
+    for (i, (verdict, flights)) in tests.iter_mut().filter(|(t, _)| t.confirmed).enumerate() {
         let name = format!("test_{i}");
+        let r = flights[0];
         let test = input.case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
         let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
-        if let Ok(bytes) = std::fs::read(folder.join(&r.trajectory)) {
-            write_atomic(&folder.join(format!("{name}.csv")), &bytes)?;
+        for (k, f) in flights.iter().enumerate() {
+            // The best failing flight is the test's own CSV; the others are its runs, by flight number.
+            let run = if k == 0 {
+                name.clone()
+            } else {
+                format!("{name}-{}", f.attempt + 1)
+            };
+            if let Ok(bytes) = std::fs::read(folder.join(&f.trajectory)) {
+                write_atomic(&folder.join(format!("{run}.csv")), &bytes)?;
+            }
         }
         let title = format!(
             "{name}: flew {}",
@@ -221,6 +249,7 @@ fn write_failing_tests(input: &CampaignInput, failing: &[&FlightRecord]) -> Resu
         let lfs = input.screener.path(&test);
         let svg = plot(&test, lfs.as_ref(), flown.as_ref(), &title, input.cfg.judge);
         write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
+        verdict.reported_as = Some(format!("{name}.yaml"));
         reported.push((r.candidate, format!("{name}.yaml")));
     }
     Ok(reported)
@@ -231,6 +260,7 @@ fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
     let d = r.min_distance.unwrap_or(f64::INFINITY);
     FlownTest {
         candidate: r.candidate,
+        attempt: r.attempt,
         predicted_min_distance: r.predicted_min_distance,
         predicted_p_fail: r.predicted_p_fail,
         min_distance: r.min_distance,
@@ -249,10 +279,12 @@ fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
     }
 }
 
-/// The suite's numbers over the flights (the screening counts are left at 0 for the caller); the LFS's
-/// accuracy only if the campaign `screened`.
-fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[FlownTest], screened: bool) -> SuiteSummary {
-    let predicted_fail: Vec<&FlightRecord> = records
+/// The suite's numbers over the flights `records` and the `tests` that failed at least once (the screening
+/// counts and `confirm` are left for the caller); the LFS's accuracy only if the campaign `screened`, over
+/// each test's first flight (its later flights were chosen by the first one's outcome, not by the ranking).
+fn summary(records: &[FlightRecord], tests: &[TestVerdict], screened: bool) -> SuiteSummary {
+    let firsts = first_flights(records);
+    let predicted_fail: Vec<&FlightRecord> = firsts
         .iter()
         .filter(|r| r.predicted_min_distance < FAIL_BELOW_M)
         .collect();
@@ -263,25 +295,23 @@ fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[Flown
             .count() as f64
             / predicted_fail.len() as f64
     });
-    let errors: Vec<f64> = records
+    let errors: Vec<f64> = firsts
         .iter()
         .filter_map(|r| r.min_distance.map(|d| (d - r.predicted_min_distance).abs()))
         .collect();
-    let (p_fail, failed): (Vec<f64>, Vec<bool>) = records
+    let (p_fail, failed): (Vec<f64>, Vec<bool>) = firsts
         .iter()
         .filter_map(|r| Some((r.predicted_p_fail?, r.min_distance? < FAIL_BELOW_M)))
         .unzip();
-    let failing_obstacles: Vec<Vec<Obstacle>> = failing.iter().map(|r| r.obstacles.clone()).collect();
+    let confirmed = || tests.iter().filter(|t| t.confirmed);
+    let failing_obstacles: Vec<Vec<Obstacle>> = confirmed().map(|t| t.obstacles.clone()).collect();
+    let failed_once: Vec<Vec<Obstacle>> = tests.iter().map(|t| t.obstacles.clone()).collect();
+    let (again, flown_again) = failed_again(records);
     SuiteSummary {
         candidates_screened: 0,
-        flown: records.len(),
-        failing: failing.len(),
-        failure_score: flights
-            .iter()
-            .filter(|f| f.reported_as.is_some())
-            .map(|f| f.test_score)
-            .sum::<f64>()
-            + 0.0, // an empty sum is -0.0, printed "-0.00"
+        flown: flights_charged(records),
+        failing: failing_obstacles.len(),
+        failure_score: score_sum(confirmed()),
         diversity: diversity(&failing_obstacles),
         distinct_failing: distinct_tests(&failing_obstacles, DISTINCT_IOU),
         failing_with_three: failing_obstacles.iter().filter(|o| o.len() == 3).count(),
@@ -289,9 +319,17 @@ fn summary(records: &[FlightRecord], failing: &[&FlightRecord], flights: &[Flown
         lfs_mean_abs_error_m: (screened && !errors.is_empty())
             .then(|| errors.iter().sum::<f64>() / errors.len() as f64),
         lfs_p_fail_brier: crate::lfs::calibration::brier(&p_fail, &failed),
-        lfs_error_first_quarter_m: quarter_error(records, false).filter(|_| screened),
-        lfs_error_last_quarter_m: quarter_error(records, true).filter(|_| screened),
+        lfs_error_first_quarter_m: quarter_error(&firsts, false).filter(|_| screened),
+        lfs_error_last_quarter_m: quarter_error(&firsts, true).filter(|_| screened),
         screening_per_s: 0.0,
+        confirm: 1,
+        failed_once: tests.len(),
+        failure_score_failed_once: score_sum(tests.iter()),
+        diversity_failed_once: diversity(&failed_once),
+        reflights: records.iter().filter(|r| r.attempt > 0).count(),
+        flown_again,
+        failed_again: again,
+        confirmation_rate: (flown_again > 0).then(|| again as f64 / flown_again as f64),
     }
 }
 
@@ -326,6 +364,9 @@ pub fn markdown(r: &Report) -> String {
         r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
     );
     summary_table(&mut md, r);
+    if s.confirm > 1 {
+        super::verdicts::markdown(&mut md, &r.tests, s.confirm);
+    }
     if let Some(l) = &r.learning {
         learning_section(&mut md, l);
     }
@@ -337,7 +378,12 @@ pub fn markdown(r: &Report) -> String {
 fn summary_table(md: &mut String, r: &Report) {
     let s = &r.suite;
     let _ = writeln!(md, "| metric | value |\n|---|---|");
-    let _ = writeln!(md, "| failing tests (< 1.5 m) / flown | {} / {} |", s.failing, s.flown);
+    let failing = if s.confirm > 1 {
+        "confirmed failing tests"
+    } else {
+        "failing tests (< 1.5 m)"
+    };
+    let _ = writeln!(md, "| {failing} / flown | {} / {} |", s.failing, s.flown);
     let _ = writeln!(
         md,
         "| distinct failing tests (none overlapping a better one by IoU > {DISTINCT_IOU}) | {} |",
@@ -346,6 +392,9 @@ fn summary_table(md: &mut String, r: &Report) {
     let _ = writeln!(md, "| failing tests with three obstacles | {} |", s.failing_with_three);
     let _ = writeln!(md, "| failure score | {:.3} |", s.failure_score);
     let _ = writeln!(md, "| diversity | {} |", opt(s.diversity));
+    if s.confirm > 1 {
+        confirm_rows(md, s);
+    }
     let _ = writeln!(
         md,
         "| LFS precision (predicted < 1.5 m that flew < 1.5 m) | {} |",
@@ -363,6 +412,26 @@ fn summary_table(md: &mut String, r: &Report) {
         md,
         "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
         st.sample_s, st.screen_s, st.ensemble_s, st.learn_s, st.fly_s, st.report_s
+    );
+}
+
+/// With `--confirm`: the numbers above are over the confirmed tests; these over every test that failed.
+fn confirm_rows(md: &mut String, s: &SuiteSummary) {
+    let _ = writeln!(
+        md,
+        "| tests that failed at least once (confirmed: more than half of up to {} flights failed) | {} |",
+        s.confirm, s.failed_once
+    );
+    let _ = writeln!(
+        md,
+        "| failure score / diversity over every test that failed at least once | {:.3} / {} |",
+        s.failure_score_failed_once,
+        opt(s.diversity_failed_once)
+    );
+    let _ = writeln!(
+        md,
+        "| flights that flew a test again; confirmation rate (2nd flight failed too / flown again) | {}; {} / {} |",
+        s.reflights, s.failed_again, s.flown_again
     );
 }
 
@@ -470,7 +539,10 @@ fn flights_table(md: &mut String, r: &Report) {
         let _ = writeln!(
             md,
             "| {} | {:.3} | {} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
-            f.candidate,
+            match f.attempt {
+                0 => f.candidate.to_string(),
+                a => format!("{} (flight {})", f.candidate, a + 1),
+            },
             f.predicted_min_distance,
             opt(f.predicted_p_fail),
             opt(f.min_distance),

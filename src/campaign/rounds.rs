@@ -14,6 +14,8 @@
 //! user's floor ([`DiversityGuard`]).
 //!
 //! The journal is read once; each round's flights are added to it in memory in the order they were journaled.
+//! A test's later flights (`--confirm`) only confirm it: the rounds learn from each test's first flight, and
+//! fly the tests waiting for confirmation before the round's new candidates, within the round's budget.
 
 use std::path::Path;
 use std::sync::atomic::Ordering;
@@ -21,11 +23,12 @@ use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
+use super::confirm::first_flights;
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
 use super::flights::{FlightStage, fly_ranked};
-use super::journal::{FlightRecord, Journal};
+use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};
 use super::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
@@ -73,7 +76,7 @@ pub fn run_rounds(
     let mut campaign = Rounds::start(input)?;
     for index in 0..ROUNDS + EXTRA_ROUNDS {
         // Past the planned rounds only while the near-duplicate filter left budget unflown.
-        if index >= ROUNDS && campaign.journal.len() >= input.cfg.budget {
+        if index >= ROUNDS && flights_charged(&campaign.flights) >= input.cfg.budget {
             break;
         }
         if !campaign.round(index, vehicles, stages)? {
@@ -92,8 +95,10 @@ struct Rounds<'a> {
     start_calibration: Calibration,
     /// The draw distribution of the next round.
     distribution: DrawDistribution,
-    /// Every journaled flight, in journal order.
+    /// Each test's first flight, in journal order: what the rounds learn from.
     journal: Vec<FlightRecord>,
+    /// Every journaled flight (later flights of a test too), in journal order: what the budget counts.
+    flights: Vec<FlightRecord>,
     /// Every candidate drawn, by generator index.
     candidates: Vec<Candidate>,
     log: Vec<RoundLog>,
@@ -140,12 +145,12 @@ impl<'a> Rounds<'a> {
             Some(p) if cfg.adapt => p.distribution.clone(),
             _ => DrawDistribution::uniform(),
         };
-        let journal = Journal::read(&input.folder.join("journal.jsonl"))?;
-        if !journal.is_empty() {
+        let flights = Journal::read(&input.folder.join("journal.jsonl"))?;
+        if !flights.is_empty() {
             input.progress.note(&format!(
                 "resuming: {} flights already journaled, {} left in the budget",
-                journal.len(),
-                cfg.budget.saturating_sub(journal.len())
+                flights_charged(&flights),
+                cfg.budget.saturating_sub(flights_charged(&flights))
             ));
         }
         Ok(Self {
@@ -154,7 +159,8 @@ impl<'a> Rounds<'a> {
             calibration: start_calibration.clone(),
             start_calibration,
             distribution,
-            journal,
+            journal: first_flights(&flights),
+            flights,
             candidates: Vec::new(),
             log: Vec::new(),
             surrogate: None,
@@ -180,10 +186,13 @@ impl<'a> Rounds<'a> {
             folder: self.input.folder,
             progress: self.input.progress,
             cancel: self.input.cancel,
+            done: &self.flights,
+            confirm: self.input.cfg.confirm,
         };
         let flown = fly_ranked(&flight, ranking.ranked, vehicles, ranking.remaining)?;
-        let flights = flown.len();
-        self.journal.extend(flown);
+        let flights = flights_charged(&flown);
+        self.journal.extend(first_flights(&flown));
+        self.flights.extend(flown);
         stages.fly_s += t.elapsed().as_secs_f64();
         self.log_round(&round, flights, ranking.share, ranking.bias_m);
         if self.input.cancel.load(Ordering::Relaxed) {
@@ -300,7 +309,7 @@ impl<'a> Rounds<'a> {
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = round.planned.saturating_sub(self.journal.len());
+        let remaining = round.planned.saturating_sub(flights_charged(&self.flights));
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;

@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use super::flights::{FlightStage, fly_interrupted};
 use super::folder::FolderLock;
-use super::journal::Journal;
+use super::journal::{Journal, flights_charged};
 use super::learn::Learnt;
 use super::pool::Vehicle;
 pub use super::report::Report;
@@ -49,13 +49,16 @@ pub fn run_campaign(
         cancel,
     };
     let mut stages = StageTimes::default();
-    let charged = Journal::read(&folder.join("journal.jsonl"))?.len();
+    let done = Journal::read(&folder.join("journal.jsonl"))?;
+    let charged = flights_charged(&done);
     let first = FlightStage {
         case: &case,
         candidates: &[],
         folder,
         progress,
         cancel,
+        done: &done,
+        confirm: cfg.confirm,
     };
     fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
     if cfg.learn && cfg.screen {

@@ -93,6 +93,7 @@ fn config(budget: usize) -> CampaignConfig {
         prior: None,
         min_diversity: 0.8,
         child_max_iou: None,
+        confirm: 1,
     }
 }
 
@@ -387,3 +388,6 @@ fn a_campaign_whose_every_vehicle_is_dropped_stops_with_an_error_and_keeps_its_f
 
 #[path = "run_learning_tests.rs"]
 mod learning;
+
+#[path = "run_confirm_tests.rs"]
+mod confirm;

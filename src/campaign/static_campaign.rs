@@ -9,7 +9,7 @@ use std::time::Instant;
 use super::candidate::{Candidate, Screened, check_journaled_as_drawn};
 use super::config::{CampaignError, CampaignInput};
 use super::flights::{FlightStage, fly_ranked};
-use super::journal::Journal;
+use super::journal::{FlightRecord, Journal, flights_charged};
 use super::pool::Vehicle;
 use super::rank::rank_unflown;
 use super::report::StageTimes;
@@ -31,7 +31,8 @@ pub fn run_static(
     let t = Instant::now();
     screen(input, &mut candidates)?;
     stages.screen_s = t.elapsed().as_secs_f64();
-    let (ranked, remaining) = rank(input, &candidates, stages)?;
+    let done = Journal::read(&input.folder.join("journal.jsonl"))?;
+    let (ranked, remaining) = rank(input, &candidates, &done, stages)?;
     let t = Instant::now();
     let flight = FlightStage {
         case: input.case,
@@ -39,6 +40,8 @@ pub fn run_static(
         folder: input.folder,
         progress: input.progress,
         cancel: input.cancel,
+        done: &done,
+        confirm: input.cfg.confirm,
     };
     fly_ranked(&flight, ranked, vehicles, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
@@ -90,15 +93,16 @@ fn screen(input: &CampaignInput, candidates: &mut [Candidate]) -> Result<(), Cam
     Ok(())
 }
 
-/// The unflown candidates to fly within what the budget has left after the journaled flights, and that many.
+/// The unflown candidates to fly within what the budget has left after the journaled flights `done`, and that
+/// many.
 fn rank(
     input: &CampaignInput,
     candidates: &[Candidate],
+    done: &[FlightRecord],
     stages: &mut StageTimes,
 ) -> Result<(Vec<Screened>, usize), CampaignError> {
     let cfg = input.cfg;
-    let done = Journal::read(&input.folder.join("journal.jsonl"))?;
-    let remaining = cfg.budget.saturating_sub(done.len());
+    let remaining = cfg.budget.saturating_sub(flights_charged(done));
     let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
     let mut fresh: Vec<Screened> = (candidates.iter())
         .filter_map(|c| c.screened.clone())
@@ -111,11 +115,11 @@ fn rank(
         apply_ensemble(&mut fresh, &members, &input.screener.ensemble_params());
         stages.ensemble_s = t.elapsed().as_secs_f64();
     }
-    let ranked = rank_unflown(&fresh, &done, candidates, cfg, remaining);
+    let ranked = rank_unflown(&fresh, done, candidates, cfg, remaining);
     if !done.is_empty() {
         input.progress.note(&format!(
             "resuming: {} flights already journaled, {} left in the budget",
-            done.len(),
+            flights_charged(done),
             remaining
         ));
     }

@@ -73,6 +73,7 @@ pub struct Flight {
     pub connect_timeout_s: Option<f64>,
     pub connect_time_scale: Option<f64>,
     pub anchor_at_vehicle_home: Option<bool>,
+    pub confirm: Option<usize>,
 }
 
 /// `[learning]`.
@@ -440,6 +441,17 @@ pub const KEYS: &[KeyDoc] = &[
         "--anchor-at-vehicle-home",
         "Re-anchor every test (mission, obstacles, fence) at each vehicle's home instead of refusing a vehicle \
          farther from the test's home than its MIS_DIST_1WP (bench drones anywhere).",
+    ),
+    key(
+        "flight",
+        "confirm",
+        "1",
+        "1 with mock vehicles, 3 with MAVLink ones",
+        "--confirm",
+        "Flights a failing test gets at most (K, at least 1). A test whose flight fails is flown again, before \
+         any new candidate and within the budget, until the majority of K flights is settled (K = 3: two \
+         failures or two passes). Only a test more than half of whose flights fail is written as `test_N.yaml`; \
+         the others that failed go to `unconfirmed.json`. 1 flies every test once.",
     ),
     key(
         "learning",

@@ -61,6 +61,11 @@ pub struct Args {
     /// rounds, calibrating the simulator on every flight and adapting the generator towards failures.
     #[arg(long)]
     no_learn: bool,
+    /// Flights a failing test gets at most: it is flown again until the majority of K flights is settled, and
+    /// written as test_N.yaml only when more than half of its flights fail (default: 3 with --connect URLs,
+    /// 1 with the embedded mock; 1 flies every test once).
+    #[arg(long, value_name = "K")]
+    confirm: Option<usize>,
     /// Start from what an earlier campaign learnt (its output folder's learnt.json).
     #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
     prior: Option<PathBuf>,
@@ -299,6 +304,22 @@ fn print_summary(report: &Report, plan: &Plan, json: bool) -> anyhow::Result<()>
         s.failure_score,
         s.diversity.map_or("n/a".into(), |d| format!("{d:.3}"))
     );
+    if s.confirm > 1 {
+        println!(
+            "confirmed: {} of {} tests that failed at least once (up to {} flights each, {} flights again); over \
+             all {}: failure score {:.2}, diversity {}; {} of {} failed again when flown again; the others are \
+             in unconfirmed.json",
+            s.failing,
+            s.failed_once,
+            s.confirm,
+            s.reflights,
+            s.failed_once,
+            s.failure_score_failed_once,
+            s.diversity_failed_once.map_or("n/a".into(), |d| format!("{d:.3}")),
+            s.failed_again,
+            s.flown_again
+        );
+    }
     println!("output folder: {}", folder.display());
     Ok(())
 }

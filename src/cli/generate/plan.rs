@@ -28,6 +28,9 @@ const CHILD_MAX_IOU: f64 = 0.85;
 /// Ensemble members ranking the shortlist when the vehicles are MAVLink ones (an ensemble costs more CPU than
 /// a mock flight, far less than a PX4 or hardware flight).
 const LINK_ENSEMBLE: usize = 8;
+/// Flights a failing test gets at most when the vehicles are MAVLink ones: on PX4 a test that failed once
+/// often passes when flown again (the embedded mock, whose flights repeat, flies each test once).
+const LINK_CONFIRM: usize = 3;
 
 /// The campaign to run.
 pub struct Plan {
@@ -256,6 +259,7 @@ fn flight(args: &Args, fl: &Flight, r: &mut Recorder) -> Flight {
                 "anchor_at_vehicle_home",
             ),
         ),
+        confirm: r.pick(args.confirm, fl.confirm, ("--confirm", "flight.confirm", "confirm")),
     }
 }
 
@@ -296,6 +300,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         .collect();
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
+    let mock = hfs == ["mock"];
     CampaignConfig {
         case,
         seed: args.seed,
@@ -305,10 +310,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         max_iou: s.screening.max_iou.unwrap_or(MAX_IOU),
         generator: req.generator.clone(),
         old_spelling: s.output.spelling == Some(Spelling::Old),
-        ensemble: s
-            .screening
-            .ensemble
-            .unwrap_or(if hfs == ["mock"] { 0 } else { LINK_ENSEMBLE }),
+        ensemble: s.screening.ensemble.unwrap_or(if mock { 0 } else { LINK_ENSEMBLE }),
         hfs,
         mode: name_of(&args.mode),
         motion: name_of(&s.screening.motion.unwrap_or(Motion::Px4)),
@@ -325,6 +327,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         prior: args.prior.clone(),
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
+        confirm: s.flight.confirm.unwrap_or(if mock { 1 } else { LINK_CONFIRM }),
     }
 }
 
@@ -454,6 +457,9 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
     }
     if cfg.hfs.is_empty() {
         bail!("--connect names no vehicle");
+    }
+    if cfg.confirm == 0 {
+        bail!("--confirm (flight.confirm) must be at least 1 flight per test");
     }
     if cfg.hfs.len() > 1 && cfg.hfs.iter().any(|u| u == "mock") {
         bail!("--connect takes either `mock` or MAVLink URLs, not both");

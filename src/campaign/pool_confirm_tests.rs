@@ -1,0 +1,110 @@
+//! Confirmation in the pool: a failing test flown again before the next candidate, within the budget.
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex};
+
+use super::tests::jobs;
+use super::*;
+
+/// Flies candidate `i`'s `n`th flight to `script[i][n]` metres (repeating the last), logging (candidate,
+/// csv file name).
+struct Scripted {
+    script: Vec<Vec<f64>>,
+    flown: Arc<Mutex<Vec<(u64, String)>>>,
+}
+
+impl Vehicle for Scripted {
+    fn name(&self) -> String {
+        "scripted".into()
+    }
+    fn fly(&mut self, test: &TestCase, csv: &Path, _c: &AtomicBool) -> Result<Flown, VehicleError> {
+        let id = test.obstacles[0].position.x as u64;
+        let mut flown = self.flown.lock().unwrap();
+        let n = flown.iter().filter(|f| f.0 == id).count();
+        let file = csv.file_name().unwrap().to_string_lossy().into_owned();
+        flown.push((id, file));
+        let script = &self.script[id as usize];
+        let d = script[n.min(script.len() - 1)];
+        Ok(Flown {
+            status: "landed".into(),
+            min_distance: Some(d),
+            min_distance_raw: Some(d),
+            flight_time_s: 40.0,
+            warnings: Vec::new(),
+            reason: None,
+        })
+    }
+}
+
+/// The journal's (candidate, attempt, failed) and the flights made as (candidate, csv file name).
+type Run = (Vec<(u64, u32, bool)>, Vec<(u64, String)>);
+
+/// `jobs` confirmed over `k` flights on one scripted vehicle within `budget`.
+fn confirm_run(script: Vec<Vec<f64>>, k: usize, budget: usize) -> Run {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(Scripted {
+        script: script.clone(),
+        flown: flown.clone(),
+    })];
+    let jobs = jobs(script.len() as u64)
+        .into_iter()
+        .map(|j| Job { confirm: k, ..j })
+        .collect();
+    let path = dir.path().join("journal.jsonl");
+    let out = fly_all(
+        &mut fleet,
+        jobs,
+        budget,
+        dir.path(),
+        Journal::open(&path).unwrap(),
+        &AtomicBool::new(false),
+        &|_| {},
+    );
+    let records = Journal::read(&path).unwrap();
+    assert_eq!(out.records, records);
+    let got = (records.iter())
+        .map(|r| (r.candidate, r.attempt, r.min_distance.unwrap() < 1.5))
+        .collect();
+    let flown = flown.lock().unwrap().clone();
+    (got, flown)
+}
+
+#[test]
+fn a_failing_test_is_flown_again_before_the_next_candidate_until_its_majority_is_settled() {
+    // Candidate 0 fails then passes twice (1 of 3), 1 fails twice (settled at 2), 2 passes, 3 alternates.
+    let script = vec![vec![1.0, 2.0, 2.0], vec![1.0, 1.2], vec![2.0], vec![1.0, 2.0, 1.0]];
+    let (journal, flown) = confirm_run(script.clone(), 3, 20);
+    let (f, p) = (true, false);
+    assert_eq!(
+        journal,
+        [
+            (0, 0, f),
+            (0, 1, p),
+            (0, 2, p),
+            (1, 0, f),
+            (1, 1, f),
+            (2, 0, p),
+            (3, 0, f),
+            (3, 1, p),
+            (3, 2, f),
+        ]
+    );
+    let files: Vec<&str> = flown.iter().take(3).map(|f| f.1.as_str()).collect();
+    assert_eq!(files, ["candidate_0.csv", "candidate_0_2.csv", "candidate_0_3.csv"]);
+    // The re-flights are charged to the budget: 5 flights reach candidate 2 only by skipping nothing.
+    let (journal, _) = confirm_run(script.clone(), 3, 5);
+    assert_eq!(journal.len(), 5);
+    assert_eq!(
+        journal.last(),
+        Some(&(1, 1, f)),
+        "candidate 1 confirmed before 2 is drawn"
+    );
+    // K = 1: every candidate once, as without confirmation.
+    let (journal, _) = confirm_run(script, 1, 20);
+    assert_eq!(
+        journal.iter().map(|j| (j.0, j.1)).collect::<Vec<_>>(),
+        [(0, 0), (1, 0), (2, 0), (3, 0)]
+    );
+}

@@ -1,0 +1,184 @@
+//! Confirmed failures (`--confirm`) through the whole campaign, static and learning, with a vehicle whose
+//! repeated flights differ: an even candidate that failed passes when flown again, an odd one fails again.
+
+use super::*;
+use crate::campaign::journal::FlightRecord;
+
+/// The candidate and flight number of a trajectory file `candidate_N.csv` / `candidate_N_K.csv`.
+fn flight_of(csv: &Path) -> (u64, u32) {
+    let stem = csv.file_stem().unwrap().to_string_lossy();
+    let mut parts = stem.trim_start_matches("candidate_").split('_');
+    let candidate = parts.next().unwrap().parse().unwrap();
+    let attempt = parts.next().map_or(0, |k| k.parse::<u32>().unwrap() - 1);
+    (candidate, attempt)
+}
+
+/// Flies as [`ScriptedVehicle`]; a later flight of an even candidate passes by 2 m. Cancels the campaign
+/// after the first failing flight when `stop_at_failure`.
+struct Flaky {
+    flown: Arc<Mutex<Vec<(u64, u32)>>>,
+    stop_at_failure: bool,
+}
+
+impl Vehicle for Flaky {
+    fn name(&self) -> String {
+        "flaky".into()
+    }
+    fn fly(&mut self, test: &TestCase, csv: &Path, cancel: &AtomicBool) -> Result<Flown, VehicleError> {
+        std::fs::write(csv, "timestamp,x,y,z,r\n0,0,0,0,\n1000000,0,10,10,\n").unwrap();
+        let (candidate, attempt) = flight_of(csv);
+        self.flown.lock().unwrap().push((candidate, attempt));
+        let mut d = (test.obstacles[0].position.y - 20.0).abs() / 2.0 + 0.2;
+        if attempt > 0 && candidate % 2 == 0 {
+            d += 2.0;
+        }
+        if self.stop_at_failure && d < 1.5 {
+            cancel.store(true, Ordering::SeqCst);
+        }
+        Ok(landed(d))
+    }
+}
+
+fn flaky(flown: &Arc<Mutex<Vec<(u64, u32)>>>, stop_at_failure: bool) -> Vec<Box<dyn Vehicle>> {
+    vec![Box::new(Flaky {
+        flown: flown.clone(),
+        stop_at_failure,
+    })]
+}
+
+/// Every test's flights in the journal: (candidate, flights, failures), by candidate.
+fn per_test(journal: &[FlightRecord]) -> Vec<(u64, usize, usize)> {
+    let mut out: Vec<(u64, usize, usize)> = Vec::new();
+    for r in journal {
+        let fail = usize::from(r.min_distance.unwrap() < 1.5);
+        match out.iter_mut().find(|t| t.0 == r.candidate) {
+            Some(t) => (t.1, t.2) = (t.1 + 1, t.2 + fail),
+            None => out.push((r.candidate, 1, fail)),
+        }
+    }
+    out.sort();
+    out
+}
+
+/// What a finished confirmed campaign in `dir` must show, whatever its schedule.
+fn check_confirmed(dir: &Path, r: &crate::campaign::run::Report, budget: usize) {
+    let journal = Journal::read(&dir.join("journal.jsonl")).unwrap();
+    assert_eq!(
+        (journal.len(), r.suite.flown),
+        (budget, budget),
+        "re-flights are charged"
+    );
+    let tests = per_test(&journal);
+    for &(c, flights, failures) in &tests {
+        assert!(flights <= 3, "candidate {c} flown {flights} times");
+        let expected = if failures == 0 {
+            1
+        } else if c % 2 == 0 {
+            3 // fails, passes, passes: 1 of 3
+        } else {
+            2 // fails twice: settled
+        };
+        // Only the last tests flown may have been cut by the budget.
+        assert!(
+            flights == expected || journal.iter().rev().take(3).any(|x| x.candidate == c),
+            "{c}"
+        );
+    }
+    let confirmed: Vec<u64> = tests.iter().filter(|t| 2 * t.2 > 3).map(|t| t.0).collect();
+    assert!(confirmed.iter().all(|c| c % 2 == 1), "{confirmed:?}");
+    assert_eq!(r.suite.failing, confirmed.len());
+    assert_eq!(r.suite.failed_once, tests.iter().filter(|t| t.2 > 0).count());
+    for i in 0..r.suite.failing {
+        assert!(dir.join(format!("test_{i}.yaml")).is_file() && dir.join(format!("test_{i}-2.csv")).is_file());
+    }
+    assert!(!dir.join(format!("test_{}.yaml", r.suite.failing)).exists());
+    let unconfirmed: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("unconfirmed.json")).unwrap()).unwrap();
+    let unconfirmed = unconfirmed.as_array().unwrap();
+    assert_eq!(unconfirmed.len(), r.suite.failed_once - r.suite.failing);
+    // An odd candidate is unconfirmed only when the budget ran out before its second flight.
+    let pending = |t: &serde_json::Value| t["settled"] == false && t["flights"] == 1;
+    assert!(
+        unconfirmed
+            .iter()
+            .all(|t| t["candidate"].as_u64().unwrap() % 2 == 0 || pending(t))
+    );
+    assert!(
+        unconfirmed.iter().filter(|t| pending(t)).count() <= 1,
+        "one vehicle: one test cut"
+    );
+    assert!(
+        unconfirmed
+            .iter()
+            .all(|t| t["failure_rate_low"].as_f64() <= t["failure_rate"].as_f64())
+    );
+}
+
+#[test]
+fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
+    for learn in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let flown = Arc::new(Mutex::new(Vec::new()));
+        let cfg = CampaignConfig {
+            confirm: 3,
+            ..if learn { adapted(14) } else { config(14) }
+        };
+        let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
+        check_confirmed(dir.path(), &r, 14);
+        assert!(
+            r.suite.failing > 0 && r.suite.failed_once > r.suite.failing,
+            "learn {learn}"
+        );
+        assert_eq!(
+            r.suite.confirmation_rate.unwrap(),
+            r.suite.failed_again as f64 / r.suite.flown_again as f64
+        );
+        // One vehicle: a failing first flight is followed by the same test's next flight.
+        let flown = flown.lock().unwrap().clone();
+        let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
+        for w in journal.windows(2) {
+            if w[0].min_distance.unwrap() < 1.5 && w[0].attempt == 0 {
+                assert_eq!(
+                    (w[1].candidate, w[1].attempt),
+                    (w[0].candidate, 1),
+                    "learn {learn}: {flown:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_resumed_campaign_flies_the_pending_confirmation_first() {
+    for learn in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let flown = Arc::new(Mutex::new(Vec::new()));
+        let cfg = CampaignConfig {
+            confirm: 3,
+            ..if learn { adapted(12) } else { config(12) }
+        };
+        let cancel = AtomicBool::new(false);
+        run_campaign(&cfg, dir.path(), &ScriptedLfs, flaky(&flown, true), &Quiet, &cancel).unwrap();
+        let cut = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
+        let last = cut.last().unwrap();
+        assert!(
+            last.min_distance.unwrap() < 1.5 && last.attempt == 0,
+            "killed after a first failure"
+        );
+        let before = flown.lock().unwrap().len();
+        let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
+        let flown = flown.lock().unwrap().clone();
+        assert_eq!(flown[before], (last.candidate, 1), "learn {learn}: {flown:?}");
+        check_confirmed(dir.path(), &r, 12);
+    }
+}
+
+#[test]
+fn one_flight_per_test_writes_no_unconfirmed_list() {
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let r = run_with(&config(8), dir.path(), flaky(&flown, false)).unwrap();
+    assert_eq!((r.suite.reflights, r.suite.failed_once), (0, r.suite.failing));
+    assert!(!dir.path().join("unconfirmed.json").exists());
+    assert!(flown.lock().unwrap().iter().all(|f| f.1 == 0));
+}
