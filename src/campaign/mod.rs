@@ -16,6 +16,7 @@ pub mod rank;
 pub mod report;
 pub mod rounds;
 pub mod run;
+pub mod runner;
 pub mod score;
 pub mod screen;
 pub mod screener;
