@@ -84,6 +84,10 @@ pub struct CampaignConfig {
     /// key is absent): children obey `max_iou` like every candidate.
     #[serde(default)]
     pub child_max_iou: Option<f64>,
+    /// `--runner`: each flight is a job, this shell command template run per flight (`hfs` is then
+    /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub runner: Option<String>,
 }
 
 fn default_min_diversity() -> f64 {

@@ -1,5 +1,6 @@
 //! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
 
+pub mod backends;
 pub mod candidate;
 pub mod config;
 pub mod diversity_guard;

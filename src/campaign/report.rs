@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::backends::{self, BackendSummary};
 use super::config::CampaignInput;
 use super::failure_counts::FAIL_BINS;
-use super::journal::FlightRecord;
+use super::journal::{FlightRecord, Journal};
 use super::learn::Learnt;
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
@@ -124,6 +125,8 @@ pub struct Report {
     pub stages: StageTimes,
     /// What a learning campaign learnt (`None` with `--no-learn`).
     pub learning: Option<Learnt>,
+    /// Per backend (mock, px4, runner, MAVLink URL): flights, failed jobs, wall time per flight.
+    pub backends: Vec<BackendSummary>,
 }
 
 /// Mean |predicted - flown| of the first (or last) quarter of the flights with a flown distance.
@@ -191,6 +194,10 @@ pub fn write_outputs(
         suite,
         stages,
         learning: learning.cloned(),
+        // The whole journal: the flights backends failed around are not in `records`.
+        backends: backends::summarise(
+            &Journal::read_all(&input.folder.join("journal.jsonl")).unwrap_or_else(|_| records.to_vec()),
+        ),
     };
     write_json(&input.folder.join("report.json"), &report, true)?;
     write_atomic(&input.folder.join("report.md"), markdown(&report).as_bytes())?;
@@ -326,6 +333,7 @@ pub fn markdown(r: &Report) -> String {
         r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
     );
     summary_table(&mut md, r);
+    backends::markdown(&mut md, &r.backends);
     if let Some(l) = &r.learning {
         learning_section(&mut md, l);
     }

@@ -17,6 +17,7 @@ mod px4_reference;
 mod px4_sitl;
 mod ready;
 mod rules;
+mod runner;
 mod score;
 mod ulog;
 

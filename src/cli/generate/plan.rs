@@ -9,8 +9,10 @@ use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
+use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
+use prgenuav::model::Spelling as ModelSpelling;
 use serde_json::Value;
 
 use super::Args;
@@ -37,6 +39,10 @@ pub struct Plan {
     pub mock_vehicles: Option<usize>,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat (not stored either).
     pub connect_timeout_s: f64,
+    /// With `--runner`: what its jobs share (the template is stored, the time limit not).
+    pub runner: Option<RunnerSettings>,
+    /// Runner jobs at once (not stored).
+    pub jobs: Option<usize>,
 }
 
 /// A setting given explicitly, by a flag or by the TOML file.
@@ -123,12 +129,44 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
         bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
     }
+    let runner = runner_settings(&cfg, &folder, args)?;
     Ok(Plan {
         cfg,
         folder,
         mock_vehicles: s.mock.vehicles,
         connect_timeout_s,
+        runner,
+        jobs: args.jobs,
     })
+}
+
+/// The runner's settings, checked before anything is sampled or flown: the template, `--jobs`, `--job-timeout`.
+fn runner_settings(cfg: &CampaignConfig, folder: &Path, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
+    let Some(text) = &cfg.runner else {
+        if args.jobs.is_some() || args.job_timeout.is_some() {
+            bail!("--jobs and --job-timeout go with --runner");
+        }
+        return Ok(None);
+    };
+    let template = Template::parse(text).map_err(anyhow::Error::msg)?;
+    if args.jobs == Some(0) {
+        bail!("--jobs must be at least 1");
+    }
+    let timeout_s = args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S);
+    if !(timeout_s.is_finite() && timeout_s > 0.0) {
+        bail!("--job-timeout must be a positive number of seconds");
+    }
+    Ok(Some(RunnerSettings {
+        template,
+        timeout: std::time::Duration::from_secs_f64(timeout_s),
+        judge: cfg.judge,
+        spelling: if cfg.old_spelling {
+            ModelSpelling::Old
+        } else {
+            ModelSpelling::New
+        },
+        campaign_folder: folder.to_path_buf(),
+    }))
 }
 
 fn given(m: &ArgMatches, id: &str) -> bool {
@@ -148,6 +186,7 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
         ("mode", "--mode", "mode"),
         ("judge", "--judge", "judge"),
         ("prior", "--prior", "prior"),
+        ("runner", "--runner", "runner"),
     ] {
         if given(m, id) {
             r.flag(flag, key);
@@ -287,12 +326,15 @@ fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
 /// The campaign's settings: what was asked for, defaults for the rest.
 fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
     let s = &req.settings;
-    let hfs: Vec<String> = args
-        .connect
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .collect();
+    let hfs: Vec<String> = match &args.runner {
+        Some(_) => vec!["runner".into()],
+        None => args
+            .connect
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect(),
+    };
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
     CampaignConfig {
@@ -324,6 +366,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         prior: args.prior.clone(),
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
+        runner: args.runner.clone(),
     }
 }
 
