@@ -19,6 +19,7 @@ mod ready;
 mod rules;
 mod runner;
 mod score;
+mod slurm;
 mod ulog;
 
 use std::path::{Path, PathBuf};
