@@ -9,7 +9,7 @@ use crate::model::Obstacle;
 pub(crate) fn ulog(samples: &[(u64, f32, f32, f32)]) -> Vec<u8> {
     let mut b = b"ULog\x01\x12\x35\x01".to_vec();
     b.extend_from_slice(&0u64.to_le_bytes());
-    let mut msg = |b: &mut Vec<u8>, kind: u8, payload: &[u8]| {
+    let msg = |b: &mut Vec<u8>, kind: u8, payload: &[u8]| {
         b.extend_from_slice(&(payload.len() as u16).to_le_bytes());
         b.push(kind);
         b.extend_from_slice(payload);
