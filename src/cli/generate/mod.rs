@@ -53,11 +53,11 @@ pub struct Args {
     /// from what the job leaves there (docs/runners.md: Aerialist, Slurm, Kubernetes).
     #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
     runner: Option<String>,
-    /// Runner jobs at once (with --runner).
-    #[arg(long, value_name = "N")]
+    /// Runner jobs at once (with --runner; docs/runners.md).
+    #[arg(long, hide = true, value_name = "N")]
     jobs: Option<usize>,
     /// Wall-time limit of one runner job, seconds (with --runner; default 1200).
-    #[arg(long, value_name = "S")]
+    #[arg(long, hide = true, value_name = "S")]
     job_timeout: Option<f64>,
     /// How the flights avoid the virtual obstacles.
     #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
