@@ -89,6 +89,10 @@ pub struct CampaignConfig {
     /// when the key is absent: such campaigns flew every test once) is one flight per test.
     #[serde(default = "one_flight")]
     pub confirm: usize,
+    /// `--runner`: each flight is a job, this shell command template run per flight (`hfs` is then
+    /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub runner: Option<String>,
 }
 
 fn one_flight() -> usize {

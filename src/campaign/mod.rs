@@ -1,5 +1,6 @@
 //! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
 
+pub mod backends;
 pub mod candidate;
 pub mod config;
 pub mod confirm;
@@ -18,6 +19,7 @@ pub mod rank;
 pub mod report;
 pub mod rounds;
 pub mod run;
+pub mod runner;
 pub mod score;
 pub mod screen;
 pub mod screener;

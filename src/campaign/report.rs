@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::backends::{self, BackendSummary};
 use super::config::CampaignInput;
 use super::confirm::{failed_again, first_flights};
 use super::failure_counts::FAIL_BINS;
-use super::journal::{FlightRecord, flights_charged};
+use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::Learnt;
 use super::verdicts::{TestVerdict, score_sum, verdicts};
 use crate::generator::adaptive::DRAW_NAMES;
@@ -150,6 +151,8 @@ pub struct Report {
     pub stages: StageTimes,
     /// What a learning campaign learnt (`None` with `--no-learn`).
     pub learning: Option<Learnt>,
+    /// Per backend (mock, px4, runner, MAVLink URL): flights, failed jobs, wall time per flight.
+    pub backends: Vec<BackendSummary>,
 }
 
 /// Mean |predicted - flown| of the first (or last) quarter of the flights with a flown distance.
@@ -202,6 +205,10 @@ pub fn write_outputs(
         suite,
         stages,
         learning: learning.cloned(),
+        // The whole journal: the flights backends failed around are not in `records`.
+        backends: backends::summarise(
+            &Journal::read_all(&input.folder.join("journal.jsonl")).unwrap_or_else(|_| records.to_vec()),
+        ),
     };
     if cfg.confirm > 1 {
         let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
@@ -367,6 +374,7 @@ pub fn markdown(r: &Report) -> String {
     if s.confirm > 1 {
         super::verdicts::markdown(&mut md, &r.tests, s.confirm);
     }
+    backends::markdown(&mut md, &r.backends);
     if let Some(l) = &r.learning {
         learning_section(&mut md, l);
     }

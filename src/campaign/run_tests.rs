@@ -94,6 +94,7 @@ fn config(budget: usize) -> CampaignConfig {
         min_diversity: 0.8,
         child_max_iou: None,
         confirm: 1,
+        runner: None,
     }
 }
 

@@ -23,6 +23,7 @@ pub use geo::{GeoPoint, LocalProjection, SIM_HOME};
 pub use mission::{CMD_LAND, CMD_TAKEOFF, CMD_WAYPOINT, LocalPoint, Mission, MissionItem};
 pub use obstacle::{Obstacle, Position, Size};
 pub use tables::{Command, Param, parse_commands_csv, parse_params_csv};
+pub(crate) use test_case::resolve as resolve_reference;
 pub use test_case::{Spelling, TestCase};
 pub use trajectory::{Sample, Trajectory};
 pub use ulog::{load_flight, load_ulog_trajectory};

@@ -18,7 +18,9 @@ mod px4_reference;
 mod px4_sitl;
 mod ready;
 mod rules;
+mod runner;
 mod score;
+mod slurm;
 mod ulog;
 
 use std::path::{Path, PathBuf};

@@ -17,6 +17,7 @@ use prgenuav::campaign::parallel::available_threads;
 use prgenuav::campaign::pool::Vehicle;
 use prgenuav::campaign::report::{DISTINCT_IOU, Report};
 use prgenuav::campaign::run::{CampaignConfig, run_campaign};
+use prgenuav::campaign::runner::RunnerVehicle;
 use prgenuav::campaign::screen::LfsScreener;
 use prgenuav::campaign::vehicles::{LinkVehicle, MockVehicle};
 use prgenuav::lfs::ensemble::EnsembleParams;
@@ -47,6 +48,17 @@ pub struct Args {
     /// vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).
     #[arg(long, alias = "hfs", value_name = "mock|URL,...", default_value = "mock")]
     connect: String,
+    /// Fly each test as a job of an existing engine: this shell command, run per flight in the flight's job
+    /// folder with {test} (its test YAML), {dir} (the folder) and {id} filled in; the flight is read back
+    /// from what the job leaves there (docs/runners.md: Aerialist, Slurm, Kubernetes).
+    #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
+    runner: Option<String>,
+    /// Runner jobs at once (with --runner; docs/runners.md).
+    #[arg(long, hide = true, value_name = "N")]
+    jobs: Option<usize>,
+    /// Wall-time limit of one runner job, seconds (with --runner; default 1200).
+    #[arg(long, hide = true, value_name = "S")]
+    job_timeout: Option<f64>,
     /// How the flights avoid the virtual obstacles.
     #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
     mode: Mode,
@@ -242,6 +254,9 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
 /// The vehicles that fly: embedded mocks, or one per MAVLink URL.
 fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
     let cfg: &CampaignConfig = &plan.cfg;
+    if let Some(runner) = plan.runner.clone() {
+        return RunnerVehicle::fleet(runner, plan.jobs.unwrap_or(1)).map_err(anyhow::Error::msg);
+    }
     let mode: FlyMode = parse_stored::<Mode>(&cfg.mode, "mode")?.into();
     if cfg.hfs == ["mock"] {
         let count = plan.mock_vehicles.unwrap_or_else(available_threads);

@@ -9,8 +9,10 @@ use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
+use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
+use prgenuav::model::Spelling as ModelSpelling;
 use serde_json::Value;
 
 use super::Args;
@@ -40,6 +42,10 @@ pub struct Plan {
     pub mock_vehicles: Option<usize>,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat (not stored either).
     pub connect_timeout_s: f64,
+    /// With `--runner`: what its jobs share (the template is stored, the time limit not).
+    pub runner: Option<RunnerSettings>,
+    /// Runner jobs at once (not stored).
+    pub jobs: Option<usize>,
 }
 
 /// A setting given explicitly, by a flag or by the TOML file.
@@ -122,17 +128,53 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
         bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
     }
+    let mut runner = runner_settings(&cfg, args)?;
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
         Some(folder) => folder.clone(),
         None => prgenuav::campaign::folder::create_new(&args.out, std::time::SystemTime::now())?,
     };
+    if let Some(r) = &mut runner {
+        r.campaign_folder = folder.clone();
+    }
     Ok(Plan {
         cfg,
         folder,
         mock_vehicles: s.mock.vehicles,
         connect_timeout_s,
+        runner,
+        jobs: args.jobs,
     })
+}
+
+/// The runner's settings, checked before anything is sampled or flown: the template, `--jobs`, `--job-timeout`.
+/// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
+fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
+    let Some(text) = &cfg.runner else {
+        if args.jobs.is_some() || args.job_timeout.is_some() {
+            bail!("--jobs and --job-timeout go with --runner");
+        }
+        return Ok(None);
+    };
+    let template = Template::parse(text).map_err(anyhow::Error::msg)?;
+    if args.jobs == Some(0) {
+        bail!("--jobs must be at least 1");
+    }
+    let timeout_s = args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S);
+    if !(timeout_s.is_finite() && timeout_s > 0.0) {
+        bail!("--job-timeout must be a positive number of seconds");
+    }
+    Ok(Some(RunnerSettings {
+        template,
+        timeout: std::time::Duration::from_secs_f64(timeout_s),
+        judge: cfg.judge,
+        spelling: if cfg.old_spelling {
+            ModelSpelling::Old
+        } else {
+            ModelSpelling::New
+        },
+        campaign_folder: PathBuf::new(),
+    }))
 }
 
 fn given(m: &ArgMatches, id: &str) -> bool {
@@ -152,6 +194,7 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
         ("mode", "--mode", "mode"),
         ("judge", "--judge", "judge"),
         ("prior", "--prior", "prior"),
+        ("runner", "--runner", "runner"),
     ] {
         if given(m, id) {
             r.flag(flag, key);
@@ -292,12 +335,15 @@ fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
 /// The campaign's settings: what was asked for, defaults for the rest.
 fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
     let s = &req.settings;
-    let hfs: Vec<String> = args
-        .connect
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .collect();
+    let hfs: Vec<String> = match &args.runner {
+        Some(_) => vec!["runner".into()],
+        None => args
+            .connect
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect(),
+    };
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
     let mock = hfs == ["mock"];
@@ -328,6 +374,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
         confirm: s.flight.confirm.unwrap_or(if mock { 1 } else { LINK_CONFIRM }),
+        runner: args.runner.clone(),
     }
 }
 

@@ -1,0 +1,189 @@
+//! A campaign whose flights are Slurm jobs (`--runner 'srun ...'`) on a one-node cluster started here: munged,
+//! slurmctld and slurmd from Debian's `slurm-wlm` and `munge`, configured in a temporary folder
+//! (tests/data/slurm/slurm.conf.in), stopped at the end. Needs root and those packages, so it is ignored by
+//! default; `.ci/run` installs them and runs it:
+//! `cargo test --test it slurm -- --ignored --nocapture`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use prgenuav::campaign::journal::Journal;
+
+use super::repo;
+
+/// The daemons started for one test, stopped (by their pid files) when dropped.
+struct Cluster {
+    dir: tempfile::TempDir,
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .expect("a free port")
+}
+
+fn run_ok(cmd: &mut Command) {
+    let out = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("{cmd:?}: {e} (apt-get install -y slurm-wlm munge)"));
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+impl Cluster {
+    fn start() -> Self {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let d = dir.path();
+        for sub in ["state", "spool", "munge"] {
+            std::fs::create_dir_all(d.join(sub)).unwrap();
+        }
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(d, std::fs::Permissions::from_mode(0o755)).unwrap();
+        std::fs::set_permissions(d.join("munge"), std::fs::Permissions::from_mode(0o700)).unwrap();
+        let key: Vec<u8> = (0..1024u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect();
+        std::fs::write(d.join("munge/munge.key"), key).unwrap();
+        std::fs::set_permissions(d.join("munge/munge.key"), std::fs::Permissions::from_mode(0o600)).unwrap();
+        let host = String::from_utf8(Command::new("hostname").output().unwrap().stdout).unwrap();
+        let conf = std::fs::read_to_string(repo().join("tests/data/slurm/slurm.conf.in"))
+            .unwrap()
+            .replace("@DIR@", &d.display().to_string())
+            .replace("@HOST@", host.trim())
+            .replace(
+                "@CPUS@",
+                &std::thread::available_parallelism().map_or(1, |n| n.get()).to_string(),
+            )
+            .replace("@PORT1@", &free_port().to_string())
+            .replace("@PORT@", &free_port().to_string());
+        std::fs::write(d.join("slurm.conf"), conf).unwrap();
+        let munge = |flag: &str, file: &str| format!("--{flag}={}", d.join("munge").join(file).display());
+        run_ok(Command::new("munged").args([
+            "--force".to_string(),
+            munge("key-file", "munge.key"),
+            munge("socket", "munge.sock"),
+            munge("pid-file", "munged.pid"),
+            munge("log-file", "munged.log"),
+            munge("seed-file", "seed"),
+        ]));
+        let cluster = Self { dir };
+        let conf = cluster.conf();
+        run_ok(Command::new("slurmctld").arg("-f").arg(&conf));
+        run_ok(Command::new("slurmd").arg("-f").arg(&conf).args(["-N", "localhost"]));
+        cluster.wait_idle();
+        cluster
+    }
+
+    fn conf(&self) -> PathBuf {
+        self.dir.path().join("slurm.conf")
+    }
+
+    /// Until the node is idle, at most 30 s.
+    fn wait_idle(&self) {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(30) {
+            let out = Command::new("sinfo")
+                .args(["-h", "-o", "%t"])
+                .env("SLURM_CONF", self.conf())
+                .output();
+            if out.is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "idle") {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(200));
+        }
+        let log = std::fs::read_to_string(self.dir.path().join("slurmctld.log")).unwrap_or_default();
+        panic!("the Slurm node did not become idle in 30 s; slurmctld.log:\n{log}");
+    }
+}
+
+impl Drop for Cluster {
+    fn drop(&mut self) {
+        for pid_file in ["slurmd.pid", "slurmctld.pid", "munge/munged.pid"] {
+            let pid = std::fs::read_to_string(self.dir.path().join(pid_file)).unwrap_or_default();
+            if let Ok(pid) = pid.trim().parse::<i32>() {
+                // SAFETY: kill(2) on the daemon this test started.
+                unsafe {
+                    libc::kill(pid, libc::SIGTERM);
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+}
+
+/// `mock-autopilot` beside the `prgenuav` under test, built if missing.
+fn mock_autopilot() -> PathBuf {
+    let path = Path::new(env!("CARGO_BIN_EXE_prgenuav")).with_file_name("mock-autopilot");
+    if !path.is_file() {
+        run_ok(Command::new(env!("CARGO")).args(["build", "-p", "mock_autopilot", "--bin", "mock-autopilot"]));
+    }
+    path
+}
+
+/// A 4-flight campaign through `runner`; returns the campaign folder and each flight's wall time.
+fn campaign(runner: &str, conf: &Path, out: &Path) -> (PathBuf, Vec<f64>) {
+    let o = Command::new(env!("CARGO_BIN_EXE_prgenuav"))
+        .args([
+            "generate",
+            "missions/mission2.yaml",
+            "4",
+            "--seed",
+            "2",
+            "--runner",
+            runner,
+            "--jobs",
+            "2",
+        ])
+        .args(["--no-learn", "--candidates", "12", "--ensemble", "0", "--json", "--out"])
+        .arg(out)
+        .env("SLURM_CONF", conf)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    let folder = PathBuf::from(v["output_folder"].as_str().unwrap());
+    let records = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
+    assert_eq!(records.len(), 4, "{records:?}\n{stderr}");
+    for r in &records {
+        assert!(["landed", "collision"].contains(&r.status.as_str()), "{r:?}");
+        assert!(r.min_distance.is_some() && r.vehicle.starts_with("runner#"), "{r:?}");
+    }
+    (folder, records.iter().map(|r| r.wall_s).collect())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    (v[(v.len() - 1) / 2] + v[v.len() / 2]) / 2.0
+}
+
+#[test]
+#[ignore = "needs root, slurm-wlm and munge: cargo test --test it slurm -- --ignored"]
+fn a_campaign_flies_its_tests_as_slurm_jobs() {
+    let cluster = Cluster::start();
+    let fly = repo().join("tests/data/slurm/fly-on-mock");
+    let job = format!(
+        "{} {} {} {{test}} {{dir}}",
+        fly.display(),
+        Path::new(env!("CARGO_BIN_EXE_prgenuav")).display(),
+        mock_autopilot().display()
+    );
+    let out = tempfile::tempdir().unwrap();
+    let srun = format!("srun -N1 -n1 --quiet -J {{id}} {job}");
+    let (folder, through_slurm) = campaign(&srun, &cluster.conf(), out.path());
+    let report = std::fs::read_to_string(folder.join("report.md")).unwrap();
+    assert!(report.contains("| runner | 4 | 0 |"), "{report}");
+    // The same flights without Slurm: the difference is Slurm's overhead per flight.
+    let (_, direct) = campaign(&job, &cluster.conf(), out.path());
+    let (s, d) = (median(through_slurm), median(direct));
+    println!(
+        "median wall time per flight: through srun {s:.3} s, direct {d:.3} s, overhead {:.3} s",
+        s - d
+    );
+}
