@@ -9,6 +9,7 @@ pub mod flights;
 pub mod journal;
 pub mod learn;
 pub mod learning;
+pub mod mock_profile;
 pub mod neighbours;
 pub mod parallel;
 pub mod pool;
