@@ -5,7 +5,8 @@
 //! and recall of "< 1.5 m"). Used to fit the campaign's default mock latency.
 //!
 //! `cargo run --release --example mock_fidelity -- [DIR=tests/data/hfs-flights] [LATENCY_MS=0|free] [PARALLEL=2]`
-//! (env `TRAJ_DIR=DIR`: keep each flown trajectory as `DIR/<id>.csv`; `VERBOSE=1`: one line per flight; `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters)
+//! (env `TRAJ_DIR=DIR`: keep each flown trajectory as `DIR/<id>.csv`; `VERBOSE=1`: one line per flight; `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters;
+//! `MOCK_PROFILE=NAME`: that mock profile instead of the default)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -14,7 +15,8 @@ use std::time::Duration;
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
-use prgenuav::campaign::vehicles::mock_builder;
+use prgenuav::campaign::mock_profile::MockProfile;
+use prgenuav::campaign::vehicles::mock_builder_with;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, load_dir};
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;
@@ -31,7 +33,11 @@ async fn fly_case(case: FlightCase, latency: Option<Duration>) -> anyhow::Result
     // EXTRA_PARAMS=NAME=VALUE,... sets more vehicle parameters (experiments: what would move the mock closer).
     prgenuav::model::Param::override_from_list(&mut test.params, &std::env::var("EXTRA_PARAMS").unwrap_or_default())
         .map_err(|e| anyhow::anyhow!("EXTRA_PARAMS: {e}"))?;
-    let mock = mock_builder(FlyMode::Avoidance)
+    let profile = match std::env::var("MOCK_PROFILE") {
+        Ok(name) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
+        Err(_) => MockProfile::default(),
+    };
+    let mock = mock_builder_with(&profile, FlyMode::Avoidance)
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
         .speed_factor(SpeedFactor::Times(speed))
         .lockstep(latency.map(|_| DEFAULT_LOCKSTEP_WAIT))

@@ -4,7 +4,8 @@
 //! Spearman) and flight time (median ratio mock / PX4). Tests without a landed PX4 report are listed, not paired.
 //!
 //! `cargo run --release --example mock_vs_px4 -- TESTS PX4_DIR [PARALLEL=2]` (env `MOCK_PX4_DEFAULTS=1`: the mock
-//! with PX4's own defaults instead of the campaign's calibrated avoidance speed limit)
+//! with PX4's own defaults instead of the campaign's mock profile; `MOCK_PROFILE=NAME`: that profile instead of the
+//! default)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -14,7 +15,8 @@ use anyhow::Context;
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
-use prgenuav::campaign::vehicles::mock_builder;
+use prgenuav::campaign::mock_profile::MockProfile;
+use prgenuav::campaign::vehicles::mock_builder_with;
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;
@@ -28,7 +30,11 @@ async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
     let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
         mock_autopilot::MockAutopilot::builder()
     } else {
-        mock_builder(FlyMode::Avoidance)
+        let profile = match std::env::var("MOCK_PROFILE") {
+            Ok(name) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
+            Err(_) => MockProfile::default(),
+        };
+        mock_builder_with(&profile, FlyMode::Avoidance)
     };
     let mock = builder
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))

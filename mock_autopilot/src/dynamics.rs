@@ -13,10 +13,46 @@ pub type Ned = Vector3<f64>;
 /// Standard gravity, m/s².
 pub const GRAVITY_M_S2: f64 = 9.80665;
 
-/// Final-approach gain (1/s): speed = gain × distance near the target.
-const POS_GAIN: f64 = 1.5;
-/// Velocity-loop gain (1/s).
-const VEL_GAIN: f64 = 2.5;
+/// The model's own constants (not PX4 parameters): how the point mass tracks its setpoint. The defaults are
+/// the mock's original model; a caller may fit them to a reference (PX4 SITL, another simulator).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tuning {
+    /// Final-approach gain (1/s): vertical speed = gain × distance near the target.
+    pub pos_gain: f64,
+    /// Velocity-loop gain (1/s): acceleration = gain × velocity error, within the acceleration and jerk limits.
+    pub vel_gain: f64,
+    /// Seconds of the current velocity by which the horizontal distance to a position target is shortened
+    /// before the braking speed is computed: PX4 measures that distance from its smoothed trajectory setpoint,
+    /// which runs ahead of the vehicle while it follows (PositionSmoothing.cpp `_getMaxXYSpeed`). 0: from the
+    /// vehicle.
+    pub lead_s: f64,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Self {
+            pos_gain: 1.5,
+            vel_gain: 2.5,
+            lead_s: 0.0,
+        }
+    }
+}
+
+impl Tuning {
+    /// The constants' names for [`Tuning::set`].
+    pub const NAMES: [&'static str; 3] = ["MOCK_POS_GAIN", "MOCK_VEL_GAIN", "MOCK_LEAD_S"];
+
+    /// Sets a constant by its name in [`Tuning::NAMES`] (clamped to a workable range); false for other names.
+    pub fn set(&mut self, name: &str, value: f64) -> bool {
+        match name {
+            "MOCK_POS_GAIN" => self.pos_gain = value.clamp(0.05, 20.0),
+            "MOCK_VEL_GAIN" => self.vel_gain = value.clamp(0.05, 50.0),
+            "MOCK_LEAD_S" => self.lead_s = value.clamp(0.0, 10.0),
+            _ => return false,
+        }
+        true
+    }
+}
 
 /// Motion limits from PX4 parameters (all positive).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +69,8 @@ pub struct Limits {
     pub jerk_m_s3: f64,
     /// MPC_YAWRAUTO_MAX, rad/s.
     pub yaw_rate_rad_s: f64,
+    /// The model's own constants.
+    pub tuning: Tuning,
 }
 
 impl Limits {
@@ -46,7 +84,14 @@ impl Limits {
             acc_down_m_s2: pos("MPC_ACC_DOWN_MAX", 0.1),
             jerk_m_s3: pos("MPC_JERK_AUTO", 0.1),
             yaw_rate_rad_s: pos("MPC_YAWRAUTO_MAX", 1.0).to_radians(),
+            tuning: Tuning::default(),
         }
+    }
+
+    /// The same limits with the model constants `tuning`.
+    pub fn with_tuning(mut self, tuning: Tuning) -> Self {
+        self.tuning = tuning;
+        self
     }
 }
 
@@ -126,8 +171,8 @@ pub fn wrap_pi(a: f64) -> f64 {
     }
 }
 
-fn approach_speed(dist: f64, cap: f64, brake_acc: f64) -> f64 {
-    cap.min((2.0 * brake_acc * dist).sqrt()).min(POS_GAIN * dist)
+fn approach_speed(dist: f64, cap: f64, brake_acc: f64, pos_gain: f64) -> f64 {
+    cap.min((2.0 * brake_acc * dist).sqrt()).min(pos_gain * dist)
 }
 
 /// The highest speed (m/s) from which a jerk-limited stop still ends within `dist_m` at `final_m_s`, as PX4's
@@ -164,7 +209,10 @@ impl Body {
             let d_h = err_h.norm();
             if d_h > 1e-9 {
                 let cap = cap.min(lim.max_h_speed_m_s);
-                err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, d_h, 0.0)) / d_h)
+                // Braking distance as PX4 sees it from its trajectory setpoint, `lead_s` of motion ahead.
+                let ahead = (self.vel_ned.xy().dot(&err_h.xy()) / d_h).max(0.0) * lim.tuning.lead_s;
+                let brake_d = (d_h - ahead).max(0.0);
+                err_h * (cap.min(max_speed_from_distance(lim.jerk_m_s3, lim.acc_hor_m_s2, brake_d, 0.0)) / d_h)
             } else {
                 Ned::zeros()
             }
@@ -181,9 +229,9 @@ impl Body {
                 let v_h = horizontal(target_ned.x, target_ned.y, h_speed_m_s);
                 let err_z = target_ned.z - self.pos_ned.z;
                 let v_z = if err_z < 0.0 {
-                    -approach_speed(-err_z, up_speed_m_s, 0.5 * lim.acc_down_m_s2)
+                    -approach_speed(-err_z, up_speed_m_s, 0.5 * lim.acc_down_m_s2, lim.tuning.pos_gain)
                 } else {
-                    approach_speed(err_z, down_speed_m_s, 0.5 * lim.acc_up_m_s2)
+                    approach_speed(err_z, down_speed_m_s, 0.5 * lim.acc_up_m_s2, lim.tuning.pos_gain)
                 };
                 Some((Ned::new(v_h.x, v_h.y, v_z), yaw_rad))
             }
@@ -217,7 +265,7 @@ impl Body {
             self.pos_ned.z = 0.0_f64.max(self.pos_ned.z);
             return;
         };
-        let mut acc_des = (vel_des - self.vel_ned) * VEL_GAIN;
+        let mut acc_des = (vel_des - self.vel_ned) * lim.tuning.vel_gain;
         let h = acc_des.xy().norm();
         if h > lim.acc_hor_m_s2 {
             acc_des.x *= lim.acc_hor_m_s2 / h;
@@ -358,6 +406,36 @@ mod tests {
         assert!((b.yaw_rate_rad_s - 45f64.to_radians()).abs() < 1e-9);
         assert!(b.yaw_rad > 3.0 || b.yaw_rad < -3.0);
         assert!((wrap_pi(4.0) - (4.0 - std::f64::consts::TAU)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tuning_by_name_slows_the_turn_and_the_approach() {
+        let mut t = Tuning::default();
+        assert!(t.set("MOCK_VEL_GAIN", 1.0) && t.set("MOCK_LEAD_S", 1.0) && !t.set("MPC_XY_P", 1.0));
+        assert!(
+            t.set("MOCK_POS_GAIN", -3.0) && t.pos_gain > 0.0,
+            "clamped to a workable value"
+        );
+        let (soft, stiff) = (limits().with_tuning(t), limits());
+        let moving = Body {
+            pos_ned: Ned::new(0.0, 0.0, -10.0),
+            vel_ned: Ned::new(2.0, 0.0, 0.0),
+            ..Default::default()
+        };
+        let sp = goto(Ned::new(5.0, 0.0, -10.0));
+        let v = |lim: &Limits| moving.velocity_setpoint(&sp, lim).map(|(v, _)| v.x).unwrap_or(0.0);
+        assert!(v(&soft) < v(&stiff), "the lead shortens the braking distance");
+        // A lower velocity gain follows a sideways setpoint more slowly.
+        let side = Setpoint::Velocity {
+            vel_ned: Ned::new(0.0, 2.0, 0.0),
+            yaw_rad: None,
+        };
+        let (mut a, mut b) = (moving, moving);
+        for _ in 0..500 {
+            a.step(&side, &soft, 0.004);
+            b.step(&side, &stiff, 0.004);
+        }
+        assert!(a.vel_ned.y < b.vel_ned.y, "{} vs {}", a.vel_ned.y, b.vel_ned.y);
     }
 
     #[test]

@@ -175,6 +175,12 @@ impl Builder {
         self
     }
 
+    /// The kinematic model's constants (a profile fitted to some reference; default: the original model).
+    pub fn tuning(mut self, tuning: crate::dynamics::Tuning) -> Self {
+        self.vehicle.tuning = tuning;
+        self
+    }
+
     /// Boot (and keep the EKF origin) at `home`.
     pub fn home(mut self, home: crate::geo::GeoPoint) -> Self {
         self.vehicle.home = home;

@@ -12,7 +12,7 @@ use mavlink::dialects::common::{
 };
 
 use crate::avoidance::Avoidance;
-use crate::dynamics::{Body, Limits, Ned, Setpoint};
+use crate::dynamics::{Body, Limits, Ned, Setpoint, Tuning};
 use crate::fence::Fence;
 use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
 use crate::land_detector::{LandDetector, LandInputs, LandParams};
@@ -50,6 +50,8 @@ pub struct VehicleConfig {
     /// Vehicle time after each boot until the estimator has converged (no GPS fix, home or arming before);
     /// zero here for sans-IO tests, [`crate::preflight::DEFAULT_ESTIMATOR_SETTLE`] in a spawned mock.
     pub estimator_settle: Duration,
+    /// The kinematic model's constants (defaults: the mock's original model).
+    pub tuning: Tuning,
 }
 
 impl Default for VehicleConfig {
@@ -61,6 +63,7 @@ impl Default for VehicleConfig {
             collision: None,
             params: Vec::new(),
             estimator_settle: Duration::ZERO,
+            tuning: Tuning::default(),
         }
     }
 }
@@ -73,6 +76,7 @@ impl std::fmt::Debug for VehicleConfig {
             .field("fail_arm", &self.fail_arm)
             .field("collision", &self.collision.is_some())
             .field("estimator_settle", &self.estimator_settle)
+            .field("tuning", &self.tuning)
             .finish()
     }
 }
@@ -149,7 +153,7 @@ impl Vehicle {
         Self {
             now: Duration::ZERO,
             boot_at: Duration::ZERO,
-            limits: Limits::from_params(&params),
+            limits: Limits::from_params(&params).with_tuning(cfg.tuning),
             nav_params: NavParams::from_params(&params),
             land_params: LandParams::from_params(&params),
             params_seen: params.version(),
@@ -401,7 +405,7 @@ impl Vehicle {
         self.now += dt;
         if self.params.version() != self.params_seen {
             self.params_seen = self.params.version();
-            self.limits = Limits::from_params(&self.params);
+            self.limits = Limits::from_params(&self.params).with_tuning(self.limits.tuning);
             self.nav_params = NavParams::from_params(&self.params);
             self.land_params = LandParams::from_params(&self.params);
         }

@@ -48,6 +48,10 @@ pub struct CampaignConfig {
     /// camera and planner lag behind the vehicle.
     #[serde(default = "default_mock_latency_ms")]
     pub mock_latency_ms: f64,
+    /// The embedded mocks' profile (`campaign::mock_profile`). `competition` when the key is absent: the only
+    /// mock there was before profiles, and a resume must match.
+    #[serde(default = "profile_before_profiles")]
+    pub mock_profile: String,
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,
@@ -131,6 +135,10 @@ pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
 
 fn default_mock_latency_ms() -> f64 {
     DEFAULT_MOCK_LATENCY_MS
+}
+
+fn profile_before_profiles() -> String {
+    "competition".into()
 }
 
 fn default_mock_speed() -> f64 {

@@ -12,6 +12,7 @@ pub mod folder;
 pub mod journal;
 pub mod learn;
 pub mod learning;
+pub mod mock_profile;
 pub mod neighbours;
 pub mod parallel;
 pub mod pool;

@@ -84,6 +84,7 @@ fn config(budget: usize) -> CampaignConfig {
         mock_speed: 20.0,
         mock_lockstep: true,
         mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
+        mock_profile: crate::campaign::mock_profile::DEFAULT_PROFILE.into(),
         screen: true,
         hfs_time_scale: None,
         flight_timeout_s: 500.0,

@@ -7,9 +7,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
-use mock_autopilot::{LinkSpec, MockAutopilot, ParamValue, SpeedFactor};
+use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
 use tokio::runtime::Handle;
 
+use super::mock_profile::MockProfile;
 use super::pool::{Flown, Vehicle, VehicleError};
 use crate::bridge::{BridgeError, CancelToken, FlightReport, FlyMode, FlyOptions, fly};
 use crate::judge::Judge;
@@ -119,30 +120,21 @@ pub struct MockVehicle {
     judge: Judge,
     anchor: bool,
     timeout_s: f64,
+    profile: MockProfile,
 }
 
-/// Horizontal speed limit (MPC_XY_VEL_MAX, m/s) of the embedded mock in avoidance mode, CALIBRATED on how fast the
-/// recorded competition flights flew (not on their distances): the median over the 37 trajectory-carrying flights
-/// of `tests/data/hfs-flights` of the 95th-percentile horizontal speed is 1.40 m/s (their median maximum 1.54,
-/// 29 of 37 between 1.2 and 1.63). PX4 v1.12's defaults (MPC_XY_CRUISE 5, jerk-limited braking towards the
-/// avoidance setpoint about 5 m ahead) would fly about 2.6 m/s; why the recorded stack flew slower is not known
-/// (see README, *Mock autopilot fidelity*). It is a vehicle-side limit the companion does not read: the companion
-/// reads MPC_XY_CRUISE as PX4-Avoidance does, and that stays PX4's 5 m/s. (Set as MPC_XY_CRUISE instead, the
-/// companion would plan at 1.4 m/s: `examples/mock_fidelity.rs` MAE 0.61 m but Spearman 0.744 and, against real
-/// PX4 on 20 mission-2 tests, 7 flights stuck until the timeout where PX4 landed.)
-pub const MOCK_AVOIDANCE_SPEED_LIMIT_M_S: f64 = 1.4;
-
-/// The embedded mock for `mode`: PX4's defaults, except the avoidance speed limit (see
-/// [`MOCK_AVOIDANCE_SPEED_LIMIT_M_S`]).
+/// The embedded mock for `mode` with the default profile ([`super::mock_profile::DEFAULT_PROFILE`]).
 pub fn mock_builder(mode: FlyMode) -> mock_autopilot::Builder {
-    let b = MockAutopilot::builder();
+    mock_builder_with(&MockProfile::default(), mode)
+}
+
+/// The embedded mock for `mode`: in avoidance mode (what the profiles are fitted to) `profile`, else PX4's
+/// defaults.
+pub fn mock_builder_with(profile: &MockProfile, mode: FlyMode) -> mock_autopilot::Builder {
     if mode == FlyMode::Avoidance {
-        b.param(
-            "MPC_XY_VEL_MAX",
-            ParamValue::Float(MOCK_AVOIDANCE_SPEED_LIMIT_M_S as f32),
-        )
+        profile.builder()
     } else {
-        b
+        MockAutopilot::builder()
     }
 }
 
@@ -160,6 +152,7 @@ impl MockVehicle {
             judge: Judge::default(),
             anchor: false,
             timeout_s: FlyOptions::default().timeout_s,
+            profile: MockProfile::default(),
         }
     }
 
@@ -167,6 +160,12 @@ impl MockVehicle {
     pub fn judged(mut self, judge: Judge, anchor: bool) -> Self {
         self.judge = judge;
         self.anchor = anchor;
+        self
+    }
+
+    /// Fly the mock with `profile` (default: [`MockProfile::default`]).
+    pub fn with_profile(mut self, profile: MockProfile) -> Self {
+        self.profile = profile;
         self
     }
 
@@ -191,7 +190,7 @@ impl Vehicle for MockVehicle {
         let mock = self
             .handle
             .block_on(
-                mock_builder(self.mode)
+                mock_builder_with(&self.profile, self.mode)
                     .link(LinkSpec::UdpIn(addr))
                     .speed_factor(SpeedFactor::Times(self.speed))
                     .lockstep(self.lockstep.map(|_| DEFAULT_LOCKSTEP_WAIT))

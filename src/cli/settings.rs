@@ -63,6 +63,7 @@ pub struct Mock {
     pub lockstep: Option<bool>,
     pub latency_ms: Option<f64>,
     pub vehicles: Option<usize>,
+    pub profile: Option<String>,
 }
 
 /// `[flight]`.
@@ -408,6 +409,15 @@ pub const KEYS: &[KeyDoc] = &[
         "--mock-vehicles",
         "Embedded mock autopilots flying at once. Flights mostly wait on the mock's clock, so more vehicles than \
          cores can help while the planner keeps up. Not stored: a resumed campaign may change it.",
+    ),
+    key(
+        "mock",
+        "profile",
+        "\"px4-sitl\"",
+        "\"px4-sitl\"",
+        "--mock-profile",
+        "What the embedded mocks' avoidance flights are fitted to: `px4-sitl` (real PX4 v1.14 SITL) or \
+         `competition` (the competition's recorded Gazebo flights); see docs/mock-autopilot.md.",
     ),
     key(
         "flight",

@@ -41,7 +41,7 @@ fn the_main_job_flies_the_pinned_journal() {
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(
         stdout.starts_with(
-            "1 failing tests (1 distinct at IoU 0.5) of 6 flights (35 candidates screened), failure score 1.26"
+            "2 failing tests (2 distinct at IoU 0.5) of 6 flights (35 candidates screened), failure score 2.83"
         ),
         "{stdout}"
     );

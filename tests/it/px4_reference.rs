@@ -63,13 +63,19 @@ fn the_lfs_px4_motion_model_predicts_px4() {
     assert!(a.spearman.is_some_and(|s| s >= LFS_SPEARMAN_BOUND), "{a:?}");
 }
 
-/// Measured (README, *Real PX4 as a second reference*): the LFS `px4` model against PX4, 127 cases: MAE 1.043 m,
-/// Spearman 0.687 (it predicts 1.02 m less clearance than PX4 keeps); the campaign's mock on tier A, 34 cases:
-/// MAE 0.623 m, Spearman 0.589. The bounds leave room for run-to-run noise only.
+/// Measured (docs/validation/mock-vs-px4.md): the LFS `px4` model against PX4, 127 cases: MAE 1.043 m, Spearman
+/// 0.687 (it predicts 1.02 m less clearance than PX4 keeps). The bounds leave room for run-to-run noise only.
 const LFS_MAE_BOUND: f64 = 1.15;
 const LFS_SPEARMAN_BOUND: f64 = 0.6;
-const MOCK_MAE_BOUND: f64 = 0.8;
-const MOCK_SPEARMAN_BOUND: f64 = 0.45;
+
+/// Every `SUBSET_STRIDE`-th reference case (sorted by id): the fixed subset the default mock profile is checked
+/// on, small enough for the debug test profile.
+const SUBSET_STRIDE: usize = 4;
+/// Measured on that subset (docs/validation/mock-vs-px4.md, `mock_fit subset`): the default profile `px4-sitl`
+/// MAE 0.407 m, Spearman 0.650. The bounds add what a tiny change of timing moves a flight
+/// by (two runs differing only in timing: MAE 0.15 m between them), so a real regression fails, noise does not.
+const MOCK_MAE_BOUND: f64 = 0.56;
+const MOCK_SPEARMAN_BOUND: f64 = 0.5;
 
 async fn fly_mock(case: &FlightCase) -> Option<f64> {
     let base = TestCase::load(&repo().join(format!("missions/{}.yaml", case.mission_name))).ok()?;
@@ -88,6 +94,7 @@ async fn fly_mock(case: &FlightCase) -> Option<f64> {
         mode: FlyMode::Avoidance,
         time_scale: 100.0,
         lockstep: Some(Duration::ZERO),
+        timeout_s: 400.0,
         judge: Judge::E2025,
         ..FlyOptions::default()
     };
@@ -96,13 +103,20 @@ async fn fly_mock(case: &FlightCase) -> Option<f64> {
     r.ok()?.min_distance.map(|d| (d - case.definition_offset_m).max(0.0))
 }
 
-/// The campaign's mock on the tier-A cases (the ones with recorded trajectories), two at a time.
+/// The fixed subset of the reference the default profile is checked on.
+fn fidelity_subset(mut cases: Vec<FlightCase>) -> Vec<FlightCase> {
+    cases.sort_by(|a, b| a.id.cmp(&b.id));
+    cases.into_iter().step_by(SUBSET_STRIDE).collect()
+}
+
+/// The default mock profile (`px4-sitl`, fitted to these flights) on a fixed subset, two flights at a time:
+/// fails when its fidelity to PX4 regresses.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_campaign_mock_flies_like_px4_on_tier_a() {
+async fn the_default_mock_profile_flies_like_px4() {
     let (cases, px4) = reference();
-    let tier_a: Vec<FlightCase> = cases.into_iter().filter(|c| c.tier == "A").collect();
+    let subset = fidelity_subset(cases);
     let mut pairs = Vec::new();
-    for two in tier_a.chunks(2) {
+    for two in subset.chunks(2) {
         let flights = futures_join(two).await;
         for (case, flown) in two.iter().zip(flights) {
             let Some(flown) = flown else { continue };
@@ -112,8 +126,8 @@ async fn the_campaign_mock_flies_like_px4_on_tier_a() {
         }
     }
     let a = aggregate(&pairs);
-    eprintln!("mock vs PX4 (tier A): {a:?}");
-    assert!(a.n + 2 >= tier_a.len(), "mock flights failed: {a:?}");
+    eprintln!("default mock profile vs PX4 ({} cases): {a:?}", subset.len());
+    assert!(a.n + 1 >= subset.len(), "mock flights failed: {a:?}");
     assert!(a.mae.is_some_and(|m| m <= MOCK_MAE_BOUND), "{a:?}");
     assert!(a.spearman.is_some_and(|s| s >= MOCK_SPEARMAN_BOUND), "{a:?}");
 }

@@ -13,6 +13,7 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use prgenuav::bridge::FlyMode;
+use prgenuav::campaign::mock_profile::MockProfile;
 use prgenuav::campaign::parallel::available_threads;
 use prgenuav::campaign::pool::Vehicle;
 use prgenuav::campaign::report::{DISTINCT_IOU, Report};
@@ -130,6 +131,9 @@ struct Expert {
     /// Embedded mock autopilots flying at once (mock.vehicles).
     #[arg(long, hide = true, value_name = "N")]
     mock_vehicles: Option<usize>,
+    /// The embedded mocks' profile: `px4-sitl` or `competition` (mock.profile).
+    #[arg(long, hide = true, value_name = "NAME")]
+    mock_profile: Option<String>,
     /// Clock rate of the --connect vehicles (flight.connect_time_scale).
     #[arg(long, hide = true, alias = "hfs-time-scale", value_name = "K")]
     connect_time_scale: Option<f64>,
@@ -266,12 +270,14 @@ fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicl
         let lockstep = cfg
             .mock_lockstep
             .then(|| Duration::from_secs_f64(cfg.mock_latency_ms / 1000.0));
+        let profile = MockProfile::named(&cfg.mock_profile).map_err(|e| anyhow::anyhow!("mock.profile: {e}"))?;
         return Ok((0..count)
             .map(|i| {
                 Box::new(
                     MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
                         .judged(cfg.judge, cfg.anchor_at_vehicle_home)
-                        .with_timeout(cfg.flight_timeout_s),
+                        .with_timeout(cfg.flight_timeout_s)
+                        .with_profile(profile.clone()),
                 ) as Box<dyn Vehicle>
             })
             .collect());

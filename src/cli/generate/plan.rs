@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
+use prgenuav::campaign::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::generator::GeneratorConfig;
@@ -269,6 +270,11 @@ fn lay_over(args: &Args, f: &CampaignToml, r: &mut Recorder) -> CampaignToml {
                 ("--mock-latency", "mock.latency_ms", "mock_latency_ms"),
             ),
             vehicles: r.pick(e.mock_vehicles, mo.vehicles, ("--mock-vehicles", "mock.vehicles", "")),
+            profile: r.pick(
+                e.mock_profile.clone(),
+                mo.profile.clone(),
+                ("--mock-profile", "mock.profile", "mock_profile"),
+            ),
         },
         flight: flight(args, &f.flight, r),
         learning: learning(args, &f.learning, r),
@@ -363,6 +369,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         mock_speed: s.mock.speed.unwrap_or(MOCK_SPEED),
         mock_lockstep: s.mock.lockstep.unwrap_or(true),
         mock_latency_ms: s.mock.latency_ms.unwrap_or(DEFAULT_MOCK_LATENCY_MS),
+        mock_profile: s.mock.profile.clone().unwrap_or_else(|| DEFAULT_PROFILE.into()),
         screen,
         judge: args.judge.into(),
         anchor_at_vehicle_home: s.flight.anchor_at_vehicle_home.unwrap_or(false),
@@ -495,6 +502,9 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
             "--mock-latency (mock.latency_ms) {} must be between 0 and 1000 ms",
             cfg.mock_latency_ms
         );
+    }
+    if let Err(e) = MockProfile::named(&cfg.mock_profile) {
+        bail!("--mock-profile (mock.profile): {e}");
     }
     if cfg.ensemble > MAX_MEMBERS {
         bail!(

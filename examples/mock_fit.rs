@@ -1,0 +1,278 @@
+//! Fits the embedded mock's profile to real PX4: flies the 127 recorded cases with obstacles on an embedded
+//! lockstep mock for each candidate setting and compares minimum distance (the recorded flights' definition)
+//! and flight time with `tests/data/px4-flights` (PX4 v1.14 SITL, the same companion).
+//!
+//! `cargo run --release --example mock_fit -- fly OUT NAME SETTING [PARALLEL=3]` flies one setting (`SETTING`:
+//! `profile:NAME` and/or `KEY=VALUE,...`, a key being a PX4 parameter or a profile constant of
+//! `mock_autopilot::profile`) and appends its rows to `OUT/flights.csv` (setting, id, mock_m, flight_time_s,
+//! status); a setting already there is skipped. `cargo run --release --example mock_fit -- cv OUT [K=5]` then
+//! prints each setting's in-sample figures and the K-fold cross-validation of choosing the setting: folds by
+//! obstacle set (`fidelity::fold_of`, repeats of a layout share a fold), the setting with the lowest objective
+//! on the other folds predicts each fold.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::Context;
+use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
+use mock_autopilot::{LinkSpec, SpeedFactor};
+use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use prgenuav::campaign::mock_profile::MockProfile;
+use prgenuav::campaign::vehicles::mock_builder_with;
+use prgenuav::judge::Judge;
+use prgenuav::lfs::fidelity::{FlightCase, aggregate, fold_of, load_dir};
+use prgenuav::lfs::px4_flights::{self, Px4Flight};
+use prgenuav::model::TestCase;
+use tokio::sync::Semaphore;
+
+const SPEED: f64 = 100.0;
+const HEADER: &str = "setting,id,mock_m,flight_time_s,status";
+
+fn reference() -> anyhow::Result<(Vec<FlightCase>, Vec<Px4Flight>)> {
+    let (cases, _) = load_dir(Path::new("tests/data/hfs-flights"))?;
+    let cases: Vec<FlightCase> = cases.into_iter().filter(|c| !c.obstacles.is_empty()).collect();
+    let px4 = px4_flights::load(Path::new("tests/data/px4-flights"), &cases)?;
+    Ok((cases, px4))
+}
+
+/// `profile:NAME` picks the base profile (default `px4-sitl`), every other `KEY=VALUE` overrides a value.
+fn parse_setting(s: &str) -> anyhow::Result<MockProfile> {
+    let mut profile = MockProfile::by_name("px4-sitl").context("no px4-sitl profile")?;
+    let mut overrides = Vec::new();
+    for kv in s.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        if let Some(name) = kv.strip_prefix("profile:") {
+            profile = MockProfile::by_name(name).with_context(|| format!("no profile {name:?}"))?;
+        } else {
+            let (k, v) = kv.split_once('=').with_context(|| format!("{kv:?} is not KEY=VALUE"))?;
+            overrides.push((k.trim().to_string(), v.trim().parse::<f64>()?));
+        }
+    }
+    for (k, v) in overrides {
+        profile.set(&k, v).map_err(|e| anyhow::anyhow!(e))?;
+    }
+    Ok(profile)
+}
+
+async fn fly_case(case: FlightCase, profile: MockProfile) -> anyhow::Result<(Option<f64>, f64, String)> {
+    let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
+    let mut test = base.with_obstacles(case.obstacles.clone());
+    test.params = case.params.clone();
+    let mock = mock_builder_with(&profile, FlyMode::Avoidance)
+        .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
+        .speed_factor(SpeedFactor::Times(SPEED))
+        .lockstep(Some(DEFAULT_LOCKSTEP_WAIT))
+        .spawn()
+        .await?;
+    let port = mock.local_addr().map(|a| a.port()).context("no port")?;
+    let opts = FlyOptions {
+        connect: format!("udpout:127.0.0.1:{port}"),
+        mode: FlyMode::Avoidance,
+        time_scale: SPEED,
+        lockstep: Some(Duration::ZERO),
+        timeout_s: 400.0,
+        judge: Judge::E2025,
+        // TRAJ_DIR=DIR keeps each flown trajectory as DIR/<id>.csv (to compare phases with PX4's).
+        trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
+        ..FlyOptions::default()
+    };
+    let r = fly(&test, &opts, CancelToken::new()).await;
+    let _ = mock.shutdown().await;
+    let r = r?;
+    let d = r.min_distance.map(|d| (d - case.definition_offset_m).max(0.0));
+    Ok((d, r.flight_time_s, r.status.as_str().to_string()))
+}
+
+fn read_rows(out: &Path) -> BTreeMap<String, BTreeMap<String, (Option<f64>, f64)>> {
+    let mut by: BTreeMap<String, BTreeMap<String, (Option<f64>, f64)>> = BTreeMap::new();
+    let text = std::fs::read_to_string(out.join("flights.csv")).unwrap_or_default();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 4 {
+            continue;
+        }
+        let d = f[2].parse().ok();
+        let t = f[3].parse().unwrap_or(f64::NAN);
+        by.entry(f[0].replace(';', ","))
+            .or_default()
+            .insert(f[1].to_string(), (d, t));
+    }
+    by
+}
+
+fn fly_setting(out: &Path, name: &str, setting: &str, parallel: usize) -> anyhow::Result<()> {
+    if read_rows(out).contains_key(name) {
+        eprintln!("{name}: already flown");
+        return Ok(());
+    }
+    let profile = parse_setting(setting)?;
+    let (cases, _) = reference()?;
+    let rt = tokio::runtime::Runtime::new()?;
+    let gate = Arc::new(Semaphore::new(parallel.max(1)));
+    let rows = rt.block_on(async {
+        let mut handles = Vec::new();
+        for case in cases {
+            let gate = gate.clone();
+            let profile = profile.clone();
+            handles.push(tokio::spawn(async move {
+                let _permit = gate.acquire_owned().await?;
+                let id = case.id.clone();
+                anyhow::Ok((id, fly_case(case, profile).await?))
+            }));
+        }
+        let mut rows = Vec::new();
+        for h in handles {
+            rows.push(h.await??);
+        }
+        anyhow::Ok(rows)
+    })?;
+    std::fs::create_dir_all(out)?;
+    let path = out.join("flights.csv");
+    let fresh = !path.exists();
+    let mut f = std::fs::OpenOptions::new().create(true).append(true).open(&path)?;
+    if fresh {
+        writeln!(f, "{HEADER}")?;
+    }
+    for (id, (d, t, status)) in rows {
+        let d = d.map_or(String::new(), |d| format!("{d:.3}"));
+        writeln!(f, "{},{id},{d},{t:.1},{status}", name.replace(',', ";"))?;
+    }
+    Ok(())
+}
+
+/// MAE, Spearman, median flight-time ratio (mock / PX4), mean signed error over `ids`.
+fn figures(
+    rows: &BTreeMap<String, (Option<f64>, f64)>,
+    px4: &BTreeMap<&str, &Px4Flight>,
+    ids: &[&str],
+) -> (f64, f64, f64, f64, usize) {
+    let mut pairs = Vec::new();
+    let mut ratios = Vec::new();
+    for id in ids {
+        let (Some((d, t)), Some(p)) = (rows.get(*id), px4.get(id)) else {
+            continue;
+        };
+        if let (Some(d), Some(pd)) = (d, p.min_distance) {
+            pairs.push((*d, pd));
+        }
+        if t.is_finite() && p.flight_time_s > 0.0 {
+            ratios.push(t / p.flight_time_s);
+        }
+    }
+    let a = aggregate(&pairs);
+    ratios.sort_by(f64::total_cmp);
+    let ratio = ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN);
+    let bias = pairs.iter().map(|(p, t)| p - t).sum::<f64>() / pairs.len().max(1) as f64;
+    (
+        a.mae.unwrap_or(f64::NAN),
+        a.spearman.unwrap_or(f64::NAN),
+        ratio,
+        bias,
+        a.n,
+    )
+}
+
+/// What the fit minimises: MAE (m) plus the flight time's log ratio (a 10 % slower or faster mock costs as
+/// much as 0.1 m), so the fitted mock is right about distances without flying at a different pace.
+fn objective(f: &(f64, f64, f64, f64, usize)) -> f64 {
+    f.0 + f.2.ln().abs()
+}
+
+fn cv(out: &Path, k: usize) -> anyhow::Result<()> {
+    let (cases, flights) = reference()?;
+    let px4: BTreeMap<&str, &Px4Flight> = flights.iter().map(|f| (f.id.as_str(), f)).collect();
+    let all: Vec<&str> = cases.iter().map(|c| c.id.as_str()).collect();
+    let by = read_rows(out);
+    // The fixed subset `tests/it/px4_reference.rs` checks the default profile on: every 4th case by id.
+    let mut sorted = all.clone();
+    sorted.sort_unstable();
+    let subset: Vec<&str> = sorted.into_iter().step_by(4).collect();
+    println!("| setting | n | MAE m | Spearman | time ratio | signed m | objective | subset MAE, Spearman |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, rows) in &by {
+        let f = figures(rows, &px4, &all);
+        let s = figures(rows, &px4, &subset);
+        println!(
+            "| {name} | {} | {:.3} | {:.3} | {:.3} | {:+.3} | {:.3} | {:.3}, {:.3} |",
+            f.4,
+            f.0,
+            f.1,
+            f.2,
+            f.3,
+            objective(&f),
+            s.0,
+            s.1
+        );
+    }
+    let mut oof: BTreeMap<String, (Option<f64>, f64)> = BTreeMap::new();
+    println!("\n| fold | cases | chosen on the other folds | test MAE m | Spearman | time ratio |");
+    println!("|---|---|---|---|---|---|");
+    for fold in 0..k {
+        let (test, train): (Vec<&FlightCase>, Vec<&FlightCase>) = cases.iter().partition(|c| fold_of(c, k) == fold);
+        let train_ids: Vec<&str> = train.iter().map(|c| c.id.as_str()).collect();
+        let test_ids: Vec<&str> = test.iter().map(|c| c.id.as_str()).collect();
+        let best = by
+            .iter()
+            .min_by(|a, b| {
+                objective(&figures(a.1, &px4, &train_ids)).total_cmp(&objective(&figures(b.1, &px4, &train_ids)))
+            })
+            .context("no settings flown")?;
+        let f = figures(best.1, &px4, &test_ids);
+        println!(
+            "| {fold} | {} | {} | {:.3} | {:.3} | {:.3} |",
+            test_ids.len(),
+            best.0,
+            f.0,
+            f.1,
+            f.2
+        );
+        for id in test_ids {
+            if let Some(r) = best.1.get(id) {
+                oof.insert(id.to_string(), *r);
+            }
+        }
+    }
+    repeat_noise(&cases, &px4);
+    let f = figures(&oof, &px4, &all);
+    println!(
+        "\ncross-validated ({k} folds by obstacle set): n {} MAE {:.3} m, Spearman {:.3}, time ratio {:.3}, signed {:+.3} m",
+        f.4, f.0, f.1, f.2, f.3
+    );
+    Ok(())
+}
+
+/// PX4's own run-to-run spread: identical obstacle sets (repeat groups) flown more than once; and the best a
+/// deterministic mock could do on those cases (each flight predicted by its group's mean).
+fn repeat_noise(cases: &[FlightCase], px4: &BTreeMap<&str, &Px4Flight>) {
+    let mut groups: BTreeMap<(&str, &str), Vec<f64>> = BTreeMap::new();
+    for c in cases {
+        if let (Some(g), Some(d)) = (&c.repeat_group, px4.get(c.id.as_str()).and_then(|f| f.min_distance)) {
+            groups.entry((g.as_str(), c.mission_name.as_str())).or_default().push(d);
+        }
+    }
+    let mut dev = Vec::new();
+    for v in groups.values().filter(|v| v.len() > 1) {
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        dev.extend(v.iter().map(|d| (d - mean).abs()));
+    }
+    let n_groups = groups.values().filter(|v| v.len() > 1).count();
+    println!(
+        "\nPX4 repeat noise: {} flights in {n_groups} repeated obstacle sets, mean |d - set mean| {:.3} m",
+        dev.len(),
+        dev.iter().sum::<f64>() / dev.len().max(1) as f64
+    );
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.first().map(String::as_str) {
+        Some("fly") if args.len() >= 4 => {
+            let parallel = args.get(4).map_or(Ok(3), |a| a.parse())?;
+            fly_setting(&PathBuf::from(&args[1]), &args[2], &args[3], parallel)
+        }
+        Some("cv") if args.len() >= 2 => cv(&PathBuf::from(&args[1]), args.get(2).map_or(Ok(5), |a| a.parse())?),
+        _ => anyhow::bail!("usage: mock_fit fly OUT NAME SETTING [PARALLEL] | mock_fit cv OUT [K]"),
+    }
+}
