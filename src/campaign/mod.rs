@@ -12,6 +12,7 @@ pub mod learning;
 pub mod neighbours;
 pub mod parallel;
 pub mod pool;
+pub mod px4_vehicle;
 pub mod rank;
 pub mod report;
 pub mod rounds;

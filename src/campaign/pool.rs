@@ -8,7 +8,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use super::candidate::Screened;
-use super::journal::{FlightRecord, INTERRUPTED, Journal};
+use super::journal::{FlightRecord, INTERRUPTED, Journal, UNCHARGED};
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -187,7 +187,8 @@ impl Pool<'_> {
             match result {
                 Ok(flown) => {
                     let flown = interrupted_if_cancelled(flown, self.cancel);
-                    if flown.status != INTERRUPTED {
+                    // An uncharged flight (interrupted, backend failed) leaves its budget to the next job.
+                    if !UNCHARGED.contains(&flown.status.as_str()) {
                         l.finished += 1;
                     }
                     drop(l);

@@ -93,6 +93,7 @@ fn config(budget: usize) -> CampaignConfig {
         prior: None,
         min_diversity: 0.8,
         child_max_iou: None,
+        px4: None,
     }
 }
 

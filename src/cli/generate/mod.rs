@@ -3,6 +3,7 @@
 //! in docs/cli.md.
 
 mod plan;
+mod px4;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -77,6 +78,8 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    px4: px4::Px4Flags,
     #[command(flatten)]
     expert: Expert,
 }
@@ -206,10 +209,13 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The vehicles that fly: embedded mocks, or one per MAVLink URL.
+/// The vehicles that fly: embedded mocks, PX4 instance slots (`--px4`), or one per MAVLink URL.
 fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
     let cfg: &CampaignConfig = &plan.cfg;
     let mode: FlyMode = parse_stored::<Mode>(&cfg.mode, "mode")?.into();
+    if let Some(px4) = &cfg.px4 {
+        return px4::fleet(px4, cfg, mode, plan.px4_instances, runtime.handle());
+    }
     if cfg.hfs == ["mock"] {
         let count = plan.mock_vehicles.unwrap_or_else(available_threads);
         if count == 0 {

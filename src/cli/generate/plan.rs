@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
+use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
@@ -37,6 +38,8 @@ pub struct Plan {
     pub mock_vehicles: Option<usize>,
     /// Seconds to wait for each MAVLink vehicle's first heartbeat (not stored either).
     pub connect_timeout_s: f64,
+    /// PX4 instances at once with `--px4` (not stored either).
+    pub px4_instances: Option<usize>,
 }
 
 /// A setting given explicitly, by a flag or by the TOML file.
@@ -67,7 +70,7 @@ struct Recorder<'a> {
 
 impl Recorder<'_> {
     fn flag(&mut self, flag: &str, key: &str) {
-        let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home"].contains(&flag);
+        let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
         self.given.push(Given {
             name: flag.to_string(),
             file: None,
@@ -118,6 +121,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         }
     };
     check(&cfg)?;
+    args.px4.check(&cfg)?;
     let s = &req.settings;
     let connect_timeout_s = s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S);
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
@@ -128,6 +132,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         folder,
         mock_vehicles: s.mock.vehicles,
         connect_timeout_s,
+        px4_instances: args.px4.instances,
     })
 }
 
@@ -148,6 +153,9 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
         ("mode", "--mode", "mode"),
         ("judge", "--judge", "judge"),
         ("prior", "--prior", "prior"),
+        ("px4", "--px4", "px4.build"),
+        ("speed_factor", "--speed-factor", "px4.speed_factor"),
+        ("keep_ulog", "--keep-ulog", "px4.keep_ulog"),
     ] {
         if given(m, id) {
             r.flag(flag, key);
@@ -287,12 +295,16 @@ fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
 /// The campaign's settings: what was asked for, defaults for the rest.
 fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
     let s = &req.settings;
-    let hfs: Vec<String> = args
-        .connect
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .collect();
+    let px4 = args.px4.backend();
+    let hfs: Vec<String> = if px4.is_some() {
+        vec!["px4".into()]
+    } else {
+        args.connect
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect()
+    };
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
     CampaignConfig {
@@ -324,6 +336,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         prior: args.prior.clone(),
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
+        px4,
     }
 }
 
@@ -368,7 +381,16 @@ fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<Campai
     let stored: CampaignConfig =
         serde_json::from_str(&text).with_context(|| format!("{}: not a campaign file", path.display()))?;
     let case = args.case.clone().unwrap_or_else(|| stored.case.clone());
-    let wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    let mut wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    // Without --px4, a --speed-factor or --keep-ulog is compared with the stored instances' settings.
+    if let (None, Some(p)) = (&wanted.px4, &stored.px4) {
+        let f = &args.px4;
+        wanted.px4 = Some(Px4Backend {
+            speed_factor: f.speed_factor.unwrap_or(p.speed_factor),
+            keep_ulog: f.keep_ulog || p.keep_ulog,
+            build: p.build.clone(),
+        });
+    }
     let conflicts = conflicts(&stored, &wanted, &req.given, &path)?;
     if !conflicts.is_empty() {
         bail!("{}", conflicts.join("\n"));
