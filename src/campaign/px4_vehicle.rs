@@ -173,7 +173,9 @@ impl Px4Vehicle {
         drop(px4);
         match (result, died) {
             (Ok(r), _) if r.status.completed() => Attempt::Flew(flown(r)),
-            (_, Some(status)) => Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance)),
+            (_, Some(status)) => {
+                Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance))
+            }
             (Err(e), None) => Attempt::Failed(format!("PX4 instance {}: {e}", self.instance)),
             (Ok(r), None) => Attempt::Flew(flown(r)),
         }
@@ -211,13 +213,19 @@ impl Vehicle for Px4Vehicle {
         let what = if failures[0] == failures[1] {
             format!("PX4 failed the same way on two fresh instances: {}", failures[0])
         } else {
-            format!("PX4 failed on two fresh instances: {}; retry: {}", failures[0], failures[1])
+            format!(
+                "PX4 failed on two fresh instances: {}; retry: {}",
+                failures[0], failures[1]
+            )
         };
         let reason = format!("{what}; {}", console_note(&written));
         if self.failed_in_a_row >= BACKEND_FAILURES_TO_DROP {
             return Err(VehicleError::Unreachable {
                 vehicle: self.name(),
-                reason: format!("{} flights in a row failed on PX4 (last: {reason})", self.failed_in_a_row),
+                reason: format!(
+                    "{} flights in a row failed on PX4 (last: {reason})",
+                    self.failed_in_a_row
+                ),
             });
         }
         Ok(Flown {
@@ -303,7 +311,12 @@ fn keep_ulog(px4: &Px4Sitl, to: &Path, log: &mut String) {
         last = now;
     }
     if let Err(e) = std::fs::copy(&newest, to) {
-        let _ = writeln!(log, "(--keep-ulog: copying {} to {}: {e})", newest.display(), to.display());
+        let _ = writeln!(
+            log,
+            "(--keep-ulog: copying {} to {}: {e})",
+            newest.display(),
+            to.display()
+        );
     }
 }
 

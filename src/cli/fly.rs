@@ -9,11 +9,11 @@ use std::time::Duration;
 use anyhow::Context;
 use prgenuav::bridge::session::gazebo::world_sdf;
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
-use prgenuav::campaign::px4_vehicle::DEFAULT_SPEED_FACTOR;
 use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
 };
+use prgenuav::campaign::px4_vehicle::DEFAULT_SPEED_FACTOR;
 use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};

@@ -32,7 +32,10 @@ const DIES_AT_BOOT: &str = "echo 'ERROR [simulator_sih] fake px4: no sensors'\ne
 
 /// Writes its pid (under its working folder's parent, the temp dir) and hangs without finishing its boot.
 fn never_boots(pids: &Path) -> String {
-    format!("echo $$ >> '{}'\necho 'INFO  [init] fake px4 starting'\nexec sleep 120", pids.display())
+    format!(
+        "echo $$ >> '{}'\necho 'INFO  [init] fake px4 starting'\nexec sleep 120",
+        pids.display()
+    )
 }
 
 fn vehicle(build: &Path, boot: Duration) -> (tokio::runtime::Runtime, Px4Vehicle) {
@@ -52,7 +55,9 @@ fn a_px4_dying_at_boot_is_retried_once_then_journaled_backend_failed_and_the_veh
     let out = tempfile::tempdir().unwrap();
     let csv = out.path().join("flights/candidate_0.csv");
     let test = case(2).with_obstacles(valid_pair());
-    let flown = v.fly(&test, &csv, &AtomicBool::new(false)).expect("journaled, not dropped");
+    let flown = v
+        .fly(&test, &csv, &AtomicBool::new(false))
+        .expect("journaled, not dropped");
     assert_eq!(flown.status, BACKEND_FAILED);
     let reason = flown.reason.unwrap_or_default();
     assert!(
@@ -66,7 +71,11 @@ fn a_px4_dying_at_boot_is_retried_once_then_journaled_backend_failed_and_the_veh
     assert!(log.contains("=== attempt 1") && log.contains("=== attempt 2"), "{log}");
     assert_eq!(log.matches("no sensors").count(), 2, "{log}");
     // The second flight in a row failing the same way drops the vehicle: its job goes back to the pool.
-    let next = v.fly(&test, &out.path().join("flights/candidate_1.csv"), &AtomicBool::new(false));
+    let next = v.fly(
+        &test,
+        &out.path().join("flights/candidate_1.csv"),
+        &AtomicBool::new(false),
+    );
     assert!(
         matches!(&next, Err(VehicleError::Unreachable { reason, .. }) if reason.contains("2 flights in a row")),
         "{next:?}"
@@ -84,7 +93,10 @@ fn a_px4_that_never_boots_is_retried_on_a_fresh_instance_and_stopped_each_time()
     let flown = v.fly(&case(2), &csv, &AtomicBool::new(false)).expect("journaled");
     assert_eq!(flown.status, BACKEND_FAILED);
     let reason = flown.reason.unwrap_or_default();
-    assert!(reason.contains("within 1 s") && reason.contains("fake px4 starting"), "{reason}");
+    assert!(
+        reason.contains("within 1 s") && reason.contains("fake px4 starting"),
+        "{reason}"
+    );
     assert!(t0.elapsed() < Duration::from_secs(20), "two bounded boots");
     let started: Vec<i32> = std::fs::read_to_string(&pids)
         .unwrap()
@@ -147,11 +159,17 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
         out.path().to_str().unwrap(),
     ]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("no reachable vehicle") && err.contains("no sensors"), "{err}");
+    assert!(
+        err.contains("no reachable vehicle") && err.contains("no sensors"),
+        "{err}"
+    );
     let folder = std::fs::read_dir(out.path()).unwrap().flatten().next().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert_eq!(all.len(), 1);
-    assert_eq!((all[0].status.as_str(), all[0].vehicle.as_str()), (BACKEND_FAILED, "px4-sih#0"));
+    assert_eq!(
+        (all[0].status.as_str(), all[0].vehicle.as_str()),
+        (BACKEND_FAILED, "px4-sih#0")
+    );
     assert!(folder.join("flights/candidate_0.px4.log").is_file());
     let stored: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("campaign.json")).unwrap()).unwrap();
@@ -197,7 +215,13 @@ fn a_killed_prgenuav_leaves_no_px4_behind() {
 pub fn killed_parent_leaves_no_px4(build: &Path, settle: Duration, comm: Option<&str>) {
     let (_d, test) = test_file(2, valid_pair());
     let mut parent = Command::new(env!("CARGO_BIN_EXE_prgenuav"))
-        .args(["fly", test.to_str().unwrap(), "--px4", build.to_str().unwrap(), "--quiet"])
+        .args([
+            "fly",
+            test.to_str().unwrap(),
+            "--px4",
+            build.to_str().unwrap(),
+            "--quiet",
+        ])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -220,12 +244,17 @@ pub fn killed_parent_leaves_no_px4(build: &Path, settle: Duration, comm: Option<
     std::thread::sleep(settle);
     parent.kill().expect("SIGKILL prgenuav");
     parent.wait().expect("reap prgenuav");
-    assert!(gone(child, Duration::from_secs(10)), "px4 {child} outlived its killed parent");
+    assert!(
+        gone(child, Duration::from_secs(10)),
+        "px4 {child} outlived its killed parent"
+    );
 }
 
 /// (pid, command name) of every process whose parent is `pid`.
 fn children_of(pid: i32) -> Vec<(i32, String)> {
-    let Ok(entries) = std::fs::read_dir("/proc") else { return Vec::new() };
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
     entries
         .flatten()
         .filter_map(|e| {

@@ -121,7 +121,11 @@ mod tests {
         assert!(refusal(&["bin", "exec", "etc"]).contains("init.d-posix/rcS (PX4's startup script) is missing"));
         let missing = Px4Build::open(Path::new("/nonexistent/px4_sitl_default")).unwrap_err();
         assert_eq!(missing.missing, "no such folder");
-        assert!(missing.to_string().contains("/nonexistent/px4_sitl_default: not a PX4 SITL build folder"));
+        assert!(
+            missing
+                .to_string()
+                .contains("/nonexistent/px4_sitl_default: not a PX4 SITL build folder")
+        );
     }
 
     #[test]

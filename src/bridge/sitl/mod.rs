@@ -94,7 +94,10 @@ pub enum SitlError {
         source: std::io::Error,
     },
     /// The startup script did not finish in time.
-    #[error("PX4 instance {instance} did not finish its startup script within {secs} s{}", last_words(tail))]
+    #[error(
+        "PX4 instance {instance} did not finish its startup script within {secs} s{}",
+        last_words(tail)
+    )]
     Boot {
         /// The instance number.
         instance: u8,
@@ -123,11 +126,7 @@ pub enum SitlError {
 
 /// `; PX4 said: "a" | "b"` for the last three console lines, or nothing.
 fn last_words(tail: &[String]) -> String {
-    let last: Vec<&str> = tail
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let last: Vec<&str> = tail.iter().map(|l| l.trim()).filter(|l| !l.is_empty()).collect();
     if last.is_empty() {
         return String::new();
     }

@@ -110,11 +110,7 @@ mod tests {
         tie_to_parent(&mut cmd);
         let mut child = cmd.spawn().unwrap();
         let mut line = String::new();
-        std::io::BufRead::read_line(
-            &mut std::io::BufReader::new(child.stdout.take().unwrap()),
-            &mut line,
-        )
-        .unwrap();
+        std::io::BufRead::read_line(&mut std::io::BufReader::new(child.stdout.take().unwrap()), &mut line).unwrap();
         let sleeper: i32 = line.trim().parse().unwrap();
         stop(&mut child);
         // The sleeper, reparented to init, is reaped shortly after its SIGKILL.

@@ -70,7 +70,8 @@ struct Recorder<'a> {
 
 impl Recorder<'_> {
     fn flag(&mut self, flag: &str, key: &str) {
-        let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
+        let switch = flag.starts_with("--no-")
+            || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
         self.given.push(Given {
             name: flag.to_string(),
             file: None,

@@ -9,7 +9,9 @@ use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::parallel::available_threads;
 use prgenuav::campaign::pool::Vehicle;
-use prgenuav::campaign::px4_vehicle::{DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots};
+use prgenuav::campaign::px4_vehicle::{
+    DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots,
+};
 use prgenuav::campaign::run::CampaignConfig;
 use tokio::runtime::Handle;
 
@@ -52,7 +54,10 @@ impl Px4Flags {
         };
         Px4Build::open(&px4.build)?;
         if !(px4.speed_factor.is_finite() && px4.speed_factor > 0.0 && px4.speed_factor <= 100.0) {
-            bail!("--speed-factor {}: expected a factor above 0, at most 100", px4.speed_factor);
+            bail!(
+                "--speed-factor {}: expected a factor above 0, at most 100",
+                px4.speed_factor
+            );
         }
         if let Some(k) = self.instances {
             instance_slots(k).map_err(anyhow::Error::msg)?;
