@@ -159,6 +159,9 @@ impl Px4Vehicle {
             detect_time_scale: true,
             trajectory_csv: Some(csv.to_path_buf()),
             heartbeat_wait_s: 30.0,
+            // Instance i is system i + 1: another vehicle heard on the port (a mock, a hand-started PX4) is not
+            // flown by mistake.
+            target_system: Some(self.instance.saturating_add(1)),
             judge: s.judge,
             anchor_at_vehicle_home: s.anchor,
             timeout_s: s.timeout_s,
