@@ -343,7 +343,7 @@ mod tests {
         assert_eq!(default_instances(4, SIH_RTF_PER_CORE / 2.0), 8);
         assert_eq!(default_instances(1, 1000.0), 1, "at least one");
         assert_eq!(default_instances(64, 1.0), MAX_INSTANCES, "at most the slots there are");
-        assert_eq!(default_instances(2, 0.0), MAX_INSTANCES);
+        assert_eq!(default_instances(2, 0.0), 1, "a nonsense factor (refused earlier): one");
     }
 
     #[test]

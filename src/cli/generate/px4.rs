@@ -25,11 +25,12 @@ pub struct Px4Flags {
     /// PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, docs/px4.md).
     #[arg(long, value_name = "K")]
     pub instances: Option<usize>,
-    /// PX4_SIM_SPEED_FACTOR of the instances [default: 5].
-    #[arg(long, value_name = "F")]
+    /// PX4_SIM_SPEED_FACTOR of the --px4 instances [default: 5] (a flag only, stored in campaign.json).
+    #[arg(long, hide = true, value_name = "F")]
     pub speed_factor: Option<f64>,
-    /// Copy each flight's PX4 ULog beside its trajectory (flights/candidate_N.ulg).
-    #[arg(long)]
+    /// Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg (a flag only, stored in
+    /// campaign.json).
+    #[arg(long, hide = true)]
     pub keep_ulog: bool,
 }
 
