@@ -97,10 +97,26 @@ pub struct CampaignConfig {
     /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub runner: Option<String>,
+    /// PX4 SITL instances the campaign starts itself (`--px4`), each flight on a fresh one; `None` (also when
+    /// the key is absent): the vehicles of `hfs`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub px4: Option<Px4Backend>,
 }
 
 fn one_flight() -> usize {
     1
+}
+
+/// How a `--px4` campaign starts its instances (their number is not stored: a resumed campaign may change it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Px4Backend {
+    /// The user's `px4_sitl_default` build folder.
+    pub build: PathBuf,
+    /// `PX4_SIM_SPEED_FACTOR`.
+    pub speed_factor: f64,
+    /// Copy each flight's ULog beside its trajectory.
+    #[serde(default)]
+    pub keep_ulog: bool,
 }
 
 fn default_min_diversity() -> f64 {

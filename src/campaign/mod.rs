@@ -16,6 +16,7 @@ pub mod mock_profile;
 pub mod neighbours;
 pub mod parallel;
 pub mod pool;
+pub mod px4_vehicle;
 pub mod rank;
 pub mod report;
 pub mod rounds;

@@ -96,6 +96,7 @@ fn config(budget: usize) -> CampaignConfig {
         child_max_iou: None,
         confirm: 1,
         runner: None,
+        px4: None,
     }
 }
 

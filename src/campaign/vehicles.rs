@@ -18,7 +18,7 @@ use crate::model::TestCase;
 
 /// Flies with the bridge on `handle`'s runtime, turning the campaign's stop flag into a bridge cancel (the
 /// flight then lands and keeps its recording).
-fn fly_blocking(
+pub(super) fn fly_blocking(
     handle: &Handle,
     test: &TestCase,
     opts: &FlyOptions,
@@ -41,7 +41,7 @@ fn fly_blocking(
     })
 }
 
-fn flown(report: FlightReport) -> Flown {
+pub(super) fn flown(report: FlightReport) -> Flown {
     Flown {
         status: report.status.as_str().to_string(),
         min_distance: report.min_distance,

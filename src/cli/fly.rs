@@ -1,4 +1,4 @@
-//! `prgenuav fly TEST.yaml [--connect URL] [--mode avoidance|offboard|mission] [--timeout S] [--json]
+//! `prgenuav fly TEST.yaml [--connect URL | --px4 BUILD_DIR] [--mode avoidance|offboard|mission] [--timeout S] [--json]
 //! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence] [--judge 2025|2026]
 //! [--anchor-at-vehicle-home] [--strict]`.
 
@@ -8,10 +8,12 @@ use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::session::gazebo::world_sdf;
+use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
 };
+use prgenuav::campaign::px4_vehicle::DEFAULT_SPEED_FACTOR;
 use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
@@ -26,6 +28,10 @@ pub struct Args {
     /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
     #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
+    /// Start a fresh PX4 SIH instance for the flight (at the test's home, instance 0) and stop it after:
+    /// BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder (docs/px4.md).
+    #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
+    px4: Option<PathBuf>,
     /// How the flight avoids the virtual obstacles.
     #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
     mode: Mode,
@@ -50,9 +56,10 @@ pub struct Args {
     /// Do not upload the obstacles as a geofence.
     #[arg(long)]
     no_fence: bool,
-    /// The vehicle's simulated time runs this many times faster (PX4_SIM_SPEED_FACTOR, mock --speed-factor).
-    #[arg(long, value_name = "K", default_value_t = 1.0)]
-    time_scale: f64,
+    /// The vehicle's simulated time runs this many times faster (PX4_SIM_SPEED_FACTOR, mock --speed-factor)
+    /// [default: 1; with --px4, the instance's speed factor, 5].
+    #[arg(long, value_name = "K")]
+    time_scale: Option<f64>,
     /// Skip the low-fidelity prediction.
     #[arg(long)]
     no_predict: bool,
@@ -89,6 +96,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ("--trajectory", args.trajectory.as_deref()),
         ("--world", args.world.as_deref()),
     ])?;
+    let build = args.px4.as_deref().map(Px4Build::open).transpose()?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -106,7 +114,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .inspect_err(|e| eprintln!("warning: no LFS prediction: {e}"))
             .ok()
     };
-    let opts = options(&args, prediction.as_ref())?;
+    let mut opts = options(&args, prediction.as_ref())?;
+    // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
+    let px4 = match &build {
+        Some(b) => Some(start_px4(b, &test, &mut opts, args.json || args.quiet)?),
+        None => None,
+    };
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
     let report = runtime.block_on(async {
         let cancel = CancelToken::new();
@@ -118,10 +131,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             }
         });
         if !args.json && !args.quiet {
-            eprintln!("waiting for a vehicle on {} ...", args.connect);
+            eprintln!("waiting for a vehicle on {} ...", opts.connect);
         }
         fly(&test, &opts, cancel).await
     })?;
+    if let Some(px4) = px4 {
+        if !report.status.completed() {
+            eprintln!("PX4's console, last 20 lines:");
+            for line in px4.console_tail(20) {
+                eprintln!("  {line}");
+            }
+        }
+        drop(px4);
+    }
     if let Some(path) = &args.plot {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
@@ -157,7 +179,9 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
         timeout_s: args.timeout,
         trajectory_csv: args.trajectory.clone(),
         fence: !args.no_fence,
-        time_scale: args.time_scale,
+        time_scale: args
+            .time_scale
+            .unwrap_or(if args.px4.is_some() { DEFAULT_SPEED_FACTOR } else { 1.0 }),
         lfs_min_distance: prediction.and_then(|p| p.min_distance),
         lockstep: match args.lockstep {
             None => None,
@@ -172,6 +196,19 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
     };
     opts.validate()?;
     Ok(opts)
+}
+
+/// `--px4`: a fresh SIH instance at the test's home, booted; `opts` then fly it at its measured clock rate.
+fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<Px4Sitl> {
+    let speed = opts.time_scale;
+    let spec = SitlSpec::new(build.bin(), 0, speed).at(test.home);
+    if !quiet {
+        eprintln!("starting PX4 SIH instance 0 at the test's home, speed factor {speed} ...");
+    }
+    let px4 = Px4Sitl::start(&spec)?;
+    opts.connect = px4.url();
+    opts.detect_time_scale = true;
+    Ok(px4)
 }
 
 /// `--plot`: the flown path over the predicted one.

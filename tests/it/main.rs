@@ -14,6 +14,8 @@ mod lfs;
 mod missions;
 mod pinned;
 mod pty;
+mod px4_campaign;
+mod px4_fake;
 mod px4_reference;
 mod px4_sitl;
 mod ready;

@@ -3,6 +3,7 @@
 //! in docs/cli.md.
 
 mod plan;
+mod px4;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -61,7 +62,7 @@ pub struct Args {
     #[arg(long, hide = true, value_name = "S")]
     job_timeout: Option<f64>,
     /// How the flights avoid the virtual obstacles.
-    #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
+    #[arg(long, hide = true, value_enum, default_value_t = Mode::Avoidance)]
     mode: Mode,
     /// Judge edition of the distances (and of the low-fidelity prediction).
     #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
@@ -96,6 +97,8 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    px4: px4::Px4Flags,
     #[command(flatten)]
     expert: Expert,
 }
@@ -255,13 +258,16 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
     std::process::exit(EXIT_INTERRUPTED);
 }
 
-/// The vehicles that fly: embedded mocks, or one per MAVLink URL.
+/// The vehicles that fly: embedded mocks, PX4 instance slots (`--px4`), or one per MAVLink URL.
 fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
     let cfg: &CampaignConfig = &plan.cfg;
     if let Some(runner) = plan.runner.clone() {
         return RunnerVehicle::fleet(runner, plan.jobs.unwrap_or(1)).map_err(anyhow::Error::msg);
     }
     let mode: FlyMode = parse_stored::<Mode>(&cfg.mode, "mode")?.into();
+    if let Some(px4) = &cfg.px4 {
+        return px4::fleet(px4, cfg, mode, plan.px4_instances, runtime.handle());
+    }
     if cfg.hfs == ["mock"] {
         let count = plan.mock_vehicles.unwrap_or_else(available_threads);
         if count == 0 {

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
+use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
@@ -47,6 +48,8 @@ pub struct Plan {
     pub runner: Option<RunnerSettings>,
     /// Runner jobs at once (not stored).
     pub jobs: Option<usize>,
+    /// PX4 instances at once with `--px4` (not stored either).
+    pub px4_instances: Option<usize>,
 }
 
 /// A setting given explicitly, by a flag or by the TOML file.
@@ -77,7 +80,8 @@ struct Recorder<'a> {
 
 impl Recorder<'_> {
     fn flag(&mut self, flag: &str, key: &str) {
-        let switch = flag.starts_with("--no-") || ["--mock-free-running", "--anchor-at-vehicle-home"].contains(&flag);
+        let switch = flag.starts_with("--no-")
+            || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
         self.given.push(Given {
             name: flag.to_string(),
             file: None,
@@ -124,6 +128,10 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         None => fresh(args, &req)?,
     };
     check(&cfg)?;
+    if cfg.runner.is_some() && cfg.px4.is_some() {
+        bail!("--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)");
+    }
+    args.px4.check(&cfg)?;
     let s = &req.settings;
     let connect_timeout_s = s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S);
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
@@ -145,6 +153,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         connect_timeout_s,
         runner,
         jobs: args.jobs,
+        px4_instances: args.px4.instances,
     })
 }
 
@@ -196,6 +205,9 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
         ("judge", "--judge", "judge"),
         ("prior", "--prior", "prior"),
         ("runner", "--runner", "runner"),
+        ("px4", "--px4", "px4.build"),
+        ("speed_factor", "--speed-factor", "px4.speed_factor"),
+        ("keep_ulog", "--keep-ulog", "px4.keep_ulog"),
     ] {
         if given(m, id) {
             r.flag(flag, key);
@@ -341,14 +353,17 @@ fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
 /// The campaign's settings: what was asked for, defaults for the rest.
 fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
     let s = &req.settings;
-    let hfs: Vec<String> = match &args.runner {
-        Some(_) => vec!["runner".into()],
-        None => args
-            .connect
+    let px4 = args.px4.backend();
+    let hfs: Vec<String> = if args.runner.is_some() {
+        vec!["runner".into()]
+    } else if px4.is_some() {
+        vec!["px4".into()]
+    } else {
+        args.connect
             .split(',')
             .map(|s| s.trim().to_string())
             .filter(|s| !s.is_empty())
-            .collect(),
+            .collect()
     };
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
@@ -382,6 +397,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
         confirm: s.flight.confirm.unwrap_or(if mock { 1 } else { LINK_CONFIRM }),
         runner: args.runner.clone(),
+        px4,
     }
 }
 
@@ -424,7 +440,16 @@ fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<Campai
     let stored: CampaignConfig =
         serde_json::from_str(&text).with_context(|| format!("{}: not a campaign file", path.display()))?;
     let case = args.case.clone().unwrap_or_else(|| stored.case.clone());
-    let wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    let mut wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    // Without --px4, a --speed-factor or --keep-ulog is compared with the stored instances' settings.
+    if let (None, Some(p)) = (&wanted.px4, &stored.px4) {
+        let f = &args.px4;
+        wanted.px4 = Some(Px4Backend {
+            speed_factor: f.speed_factor.unwrap_or(p.speed_factor),
+            keep_ulog: f.keep_ulog || p.keep_ulog,
+            build: p.build.clone(),
+        });
+    }
     let conflicts = conflicts(&stored, &wanted, &req.given, &path)?;
     if !conflicts.is_empty() {
         bail!("{}", conflicts.join("\n"));
@@ -522,7 +547,8 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
         bail!("--connect takes either `mock` or MAVLink URLs, not both");
     }
     // Before anything is screened or flown: a typo in the fifth URL must not cost the first four flights.
-    for url in cfg.hfs.iter().filter(|u| *u != "mock") {
+    let links = cfg.runner.is_none() && cfg.px4.is_none();
+    for url in cfg.hfs.iter().filter(|u| links && *u != "mock") {
         prgenuav::bridge::LinkAddress::parse(url).map_err(|e| anyhow::anyhow!("--connect: {e}"))?;
     }
     Ok(())

@@ -1,0 +1,457 @@
+//! Starting a PX4 SITL binary the user built (PX4 v1.14, SIH quadrotor, headless) for tests and reference
+//! runs. Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
+//! `make px4_sitl sihsim_quadx` target does, in a private working directory, and stops it when dropped
+//! ([`spawn`]: also when prgenuav is killed). [`build`] checks the user's build folder.
+
+mod build;
+mod spawn;
+
+use std::collections::VecDeque;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::Child;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+pub use build::{NotABuild, Px4Build};
+
+use crate::model::GeoPoint;
+
+/// How long the startup script may take before [`Px4Sitl::start`] gives up (a loaded machine boots PX4 in
+/// 5-15 s).
+pub const BOOT_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Console lines kept for [`Px4Sitl::console_tail`]: enough for a flight's failsafe, landing and disarm
+/// messages, small enough to keep for every instance of a fleet.
+const CONSOLE_LINES: usize = 400;
+
+/// The competition's home (PX4 1.14's SIH reads these integer parameters in 1e-7 degrees).
+pub const COMPETITION_HOME_E7: (i64, i64) = (473_977_420, 85_455_940);
+
+/// The console line PX4's POSIX main prints once its startup script ran.
+const BOOTED: &str = "Startup script returned";
+
+/// What to start.
+#[derive(Debug, Clone)]
+pub struct SitlSpec {
+    /// `BUILD/bin/px4` of a `px4_sitl_default` build.
+    pub bin: PathBuf,
+    /// Instance number: MAVLink system id `instance + 1`, API link sending to UDP `14540 + instance`.
+    pub instance: u8,
+    /// `PX4_SIM_SPEED_FACTOR` (SIH's lockstep speed-up).
+    pub speed_factor: f64,
+    /// Home (latitude, longitude) in 1e-7 degrees.
+    pub home_e7: (i64, i64),
+    /// How long the startup script may take.
+    pub boot_timeout: Duration,
+}
+
+impl SitlSpec {
+    /// The competition's home at `speed_factor`.
+    pub fn new(bin: impl Into<PathBuf>, instance: u8, speed_factor: f64) -> Self {
+        SitlSpec {
+            bin: bin.into(),
+            instance,
+            speed_factor,
+            home_e7: COMPETITION_HOME_E7,
+            boot_timeout: BOOT_TIMEOUT,
+        }
+    }
+
+    /// The same at `home` (a test's home, so the test's frame and PX4's local origin coincide).
+    pub fn at(mut self, home: GeoPoint) -> Self {
+        self.home_e7 = home_e7(home);
+        self
+    }
+}
+
+/// `home`'s latitude and longitude in the integer 1e-7 degrees PX4 1.14's SIH reads from `PX4_HOME_LAT` and
+/// `PX4_HOME_LON` (it ignores `PX4_HOME_ALT`: SIH's ground is its `SIH_LOC_H0`; heights are judged above the
+/// ground, so the altitude does not matter).
+pub fn home_e7(home: GeoPoint) -> (i64, i64) {
+    ((home.lat_deg * 1e7).round() as i64, (home.lon_deg * 1e7).round() as i64)
+}
+
+/// Why an instance did not start.
+#[derive(Debug, thiserror::Error)]
+pub enum SitlError {
+    /// The binary is not `BUILD/bin/px4` with a `BUILD/etc` beside `bin`.
+    #[error("{bin}: not BUILD/bin/px4 of a PX4 SITL build ({etc} is missing)")]
+    NoEtc {
+        /// The binary given.
+        bin: String,
+        /// Where `etc` was looked for.
+        etc: String,
+    },
+    /// The process could not be started.
+    #[error("starting {bin}: {source}")]
+    Spawn {
+        /// The binary given.
+        bin: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The startup script did not finish in time.
+    #[error(
+        "PX4 instance {instance} did not finish its startup script within {secs} s{}",
+        last_words(tail)
+    )]
+    Boot {
+        /// The instance number.
+        instance: u8,
+        /// The bound waited.
+        secs: u64,
+        /// The console's last lines.
+        tail: Vec<String>,
+    },
+    /// The process ended before its startup script finished.
+    #[error("PX4 instance {instance} exited during its startup ({status}){}", last_words(tail))]
+    Died {
+        /// The instance number.
+        instance: u8,
+        /// Its exit status, in words.
+        status: String,
+        /// The console's last lines.
+        tail: Vec<String>,
+    },
+    /// The caller's stop flag was raised while it booted.
+    #[error("PX4 instance {instance}: stopped while booting")]
+    Cancelled {
+        /// The instance number.
+        instance: u8,
+    },
+}
+
+/// `; PX4 said: "a" | "b"` for the last three console lines, or nothing.
+fn last_words(tail: &[String]) -> String {
+    let last: Vec<&str> = tail.iter().map(|l| l.trim()).filter(|l| !l.is_empty()).collect();
+    if last.is_empty() {
+        return String::new();
+    }
+    format!("; PX4 said: {}", last[last.len().saturating_sub(3)..].join(" | "))
+}
+
+/// One running instance; its process group killed (and its working directory removed) when dropped.
+#[derive(Debug)]
+pub struct Px4Sitl {
+    child: Child,
+    instance: u8,
+    dir: PathBuf,
+    console: Arc<Mutex<VecDeque<String>>>,
+}
+
+impl Px4Sitl {
+    /// Starts the instance and waits (bounded) until its startup script ran, so a flight does not race the boot.
+    pub fn start(spec: &SitlSpec) -> Result<Px4Sitl, SitlError> {
+        Self::start_until(spec, &AtomicBool::new(false))
+    }
+
+    /// [`Self::start`], giving up as soon as `stop` is raised.
+    ///
+    /// On Linux the instance is killed when the calling *thread* ends (PR_SET_PDEATHSIG): start it on a thread
+    /// that outlives it (not a pool thread that may retire while it flies).
+    pub fn start_until(spec: &SitlSpec, stop: &AtomicBool) -> Result<Px4Sitl, SitlError> {
+        let etc = etc_dir(&spec.bin);
+        if !etc.is_dir() {
+            return Err(SitlError::NoEtc {
+                bin: spec.bin.display().to_string(),
+                etc: etc.display().to_string(),
+            });
+        }
+        let dir = work_dir(spec.instance);
+        let spawn_err = |source| SitlError::Spawn {
+            bin: spec.bin.display().to_string(),
+            source,
+        };
+        std::fs::create_dir_all(&dir).map_err(spawn_err)?;
+        let mut child = match spawn::command(spec, &etc, &dir).spawn() {
+            Ok(c) => c,
+            Err(e) => {
+                let _ = std::fs::remove_dir_all(&dir);
+                return Err(spawn_err(e));
+            }
+        };
+        // The reader thread ends with the process (its stdout closes); it keeps draining so PX4 never blocks,
+        // and keeps the console's last lines: PX4's own account of a flight that went wrong.
+        let (tx, rx) = std::sync::mpsc::channel();
+        let console = Arc::new(Mutex::new(VecDeque::with_capacity(CONSOLE_LINES)));
+        if let Some(out) = child.stdout.take() {
+            let console = Arc::clone(&console);
+            std::thread::spawn(move || {
+                for line in BufReader::new(out).lines().map_while(Result::ok) {
+                    if line.contains(BOOTED) {
+                        let _ = tx.send(());
+                    }
+                    keep_line(&console, line);
+                }
+            });
+        }
+        let mut sitl = Px4Sitl {
+            child,
+            instance: spec.instance,
+            dir,
+            console,
+        };
+        let deadline = Instant::now() + spec.boot_timeout;
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                return Err(SitlError::Cancelled {
+                    instance: spec.instance,
+                });
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            match rx.recv_timeout(left.min(Duration::from_millis(100))) {
+                Ok(()) => return Ok(sitl),
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(SitlError::Died {
+                        instance: spec.instance,
+                        status: sitl.exit_status(Duration::from_secs(2)),
+                        tail: sitl.console_tail(CONSOLE_LINES),
+                    });
+                }
+                Err(RecvTimeoutError::Timeout) if left.is_zero() => {
+                    return Err(SitlError::Boot {
+                        instance: spec.instance,
+                        secs: spec.boot_timeout.as_secs(),
+                        tail: sitl.console_tail(CONSOLE_LINES),
+                    });
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+    }
+
+    /// The bridge's address for this instance's API link.
+    pub fn url(&self) -> String {
+        format!("udpin:0.0.0.0:{}", 14540 + u16::from(self.instance))
+    }
+
+    /// The instance number.
+    pub fn instance(&self) -> u8 {
+        self.instance
+    }
+
+    /// PX4's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// How PX4 ended, in words, if it has (it should run until dropped).
+    pub fn exited(&mut self) -> Option<String> {
+        self.child.try_wait().ok().flatten().map(|s| s.to_string())
+    }
+
+    /// The exit status once the process ends, waiting at most `wait` (its stdout may close a moment before).
+    fn exit_status(&mut self, wait: Duration) -> String {
+        let deadline = Instant::now() + wait;
+        loop {
+            if let Some(s) = self.exited() {
+                return s;
+            }
+            if Instant::now() >= deadline {
+                return "closed its console, still running".into();
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The instance's working folder (its `rootfs`: parameters, mission, `log/`).
+    pub fn work_dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The ULog files PX4 wrote so far (under `log/`, one per arming), oldest first by name.
+    pub fn ulogs(&self) -> Vec<PathBuf> {
+        let mut found = Vec::new();
+        collect_ulogs(&self.dir.join("log"), 3, &mut found);
+        found.sort();
+        found
+    }
+
+    /// The console's last `n` lines (at most [`CONSOLE_LINES`]), oldest first, terminal colours removed.
+    pub fn console_tail(&self, n: usize) -> Vec<String> {
+        let lines = self.console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        lines.iter().skip(lines.len().saturating_sub(n)).cloned().collect()
+    }
+}
+
+/// `.ulg` files under `dir`, at most `depth` folders down (PX4 writes `log/DATE/TIME.ulg`).
+fn collect_ulogs(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for p in entries.flatten().map(|e| e.path()) {
+        if p.is_dir() && depth > 0 {
+            collect_ulogs(&p, depth - 1, found);
+        } else if p.extension().is_some_and(|x| x == "ulg") {
+            found.push(p);
+        }
+    }
+}
+
+/// Appends `line` without its ANSI colour codes, dropping the oldest line beyond [`CONSOLE_LINES`].
+fn keep_line(console: &Mutex<VecDeque<String>>, line: String) {
+    let plain = strip_ansi(&line);
+    let mut lines = console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if lines.len() == CONSOLE_LINES {
+        lines.pop_front();
+    }
+    lines.push_back(plain);
+}
+
+/// `line` without `ESC [ ... letter` sequences (PX4 colours its console's INFO/WARN tags).
+fn strip_ansi(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            if chars.next() == Some('[') {
+                for c in chars.by_ref() {
+                    if c.is_ascii_alphabetic() {
+                        break;
+                    }
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+impl Drop for Px4Sitl {
+    fn drop(&mut self) {
+        spawn::stop(&mut self.child);
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// `BUILD/etc` for `BUILD/bin/px4`.
+fn etc_dir(bin: &Path) -> PathBuf {
+    bin.parent()
+        .and_then(Path::parent)
+        .map_or_else(|| PathBuf::from("etc"), |b| b.join("etc"))
+}
+
+/// A fresh private working directory (PX4 keeps its parameters and logs there).
+fn work_dir(instance: u8) -> PathBuf {
+    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    std::env::temp_dir().join(format!("prgenuav-px4-{}-{instance}-{nanos}", std::process::id()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn etc_sits_beside_bin() {
+        assert_eq!(
+            etc_dir(Path::new("/b/px4_sitl_default/bin/px4")),
+            PathBuf::from("/b/px4_sitl_default/etc")
+        );
+    }
+
+    #[test]
+    fn colours_are_removed_from_console_lines() {
+        assert_eq!(
+            strip_ansi("INFO  [commander] \u{1b}[32mReady for takeoff!\u{1b}[0m"),
+            "INFO  [commander] Ready for takeoff!"
+        );
+        assert_eq!(
+            strip_ansi("WARN  [failsafe] Failsafe activated\t"),
+            "WARN  [failsafe] Failsafe activated\t"
+        );
+    }
+
+    #[test]
+    fn the_console_keeps_its_last_lines() {
+        let console = Mutex::new(VecDeque::new());
+        for i in 0..CONSOLE_LINES + 5 {
+            keep_line(&console, format!("line {i}"));
+        }
+        let lines = console.lock().unwrap();
+        assert_eq!(lines.len(), CONSOLE_LINES);
+        assert_eq!(lines.front().map(String::as_str), Some("line 5"));
+        assert_eq!(lines.back(), Some(&format!("line {}", CONSOLE_LINES + 4)));
+    }
+
+    #[test]
+    fn a_binary_without_etc_is_refused_with_the_path() {
+        let err = Px4Sitl::start(&SitlSpec::new("/nonexistent/bin/px4", 0, 5.0)).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("/nonexistent/etc"), "{msg}");
+    }
+
+    #[test]
+    fn the_home_is_written_in_integer_1e7_degrees() {
+        assert_eq!(home_e7(crate::model::SIM_HOME), COMPETITION_HOME_E7);
+        let south_west = GeoPoint {
+            lat_deg: -33.868_820_04,
+            lon_deg: -151.209_295_55,
+            alt_m: 0.0,
+        };
+        assert_eq!(home_e7(south_west), (-338_688_200, -1_512_092_956));
+    }
+
+    /// A fake `BUILD/bin/px4` running `script`, with `BUILD/etc`.
+    #[cfg(unix)]
+    fn fake(script: &str) -> (tempfile::TempDir, PathBuf) {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join("bin")).unwrap();
+        std::fs::create_dir_all(dir.path().join("etc")).unwrap();
+        let bin = dir.path().join("bin/px4");
+        std::fs::write(&bin, format!("#!/bin/sh\n{script}\n")).unwrap();
+        std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).unwrap();
+        (dir, bin)
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_px4_dying_at_boot_is_reported_with_its_last_words() {
+        let (_d, bin) = fake("echo 'ERROR [simulator_sih] no sensors'\nexit 3");
+        let err = Px4Sitl::start(&SitlSpec::new(&bin, 7, 5.0)).unwrap_err();
+        let msg = err.to_string();
+        assert!(matches!(err, SitlError::Died { instance: 7, .. }), "{msg}");
+        assert!(msg.contains("exit status: 3") && msg.contains("no sensors"), "{msg}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_px4_that_never_boots_is_given_up_after_the_boot_timeout() {
+        let (_d, bin) = fake("echo 'INFO  [init] starting'\nexec sleep 30");
+        let spec = SitlSpec {
+            boot_timeout: Duration::from_millis(300),
+            ..SitlSpec::new(&bin, 8, 5.0)
+        };
+        let err = Px4Sitl::start(&spec).unwrap_err();
+        assert!(matches!(err, SitlError::Boot { instance: 8, .. }), "{err}");
+        assert!(err.to_string().contains("INFO  [init] starting"), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_booted_instance_reports_its_death_and_its_logs() {
+        let (_d, bin) = fake(
+            "cd \"$5\" && mkdir -p log/2026-01-01 && : > log/2026-01-01/10_00_00.ulg\necho 'INFO  [init] Startup script returned successfully'\nsleep 1",
+        );
+        let mut px4 = Px4Sitl::start(&SitlSpec::new(&bin, 9, 5.0)).unwrap();
+        assert_eq!(px4.url(), "udpin:0.0.0.0:14549");
+        assert_eq!(px4.ulogs(), vec![px4.work_dir().join("log/2026-01-01/10_00_00.ulg")]);
+        assert_eq!(px4.exited(), None, "still running right after its boot");
+        assert!(px4.exit_status(Duration::from_secs(5)).contains("exit status: 0"));
+        let dir = px4.work_dir().to_path_buf();
+        drop(px4);
+        assert!(!dir.exists(), "the working folder is removed with the instance");
+    }
+
+    #[test]
+    fn a_raised_stop_flag_ends_the_boot_wait() {
+        #[cfg(unix)]
+        {
+            let (_d, bin) = fake("exec sleep 30");
+            let err = Px4Sitl::start_until(&SitlSpec::new(&bin, 6, 5.0), &AtomicBool::new(true)).unwrap_err();
+            assert!(matches!(err, SitlError::Cancelled { instance: 6 }), "{err}");
+        }
+    }
+}

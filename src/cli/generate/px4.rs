@@ -1,0 +1,89 @@
+//! `generate --px4 BUILD [--instances K] [--speed-factor F] [--keep-ulog]`: the campaign starts its own PX4
+//! SITL instances, each flight on a fresh one. Checked before anything is screened or started.
+
+use std::path::PathBuf;
+
+use anyhow::bail;
+use prgenuav::bridge::FlyMode;
+use prgenuav::bridge::sitl::Px4Build;
+use prgenuav::campaign::config::Px4Backend;
+use prgenuav::campaign::parallel::available_threads;
+use prgenuav::campaign::pool::Vehicle;
+use prgenuav::campaign::px4_vehicle::{
+    DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots,
+};
+use prgenuav::campaign::run::CampaignConfig;
+use tokio::runtime::Handle;
+
+/// The `--px4` flags.
+#[derive(Debug, clap::Args)]
+pub struct Px4Flags {
+    /// Fly on PX4 SITL instances started here, every flight on a fresh SIH instance at the test's home:
+    /// BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder (docs/px4.md).
+    #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
+    pub px4: Option<PathBuf>,
+    /// PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, docs/px4.md).
+    #[arg(long, hide = true, value_name = "K")]
+    pub instances: Option<usize>,
+    /// PX4_SIM_SPEED_FACTOR of the --px4 instances [default: 5] (a flag only, stored in campaign.json).
+    #[arg(long, hide = true, value_name = "F")]
+    pub speed_factor: Option<f64>,
+    /// Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg (a flag only, stored in
+    /// campaign.json).
+    #[arg(long, hide = true)]
+    pub keep_ulog: bool,
+}
+
+impl Px4Flags {
+    /// What campaign.json stores of them (the build folder made absolute, so `--resume` works from anywhere).
+    pub fn backend(&self) -> Option<Px4Backend> {
+        let build = self.px4.as_ref()?;
+        Some(Px4Backend {
+            build: std::fs::canonicalize(build).unwrap_or_else(|_| build.clone()),
+            speed_factor: self.speed_factor.unwrap_or(DEFAULT_SPEED_FACTOR),
+            keep_ulog: self.keep_ulog,
+        })
+    }
+
+    /// The campaign's PX4 settings are sound and its build folder is a build, before anything runs.
+    pub fn check(&self, cfg: &CampaignConfig) -> anyhow::Result<()> {
+        let Some(px4) = &cfg.px4 else {
+            if self.instances.is_some() || self.speed_factor.is_some() || self.keep_ulog {
+                bail!("--instances, --speed-factor and --keep-ulog need --px4 BUILD_DIR");
+            }
+            return Ok(());
+        };
+        Px4Build::open(&px4.build)?;
+        if !(px4.speed_factor.is_finite() && px4.speed_factor > 0.0 && px4.speed_factor <= 100.0) {
+            bail!(
+                "--speed-factor {}: expected a factor above 0, at most 100",
+                px4.speed_factor
+            );
+        }
+        if let Some(k) = self.instances {
+            instance_slots(k).map_err(anyhow::Error::msg)?;
+        }
+        Ok(())
+    }
+}
+
+/// The campaign's PX4 vehicles: `--instances`, or what the machine carries.
+pub fn fleet(
+    px4: &Px4Backend,
+    cfg: &CampaignConfig,
+    mode: FlyMode,
+    instances: Option<usize>,
+    handle: &Handle,
+) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
+    let settings = Px4Settings {
+        keep_ulog: px4.keep_ulog,
+        mode,
+        judge: cfg.judge,
+        anchor: cfg.anchor_at_vehicle_home,
+        timeout_s: cfg.flight_timeout_s,
+        ..Px4Settings::new(Px4Build::open(&px4.build)?, px4.speed_factor)
+    };
+    let k = instances.unwrap_or_else(|| default_instances(available_threads(), px4.speed_factor));
+    let fleet = Px4Vehicle::fleet(handle, &settings, k).map_err(anyhow::Error::msg)?;
+    Ok(fleet.into_iter().map(|v| Box::new(v) as Box<dyn Vehicle>).collect())
+}
