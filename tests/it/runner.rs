@@ -176,8 +176,9 @@ fn a_broken_runner_fails_its_flights_uncharged_and_the_campaign_ends() {
         "--ensemble",
         "0",
     ]);
-    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(code, 1, "every flight failed on its backend: not a clean run; {stderr}");
     assert!(stdout.contains("of 0 flights"), "{stdout}");
+    assert!(stderr.contains("2 flight(s) failed on their backend"), "{stderr}");
     let folder = std::fs::read_dir(out.path()).unwrap().next().unwrap().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert!(

@@ -215,6 +215,14 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     if let Some(w) = floor_warning(report.suite.diversity, cfg.adapt, cfg.min_diversity) {
         eprintln!("warning: {w}");
     }
+    let failed_jobs: usize = report.backends.iter().map(|b| b.failed_jobs).sum();
+    if failed_jobs > 0 {
+        eprintln!("warning: {failed_jobs} flight(s) failed on their backend (not charged; see report.md)");
+        if report.suite.flown == 0 {
+            // Every flight failed on the backend: that is a broken setup, not a clean run with no failure.
+            return Ok(ExitCode::from(super::EXIT_FAIL));
+        }
+    }
     if stop.load(Ordering::SeqCst) {
         eprintln!(
             "interrupted: resume with  prgenuav generate --resume {}",
