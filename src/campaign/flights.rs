@@ -8,7 +8,7 @@ use super::candidate::{Candidate, Screened};
 use super::config::CampaignError;
 use super::confirm::pending;
 use super::journal::{FlightRecord, Journal};
-use super::pool::{Job, Vehicle, fly_all};
+use super::pool::{Job, PoolOutcome, Vehicle, fly_all};
 use super::screener::Progress;
 use crate::model::TestCase;
 
@@ -69,26 +69,7 @@ pub fn fly_ranked(
     if vehicles.is_empty() {
         return Err(no_vehicle_left("every vehicle was dropped in an earlier round".into()));
     }
-    let progress = ctx.progress;
-    progress.stage("fly", jobs.len());
-    let count = AtomicUsize::new(0);
-    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r);
-    let journal_path = ctx.folder.join("journal.jsonl");
-    let outcome = fly_all(
-        vehicles,
-        jobs,
-        remaining,
-        ctx.folder,
-        Journal::open(&journal_path)?,
-        ctx.cancel,
-        &on_flight,
-    );
-    for d in &outcome.dropped {
-        progress.note(&format!("dropped {d}"));
-    }
-    if let Some(e) = outcome.errors.first() {
-        return Err(CampaignError::Config(format!("journal: {e}")));
-    }
+    let outcome = fly_stage(ctx, "fly", jobs, vehicles, remaining)?;
     if vehicles.is_empty() {
         return Err(no_vehicle_left(outcome.dropped.join("; ")));
     }
@@ -123,26 +104,31 @@ pub fn fly_interrupted(
             ..Job::new(screened_as_flown(&r), ctx.case.with_obstacles(r.obstacles.clone()))
         })
         .collect();
+    Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, budget_left)?.flown)
+}
+
+/// Flies `jobs` within `budget` on the pool, announcing each flight under stage `name` and the vehicles
+/// dropped; a journal error stops the campaign.
+fn fly_stage(
+    ctx: &FlightStage,
+    name: &str,
+    jobs: Vec<Job>,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    budget: usize,
+) -> Result<PoolOutcome, CampaignError> {
     let progress = ctx.progress;
-    progress.stage("fly interrupted", jobs.len());
+    progress.stage(name, jobs.len());
     let count = AtomicUsize::new(0);
     let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r);
-    let outcome = fly_all(
-        vehicles,
-        jobs,
-        budget_left,
-        ctx.folder,
-        Journal::open(&journal_path)?,
-        ctx.cancel,
-        &on_flight,
-    );
+    let journal = Journal::open(&ctx.folder.join("journal.jsonl"))?;
+    let outcome = fly_all(vehicles, jobs, budget, ctx.folder, journal, ctx.cancel, &on_flight);
     for d in &outcome.dropped {
         progress.note(&format!("dropped {d}"));
     }
     if let Some(e) = outcome.errors.first() {
         return Err(CampaignError::Config(format!("journal: {e}")));
     }
-    Ok(outcome.flown)
+    Ok(outcome)
 }
 
 /// The prediction a test was first flown with, for its later flights' records.

@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use super::config::CampaignError;
-use super::report::timestamped_folder;
 use crate::model::ModelError;
 
 /// The lock file inside a campaign folder; it holds the writer's process id.
@@ -51,6 +50,32 @@ pub fn create_new(dir: &Path, now: SystemTime) -> Result<PathBuf, CampaignError>
         "{}: {MAX_SUFFIX} campaign folders already start with this name; use another --out",
         base.display()
     )))
+}
+
+/// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.
+pub fn timestamped_folder(dir: &Path, now: SystemTime) -> PathBuf {
+    let secs = now.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    let (_, month, day) = civil_from_days(days as i64);
+    dir.join(format!(
+        "{day:02}-{month:02}-{:02}-{:02}-{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    ))
+}
+
+/// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar.
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
 }
 
 /// The advisory lock of one campaign folder, held until dropped (or the process ends).
@@ -105,6 +130,18 @@ impl FolderLock {
 mod tests {
     use super::*;
     use std::time::{Duration, UNIX_EPOCH};
+
+    #[test]
+    fn folder_name_is_day_month_time() {
+        // 2026-11-22 03:42:07 UTC
+        let t = UNIX_EPOCH + Duration::from_secs(1_795_318_927);
+        assert_eq!(
+            timestamped_folder(Path::new("out"), t),
+            PathBuf::from("out/22-11-03-42-07")
+        );
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(19_782), (2024, 2, 29));
+    }
 
     #[test]
     fn campaigns_started_in_the_same_second_get_folders_of_their_own() {

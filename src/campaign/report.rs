@@ -3,7 +3,6 @@
 //! `unconfirmed.json` and the report.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
@@ -565,48 +564,5 @@ fn flights_table(md: &mut String, r: &Report) {
             f.test_score,
             f.reported_as.as_deref().unwrap_or("")
         );
-    }
-}
-
-/// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.
-pub fn timestamped_folder(dir: &Path, now: std::time::SystemTime) -> PathBuf {
-    let secs = now.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
-    let (days, rem) = (secs / 86_400, secs % 86_400);
-    let (_, month, day) = civil_from_days(days as i64);
-    dir.join(format!(
-        "{day:02}-{month:02}-{:02}-{:02}-{:02}",
-        rem / 3600,
-        rem % 3600 / 60,
-        rem % 60
-    ))
-}
-
-/// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar.
-fn civil_from_days(z: i64) -> (i64, u32, u32) {
-    let z = z + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    (yoe + era * 400 + i64::from(m <= 2), m, d)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn folder_name_is_day_month_time() {
-        // 2026-11-22 03:42:07 UTC
-        let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_795_318_927);
-        assert_eq!(
-            timestamped_folder(Path::new("out"), t),
-            PathBuf::from("out/22-11-03-42-07")
-        );
-        assert_eq!(civil_from_days(0), (1970, 1, 1));
-        assert_eq!(civil_from_days(19_782), (2024, 2, 29));
     }
 }

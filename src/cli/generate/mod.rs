@@ -4,6 +4,7 @@
 
 mod plan;
 mod px4;
+mod runner;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

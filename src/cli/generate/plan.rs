@@ -11,10 +11,9 @@ use clap::parser::ValueSource;
 use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
-use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
+use prgenuav::campaign::runner::RunnerSettings;
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
-use prgenuav::model::Spelling as ModelSpelling;
 use serde_json::Value;
 
 use super::Args;
@@ -137,7 +136,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
         bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
     }
-    let mut runner = runner_settings(&cfg, args)?;
+    let mut runner = super::runner::runner_settings(&cfg, args)?;
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
         Some(folder) => folder.clone(),
@@ -155,36 +154,6 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         jobs: args.jobs,
         px4_instances: args.px4.instances,
     })
-}
-
-/// The runner's settings, checked before anything is sampled or flown: the template, `--jobs`, `--job-timeout`.
-/// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
-fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
-    let Some(text) = &cfg.runner else {
-        if args.jobs.is_some() || args.job_timeout.is_some() {
-            bail!("--jobs and --job-timeout go with --runner");
-        }
-        return Ok(None);
-    };
-    let template = Template::parse(text).map_err(anyhow::Error::msg)?;
-    if args.jobs == Some(0) {
-        bail!("--jobs must be at least 1");
-    }
-    let timeout_s = args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S);
-    if !(timeout_s.is_finite() && timeout_s > 0.0) {
-        bail!("--job-timeout must be a positive number of seconds");
-    }
-    Ok(Some(RunnerSettings {
-        template,
-        timeout: std::time::Duration::from_secs_f64(timeout_s),
-        judge: cfg.judge,
-        spelling: if cfg.old_spelling {
-            ModelSpelling::Old
-        } else {
-            ModelSpelling::New
-        },
-        campaign_folder: PathBuf::new(),
-    }))
 }
 
 fn given(m: &ArgMatches, id: &str) -> bool {
