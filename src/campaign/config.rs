@@ -93,6 +93,10 @@ pub struct CampaignConfig {
     /// when the key is absent: such campaigns flew every test once) is one flight per test.
     #[serde(default = "one_flight")]
     pub confirm: usize,
+    /// Plan each learning round while the previous one flies ([`super::rounds`]); `false` (also when the key is
+    /// absent: such campaigns planned after each round landed) plans after.
+    #[serde(default)]
+    pub overlap: bool,
     /// `--runner`: each flight is a job, this shell command template run per flight (`hfs` is then
     /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]

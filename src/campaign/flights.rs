@@ -8,7 +8,7 @@ use super::candidate::{Candidate, Screened};
 use super::config::CampaignError;
 use super::confirm::pending;
 use super::journal::{FlightRecord, Journal};
-use super::pool::{Job, PoolOutcome, Vehicle, fly_all};
+use super::pool::{FleetUse, Job, PoolOutcome, Vehicle, fly_all};
 use super::screener::Progress;
 use crate::model::TestCase;
 
@@ -33,7 +33,7 @@ pub struct FlightStage<'a> {
 
 /// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
 /// within `remaining` flights, journaling each; returns the flights made, as the journal reads them back, in
-/// its order. A failing flight's test is flown again before the next new candidate (see [`fly_all`]).
+/// its order, and how busy the vehicles were. A failing flight's test is flown again before the next new candidate (see [`fly_all`]).
 /// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
 /// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
 /// must not end as a clean run that found no failing test.
@@ -42,23 +42,10 @@ pub fn fly_ranked(
     ranked: Vec<Screened>,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     remaining: usize,
-) -> Result<Vec<FlightRecord>, CampaignError> {
-    let again = pending(ctx.done, ctx.confirm).into_iter().map(|(tally, first)| Job {
-        test: ctx.case.with_obstacles(first.obstacles.clone()),
-        screened: screened_as_flown(first),
-        tally,
-        confirm: ctx.confirm,
-    });
-    let fresh = ranked.into_iter().map(|s| {
-        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());
-        Job {
-            confirm: ctx.confirm,
-            ..Job::new(s, test)
-        }
-    });
-    let jobs: Vec<Job> = again.chain(fresh).collect();
+) -> Result<(Vec<FlightRecord>, FleetUse), CampaignError> {
+    let jobs = stage_jobs(ctx, ranked, &[]);
     if jobs.is_empty() || remaining == 0 {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), FleetUse::default()));
     }
     let no_vehicle_left = |why: String| {
         CampaignError::NoVehicle(format!(
@@ -73,7 +60,28 @@ pub fn fly_ranked(
     if vehicles.is_empty() {
         return Err(no_vehicle_left(outcome.dropped.join("; ")));
     }
-    Ok(outcome.records)
+    Ok((outcome.records, outcome.fleet))
+}
+
+/// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
+/// or in the air already, left out), then `ranked` in order.
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec<Job> {
+    let again = pending(ctx.done, ctx.confirm)
+        .into_iter()
+        .filter(|(_, first)| !busy.contains(&first.candidate))
+        .map(|(tally, first)| Job {
+            tally,
+            confirm: ctx.confirm,
+            ..Job::new(screened_as_flown(first), ctx.case.with_obstacles(first.obstacles.clone()))
+        });
+    let fresh = ranked.into_iter().map(|s| {
+        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());
+        Job {
+            confirm: ctx.confirm,
+            ..Job::new(s, test)
+        }
+    });
+    again.chain(fresh).collect()
 }
 
 /// On resume, flies the flights the user interrupted before anything else (they were the most promising
@@ -119,7 +127,7 @@ fn fly_stage(
     let progress = ctx.progress;
     progress.stage(name, jobs.len());
     let count = AtomicUsize::new(0);
-    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r);
+    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r, true);
     let journal = Journal::open(&ctx.folder.join("journal.jsonl"))?;
     let outcome = fly_all(vehicles, jobs, budget, ctx.folder, journal, ctx.cancel, &on_flight);
     for d in &outcome.dropped {
@@ -146,8 +154,10 @@ fn screened_as_flown(first: &FlightRecord) -> Screened {
 }
 
 /// Tells the user of the `n`th flight of the stage.
-fn announce(progress: &dyn Progress, n: usize, r: &FlightRecord) {
-    progress.tick(n);
+pub(super) fn announce(progress: &dyn Progress, n: usize, r: &FlightRecord, tick: bool) {
+    if tick {
+        progress.tick(n);
+    }
     progress.note(&format!(
         "flight {n}: candidate {}{} predicted {:.2} m, flew {} ({})",
         r.candidate,

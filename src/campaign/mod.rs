@@ -15,6 +15,7 @@ pub mod learning;
 pub mod mock_profile;
 pub mod neighbours;
 pub mod parallel;
+pub mod fleet;
 pub mod pool;
 pub mod px4_vehicle;
 pub mod rank;

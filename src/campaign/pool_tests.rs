@@ -1,8 +1,9 @@
 //! The flight pool: budgets, dropped vehicles, rejections and re-flights, on scripted vehicles.
 
 use super::*;
+use crate::campaign::fleet::{Fleet, FleetSetup, run_fleet};
 use crate::model::{Obstacle, SIM_HOME};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 struct Fake {
     name: &'static str,
@@ -272,4 +273,67 @@ fn rejections_in_a_row_count_across_rounds() {
 fn no_reachable_vehicle_flies_nothing() {
     let (out, flown, records) = run(vec![("x", false), ("y", false)], 5, 5);
     assert_eq!((out.flown, flown.len(), records, out.dropped.len()), (0, 0, 0, 2));
+}
+
+/// Runs `body` on an open fleet of `vehicles` (name, reachable); returns its result and the outcome.
+fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) -> R) -> (R, PoolOutcome) {
+    let dir = tempfile::tempdir().unwrap();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let mut v: Vec<Box<dyn Vehicle>> = vehicles
+        .into_iter()
+        .map(|(name, reachable)| fake(name, reachable, &log, &None))
+        .collect();
+    let setup = FleetSetup {
+        folder: dir.path(),
+        journal: Journal::open(&dir.path().join("journal.jsonl")).unwrap(),
+        cancel: &AtomicBool::new(false),
+        on_flight: &|_| {},
+    };
+    run_fleet(&mut v, setup, body)
+}
+
+fn candidates(records: &[FlightRecord]) -> Vec<u64> {
+    let mut c: Vec<u64> = records.iter().map(|r| r.candidate).collect();
+    c.sort_unstable();
+    c
+}
+
+#[test]
+fn an_open_fleet_flies_rounds_as_they_are_pushed_and_returns_each_round_s_flights() {
+    let ((first, second), out) = on_fleet(vec![("a", true), ("b", true)], |fleet| {
+        // Idle workers wait for work rather than stop.
+        std::thread::sleep(std::time::Duration::from_millis(450));
+        let mut all = jobs(6);
+        let later = all.split_off(3);
+        fleet.push(0, all, 3);
+        fleet.push(1, later, 6);
+        (fleet.wait_round(0), fleet.wait_round(1))
+    });
+    assert_eq!(candidates(&first), vec![0, 1, 2]);
+    assert_eq!(candidates(&second), vec![3, 4, 5]);
+    assert_eq!(out.flown, 6);
+    assert_eq!(out.fleet.vehicles, 2);
+}
+
+#[test]
+fn a_round_s_jobs_beyond_its_budget_are_dropped_when_the_campaign_collects_it() {
+    let ((flown, committed), out) = on_fleet(vec![("a", true)], |fleet| {
+        fleet.push(0, jobs(5), 3);
+        let flown = fleet.wait_round(0);
+        (flown, fleet.committed())
+    });
+    assert_eq!(flown.len(), 3);
+    assert_eq!(committed, 3, "the two jobs over the budget left the queue");
+    assert_eq!(out.flown, 3);
+}
+
+#[test]
+fn waiting_on_a_fleet_whose_vehicles_are_all_dropped_returns() {
+    let ((flown, alive), out) = on_fleet(vec![("dead", false)], |fleet| {
+        fleet.push(0, jobs(2), 2);
+        (fleet.wait_round(0), fleet.alive())
+    });
+    assert!(flown.is_empty());
+    assert_eq!(alive, 0);
+    assert_eq!(out.dropped.len(), 1, "{:?}", out.dropped);
 }

@@ -12,6 +12,7 @@ use super::confirm::{failed_again, first_flights};
 use super::failure_counts::FAIL_BINS;
 use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::Learnt;
+use super::pool::FleetUse;
 use super::verdicts::{TestVerdict, score_sum, verdicts};
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
@@ -39,6 +40,24 @@ pub struct StageTimes {
     pub fly_s: f64,
     /// Writing the outputs.
     pub report_s: f64,
+    /// Vehicle-seconds the vehicles spent flying, summed over the flight stages.
+    pub vehicle_busy_s: f64,
+    /// Vehicle-seconds available from each stage's first take-off to its last landing (vehicles x span).
+    pub vehicle_span_s: f64,
+}
+
+impl StageTimes {
+    /// Counts a fleet's use of its vehicles.
+    pub fn add_fleet(&mut self, fleet: FleetUse) {
+        self.vehicle_busy_s += fleet.busy_s;
+        self.vehicle_span_s += fleet.vehicles as f64 * fleet.span_s;
+    }
+
+    /// Share of the vehicle time from take-off to last landing the vehicles waited (on screening, learning, or
+    /// the last flights of a round); `None` before any flight.
+    pub fn vehicles_idle(&self) -> Option<f64> {
+        (self.vehicle_span_s > 0.0).then(|| (1.0 - self.vehicle_busy_s / self.vehicle_span_s).clamp(0.0, 1.0))
+    }
 }
 
 /// One flight in the report.

@@ -17,8 +17,9 @@
 //! A test's later flights (`--confirm`) only confirm it: the rounds learn from each test's first flight, and
 //! fly the tests waiting for confirmation before the round's new candidates, within the round's budget.
 
-use std::path::Path;
-use std::sync::atomic::Ordering;
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
@@ -27,7 +28,8 @@ use super::confirm::first_flights;
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
-use super::flights::{FlightStage, fly_ranked};
+use super::fleet::{Fleet, FleetSetup, run_fleet};
+use super::flights::{FlightStage, announce, stage_jobs};
 use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};
@@ -40,7 +42,7 @@ use super::surrogate::Surrogate;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
-use crate::model::ModelError;
+use crate::model::{ModelError, Obstacle};
 use crate::model::competition::FAIL_BELOW_M;
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
@@ -67,22 +69,39 @@ pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
     Ok(learnt)
 }
 
-/// Runs every round; returns what was learnt and the number of candidates drawn.
+/// Runs every round on one [`Fleet`]; returns what was learnt and the number of candidates drawn.
+///
+/// With `overlap`, round `r + 1` is drawn, screened and ranked from the flights of the rounds before `r` while
+/// round `r` flies (one round of lag in what it learns from), so the vehicles do not wait on the LFS; without
+/// it, each round is planned after the previous one landed.
 pub fn run_rounds(
     input: &CampaignInput,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     stages: &mut StageTimes,
 ) -> Result<(Learnt, usize), CampaignError> {
     let mut campaign = Rounds::start(input)?;
-    for index in 0..ROUNDS + EXTRA_ROUNDS {
-        // Past the planned rounds only while the near-duplicate filter left budget unflown.
-        if index >= ROUNDS && flights_charged(&campaign.flights) >= input.cfg.budget {
-            break;
+    let progress = input.progress;
+    let count = AtomicUsize::new(0);
+    let tick = !input.cfg.overlap;
+    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r, tick);
+    let setup = FleetSetup {
+        folder: input.folder,
+        journal: Journal::open(&input.folder.join("journal.jsonl"))?,
+        cancel: input.cancel,
+        on_flight: &on_flight,
+    };
+    let (flown, outcome) = run_fleet(vehicles, setup, |fleet| {
+        let flown = campaign.fly_rounds(fleet, stages);
+        if flown.is_err() {
+            fleet.abandon();
         }
-        if !campaign.round(index, vehicles, stages)? {
-            break;
-        }
+        flown
+    });
+    stages.add_fleet(outcome.fleet);
+    if let Some(e) = outcome.errors.first() {
+        return Err(CampaignError::Config(format!("journal: {e}")));
     }
+    flown?;
     campaign.finish()
 }
 
@@ -106,6 +125,18 @@ struct Rounds<'a> {
     surrogate: Option<Surrogate>,
     /// The last round's learning, reused while no flight has landed since.
     carried: Option<Learning>,
+    /// Flights charged before the fleet started (resumed, or flown first as interrupted).
+    charged_before: usize,
+    /// Rounds pushed to the fleet and not yet learnt from, oldest first.
+    in_air: VecDeque<Pushed>,
+}
+
+/// A round in the fleet, with what its log needs once it has flown.
+struct Pushed {
+    round: Round,
+    remaining: usize,
+    share: f64,
+    bias_m: f64,
 }
 
 /// One round's plan, from its draw on.
@@ -165,21 +196,43 @@ impl<'a> Rounds<'a> {
             log: Vec::new(),
             surrogate: None,
             carried: None,
+            charged_before: 0,
+            in_air: VecDeque::new(),
         })
     }
 
-    /// Round `index`: draw, screen, rank, fly, learn. Returns false when the campaign was cancelled.
-    fn round(
-        &mut self,
-        index: usize,
-        vehicles: &mut Vec<Box<dyn Vehicle>>,
-        stages: &mut StageTimes,
-    ) -> Result<bool, CampaignError> {
+    /// Plans every round and flies it on `fleet`, learning from each round once it has landed (with `overlap`,
+    /// after the next round is planned).
+    fn fly_rounds(&mut self, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
+        let cfg = self.input.cfg;
+        let lag = usize::from(cfg.overlap);
+        self.charged_before = flights_charged(&self.flights);
+        for index in 0..ROUNDS + EXTRA_ROUNDS {
+            // Past the planned rounds only while the near-duplicate filter left budget unflown.
+            if index >= ROUNDS && self.charged_before + fleet.committed() >= cfg.budget {
+                break;
+            }
+            if self.input.cancel.load(Ordering::Relaxed) {
+                break;
+            }
+            self.plan(index, fleet, stages)?;
+            while self.in_air.len() > lag {
+                self.absorb(fleet, stages)?;
+            }
+        }
+        while !self.in_air.is_empty() {
+            self.absorb(fleet, stages)?;
+        }
+        Ok(())
+    }
+
+    /// Round `index`: draw, screen and rank (from the flights learnt so far), then push its flights.
+    fn plan(&mut self, index: usize, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let round = self.draw(index, stages)?;
         self.screen(&round, stages)?;
-        let ranking = self.rank(&round, stages)?;
+        let busy = fleet.busy();
+        let ranking = self.rank(&round, &busy, fleet.committed(), stages)?;
         self.note(&round, &ranking);
-        let t = Instant::now();
         let flight = FlightStage {
             case: self.input.case,
             candidates: &self.candidates,
@@ -189,17 +242,57 @@ impl<'a> Rounds<'a> {
             done: &self.flights,
             confirm: self.input.cfg.confirm,
         };
-        let flown = fly_ranked(&flight, ranking.ranked, vehicles, ranking.remaining)?;
+        let busy: Vec<u64> = busy.iter().map(|(c, _)| *c).collect();
+        let jobs = stage_jobs(&flight, ranking.ranked, &busy);
+        if !self.input.cfg.overlap {
+            self.input.progress.stage("fly", jobs.len().min(ranking.remaining));
+        }
+        if !jobs.is_empty() && ranking.remaining > 0 && fleet.alive() == 0 {
+            return Err(self.no_vehicle_left(fleet));
+        }
+        let limit = round.planned.saturating_sub(self.charged_before);
+        fleet.push(index, jobs, limit);
+        self.in_air.push_back(Pushed {
+            round,
+            remaining: ranking.remaining,
+            share: ranking.share,
+            bias_m: ranking.bias_m,
+        });
+        Ok(())
+    }
+
+    /// Waits for the oldest round in the air to land, then learns from it.
+    fn absorb(&mut self, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
+        let Some(pushed) = self.in_air.pop_front() else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let flown = fleet.wait_round(pushed.round.index);
+        stages.fly_s += t.elapsed().as_secs_f64();
+        if fleet.alive() == 0 && !self.input.cancel.load(Ordering::Relaxed) && fleet.journal_error().is_none() {
+            return Err(self.no_vehicle_left(fleet));
+        }
         let flights = flights_charged(&flown);
         self.journal.extend(first_flights(&flown));
         self.flights.extend(flown);
-        stages.fly_s += t.elapsed().as_secs_f64();
-        self.log_round(&round, flights, ranking.share, ranking.bias_m);
-        if self.input.cancel.load(Ordering::Relaxed) {
-            return Ok(false);
-        }
-        self.learn(flights < ranking.remaining, stages);
-        Ok(true)
+        self.log_round(&pushed.round, flights, pushed.share, pushed.bias_m);
+        self.learn(flights < pushed.remaining, stages);
+        Ok(())
+    }
+
+    /// A fleet with no vehicle left stops the campaign, keeping the flights journaled so far for `--resume`: a
+    /// campaign that lost every vehicle must not end as a clean run that found no failing test.
+    fn no_vehicle_left(&self, fleet: &Fleet) -> CampaignError {
+        let dropped = fleet.dropped();
+        CampaignError::NoVehicle(format!(
+            "{}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
+            if dropped.is_empty() {
+                "every vehicle was dropped in an earlier stage".to_string()
+            } else {
+                dropped.join("; ")
+            },
+            self.input.folder.display()
+        ))
     }
 
     /// Draws round `index`'s candidates: its share of `--candidates` from the histogram, and with `adapt`
@@ -289,7 +382,15 @@ impl<'a> Rounds<'a> {
 
     /// Learns from every flight so far, then ranks the unflown candidates with the calibrated LFS moved towards
     /// the flights near them (and the ensembles), within the round's share of the budget.
-    fn rank(&mut self, round: &Round, stages: &mut StageTimes) -> Result<Ranking, CampaignError> {
+    /// `busy` are the candidates queued or in the air, `committed` the flights the fleet has promised (journaled,
+    /// in the air or queued).
+    fn rank(
+        &mut self,
+        round: &Round,
+        busy: &[(u64, Vec<Obstacle>)],
+        committed: usize,
+        stages: &mut StageTimes,
+    ) -> Result<Ranking, CampaignError> {
         let cfg = self.input.cfg;
         let t = Instant::now();
         let taught = match self.carried.take() {
@@ -298,7 +399,9 @@ impl<'a> Rounds<'a> {
         };
         self.calibration = taught.calibration.clone();
         self.surrogate = taught.kernel;
-        let flown: Vec<u64> = self.journal.iter().map(|r| r.candidate).collect();
+        let flown: Vec<u64> = (self.journal.iter().map(|r| r.candidate))
+            .chain(busy.iter().map(|(c, _)| *c))
+            .collect();
         let mut fresh: Vec<Screened> = (self.candidates.iter())
             .filter_map(|c| c.screened.as_ref())
             .filter(|s| !flown.contains(&s.candidate))
@@ -309,7 +412,7 @@ impl<'a> Rounds<'a> {
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = round.planned.saturating_sub(flights_charged(&self.flights));
+        let remaining = round.planned.saturating_sub(self.charged_before + committed);
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;
@@ -317,7 +420,7 @@ impl<'a> Rounds<'a> {
             apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let (ranked, share) = self.choose(round, &fresh, remaining);
+        let (ranked, share) = self.choose(round, &fresh, remaining, &queued_as_flown(busy));
         Ok(Ranking {
             ranked,
             remaining,
@@ -328,7 +431,15 @@ impl<'a> Rounds<'a> {
 
     /// The round's flights among `fresh`: with `adapt`, a share for the children that follows their failure
     /// rate, each admitted by the diversity guard; else the ranking's best distinct ones.
-    fn choose(&self, round: &Round, fresh: &[Screened], remaining: usize) -> (Vec<Screened>, f64) {
+    /// `queued` stand for the flights in the fleet: the ranking keeps away from them as from the flown tests.
+    fn choose(
+        &self,
+        round: &Round,
+        fresh: &[Screened],
+        remaining: usize,
+        queued: &[FlightRecord],
+    ) -> (Vec<Screened>, f64) {
+        let seen: Vec<FlightRecord> = self.journal.iter().chain(queued).cloned().collect();
         let cfg = self.input.cfg;
         let is_arm = |c| is_child(&self.candidates, c, round.lineage);
         let (near_flown, other_flown) = arm_counts(&self.journal, is_arm);
@@ -338,7 +449,7 @@ impl<'a> Rounds<'a> {
         };
         if !cfg.adapt {
             return (
-                rank_unflown(fresh, &self.journal, &self.candidates, cfg, remaining),
+                rank_unflown(fresh, &seen, &self.candidates, cfg, remaining),
                 share,
             );
         }
@@ -347,7 +458,7 @@ impl<'a> Rounds<'a> {
             fresh,
             is_arm,
             share,
-            (&self.journal, &self.candidates),
+            (&seen, &self.candidates),
             cfg,
             remaining,
             (&mut guard, (near_flown.rate(), other_flown.rate())),
@@ -429,6 +540,30 @@ impl<'a> Rounds<'a> {
         Ok((learnt, drawn.len()))
     }
 }
+/// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
+fn queued_as_flown(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
+    busy.iter()
+        .map(|(candidate, obstacles)| FlightRecord {
+            candidate: *candidate,
+            attempt: 0,
+            obstacles: obstacles.clone(),
+            predicted_min_distance: f64::NAN,
+            predicted_flight_time_s: 0.0,
+            predicted_p_fail: None,
+            predicted_raw_min_distance: None,
+            min_distance: None,
+            min_distance_raw: None,
+            status: "queued".into(),
+            flight_time_s: 0.0,
+            warnings: Vec::new(),
+            reason: None,
+            vehicle: String::new(),
+            trajectory: PathBuf::new(),
+            wall_s: 0.0,
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

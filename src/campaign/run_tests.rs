@@ -95,6 +95,7 @@ fn config(budget: usize) -> CampaignConfig {
         min_diversity: 0.8,
         child_max_iou: None,
         confirm: 1,
+        overlap: false,
         runner: None,
         px4: None,
     }
@@ -394,3 +395,6 @@ mod learning;
 
 #[path = "run_confirm_tests.rs"]
 mod confirm;
+
+#[path = "run_overlap_tests.rs"]
+mod overlap;

@@ -43,8 +43,9 @@ pub fn run_static(
         done: &done,
         confirm: input.cfg.confirm,
     };
-    fly_ranked(&flight, ranked, vehicles, remaining)?;
+    let (_, fleet) = fly_ranked(&flight, ranked, vehicles, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
+    stages.add_fleet(fleet);
     Ok(input.cfg.candidates)
 }
 

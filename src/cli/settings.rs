@@ -75,6 +75,7 @@ pub struct Flight {
     pub connect_time_scale: Option<f64>,
     pub anchor_at_vehicle_home: Option<bool>,
     pub confirm: Option<usize>,
+    pub overlap: Option<bool>,
 }
 
 /// `[learning]`.
@@ -462,6 +463,16 @@ pub const KEYS: &[KeyDoc] = &[
          any new candidate and within the budget, until the majority of K flights is settled (K = 3: two \
          failures or two passes). Only a test more than half of whose flights fail is written as `test_N.yaml`; \
          the others that failed go to `unconfirmed.json`. 1 flies every test once.",
+    ),
+    key(
+        "flight",
+        "overlap",
+        "true",
+        "true with --connect, --px4 and --runner vehicles, false with the embedded mock",
+        "",
+        "Plan each learning round (draw, screen, ensemble, rank) while the previous one flies, so the vehicles \
+         do not wait on the simulator; each round then learns from the flights before the previous round (one \
+         round of lag). The embedded mock flies on the same cores as the screening, so it gains nothing there.",
     ),
     key(
         "learning",

@@ -290,6 +290,7 @@ fn flight(args: &Args, fl: &Flight, r: &mut Recorder) -> Flight {
             ),
         ),
         confirm: r.pick(args.confirm, fl.confirm, ("--confirm", "flight.confirm", "confirm")),
+        overlap: r.pick(None, fl.overlap, ("", "flight.overlap", "overlap")),
     }
 }
 
@@ -365,6 +366,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
         confirm: s.flight.confirm.unwrap_or(if mock { 1 } else { LINK_CONFIRM }),
+        overlap: s.flight.overlap.unwrap_or(!mock),
         runner: args.runner.clone(),
         px4,
     }
