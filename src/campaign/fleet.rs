@@ -11,10 +11,10 @@ use std::time::{Duration, Instant};
 
 use super::confirm::trajectory_name;
 use super::journal::{FlightRecord, INTERRUPTED, Journal};
-use crate::model::Obstacle;
 use super::pool::{
     FleetUse, Job, PoolOutcome, Vehicle, fly_counting_rejections, interrupted_if_cancelled, rejected_in_a_row,
 };
+use crate::model::Obstacle;
 
 /// How long an idle worker or a waiting campaign sleeps before looking at the cancel flag again.
 const POLL: Duration = Duration::from_millis(200);
@@ -135,6 +135,32 @@ pub fn run_fleet<R>(
     (result, outcome)
 }
 
+/// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
+/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv` (a test's later
+/// flights to `candidate_<n>_<flight>.csv`). A failing flight whose test is to be confirmed puts the test's
+/// next flight at the front of the queue, before the new candidates: within the budget like any flight.
+///
+/// A vehicle that turns out unreachable, or rejects [`REJECTED_IN_A_ROW_TO_DROP`] flights in a row, gives its
+/// job back; the others wait for that (rather than stopping at a budget that is only reserved) so the job is
+/// still flown. Such vehicles are removed from `vehicles`; the others stay for the next call.
+pub fn fly_all(
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    jobs: Vec<Job>,
+    budget: usize,
+    folder: &Path,
+    journal: Journal,
+    cancel: &AtomicBool,
+    on_flight: &(dyn Fn(&FlightRecord) + Sync),
+) -> PoolOutcome {
+    let setup = FleetSetup {
+        folder,
+        journal,
+        cancel,
+        on_flight,
+    };
+    run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1
+}
+
 impl<'a> Fleet<'a> {
     fn new(setup: FleetSetup<'a>, vehicles: usize) -> Self {
         Self {
@@ -246,7 +272,12 @@ impl<'a> Fleet<'a> {
 
     /// The first journal error (the fleet stopped on it).
     pub fn journal_error(&self) -> Option<String> {
-        self.outcome.lock().unwrap_or_else(|p| p.into_inner()).errors.first().cloned()
+        self.outcome
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .errors
+            .first()
+            .cloned()
     }
 
     /// Empties the queue: the flights in the air finish, nothing else takes off.

@@ -7,8 +7,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use super::candidate::{Candidate, Screened};
 use super::config::CampaignError;
 use super::confirm::pending;
+use super::fleet::fly_all;
 use super::journal::{FlightRecord, Journal};
-use super::pool::{FleetUse, Job, PoolOutcome, Vehicle, fly_all};
+use super::pool::{FleetUse, Job, PoolOutcome, Vehicle};
 use super::screener::Progress;
 use crate::model::TestCase;
 
@@ -72,7 +73,10 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec
         .map(|(tally, first)| Job {
             tally,
             confirm: ctx.confirm,
-            ..Job::new(screened_as_flown(first), ctx.case.with_obstacles(first.obstacles.clone()))
+            ..Job::new(
+                screened_as_flown(first),
+                ctx.case.with_obstacles(first.obstacles.clone()),
+            )
         });
     let fresh = ranked.into_iter().map(|s| {
         let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());

@@ -1,13 +1,12 @@
 //! The high-fidelity flight pool: the vehicles, the jobs they fly, and one pass of jobs flown on them within a
-//! budget ([`fly_all`]; the campaign's rounds keep a [`super::fleet`] open instead).
+//! budget ([`super::fleet`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::candidate::Screened;
 use super::confirm::Tally;
-use super::fleet::{FleetSetup, run_fleet};
-use super::journal::{FlightRecord, INTERRUPTED, Journal};
+use super::journal::{FlightRecord, INTERRUPTED};
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -115,32 +114,6 @@ pub struct FleetUse {
 /// sensors timed out (`MAG #0 failed: TIMEOUT`, "Preflight Fail: No valid data from Compass 0") rejected 8 of a
 /// campaign's 30 flights in a row this way, each spending a flight of the budget.
 pub const REJECTED_IN_A_ROW_TO_DROP: usize = 2;
-
-/// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
-/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv` (a test's later
-/// flights to `candidate_<n>_<flight>.csv`). A failing flight whose test is to be confirmed puts the test's
-/// next flight at the front of the queue, before the new candidates: within the budget like any flight.
-///
-/// A vehicle that turns out unreachable, or rejects [`REJECTED_IN_A_ROW_TO_DROP`] flights in a row, gives its
-/// job back; the others wait for that (rather than stopping at a budget that is only reserved) so the job is
-/// still flown. Such vehicles are removed from `vehicles`; the others stay for the next call.
-pub fn fly_all(
-    vehicles: &mut Vec<Box<dyn Vehicle>>,
-    jobs: Vec<Job>,
-    budget: usize,
-    folder: &Path,
-    journal: Journal,
-    cancel: &AtomicBool,
-    on_flight: &(dyn Fn(&FlightRecord) + Sync),
-) -> PoolOutcome {
-    let setup = FleetSetup {
-        folder,
-        journal,
-        cancel,
-        on_flight,
-    };
-    run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1
-}
 
 /// The setup rejections `vehicle` ended its journaled flights with.
 pub(super) fn rejected_in_a_row(history: &[FlightRecord], vehicle: &str) -> usize {

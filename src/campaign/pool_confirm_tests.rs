@@ -6,6 +6,8 @@ use std::sync::{Arc, Mutex};
 
 use super::tests::jobs;
 use super::*;
+use crate::campaign::fleet::fly_all;
+use crate::campaign::journal::Journal;
 
 /// Flies candidate `i`'s `n`th flight to `script[i][n]` metres (repeating the last), logging (candidate,
 /// csv file name).

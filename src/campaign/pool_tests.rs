@@ -1,7 +1,9 @@
 //! The flight pool: budgets, dropped vehicles, rejections and re-flights, on scripted vehicles.
 
 use super::*;
+use crate::campaign::fleet::fly_all;
 use crate::campaign::fleet::{Fleet, FleetSetup, run_fleet};
+use crate::campaign::journal::Journal;
 use crate::model::{Obstacle, SIM_HOME};
 use std::sync::{Arc, Mutex};
 

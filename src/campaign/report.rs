@@ -436,9 +436,18 @@ fn summary_table(md: &mut String, r: &Report) {
     let st = &r.stages;
     let _ = writeln!(
         md,
-        "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |\n",
+        "| wall time: sample / screen / ensemble / learn / fly / report | {:.2} / {:.2} / {:.2} / {:.2} / {:.2} / {:.2} s |",
         st.sample_s, st.screen_s, st.ensemble_s, st.learn_s, st.fly_s, st.report_s
     );
+    if let Some(idle) = st.vehicles_idle() {
+        let _ = writeln!(
+            md,
+            "| vehicles idle from the first take-off to the last landing | {:.1} % of {:.0} vehicle-seconds |",
+            100.0 * idle,
+            st.vehicle_span_s
+        );
+    }
+    md.push('\n');
 }
 
 /// With `--confirm`: the numbers above are over the confirmed tests; these over every test that failed.

@@ -42,8 +42,8 @@ use super::surrogate::Surrogate;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
-use crate::model::{ModelError, Obstacle};
 use crate::model::competition::FAIL_BELOW_M;
+use crate::model::{ModelError, Obstacle};
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
@@ -448,10 +448,7 @@ impl<'a> Rounds<'a> {
             Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
         };
         if !cfg.adapt {
-            return (
-                rank_unflown(fresh, &seen, &self.candidates, cfg, remaining),
-                share,
-            );
+            return (rank_unflown(fresh, &seen, &self.candidates, cfg, remaining), share);
         }
         let mut guard = DiversityGuard::for_round(&self.journal, FAIL_BELOW_M, cfg, round.later);
         let ranked = rank_split(

@@ -61,8 +61,20 @@ fn with_overlap_the_next_round_is_screened_while_a_round_flies_and_the_budget_is
         overlapped: overlapped.clone(),
     };
     let lfs = CountingLfs(screened);
-    let r = run_campaign(&cfg, dir.path(), &lfs, vec![Box::new(probe)], &Quiet, &AtomicBool::new(false)).unwrap();
-    assert_eq!(*overlapped.lock().unwrap(), Some(true), "round 2 was screened while round 1 flew");
+    let r = run_campaign(
+        &cfg,
+        dir.path(),
+        &lfs,
+        vec![Box::new(probe)],
+        &Quiet,
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    assert_eq!(
+        *overlapped.lock().unwrap(),
+        Some(true),
+        "round 2 was screened while round 1 flew"
+    );
     assert_eq!(r.suite.flown, 16);
     let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
     let mut seen: Vec<u64> = journal.iter().map(|j| j.candidate).collect();

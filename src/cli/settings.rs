@@ -467,7 +467,7 @@ pub const KEYS: &[KeyDoc] = &[
     key(
         "flight",
         "overlap",
-        "true",
+        "false",
         "true with --connect, --px4 and --runner vehicles, false with the embedded mock",
         "",
         "Plan each learning round (draw, screen, ensemble, rank) while the previous one flies, so the vehicles \

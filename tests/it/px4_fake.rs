@@ -10,7 +10,8 @@ use std::time::{Duration, Instant};
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::candidate::Screened;
 use prgenuav::campaign::journal::{BACKEND_FAILED, Journal};
-use prgenuav::campaign::pool::{Job, Vehicle, VehicleError, fly_all};
+use prgenuav::campaign::fleet::fly_all;
+use prgenuav::campaign::pool::{Job, Vehicle, VehicleError};
 use prgenuav::campaign::px4_vehicle::{Px4Settings, Px4Vehicle};
 
 use super::{case, repo, test_file, valid_pair};
