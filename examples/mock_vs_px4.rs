@@ -79,7 +79,11 @@ fn main() -> anyhow::Result<()> {
         .filter(|n| n.starts_with("test_") && n.ends_with(".yaml"))
         .map(|n| n.trim_end_matches(".yaml").to_string())
         .collect();
-    names.sort_by_key(|n| n.trim_start_matches("test_").parse::<u32>().unwrap_or(u32::MAX));
+    // test_7 before test_10; test_m4_2 before test_m4_10 before test_m5_0.
+    names.sort_by_key(|n| {
+        let (head, tail) = n.rsplit_once('_').unwrap_or((n.as_str(), ""));
+        (head.to_string(), tail.parse::<u32>().unwrap_or(u32::MAX))
+    });
     let rt = tokio::runtime::Runtime::new()?;
     let gate = Arc::new(Semaphore::new(parallel.max(1)));
     let rows = rt.block_on(async {

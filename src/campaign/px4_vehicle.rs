@@ -15,6 +15,7 @@ use tokio::runtime::Handle;
 use super::journal::BACKEND_FAILED;
 use super::pool::{Flown, Vehicle, VehicleError};
 use super::vehicles::{flown, fly_blocking};
+use crate::bridge::sitl::slot::{self, Slot};
 use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
 use crate::bridge::{FlyMode, FlyOptions};
 use crate::judge::Judge;
@@ -22,7 +23,7 @@ use crate::model::TestCase;
 
 /// Instances on one machine: instance `i` listens for the bridge on UDP `14540 + i`, and instance 10's port
 /// would be 14550, where every instance's GCS link sends (QGroundControl's port).
-pub const MAX_INSTANCES: usize = 10;
+pub const MAX_INSTANCES: usize = slot::SLOTS as usize;
 
 /// `PX4_SIM_SPEED_FACTOR` when `--speed-factor` is not given (the factor the PX4 campaigns of
 /// docs/experiments.md flew at).
@@ -104,6 +105,8 @@ pub struct Px4Vehicle {
     settings: Px4Settings,
     instance: u8,
     failed_in_a_row: usize,
+    /// The machine-wide claim on `instance` (none when the caller chose the instance).
+    _slot: Option<Slot>,
 }
 
 /// How one attempt on one instance ended.
@@ -116,12 +119,20 @@ enum Attempt {
 }
 
 impl Px4Vehicle {
-    /// `k` vehicles on instance slots `0..k`.
+    /// `k` vehicles on the `k` lowest instance slots free on this machine (claimed for the campaign, so another
+    /// campaign or `fly --px4` job on the machine takes others).
     pub fn fleet(handle: &Handle, settings: &Px4Settings, k: usize) -> Result<Vec<Px4Vehicle>, String> {
-        Ok(instance_slots(k)?
+        instance_slots(k)?;
+        let slots = slot::claim_many(k).map_err(|e| e.to_string())?;
+        Ok(slots
             .into_iter()
-            .map(|instance| Px4Vehicle::new(handle.clone(), settings.clone(), instance))
+            .map(|s| Px4Vehicle::new(handle.clone(), settings.clone(), s.instance()).claimed(s))
             .collect())
+    }
+
+    fn claimed(mut self, slot: Slot) -> Self {
+        self._slot = Some(slot);
+        self
     }
 
     /// The vehicle of instance slot `instance`.
@@ -131,6 +142,7 @@ impl Px4Vehicle {
             settings,
             instance,
             failed_in_a_row: 0,
+            _slot: None,
         }
     }
 

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::session::gazebo::world_sdf;
+use prgenuav::bridge::sitl::slot::{self, Slot};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
@@ -28,8 +29,9 @@ pub struct Args {
     /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
     #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
-    /// Start a fresh PX4 SIH instance for the flight (at the test's home, instance 0) and stop it after:
-    /// BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder (docs/px4.md).
+    /// Start a fresh PX4 SIH instance for the flight (at the test's home, on the first free instance slot of
+    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder
+    /// (docs/px4.md).
     #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
     px4: Option<PathBuf>,
     /// How the flight avoids the virtual obstacles.
@@ -135,14 +137,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         fly(&test, &opts, cancel).await
     })?;
-    if let Some(px4) = px4 {
+    if let Some((px4, slot)) = px4 {
         if !report.status.completed() {
             eprintln!("PX4's console, last 20 lines:");
             for line in px4.console_tail(20) {
                 eprintln!("  {line}");
             }
         }
+        // The instance is gone before its slot is freed.
         drop(px4);
+        drop(slot);
     }
     if let Some(path) = &args.plot {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
@@ -198,17 +202,24 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
     Ok(opts)
 }
 
-/// `--px4`: a fresh SIH instance at the test's home, booted; `opts` then fly it at its measured clock rate.
-fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<Px4Sitl> {
+/// `--px4`: a fresh SIH instance at the test's home on a free instance slot (held until the flight ends, so
+/// parallel `fly --px4` jobs on one machine do not share ports), booted; `opts` then fly it at its measured
+/// clock rate.
+fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<(Px4Sitl, Slot)> {
     let speed = opts.time_scale;
-    let spec = SitlSpec::new(build.bin(), 0, speed).at(test.home);
+    let slot = slot::claim(0)?;
+    let spec = SitlSpec::new(build.bin(), slot.instance(), speed).at(test.home);
     if !quiet {
-        eprintln!("starting PX4 SIH instance 0 at the test's home, speed factor {speed} ...");
+        eprintln!(
+            "starting PX4 SIH instance {} at the test's home, speed factor {speed} ...",
+            slot.instance()
+        );
     }
     let px4 = Px4Sitl::start(&spec)?;
     opts.connect = px4.url();
     opts.detect_time_scale = true;
-    Ok(px4)
+    opts.target_system = Some(slot.instance().saturating_add(1));
+    Ok((px4, slot))
 }
 
 /// `--plot`: the flown path over the predicted one.

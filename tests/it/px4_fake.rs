@@ -9,8 +9,8 @@ use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::candidate::Screened;
-use prgenuav::campaign::journal::{BACKEND_FAILED, Journal};
 use prgenuav::campaign::fleet::fly_all;
+use prgenuav::campaign::journal::{BACKEND_FAILED, Journal};
 use prgenuav::campaign::pool::{Job, Vehicle, VehicleError};
 use prgenuav::campaign::px4_vehicle::{Px4Settings, Px4Vehicle};
 
@@ -164,10 +164,9 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
     let folder = std::fs::read_dir(out.path()).unwrap().flatten().next().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert_eq!(all.len(), 1);
-    assert_eq!(
-        (all[0].status.as_str(), all[0].vehicle.as_str()),
-        (BACKEND_FAILED, "px4-sih#0")
-    );
+    // The lowest instance slot free on this machine (another PX4 may hold slot 0).
+    assert_eq!(all[0].status.as_str(), BACKEND_FAILED);
+    assert!(all[0].vehicle.starts_with("px4-sih#"), "{}", all[0].vehicle);
     assert!(folder.join("flights/candidate_0.px4.log").is_file());
     let stored: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("campaign.json")).unwrap()).unwrap();

@@ -4,6 +4,7 @@
 //! ([`spawn`]: also when prgenuav is killed). [`build`] checks the user's build folder.
 
 mod build;
+pub mod slot;
 mod spawn;
 
 use std::collections::VecDeque;
