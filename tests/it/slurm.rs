@@ -127,19 +127,32 @@ fn mock_autopilot() -> PathBuf {
 
 /// A 4-flight campaign through `runner`; returns the campaign folder and each flight's wall time.
 fn campaign(runner: &str, conf: &Path, out: &Path) -> (PathBuf, Vec<f64>) {
+    campaign_on(&["--runner", runner, "--jobs", "2"], 4, "runner#", conf, out)
+}
+
+/// A static `flights`-flight campaign on `backend` (flags), each flight on a vehicle named `vehicle`...;
+/// returns the campaign folder and each flight's wall time.
+fn campaign_on(backend: &[&str], flights: usize, vehicle: &str, conf: &Path, out: &Path) -> (PathBuf, Vec<f64>) {
     let o = Command::new(env!("CARGO_BIN_EXE_prgenuav"))
         .args([
             "generate",
             "missions/mission2.yaml",
-            "4",
+            &flights.to_string(),
             "--seed",
             "2",
-            "--runner",
-            runner,
-            "--jobs",
-            "2",
         ])
-        .args(["--no-learn", "--candidates", "12", "--ensemble", "0", "--json", "--out"])
+        .args(backend)
+        .args([
+            "--no-learn",
+            "--candidates",
+            "12",
+            "--ensemble",
+            "0",
+            "--confirm",
+            "1",
+            "--json",
+            "--out",
+        ])
         .arg(out)
         .env("SLURM_CONF", conf)
         .current_dir(repo())
@@ -150,10 +163,10 @@ fn campaign(runner: &str, conf: &Path, out: &Path) -> (PathBuf, Vec<f64>) {
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("{e}: {stdout}"));
     let folder = PathBuf::from(v["output_folder"].as_str().unwrap());
     let records = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
-    assert_eq!(records.len(), 4, "{records:?}\n{stderr}");
+    assert_eq!(records.len(), flights, "{records:?}\n{stderr}");
     for r in &records {
         assert!(["landed", "collision"].contains(&r.status.as_str()), "{r:?}");
-        assert!(r.min_distance.is_some() && r.vehicle.starts_with("runner#"), "{r:?}");
+        assert!(r.min_distance.is_some() && r.vehicle.starts_with(vehicle), "{r:?}");
     }
     (folder, records.iter().map(|r| r.wall_s).collect())
 }
@@ -184,6 +197,49 @@ fn a_campaign_flies_its_tests_as_slurm_jobs() {
     let (s, d) = (median(through_slurm), median(direct));
     println!(
         "median wall time per flight: through srun {s:.3} s, direct {d:.3} s, overhead {:.3} s",
+        s - d
+    );
+}
+
+/// With `PX4_SITL_BIN` (a PX4 v1.14 `px4_sitl_default` build's `bin/px4`): 6 flights as `srun` steps of
+/// `prgenuav fly --px4` (2 job slots on one node), then the same campaign with `--px4 --instances 2`; prints
+/// Slurm's overhead per flight.
+#[test]
+#[ignore = "needs root, slurm-wlm, munge and PX4_SITL_BIN: cargo test --release --test it slurm -- --ignored"]
+fn a_campaign_flies_px4_flights_as_slurm_jobs() {
+    let Some(bin) = std::env::var_os("PX4_SITL_BIN").map(PathBuf::from) else {
+        eprintln!("skipped: set PX4_SITL_BIN to your PX4 v1.14 build's bin/px4 to fly PX4 through Slurm");
+        return;
+    };
+    let build = bin
+        .parent()
+        .and_then(Path::parent)
+        .expect("BUILD/bin/px4")
+        .display()
+        .to_string();
+    let cluster = Cluster::start();
+    let out = tempfile::tempdir().unwrap();
+    let srun = format!(
+        "srun -N1 -n1 --quiet -J {{id}} {} fly {{test}} --px4 {build} --json --no-predict --trajectory {{dir}}/flight.csv",
+        Path::new(env!("CARGO_BIN_EXE_prgenuav")).display()
+    );
+    let (_, through_slurm) = campaign_on(
+        &["--runner", &srun, "--jobs", "2"],
+        6,
+        "runner#",
+        &cluster.conf(),
+        out.path(),
+    );
+    let (_, direct) = campaign_on(
+        &["--px4", &build, "--instances", "2"],
+        6,
+        "px4-sih#",
+        &cluster.conf(),
+        out.path(),
+    );
+    let (s, d) = (median(through_slurm), median(direct));
+    println!(
+        "PX4: median wall time per flight through srun (fly --px4) {s:.3} s, --px4 {d:.3} s, overhead {:.3} s",
         s - d
     );
 }
