@@ -1,0 +1,84 @@
+//! Exploring or confirming: from campaign folders flown with `--confirm 3`, what a flight buys spent on a new
+//! candidate against one spent confirming a test whose first flight failed. Prints, over every journal given:
+//! the new candidates' failure rate `f`; for tests whose first flight failed, the share confirmed and the
+//! flights their confirmation took, overall and by the first flight's distance; and the confirmed failing tests
+//! per flight of each use.
+//!
+//! `cargo run --release --example confirm_split -- FOLDER...` (campaign folders, each holding `journal.jsonl`)
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use prgenuav::campaign::confirm::failed;
+use prgenuav::campaign::journal::{FlightRecord, Journal};
+
+/// First-flight distance bins (upper bounds, metres) of the failing first flights.
+const BINS: [f64; 3] = [1.0, 1.25, 1.5];
+
+/// A failing test's flights after its first: (its first flight's distance, confirmed, flights after the first).
+fn confirmations(records: &[FlightRecord]) -> Vec<(f64, bool, usize)> {
+    let mut by_test: BTreeMap<u64, Vec<&FlightRecord>> = BTreeMap::new();
+    for r in records {
+        by_test.entry(r.candidate).or_default().push(r);
+    }
+    by_test
+        .values()
+        .filter_map(|flights| {
+            let first = flights.iter().find(|r| r.attempt == 0)?;
+            let d1 = first.min_distance.filter(|_| failed(first.min_distance))?;
+            let fails = flights.iter().filter(|r| failed(r.min_distance)).count();
+            // Settled only: a test whose third flight never came (budget spent) says nothing.
+            let settled = fails >= 2 || flights.len() - fails >= 2;
+            settled.then_some((d1, fails >= 2, flights.len() - 1))
+        })
+        .collect()
+}
+
+fn main() -> anyhow::Result<()> {
+    let folders: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
+    anyhow::ensure!(!folders.is_empty(), "usage: confirm_split FOLDER...");
+    let (mut fresh, mut fresh_failed, mut tests) = (0usize, 0usize, Vec::new());
+    for folder in &folders {
+        let path = folder.join("journal.jsonl");
+        let records = Journal::read(&path).with_context(|| format!("reading {}", path.display()))?;
+        let first: Vec<&FlightRecord> = records.iter().filter(|r| r.attempt == 0).collect();
+        fresh += first.len();
+        fresh_failed += first.iter().filter(|r| failed(r.min_distance)).count();
+        tests.extend(confirmations(&records));
+    }
+    let f = fresh_failed as f64 / fresh.max(1) as f64;
+    println!("new candidates: {fresh_failed} of {fresh} first flights failed (f = {f:.3})");
+    let row = |name: &str, t: &[&(f64, bool, usize)]| {
+        let confirmed = t.iter().filter(|x| x.1).count();
+        let flights: usize = t.iter().map(|x| x.2).sum();
+        println!(
+            "{name}: {} settled, {confirmed} confirmed ({:.2}), {flights} flights after the first ({:.2} each); \
+             confirmed per confirming flight {:.3}",
+            t.len(),
+            confirmed as f64 / t.len().max(1) as f64,
+            flights as f64 / t.len().max(1) as f64,
+            confirmed as f64 / flights.max(1) as f64
+        );
+        (
+            confirmed as f64 / t.len().max(1) as f64,
+            flights as f64 / t.len().max(1) as f64,
+        )
+    };
+    let all: Vec<&(f64, bool, usize)> = tests.iter().collect();
+    let (p_confirm, extra) = row("failing first flights", &all);
+    let mut low = 0.0;
+    for high in BINS {
+        let bin: Vec<&(f64, bool, usize)> = tests.iter().filter(|t| t.0 >= low && t.0 < high).collect();
+        row(&format!("  first flight in [{low:.2}, {high:.2}) m"), &bin);
+        low = high;
+    }
+    // A new candidate costs its flight plus, when it fails, its confirmation.
+    let explore = f * p_confirm / (1.0 + f * extra);
+    println!(
+        "confirmed failing tests per flight: exploring (a new candidate, confirmed as above) {explore:.3}; \
+         confirming a test whose first flight failed {:.3}",
+        p_confirm / extra.max(f64::MIN_POSITIVE)
+    );
+    Ok(())
+}
