@@ -192,8 +192,22 @@ impl Px4Vehicle {
                 Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance))
             }
             (Err(e), None) => Attempt::Failed(format!("PX4 instance {}: {e}", self.instance)),
-            (Ok(r), None) => Attempt::Flew(flown(r)),
+            (Ok(r), None) => never_ready(flown(r), self.instance),
         }
+    }
+}
+
+/// A fresh instance at the test's home that never became ready to arm (`rejected`) failed on PX4's side, or on
+/// the machine's (a starved instance that is late with its home position), not on the test's: the flight is
+/// retried on a fresh instance like a failed boot, and never charged to the budget.
+fn never_ready(f: Flown, instance: u8) -> Attempt {
+    if f.status == "rejected" {
+        Attempt::Failed(format!(
+            "PX4 instance {instance} was never ready to fly: {}",
+            f.reason.as_deref().unwrap_or("no reason given")
+        ))
+    } else {
+        Attempt::Flew(f)
     }
 }
 
@@ -338,6 +352,25 @@ fn keep_ulog(px4: &Px4Sitl, to: &Path, log: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_fresh_instance_that_never_arms_is_a_backend_failure_and_a_flown_one_is_not() {
+        let f = |status: &str| Flown {
+            status: status.into(),
+            min_distance: None,
+            min_distance_raw: None,
+            flight_time_s: 0.0,
+            warnings: Vec::new(),
+            reason: Some("not ready to arm within 60 s (missing: home position)".into()),
+        };
+        match never_ready(f("rejected"), 3) {
+            Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
+            _ => panic!("a rejected flight on a fresh instance must be retried, not journaled as flown"),
+        }
+        for status in ["landed", "collision", "timeout"] {
+            assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");
+        }
+    }
 
     #[test]
     fn k_vehicles_own_k_distinct_slots() {
