@@ -4,6 +4,10 @@
 //! flights their confirmation took, overall and by the first flight's distance; and the confirmed failing tests
 //! per flight of each use.
 //!
+//! Also how well the failure probability ranks on this vehicle: the Brier score over first flights of the
+//! ensemble's `predicted_p_fail`, of a constant rate, and of a normal model of the calibrated prediction whose
+//! bias and spread are fitted on the campaign's earlier flights (in flight order, so each is out of sample).
+//!
 //! `cargo run --release --example confirm_split -- FOLDER...` (campaign folders, each holding `journal.jsonl`)
 
 use std::collections::BTreeMap;
@@ -12,6 +16,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use prgenuav::campaign::confirm::failed;
 use prgenuav::campaign::journal::{FlightRecord, Journal};
+use prgenuav::model::competition::FAIL_BELOW_M as FAIL_M;
 
 /// First-flight distance bins (upper bounds, metres) of the failing first flights.
 const BINS: [f64; 3] = [1.0, 1.25, 1.5];
@@ -35,10 +40,43 @@ fn confirmations(records: &[FlightRecord]) -> Vec<(f64, bool, usize)> {
         .collect()
 }
 
+/// The standard normal CDF (Abramowitz and Stegun 7.1.26, error below 1.5e-7).
+fn phi(x: f64) -> f64 {
+    let z = x.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * z);
+    let poly =
+        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erf = 1.0 - poly * (-z * z).exp();
+    0.5 * (1.0 + erf.copysign(x))
+}
+
+/// (normal model's p, ensemble's p, failed) of each first flight with an ensemble prediction, in flight order.
+/// The model's prior: 0 m of extra bias and a 0.3 m spread, each weighing 3 flights.
+fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
+    let mut residuals: Vec<f64> = Vec::new();
+    let mut out = Vec::new();
+    for r in records.iter().filter(|r| r.attempt == 0) {
+        let Some(flown) = r.min_distance else { continue };
+        let n = residuals.len() as f64;
+        let bias = residuals.iter().sum::<f64>() / (n + 3.0);
+        let var = (3.0 * 0.09 + residuals.iter().map(|x| (x - bias).powi(2)).sum::<f64>()) / (n + 3.0);
+        let q = phi((FAIL_M - (r.predicted_min_distance + bias)) / var.sqrt());
+        if let Some(p) = r.predicted_p_fail {
+            out.push((q, p, flown < FAIL_M));
+        }
+        residuals.push(flown - r.predicted_min_distance);
+    }
+    out
+}
+
+fn brier(v: &[(f64, f64, bool)], p: impl Fn(&(f64, f64, bool)) -> f64) -> f64 {
+    v.iter().map(|x| (p(x) - f64::from(u8::from(x.2))).powi(2)).sum::<f64>() / v.len().max(1) as f64
+}
+
 fn main() -> anyhow::Result<()> {
     let folders: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
     anyhow::ensure!(!folders.is_empty(), "usage: confirm_split FOLDER...");
-    let (mut fresh, mut fresh_failed, mut tests) = (0usize, 0usize, Vec::new());
+    let (mut fresh, mut fresh_failed, mut tests, mut probs) = (0usize, 0usize, Vec::new(), Vec::new());
     for folder in &folders {
         let path = folder.join("journal.jsonl");
         let records = Journal::read(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -46,6 +84,7 @@ fn main() -> anyhow::Result<()> {
         fresh += first.len();
         fresh_failed += first.iter().filter(|r| failed(r.min_distance)).count();
         tests.extend(confirmations(&records));
+        probs.extend(probabilities(&records));
     }
     let f = fresh_failed as f64 / fresh.max(1) as f64;
     println!("new candidates: {fresh_failed} of {fresh} first flights failed (f = {f:.3})");
@@ -79,6 +118,15 @@ fn main() -> anyhow::Result<()> {
         "confirmed failing tests per flight: exploring (a new candidate, confirmed as above) {explore:.3}; \
          confirming a test whose first flight failed {:.3}",
         p_confirm / extra.max(f64::MIN_POSITIVE)
+    );
+    let rate = probs.iter().filter(|x| x.2).count() as f64 / probs.len().max(1) as f64;
+    println!(
+        "Brier over {} first flights with an ensemble: ensemble p_fail {:.3}, a constant rate ({rate:.3}) {:.3}, \
+         normal model of the calibrated prediction {:.3}",
+        probs.len(),
+        brier(&probs, |x| x.1),
+        brier(&probs, |_| rate),
+        brier(&probs, |x| x.0)
     );
     Ok(())
 }
