@@ -45,8 +45,6 @@ pub fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
 
 /// What the journal teaches: the calibration, and the flights' kernel over the flights this run drew.
 pub struct Learning {
-    /// Journal records it learnt from.
-    pub journaled: usize,
     /// The LFS's calibration.
     pub calibration: Calibration,
     points: Vec<Flown>,
@@ -75,7 +73,6 @@ impl Learning {
             .collect();
         let kernel = Surrogate::fit(&points);
         Self {
-            journaled: done.len(),
             calibration,
             points,
             kernel,

@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
-use super::confirm::first_flights;
+use super::confirm::as_learnt;
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
@@ -117,7 +117,7 @@ struct Rounds<'a> {
     start_calibration: Calibration,
     /// The draw distribution of the next round.
     distribution: DrawDistribution,
-    /// Each test's first flight, in journal order: what the rounds learn from.
+    /// Each test once, in journal order, at its flights' mean distance: what the rounds learn from.
     journal: Vec<FlightRecord>,
     /// Every journaled flight (later flights of a test too), in journal order: what the budget counts.
     flights: Vec<FlightRecord>,
@@ -127,7 +127,7 @@ struct Rounds<'a> {
     calibration: Calibration,
     surrogate: Option<Surrogate>,
     /// The last round's learning, reused while no flight has landed since.
-    carried: Option<Learning>,
+    carried: Option<(usize, Learning)>,
     /// Flights charged before the fleet started (resumed, or flown first as interrupted).
     charged_before: usize,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
@@ -193,7 +193,7 @@ impl<'a> Rounds<'a> {
             calibration: start_calibration.clone(),
             start_calibration,
             distribution,
-            journal: first_flights(&flights),
+            journal: as_learnt(&flights),
             flights,
             candidates: Vec::new(),
             log: Vec::new(),
@@ -276,8 +276,8 @@ impl<'a> Rounds<'a> {
             return Err(self.no_vehicle_left(fleet));
         }
         let flights = flights_charged(&flown);
-        self.journal.extend(first_flights(&flown));
         self.flights.extend(flown);
+        self.journal = as_learnt(&self.flights);
         self.log_round(&pushed.round, flights, pushed.share, pushed.bias_m);
         self.learn(flights < pushed.remaining, stages);
         Ok(())
@@ -397,7 +397,7 @@ impl<'a> Rounds<'a> {
         let cfg = self.input.cfg;
         let t = Instant::now();
         let taught = match self.carried.take() {
-            Some(l) if l.journaled == self.journal.len() => l,
+            Some((at, l)) if at == self.flights.len() => l,
             _ => Learning::from(&self.start_calibration, &self.journal, &self.candidates),
         };
         self.calibration = taught.calibration.clone();
@@ -515,7 +515,7 @@ impl<'a> Rounds<'a> {
             let fit = (self.input.cfg, starved);
             self.distribution = refit(&self.distribution, &self.candidates, &self.journal, &taught, fit);
         }
-        self.carried = Some(taught);
+        self.carried = Some((self.flights.len(), taught));
         stages.learn_s += t.elapsed().as_secs_f64();
     }
 

@@ -1,6 +1,8 @@
 //! Confirmed failures (`--confirm`) through the whole campaign, static and learning, with a vehicle whose
 //! repeated flights differ: an even candidate that failed passes when flown again, an odd one fails again.
 
+use std::collections::BTreeMap;
+
 use super::*;
 use crate::campaign::journal::FlightRecord;
 
@@ -133,6 +135,24 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
             r.suite.confirmation_rate.unwrap(),
             r.suite.failed_again as f64 / r.suite.flown_again as f64
         );
+        if learn {
+            // The rounds learnt each test at its flights' mean: the even tests their repeats refuted are no
+            // failures to learn from (and no parents of children).
+            let learnt: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.path().join("learnt.json")).unwrap()).unwrap();
+            let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
+            let mut means: BTreeMap<u64, (f64, f64)> = BTreeMap::new();
+            for rec in &journal {
+                let e = means.entry(rec.candidate).or_default();
+                *e = (e.0 + rec.min_distance.unwrap(), e.1 + 1.0);
+            }
+            let failing = means.values().filter(|(sum, n)| sum / n < 1.5).count();
+            assert_eq!(
+                learnt["failure_counts"]["total"]["failures"].as_u64(),
+                Some(failing as u64)
+            );
+            assert!(failing < r.suite.failed_once, "some failures were refuted");
+        }
         // One vehicle: a failing first flight is followed by the same test's next flight.
         let flown = flown.lock().unwrap().clone();
         let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
