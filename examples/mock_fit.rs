@@ -8,7 +8,8 @@
 //! status); a setting already there is skipped. `cargo run --release --example mock_fit -- cv OUT [K=5]` then
 //! prints each setting's in-sample figures and the K-fold cross-validation of choosing the setting: folds by
 //! obstacle set (`fidelity::fold_of`, repeats of a layout share a fold), the setting with the lowest objective
-//! on the other folds predicts each fold.
+//! on the other folds predicts each fold. `mock_fit cv OUT mission`: one fold per mission instead, so each
+//! mission's cases are predicted by the setting chosen on the other missions'.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -180,7 +181,47 @@ fn objective(f: &(f64, f64, f64, f64, usize)) -> f64 {
     f.0 + f.2.ln().abs()
 }
 
-fn cv(out: &Path, k: usize) -> anyhow::Result<()> {
+/// How the cases are split for cross-validation.
+enum Folds {
+    /// K folds by obstacle set (`fidelity::fold_of`).
+    ObstacleSet(usize),
+    /// One fold per mission.
+    Mission,
+}
+
+impl Folds {
+    fn parse(arg: Option<&String>) -> anyhow::Result<Self> {
+        match arg.map(String::as_str) {
+            None => Ok(Self::ObstacleSet(5)),
+            Some("mission") => Ok(Self::Mission),
+            Some(k) => Ok(Self::ObstacleSet(
+                k.parse().context("K: a number of folds, or `mission`")?,
+            )),
+        }
+    }
+
+    /// Each case's fold, and what the folds are called.
+    fn assign(&self, cases: &[FlightCase]) -> (Vec<usize>, String) {
+        match self {
+            Self::ObstacleSet(k) => (
+                cases.iter().map(|c| fold_of(c, *k)).collect(),
+                format!("{k} folds by obstacle set"),
+            ),
+            Self::Mission => {
+                let mut missions: Vec<&str> = cases.iter().map(|c| c.mission_name.as_str()).collect();
+                missions.sort_unstable();
+                missions.dedup();
+                let fold = |c: &FlightCase| missions.iter().position(|m| *m == c.mission_name).unwrap_or(0);
+                (
+                    cases.iter().map(fold).collect(),
+                    format!("{} folds by mission", missions.len()),
+                )
+            }
+        }
+    }
+}
+
+fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
     let (cases, flights) = reference()?;
     let px4: BTreeMap<&str, &Px4Flight> = flights.iter().map(|f| (f.id.as_str(), f)).collect();
     let all: Vec<&str> = cases.iter().map(|c| c.id.as_str()).collect();
@@ -209,8 +250,15 @@ fn cv(out: &Path, k: usize) -> anyhow::Result<()> {
     let mut oof: BTreeMap<String, (Option<f64>, f64)> = BTreeMap::new();
     println!("\n| fold | cases | chosen on the other folds | test MAE m | Spearman | time ratio |");
     println!("|---|---|---|---|---|---|");
+    let (fold_of_case, folds_name) = folds.assign(&cases);
+    let k = fold_of_case.iter().max().map_or(0, |m| m + 1);
     for fold in 0..k {
-        let (test, train): (Vec<&FlightCase>, Vec<&FlightCase>) = cases.iter().partition(|c| fold_of(c, k) == fold);
+        let (test, train): (Vec<(usize, &FlightCase)>, Vec<(usize, &FlightCase)>) =
+            cases.iter().enumerate().partition(|(i, _)| fold_of_case[*i] == fold);
+        let (test, train): (Vec<&FlightCase>, Vec<&FlightCase>) = (
+            test.into_iter().map(|x| x.1).collect(),
+            train.into_iter().map(|x| x.1).collect(),
+        );
         let train_ids: Vec<&str> = train.iter().map(|c| c.id.as_str()).collect();
         let test_ids: Vec<&str> = test.iter().map(|c| c.id.as_str()).collect();
         let best = by
@@ -237,7 +285,7 @@ fn cv(out: &Path, k: usize) -> anyhow::Result<()> {
     repeat_noise(&cases, &px4);
     let f = figures(&oof, &px4, &all);
     println!(
-        "\ncross-validated ({k} folds by obstacle set): n {} MAE {:.3} m, Spearman {:.3}, time ratio {:.3}, signed {:+.3} m",
+        "\ncross-validated ({folds_name}): n {} MAE {:.3} m, Spearman {:.3}, time ratio {:.3}, signed {:+.3} m",
         f.4, f.0, f.1, f.2, f.3
     );
     Ok(())
@@ -272,7 +320,7 @@ fn main() -> anyhow::Result<()> {
             let parallel = args.get(4).map_or(Ok(3), |a| a.parse())?;
             fly_setting(&PathBuf::from(&args[1]), &args[2], &args[3], parallel)
         }
-        Some("cv") if args.len() >= 2 => cv(&PathBuf::from(&args[1]), args.get(2).map_or(Ok(5), |a| a.parse())?),
-        _ => anyhow::bail!("usage: mock_fit fly OUT NAME SETTING [PARALLEL] | mock_fit cv OUT [K]"),
+        Some("cv") if args.len() >= 2 => cv(&PathBuf::from(&args[1]), &Folds::parse(args.get(2))?),
+        _ => anyhow::bail!("usage: mock_fit fly OUT NAME SETTING [PARALLEL] | mock_fit cv OUT [K | mission]"),
     }
 }

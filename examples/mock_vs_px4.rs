@@ -5,7 +5,8 @@
 //!
 //! `cargo run --release --example mock_vs_px4 -- TESTS PX4_DIR [PARALLEL=2]` (env `MOCK_PX4_DEFAULTS=1`: the mock
 //! with PX4's own defaults instead of the campaign's mock profile; `MOCK_PROFILE=NAME`: that profile instead of the
-//! default)
+//! default; `AGAINST=DIR`: no mock, the reports in DIR of the same tests flown again on PX4 in its place, which
+//! measures how closely PX4 repeats itself: the best any model of it can do)
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -84,11 +85,26 @@ fn main() -> anyhow::Result<()> {
         let (head, tail) = n.rsplit_once('_').unwrap_or((n.as_str(), ""));
         (head.to_string(), tail.parse::<u32>().unwrap_or(u32::MAX))
     });
+    let rows = match std::env::var_os("AGAINST") {
+        Some(again) => (names.iter())
+            .map(|n| {
+                let flown = px4_report(Path::new(&again), n).unwrap_or(("no report".into(), None, f64::NAN));
+                (n.clone(), flown)
+            })
+            .collect(),
+        None => fly_all(&tests, &names, parallel)?,
+    };
+    compare(&rows, &px4);
+    Ok(())
+}
+
+/// Flies every named test on its own mock, `parallel` at a time.
+fn fly_all(tests: &Path, names: &[String], parallel: usize) -> anyhow::Result<Vec<(String, Flown)>> {
     let rt = tokio::runtime::Runtime::new()?;
     let gate = Arc::new(Semaphore::new(parallel.max(1)));
     let rows = rt.block_on(async {
         let mut handles = Vec::new();
-        for name in &names {
+        for name in names {
             let test = TestCase::load(&tests.join(format!("{name}.yaml")))?;
             let gate = gate.clone();
             handles.push(tokio::spawn(async move {
@@ -102,11 +118,16 @@ fn main() -> anyhow::Result<()> {
         }
         anyhow::Ok(rows)
     })?;
+    Ok(rows)
+}
+
+/// Prints each test's two flights and the figures over the tests that landed on both.
+fn compare(rows: &[(String, Flown)], px4: &Path) {
     let mut pairs = Vec::new();
     let mut ratios = Vec::new();
     println!("test\tmock status\tmock m\tmock s\tpx4 status\tpx4 m\tpx4 s");
-    for (name, (ms, md, mt)) in &rows {
-        let p = px4_report(&px4, name);
+    for (name, (ms, md, mt)) in rows {
+        let p = px4_report(px4, name);
         let show = |d: &Option<f64>| d.map_or("-".into(), |d| format!("{d:.2}"));
         match &p {
             Some((ps, pd, pt)) => println!("{name}\t{ms}\t{}\t{mt:.0}\t{ps}\t{}\t{pt:.0}", show(md), show(pd)),
@@ -130,5 +151,4 @@ fn main() -> anyhow::Result<()> {
         a.spearman.unwrap_or(f64::NAN),
         ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN)
     );
-    Ok(())
 }
