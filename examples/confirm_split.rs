@@ -8,6 +8,10 @@
 //! ensemble's `predicted_p_fail`, of a constant rate, and of a normal model of the calibrated prediction whose
 //! bias and spread are fitted on the campaign's earlier flights (in flight order, so each is out of sample).
 //!
+//! And, per folder, how well the predictions the campaign ranked by order its first flights: Spearman of the
+//! prediction it flew each test on (calibrated, moved by the flights' kernel) and of the raw LFS against the
+//! flown distance.
+//!
 //! `cargo run --release --example confirm_split -- FOLDER...` (campaign folders, each holding `journal.jsonl`)
 
 use std::collections::BTreeMap;
@@ -16,6 +20,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use prgenuav::campaign::confirm::failed;
 use prgenuav::campaign::journal::{FlightRecord, Journal};
+use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::competition::FAIL_BELOW_M as FAIL_M;
 
 /// First-flight distance bins (upper bounds, metres) of the failing first flights.
@@ -69,6 +74,23 @@ fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
     out
 }
 
+/// Spearman of the campaign's prediction and of the raw LFS against the flown distance, over `first`.
+fn print_ranking(folder: &std::path::Path, first: &[&FlightRecord]) {
+    let pairs = |p: &dyn Fn(&FlightRecord) -> Option<f64>| -> Vec<(f64, f64)> {
+        first.iter().filter_map(|r| Some((p(r)?, r.min_distance?))).collect()
+    };
+    let ranked = aggregate(&pairs(&|r| Some(r.predicted_min_distance)));
+    let raw = aggregate(&pairs(&|r| r.predicted_raw_min_distance));
+    let show = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.3}"));
+    println!(
+        "{}: {} first flights; Spearman against the flown distance: the campaign's prediction {}, the raw LFS {}",
+        folder.display(),
+        ranked.n,
+        show(ranked.spearman),
+        show(raw.spearman)
+    );
+}
+
 fn brier(v: &[(f64, f64, bool)], p: impl Fn(&(f64, f64, bool)) -> f64) -> f64 {
     v.iter().map(|x| (p(x) - f64::from(u8::from(x.2))).powi(2)).sum::<f64>() / v.len().max(1) as f64
 }
@@ -81,6 +103,7 @@ fn main() -> anyhow::Result<()> {
         let path = folder.join("journal.jsonl");
         let records = Journal::read(&path).with_context(|| format!("reading {}", path.display()))?;
         let first: Vec<&FlightRecord> = records.iter().filter(|r| r.attempt == 0).collect();
+        print_ranking(folder, &first);
         fresh += first.len();
         fresh_failed += first.iter().filter(|r| failed(r.min_distance)).count();
         tests.extend(confirmations(&records));
