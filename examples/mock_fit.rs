@@ -253,12 +253,10 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
     let (fold_of_case, folds_name) = folds.assign(&cases);
     let k = fold_of_case.iter().max().map_or(0, |m| m + 1);
     for fold in 0..k {
-        let (test, train): (Vec<(usize, &FlightCase)>, Vec<(usize, &FlightCase)>) =
-            cases.iter().enumerate().partition(|(i, _)| fold_of_case[*i] == fold);
-        let (test, train): (Vec<&FlightCase>, Vec<&FlightCase>) = (
-            test.into_iter().map(|x| x.1).collect(),
-            train.into_iter().map(|x| x.1).collect(),
-        );
+        let (mut test, mut train): (Vec<&FlightCase>, Vec<&FlightCase>) = (Vec::new(), Vec::new());
+        for (c, f) in cases.iter().zip(&fold_of_case) {
+            if *f == fold { test.push(c) } else { train.push(c) }
+        }
         let train_ids: Vec<&str> = train.iter().map(|c| c.id.as_str()).collect();
         let test_ids: Vec<&str> = test.iter().map(|c| c.id.as_str()).collect();
         let best = by

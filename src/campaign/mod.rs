@@ -28,6 +28,7 @@ pub mod screen;
 pub mod screener;
 pub mod screening;
 pub mod static_campaign;
+pub mod suite;
 pub mod surrogate;
 pub mod vehicles;
 pub mod verdicts;
