@@ -12,18 +12,14 @@ use super::failure_counts::FAIL_BINS;
 use super::journal::{FlightRecord, Journal};
 use super::learn::Learnt;
 use super::pool::FleetUse;
-pub use super::suite::SuiteSummary;
 use super::suite::summary;
+pub use super::suite::{DISTINCT_IOU, SuiteSummary};
 use super::verdicts::{TestVerdict, verdicts};
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{Judge, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
-
-/// Two failing tests overlapping more than this (IoU) count as one place in [`SuiteSummary::distinct_failing`]:
-/// the campaign's default `--max-iou`, its near-duplicate rule.
-pub const DISTINCT_IOU: f64 = 0.5;
 
 /// Wall time of each stage, seconds.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

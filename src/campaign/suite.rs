@@ -5,12 +5,15 @@ use serde::Serialize;
 
 use super::confirm::{failed_again, first_flights};
 use super::journal::{FlightRecord, flights_charged};
-use super::report::DISTINCT_IOU;
 use super::verdicts::{TestVerdict, score_sum};
 use crate::judge::{distinct_tests, diversity};
 use crate::lfs::fidelity::aggregate;
 use crate::model::Obstacle;
 use crate::model::competition::FAIL_BELOW_M;
+
+/// Two failing tests overlapping more than this (IoU) count as one place in [`SuiteSummary::distinct_failing`]:
+/// the campaign's default `--max-iou`, its near-duplicate rule.
+pub const DISTINCT_IOU: f64 = 0.5;
 
 /// The suite's numbers.
 #[derive(Debug, Clone, PartialEq, Serialize)]
