@@ -125,7 +125,7 @@ fn fly_all(tests: &Path, names: &[String], parallel: usize) -> anyhow::Result<Ve
 fn compare(rows: &[(String, Flown)], px4: &Path) {
     let mut pairs = Vec::new();
     let mut ratios = Vec::new();
-    println!("test\tmock status\tmock m\tmock s\tpx4 status\tpx4 m\tpx4 s");
+    println!("test\tmodel status\tmodel m\tmodel s\tpx4 status\tpx4 m\tpx4 s");
     for (name, (ms, md, mt)) in rows {
         let p = px4_report(px4, name);
         let show = |d: &Option<f64>| d.map_or("-".into(), |d| format!("{d:.2}"));
