@@ -92,8 +92,8 @@ pub fn first_flights(records: &[FlightRecord]) -> Vec<FlightRecord> {
 
 /// Each test once, as the campaign learns from it: its first flight's record, in journal order, with the mean
 /// distance of its charged flights. A repeat flight is evidence about its test, so a test its repeats refuted
-/// stops counting as a failure (as a parent of children, an elite, a point of the flights' kernel); on PX4 a
-/// first failure in [1.25, 1.5) m holds on the next flight about a third of the time. Counted as separate
+/// stops counting as a failure (as a parent of children, an elite, a point of the flights' kernel); on PX4 the
+/// repeat flights refuted 53 of 122 first failures in [1.25, 1.5) m. Counted as separate
 /// records instead, repeats would weigh the failing tests twice and, as copies, pull the failing tests'
 /// diversity down. With one flight per test this is the journal itself.
 pub fn as_learnt(records: &[FlightRecord]) -> Vec<FlightRecord> {
