@@ -8,54 +8,17 @@
 //! default; `AGAINST=DIR`: no mock, the reports in DIR of the same tests flown again on PX4 in its place, which
 //! measures how closely PX4 repeats itself: the best any model of it can do)
 
+#[path = "common/mock_flight.rs"]
+mod mock_flight;
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::Context;
-use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
-use mock_autopilot::{LinkSpec, SpeedFactor};
-use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
-use prgenuav::campaign::mock_profile::MockProfile;
-use prgenuav::campaign::vehicles::mock_builder_with;
+use mock_flight::{Flown, fly_mock};
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;
-
-const SPEED: f64 = 100.0;
-
-/// (status, min distance, flight time) of one flight.
-type Flown = (String, Option<f64>, f64);
-
-async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
-    let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
-        mock_autopilot::MockAutopilot::builder()
-    } else {
-        let profile = match std::env::var("MOCK_PROFILE") {
-            Ok(name) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
-            Err(_) => MockProfile::default(),
-        };
-        mock_builder_with(&profile, FlyMode::Avoidance)
-    };
-    let mock = builder
-        .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
-        .speed_factor(SpeedFactor::Times(SPEED))
-        .lockstep(Some(DEFAULT_LOCKSTEP_WAIT))
-        .spawn()
-        .await?;
-    let port = mock.local_addr().map(|a| a.port()).context("mock has no port")?;
-    let opts = FlyOptions {
-        connect: format!("udpout:127.0.0.1:{port}"),
-        mode: FlyMode::Avoidance,
-        time_scale: SPEED,
-        lockstep: Some(Duration::ZERO),
-        ..FlyOptions::default()
-    };
-    let r = fly(&test, &opts, CancelToken::new()).await;
-    let _ = mock.shutdown().await;
-    let r = r?;
-    Ok((r.status.as_str().to_string(), r.min_distance, r.flight_time_s))
-}
 
 fn px4_report(dir: &Path, name: &str) -> Option<Flown> {
     let text = std::fs::read_to_string(dir.join(format!("{name}.json"))).ok()?;

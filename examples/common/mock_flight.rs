@@ -1,0 +1,50 @@
+//! One flight of a test on an embedded lockstep mock in `avoidance` mode, as `generate` flies it: shared by
+//! the examples that compare the mock with PX4.
+
+use std::time::Duration;
+
+use anyhow::Context;
+use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
+use mock_autopilot::{LinkSpec, SpeedFactor};
+use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use prgenuav::campaign::mock_profile::MockProfile;
+use prgenuav::campaign::vehicles::mock_builder_with;
+use prgenuav::model::TestCase;
+
+/// The mock's simulated time runs this many times faster than the wall clock.
+const SPEED: f64 = 100.0;
+
+/// (status, min distance, flight time) of one flight.
+pub type Flown = (String, Option<f64>, f64);
+
+/// Flies `test` on a fresh mock with the campaign's mock profile (env `MOCK_PROFILE=NAME`: that profile;
+/// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults).
+pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
+    let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
+        mock_autopilot::MockAutopilot::builder()
+    } else {
+        let profile = match std::env::var("MOCK_PROFILE") {
+            Ok(name) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
+            Err(_) => MockProfile::default(),
+        };
+        mock_builder_with(&profile, FlyMode::Avoidance)
+    };
+    let mock = builder
+        .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
+        .speed_factor(SpeedFactor::Times(SPEED))
+        .lockstep(Some(DEFAULT_LOCKSTEP_WAIT))
+        .spawn()
+        .await?;
+    let port = mock.local_addr().map(|a| a.port()).context("mock has no port")?;
+    let opts = FlyOptions {
+        connect: format!("udpout:127.0.0.1:{port}"),
+        mode: FlyMode::Avoidance,
+        time_scale: SPEED,
+        lockstep: Some(Duration::ZERO),
+        ..FlyOptions::default()
+    };
+    let r = fly(&test, &opts, CancelToken::new()).await;
+    let _ = mock.shutdown().await;
+    let r = r?;
+    Ok((r.status.as_str().to_string(), r.min_distance, r.flight_time_s))
+}

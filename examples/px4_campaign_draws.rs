@@ -1,0 +1,148 @@
+//! Do the LFS and the mock fly the campaign's own tests like PX4? Reads the PX4 flights of ten budget-100
+//! campaigns (`tests/data/px4-campaign-draws/tests.jsonl`: PX4 v1.14 SIH, missions 2 and 5; one line per test
+//! with its obstacles and every PX4 flight of it), predicts each test with the LFS (`px4` motion model, as
+//! `generate` screens) and flies it on the embedded mock with the campaign's mock profile. Prints, per kind of
+//! draw (`no-screen`: the generator's plain draws; `learning`: what the learning campaigns chose to fly) and
+//! mission: the share of first flights below 1.5 m on PX4, on the mock and by the LFS, the medians, and how
+//! each model orders PX4's first flights (Spearman) and separates its failures (ROC AUC of the distance).
+//!
+//! `cargo run --release --example px4_campaign_draws -- [PARALLEL=2]` (about 35 minutes on 2 cores; env
+//! `NO_MOCK=1`: the LFS alone, about 3 minutes; `MOCK_PROFILE=NAME`: that mock profile)
+
+#[path = "common/mock_flight.rs"]
+mod mock_flight;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::Context;
+use prgenuav::bridge::predict;
+use prgenuav::lfs::fidelity::aggregate;
+use prgenuav::lfs::sim::MotionModel;
+use prgenuav::model::competition::FAIL_BELOW_M;
+use prgenuav::model::{Obstacle, TestCase};
+use serde::Deserialize;
+use tokio::sync::Semaphore;
+
+const DATA: &str = "tests/data/px4-campaign-draws/tests.jsonl";
+
+/// One test of a PX4 campaign.
+#[derive(Debug, Clone, Deserialize)]
+struct Row {
+    mission: u32,
+    draws: String,
+    obstacles: Vec<Obstacle>,
+    /// Every PX4 flight of it, metres, the first first.
+    px4_min_distance: Vec<f64>,
+}
+
+/// A test's first PX4 flight and the two models' distances.
+struct Judged {
+    px4: f64,
+    lfs: Option<f64>,
+    mock: Option<f64>,
+}
+
+fn main() -> anyhow::Result<()> {
+    let parallel: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
+    let with_mock = std::env::var_os("NO_MOCK").is_none();
+    let text = std::fs::read_to_string(DATA).with_context(|| format!("reading {DATA}"))?;
+    let rows: Vec<Row> = (text.lines().enumerate())
+        .map(|(i, l)| serde_json::from_str(l).with_context(|| format!("{DATA}:{}", i + 1)))
+        .collect::<anyhow::Result<_>>()?;
+    let rt = tokio::runtime::Runtime::new()?;
+    let gate = Arc::new(Semaphore::new(parallel.max(1)));
+    let judged = rt.block_on(async {
+        let mut handles = Vec::new();
+        for row in &rows {
+            let case = TestCase::load(Path::new(&format!("missions/mission{}.yaml", row.mission)))?;
+            let test = case.with_obstacles(row.obstacles.clone());
+            let px4 = *row.px4_min_distance.first().context("a test without a PX4 flight")?;
+            let gate = gate.clone();
+            handles.push(tokio::spawn(async move {
+                let _permit = gate.acquire_owned().await?;
+                let motion = MotionModel::by_name("px4").context("the px4 motion model")?;
+                let lfs = predict(&test, motion, Default::default())
+                    .ok()
+                    .and_then(|p| p.min_distance);
+                let mock = if with_mock {
+                    let (status, d, _) = mock_flight::fly_mock(test).await?;
+                    d.filter(|_| status == "landed")
+                } else {
+                    None
+                };
+                anyhow::Ok(Judged { px4, lfs, mock })
+            }));
+        }
+        let mut out = Vec::new();
+        for h in handles {
+            out.push(h.await??);
+        }
+        anyhow::Ok(out)
+    })?;
+    let mut groups: BTreeMap<(String, u32), Vec<&Judged>> = BTreeMap::new();
+    for (row, j) in rows.iter().zip(&judged) {
+        groups.entry((row.draws.clone(), row.mission)).or_default().push(j);
+    }
+    println!(
+        "| draws | mission | tests | below 1.5 m: PX4 / mock / LFS | median m: PX4 / mock / LFS | Spearman vs PX4: \
+         mock / LFS | AUC of PX4's failures: mock / LFS |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for ((draws, mission), js) in &groups {
+        let px4: Vec<f64> = js.iter().map(|j| j.px4).collect();
+        let mock: Vec<(f64, f64)> = js.iter().filter_map(|j| j.mock.map(|m| (m, j.px4))).collect();
+        let lfs: Vec<(f64, f64)> = js.iter().filter_map(|j| j.lfs.map(|m| (m, j.px4))).collect();
+        let model: Vec<f64> = mock.iter().map(|p| p.0).collect();
+        let lfs_m: Vec<f64> = lfs.iter().map(|p| p.0).collect();
+        println!(
+            "| {draws} | {mission} | {} | {} / {} / {} | {} / {} / {} | {} / {} | {} / {} |",
+            js.len(),
+            rate(&px4),
+            rate(&model),
+            rate(&lfs_m),
+            median(&px4),
+            median(&model),
+            median(&lfs_m),
+            show(aggregate(&mock).spearman),
+            show(aggregate(&lfs).spearman),
+            show(auc(&mock)),
+            show(auc(&lfs))
+        );
+    }
+    Ok(())
+}
+
+fn show(x: Option<f64>) -> String {
+    x.map_or("-".into(), |x| format!("{x:.2}"))
+}
+
+fn rate(v: &[f64]) -> String {
+    let below = v.iter().filter(|d| **d < FAIL_BELOW_M).count();
+    show((!v.is_empty()).then(|| below as f64 / v.len() as f64))
+}
+
+fn median(v: &[f64]) -> String {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    show(v.get(v.len() / 2).copied())
+}
+
+/// ROC AUC of a model's distance (closer = likelier to fail) against PX4's first flight failing, over
+/// `(model, px4)` pairs; ties count half.
+fn auc(pairs: &[(f64, f64)]) -> Option<f64> {
+    let (fail, pass): (Vec<_>, Vec<_>) = pairs.iter().partition(|(_, px4)| *px4 < FAIL_BELOW_M);
+    if fail.is_empty() || pass.is_empty() {
+        return None;
+    }
+    let wins: f64 = (fail.iter())
+        .flat_map(|(f, _)| pass.iter().map(move |(p, _)| (f, p)))
+        .map(|(f, p)| match f.total_cmp(p) {
+            std::cmp::Ordering::Less => 1.0,
+            std::cmp::Ordering::Equal => 0.5,
+            std::cmp::Ordering::Greater => 0.0,
+        })
+        .sum();
+    Some(wins / (fail.len() * pass.len()) as f64)
+}
