@@ -26,9 +26,6 @@ pub struct Candidate {
     pub parents: Option<Lineage>,
     /// A child admitted closer to a flown test than `max_iou` by the diversity guard.
     pub close: bool,
-    /// A histogram draw of the unranked arm: it flies in draw order, whatever the LFS predicts for it
-    /// ([`super::neighbours::Arm::Unranked`]).
-    pub unranked: bool,
     /// The LFS's prediction, once screened.
     pub screened: Option<Screened>,
 }
@@ -41,7 +38,6 @@ impl Candidate {
             unit,
             parents: None,
             close: false,
-            unranked: false,
             screened: None,
         }
     }
@@ -56,11 +52,6 @@ impl Candidate {
 /// are not).
 pub fn is_child(candidates: &[Candidate], c: u64, lineage: Lineage) -> bool {
     candidates.get(c as usize).is_some_and(|x| x.is_child_of(lineage))
-}
-
-/// Whether candidate `c` of `candidates` belongs to the unranked arm.
-pub fn is_unranked(candidates: &[Candidate], c: u64) -> bool {
-    candidates.get(c as usize).is_some_and(|x| x.unranked)
 }
 
 /// The draw of candidate `c`, if this run drew it.

@@ -1,7 +1,6 @@
 //! The draw stage of a learning round: the round's candidates from the histogram distribution, and its last
 //! ones as children in the boxes around the parents ([`super::neighbours`]), each child admitted by the
-//! diversity guard. The round's first histogram draws are flagged for the unranked arm at draw time, so a
-//! resumed campaign counts every flight in the arm it was flown in.
+//! diversity guard.
 
 use super::candidate::{Candidate, Lineage};
 use super::diversity_guard::DiversityGuard;
@@ -17,8 +16,6 @@ pub struct DrawPlan<'a> {
     pub count: usize,
     /// Of them, the last ones drawn as children.
     pub children: usize,
-    /// Of the histogram's draws, the first ones belong to the unranked arm.
-    pub unranked: usize,
     /// The parents' boxes.
     pub around: &'a [Neighbourhood],
     /// Whose children they are.
@@ -57,7 +54,6 @@ pub fn draw(
             unit: p.draw.unit,
             parents: from_box.then_some(plan.lineage),
             close: from_box && guard.last_was_close(),
-            unranked: !from_box && k < plan.unranked,
             screened: None,
         });
     }

@@ -132,13 +132,9 @@ pub struct Learnt {
     /// ... near the closest flights, before the first failure ...
     #[serde(default)]
     pub drawn_near_misses: BinCount,
-    /// ... of the histogram's draws flown by the LFS's ranking (and of flights this run did not draw) ...
+    /// ... and of all the others (a diagnostic: did the boxes pay on this vehicle?).
     #[serde(default)]
     pub drawn_elsewhere: BinCount,
-    /// ... and of the histogram's draws flown in draw order (a diagnostic: did the boxes and the ranking pay
-    /// on this vehicle?).
-    #[serde(default)]
-    pub drawn_unranked: BinCount,
     /// Of the candidates drawn near failing flights, those closer to a flown test than `--max-iou`
     /// ([`super::diversity_guard`]).
     #[serde(default)]
@@ -161,10 +157,6 @@ pub struct RoundLog {
     /// without `adapt`).
     #[serde(default)]
     pub local_flight_share: f64,
-    /// Share of the rest offered to the unranked arm ([`super::neighbours::unranked_flight_share`]; 0 without
-    /// `adapt`).
-    #[serde(default)]
-    pub unranked_flight_share: f64,
     /// Its neighbour candidates were drawn around near misses: no flight had failed yet.
     #[serde(default)]
     pub near_miss_parents: bool,

@@ -16,7 +16,7 @@ pub use super::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use super::diversity_guard::{DiversityGuard, child_max_iou};
 use super::failure_counts::BinCount;
 use super::journal::FlightRecord;
-use super::rank::{in_draw_order, rank_unflown, rank_unflown_within};
+use super::rank::{rank_unflown, rank_unflown_within};
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 
 /// Candidates drawn around the parents per round (at most; no more than the round's own draws), shared out
@@ -97,101 +97,49 @@ pub fn child_box(parents: &[Neighbourhood], j: usize, close: bool) -> Option<Nei
 /// the histogram's (Laplace-smoothed, so 0.5 before any flight), within [`LOCAL_FLIGHT_SHARE`]. The arm that
 /// finds failures gets the flights; on a stack where neighbours fail no more often, the split stays even.
 pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
-    (local.rate() / (local.rate() + histogram.rate())).clamp(LOCAL_FLIGHT_SHARE.0, LOCAL_FLIGHT_SHARE.1)
+    let (l, h) = (local.rate(), histogram.rate());
+    (l / (l + h)).clamp(LOCAL_FLIGHT_SHARE.0, LOCAL_FLIGHT_SHARE.1)
 }
 
-/// Bounds of the unranked arm's share of the histogram's flights (those not offered to neighbours).
-pub const UNRANKED_FLIGHT_SHARE: (f64, f64) = (0.2, 0.8);
-
-/// Share of the histogram's flights for the unranked arm: its failure rate over the sum of its and the
-/// LFS-ranked arm's (Laplace-smoothed), within [`UNRANKED_FLIGHT_SHARE`]. Where the LFS ranks the vehicle's
-/// flights, the ranked arm takes most of them; where it does not (PX4 v1.14 SIH on missions 2 and 5: the
-/// LFS-ranked histogram draws failed 5 of 122 flights, random draws 51 of 320), the unranked arm does.
-pub fn unranked_flight_share(unranked: BinCount, ranked: BinCount) -> f64 {
-    (unranked.rate() / (unranked.rate() + ranked.rate())).clamp(UNRANKED_FLIGHT_SHARE.0, UNRANKED_FLIGHT_SHARE.1)
-}
-
-/// Which arm of a learning round a candidate flies in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Arm {
-    /// A child of the round's parents, ranked by the learnt prediction.
-    Near,
-    /// A histogram draw ranked by the learnt prediction.
-    Ranked,
-    /// A histogram draw flown in draw order ([`super::candidate::Candidate::unranked`]).
-    Unranked,
-}
-
-/// How a round shares its flights among the arms, and each arm's failure rate so far.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Split {
-    /// Share of the round's flights offered to the neighbours.
-    pub near_share: f64,
-    /// Share of the rest offered to the unranked arm.
-    pub unranked_share: f64,
-    /// Failure rates (neighbours, ranked, unranked), for the diversity guard's expectation.
-    pub rates: (f64, f64, f64),
-}
-
-/// The round's flights: `near_share` of `remaining` from the neighbours (best first), `unranked_share` of the
-/// rest from the unranked arm (in draw order), the rest from the ranked arm (best first), then the unranked
-/// and the neighbours' leftovers if the ranked arm runs out; near-duplicates of any flown test skipped, and
+/// The round's flights: the best `share` of `remaining` among the neighbour candidates (`is_local`), the rest
+/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped, and
 /// each flight admitted by `guard` (distinct from the round's others, keeping the failing tests' expected
-/// diversity) with its arm's failure rate.
+/// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(
     fresh: &[Screened],
-    arm_of: impl Fn(u64) -> Arm,
-    split: Split,
+    is_local: impl Fn(u64) -> bool,
+    share: f64,
     (done, candidates): (&[FlightRecord], &[Candidate]),
     cfg: &CampaignConfig,
     remaining: usize,
-    guard: &mut DiversityGuard,
+    (guard, (near_rate, other_rate)): (&mut DiversityGuard, (f64, f64)),
 ) -> Vec<Screened> {
-    let of = |arm| -> Vec<Screened> { fresh.iter().filter(|s| arm_of(s.candidate) == arm).cloned().collect() };
-    let (near_rate, ranked_rate, unranked_rate) = split.rates;
-    let near_quota = ((remaining as f64 * split.near_share).round() as usize).min(remaining);
-    let unranked_quota = ((remaining - near_quota) as f64 * split.unranked_share).round() as usize;
-    let near = rank_unflown_within(&of(Arm::Near), done, candidates, cfg, usize::MAX, child_max_iou(cfg));
-    let unranked = in_draw_order(
-        &of(Arm::Unranked),
-        done,
-        candidates,
-        (cfg.threshold_m, cfg.max_iou),
-        usize::MAX,
-    );
-    let ranked = rank_unflown(&of(Arm::Ranked), done, candidates, cfg, usize::MAX);
+    let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
+    let quota = ((remaining as f64 * share).round() as usize).min(remaining);
+    let near = rank_unflown_within(&near, done, candidates, cfg, usize::MAX, child_max_iou(cfg));
     let mut chosen: Vec<Screened> = Vec::new();
-    let mut take = |s: Screened, rate: f64, quota: usize, chosen: &mut Vec<Screened>| {
-        let admit = chosen.len() < quota
-            && chosen.iter().all(|c| c.candidate != s.candidate)
-            && guard.admit(&candidates[s.candidate as usize].obstacles, rate);
-        if admit {
-            chosen.push(s);
-        }
-        admit
-    };
     let mut later = Vec::new();
     for s in near {
-        if !take(s.clone(), near_rate, near_quota, &mut chosen) {
-            later.push((s, near_rate));
+        if chosen.len() < quota && guard.admit(&candidates[s.candidate as usize].obstacles, near_rate) {
+            chosen.push(s);
+        } else {
+            later.push(s);
         }
     }
-    let mut later_unranked = Vec::new();
-    let before = chosen.len();
-    for s in unranked {
-        let quota = before + unranked_quota;
-        if !take(s.clone(), unranked_rate, quota, &mut chosen) {
-            later_unranked.push((s, unranked_rate));
-        }
-    }
-    let rest = (ranked.into_iter().map(|s| (s, ranked_rate)))
-        .chain(later_unranked)
-        .chain(later);
+    let others = rank_unflown(&other, done, candidates, cfg, usize::MAX);
+    let rest = others
+        .into_iter()
+        .map(|s| (s, other_rate))
+        .chain(later.into_iter().map(|s| (s, near_rate)));
     for (s, rate) in rest {
         if chosen.len() >= remaining {
             break;
         }
-        take(s, rate, remaining, &mut chosen);
+        if chosen.iter().all(|c| c.candidate != s.candidate)
+            && guard.admit(&candidates[s.candidate as usize].obstacles, rate)
+        {
+            chosen.push(s);
+        }
     }
     chosen
 }
@@ -296,16 +244,5 @@ mod tests {
         assert!((local_flight_share(c(18, 5), c(82, 4)) - 0.8344).abs() < 1e-3);
         assert_eq!(local_flight_share(c(40, 20), c(40, 0)), LOCAL_FLIGHT_SHARE.1);
         assert_eq!(local_flight_share(c(40, 0), c(40, 20)), LOCAL_FLIGHT_SHARE.0);
-    }
-
-    #[test]
-    fn the_unranked_arm_gets_the_histograms_flights_where_the_ranking_does_not_pay() {
-        let c = |flights, failures| BinCount { flights, failures };
-        assert_eq!(unranked_flight_share(c(0, 0), c(0, 0)), 0.5);
-        // PX4 on mission 2: ranked 1 of 51, random draws 24 of 161: (25/163) / (25/163 + 2/53) = 0.80.
-        assert!((unranked_flight_share(c(161, 24), c(51, 1)) - 0.8).abs() < 1e-3);
-        // The mock, where the ranking pays: the floor.
-        assert_eq!(unranked_flight_share(c(40, 1), c(60, 20)), UNRANKED_FLIGHT_SHARE.0);
-        assert!((unranked_flight_share(c(20, 5), c(20, 5)) - 0.5).abs() < 1e-12);
     }
 }

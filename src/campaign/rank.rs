@@ -30,16 +30,6 @@ pub fn rank(
             .then(a.flight_time_s.total_cmp(&b.flight_time_s))
             .then(a.candidate.cmp(&b.candidate))
     });
-    distinct(order, max_iou, limit, footprints)
-}
-
-/// The first `limit` of `order` whose footprints overlap every one taken before by at most `max_iou`.
-fn distinct<'a>(
-    order: impl IntoIterator<Item = &'a Screened>,
-    max_iou: f64,
-    limit: usize,
-    footprints: impl Fn(u64) -> Vec<Footprint>,
-) -> Vec<Screened> {
     let mut chosen: Vec<(Screened, Vec<Footprint>)> = Vec::new();
     for s in order {
         if chosen.len() >= limit {
@@ -90,39 +80,13 @@ pub fn rank_unflown_within(
             .collect()
     };
     let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
-    ranked.retain(|s| !like_flown(done, candidates, s.candidate, flown_max_iou));
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
+    });
     ranked.truncate(remaining);
     ranked
-}
-
-/// The unranked arm's candidates to fly, in draw order whatever the LFS predicts below `threshold_m`: the
-/// newest draw first (it comes from the latest histogram), near-duplicates of each other and of every journaled
-/// flight skipped, at most `remaining`. The threshold stays: on PX4 v1.14 SIH (missions 2 and 5, 320 plain
-/// draws) the draws the LFS predicted beyond 3 m failed 3 of 62 flights, the others 48 of 258.
-pub fn in_draw_order(
-    fresh: &[Screened],
-    done: &[FlightRecord],
-    candidates: &[Candidate],
-    (threshold_m, max_iou): (f64, f64),
-    remaining: usize,
-) -> Vec<Screened> {
-    let mut order: Vec<&Screened> = (fresh.iter())
-        .filter(|s| s.min_distance < threshold_m && !like_flown(done, candidates, s.candidate, max_iou))
-        .collect();
-    order.sort_by_key(|s| std::cmp::Reverse(s.candidate));
-    let footprints = |c: u64| {
-        candidates[c as usize]
-            .obstacles
-            .iter()
-            .map(Obstacle::footprint)
-            .collect()
-    };
-    distinct(order, max_iou, remaining, footprints)
-}
-
-/// Whether candidate `c` overlaps a journaled flight by more than `max_iou`.
-fn like_flown(done: &[FlightRecord], candidates: &[Candidate], c: u64, max_iou: f64) -> bool {
-    (done.iter()).any(|r| too_similar(&r.obstacles, &candidates[c as usize].obstacles, max_iou))
 }
 
 #[cfg(test)]
@@ -179,33 +143,5 @@ mod tests {
             vec![4, 2],
             "ties broken by flight time"
         );
-    }
-
-    #[test]
-    fn the_unranked_arm_flies_newest_draws_first_whatever_their_prediction() {
-        use crate::campaign::candidate::Candidate;
-        use crate::generator::adaptive::DIMS;
-        let at = |x: f64| vec![Obstacle::new(4.0, 2.0, 10.0, x, 20.0, 0.0)];
-        // Candidate 3 sits on candidate 1's footprint; candidate 0 on the flown test's.
-        let xs = [50.0, 10.0, 30.0, 10.5, 70.0];
-        let candidates: Vec<Candidate> = xs.iter().map(|x| Candidate::drawn(at(*x), [0.5; DIMS])).collect();
-        let fresh: Vec<Screened> = (0..5).map(|c| s(c, 1.0 + c as f64 * 0.1, 40.0)).collect();
-        let mut flown = crate::campaign::journal::test_record(9, 1.0, Some(2.0));
-        flown.obstacles = at(50.0);
-        let order = |threshold, limit| -> Vec<u64> {
-            let r = in_draw_order(
-                &fresh,
-                std::slice::from_ref(&flown),
-                &candidates,
-                (threshold, 0.5),
-                limit,
-            );
-            r.iter().map(|s| s.candidate).collect()
-        };
-        // The predictions' order does not matter; 1 is a near-duplicate of 3, 0 of the flown test.
-        assert_eq!(order(3.0, 10), vec![4, 3, 2]);
-        assert_eq!(order(3.0, 2), vec![4, 3]);
-        // Beyond the threshold (4 at 1.4 m, 3 at 1.3 m) a draw is not flown, and 1 no longer has a twin.
-        assert_eq!(order(1.25, 10), vec![2, 1]);
     }
 }

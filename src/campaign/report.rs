@@ -372,7 +372,7 @@ fn learning_section(md: &mut String, l: &Learnt) {
     }
     let _ = writeln!(
         md,
-        "| round | candidates (near flights) | flights (share offered near / unranked) | bias used m | kernel h / LOO error m | draw means ({}) |",
+        "| round | candidates (near flights) | flights (share offered near) | bias used m | kernel h / LOO error m | draw means ({}) |",
         DRAW_NAMES.join(", ")
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
@@ -388,13 +388,12 @@ fn learning_section(md: &mut String, l: &Learnt) {
         };
         let _ = writeln!(
             md,
-            "| {} | {} ({}) | {} ({:.2} / {:.2}) | {:+.3} | {} | {} |",
+            "| {} | {} ({}) | {} ({:.2}) | {:+.3} | {} | {} |",
             round.round + 1,
             round.candidates,
             near,
             round.flights,
             round.local_flight_share,
-            round.unranked_flight_share,
             round.bias_m,
             kernel,
             means.join(", ")
@@ -427,13 +426,12 @@ fn failure_bins(md: &mut String, l: &Learnt) {
         let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
     }
     let (near, misses, other) = (l.drawn_near_failures, l.drawn_near_misses, l.drawn_elsewhere);
-    let unranked = l.drawn_unranked;
-    if near.flights + misses.flights + unranked.flights > 0 {
+    if near.flights + misses.flights > 0 {
         let _ = writeln!(
             md,
             "\nCandidates drawn near failing flights failed {} of {} flights (those closer to a flown test than \
-             --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the histogram's \
-             draws flown by the LFS's ranking {} of {}, and those flown in draw order (unranked) {} of {}.",
+             --max-iou: {} of {}); near the closest flights before the first failure, {} of {}; the others {} of \
+             {}.",
             near.failures,
             near.flights,
             l.drawn_close.failures,
@@ -441,9 +439,7 @@ fn failure_bins(md: &mut String, l: &Learnt) {
             misses.failures,
             misses.flights,
             other.failures,
-            other.flights,
-            unranked.failures,
-            unranked.flights
+            other.flights
         );
     }
     let _ = writeln!(md);

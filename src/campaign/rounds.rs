@@ -9,10 +9,7 @@
 //! With `adapt`, the generator moves towards failures in two ways. Some of a round's new candidates are drawn
 //! in small boxes around the failing flights so far (before the first failure, around the closest near misses:
 //! [`super::neighbours`]), and a share of its flights that follows their failure rate is offered to them. The
-//! others come from the histogram refitted on the elites after each round ([`super::learning::refit`]): most
-//! are flown by the LFS's ranking, a third form the unranked arm, flown in draw order, and the share of flights
-//! each gets follows its failure rate ([`super::neighbours::unranked_flight_share`]), so a vehicle whose flights
-//! the LFS does not rank still gets the histogram's plain failure rate. Every
+//! others come from the histogram refitted on the elites after each round ([`super::learning::refit`]). Every
 //! child drawn and every candidate flown must keep the final failing tests' expected diversity above the
 //! user's floor ([`DiversityGuard`]).
 //!
@@ -28,20 +25,18 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use super::candidate::{Candidate, Lineage, Screened, is_child, is_unranked};
+use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
 use super::confirm::as_learnt;
 use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
-use super::failure_counts::{BinCount, arm_counts, counted_failures};
+use super::failure_counts::{arm_counts, counted_failures};
 use super::fleet::{Fleet, FleetSetup, run_fleet};
 use super::flights::{FlightStage, announce, stage_jobs};
 use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};
-use super::neighbours::{
-    self, Arm, NEAR_MISS_FLIGHT_SHARE, Split, local_flight_share, rank_split, unranked_flight_share,
-};
+use super::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use super::pool::Vehicle;
 use super::rank::rank_unflown;
 use super::report::StageTimes;
@@ -55,8 +50,6 @@ use crate::model::{ModelError, Obstacle};
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
-/// One in this many of a round's histogram draws belongs to the unranked arm (with `adapt`).
-pub const UNRANKED_DRAWS_EVERY: usize = 3;
 /// Rounds added (each drawing as many candidates as a planned one) while the budget is not yet flown because
 /// the near-duplicate filter rejected the ranking's tail.
 pub const EXTRA_ROUNDS: usize = 4;
@@ -145,7 +138,7 @@ struct Rounds<'a> {
 struct Pushed {
     round: Round,
     remaining: usize,
-    split: Split,
+    share: f64,
     bias_m: f64,
 }
 
@@ -169,8 +162,8 @@ struct Ranking {
     ranked: Vec<Screened>,
     /// Flights left in the round's share of the budget.
     remaining: usize,
-    /// How the flights were shared among the arms.
-    split: Split,
+    /// Share of the flights offered to the children.
+    share: f64,
     bias_m: f64,
 }
 
@@ -265,7 +258,7 @@ impl<'a> Rounds<'a> {
         self.in_air.push_back(Pushed {
             round,
             remaining: ranking.remaining,
-            split: ranking.split,
+            share: ranking.share,
             bias_m: ranking.bias_m,
         });
         Ok(())
@@ -285,7 +278,7 @@ impl<'a> Rounds<'a> {
         let flights = flights_charged(&flown);
         self.flights.extend(flown);
         self.journal = as_learnt(&self.flights);
-        self.log_round(&pushed.round, flights, pushed.split, pushed.bias_m);
+        self.log_round(&pushed.round, flights, pushed.share, pushed.bias_m);
         self.learn(flights < pushed.remaining, stages);
         Ok(())
     }
@@ -347,7 +340,6 @@ impl<'a> Rounds<'a> {
             first,
             count: own + children,
             children,
-            unranked: if cfg.adapt { own / UNRANKED_DRAWS_EVERY } else { 0 },
             around: &around,
             lineage,
             child_rate,
@@ -431,11 +423,11 @@ impl<'a> Rounds<'a> {
             apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let (ranked, split) = self.choose(round, &fresh, remaining, &queued_as_flown(busy));
+        let (ranked, share) = self.choose(round, &fresh, remaining, &queued_as_flown(busy));
         Ok(Ranking {
             ranked,
             remaining,
-            split,
+            share,
             bias_m: self.calibration.bias_m(),
         })
     }
@@ -449,46 +441,29 @@ impl<'a> Rounds<'a> {
         fresh: &[Screened],
         remaining: usize,
         queued: &[FlightRecord],
-    ) -> (Vec<Screened>, Split) {
+    ) -> (Vec<Screened>, f64) {
         let seen: Vec<FlightRecord> = self.journal.iter().chain(queued).cloned().collect();
         let cfg = self.input.cfg;
-        let arm_of = |c| {
-            if is_child(&self.candidates, c, round.lineage) {
-                Arm::Near
-            } else if is_unranked(&self.candidates, c) {
-                Arm::Unranked
-            } else {
-                Arm::Ranked
-            }
-        };
-        let count = |arm| arm_counts(&self.journal, |c| arm_of(c) == arm).0;
-        let (near, ranked, unranked) = (count(Arm::Near), count(Arm::Ranked), count(Arm::Unranked));
-        let histogram = BinCount {
-            flights: ranked.flights + unranked.flights,
-            failures: ranked.failures + unranked.failures,
-        };
-        let split = Split {
-            near_share: match round.lineage {
-                Lineage::Failures => local_flight_share(near, histogram),
-                Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
-            },
-            unranked_share: unranked_flight_share(unranked, ranked),
-            rates: (near.rate(), ranked.rate(), unranked.rate()),
+        let is_arm = |c| is_child(&self.candidates, c, round.lineage);
+        let (near_flown, other_flown) = arm_counts(&self.journal, is_arm);
+        let share = match round.lineage {
+            Lineage::Failures => local_flight_share(near_flown, other_flown),
+            Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
         };
         if !cfg.adapt {
-            return (rank_unflown(fresh, &seen, &self.candidates, cfg, remaining), split);
+            return (rank_unflown(fresh, &seen, &self.candidates, cfg, remaining), share);
         }
         let mut guard = DiversityGuard::for_round(&self.journal, FAIL_BELOW_M, cfg, round.later);
-        let chosen = rank_split(
+        let ranked = rank_split(
             fresh,
-            arm_of,
-            split,
+            is_arm,
+            share,
             (&seen, &self.candidates),
             cfg,
             remaining,
-            &mut guard,
+            (&mut guard, (near_flown.rate(), other_flown.rate())),
         );
-        (chosen, split)
+        (ranked, share)
     }
 
     fn note(&self, round: &Round, ranking: &Ranking) {
@@ -512,7 +487,7 @@ impl<'a> Rounds<'a> {
         ));
     }
 
-    fn log_round(&mut self, round: &Round, flights: usize, split: Split, bias_m: f64) {
+    fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
         let adapt = self.input.cfg.adapt;
         self.log.push(RoundLog {
             round: round.index,
@@ -521,8 +496,7 @@ impl<'a> Rounds<'a> {
             local_candidates: (self.candidates[round.first as usize..].iter())
                 .filter(|c| c.parents.is_some())
                 .count(),
-            local_flight_share: if adapt { split.near_share } else { 0.0 },
-            unranked_flight_share: if adapt { split.unranked_share } else { 0.0 },
+            local_flight_share: if adapt { share } else { 0.0 },
             near_miss_parents: round.children > 0 && round.lineage == Lineage::NearMisses,
             flights,
             bias_m,
@@ -559,8 +533,7 @@ impl<'a> Rounds<'a> {
             failure_counts: counted_failures(done, drawn),
             drawn_near_failures: arm_counts(done, child_of(Lineage::Failures)).0,
             drawn_near_misses: arm_counts(done, child_of(Lineage::NearMisses)).0,
-            drawn_elsewhere: arm_counts(done, |c| any_child(c) || is_unranked(drawn, c)).1,
-            drawn_unranked: arm_counts(done, |c| is_unranked(drawn, c)).0,
+            drawn_elsewhere: arm_counts(done, any_child).1,
             drawn_close: arm_counts(done, close).0,
         };
         write_json(&self.input.folder.join("learnt.json"), &learnt, true)?;

@@ -20,7 +20,6 @@ fn a_prior_with_only_the_paper_draws_still_seeds_a_campaign() {
         drawn_near_failures: BinCount::default(),
         drawn_near_misses: BinCount::default(),
         drawn_elsewhere: BinCount::default(),
-        drawn_unranked: BinCount::default(),
         drawn_close: BinCount::default(),
     };
     // A prior learnt before the generator had extra draws: one row per paper draw.
@@ -54,7 +53,6 @@ fn a_bad_prior_file_is_an_error_naming_it() {
         drawn_near_failures: BinCount::default(),
         drawn_near_misses: BinCount::default(),
         drawn_elsewhere: BinCount::default(),
-        drawn_unranked: BinCount::default(),
         drawn_close: BinCount::default(),
     };
     l.calibration.prior_flights = -3.0;

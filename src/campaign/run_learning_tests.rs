@@ -35,7 +35,6 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
             "{round:?}"
         );
         assert!((0.25..=0.85).contains(&round.local_flight_share), "{round:?}");
-        assert!((0.2..=0.8).contains(&round.unranked_flight_share), "{round:?}");
     }
     // Children once the first failures are in, no more than the round's own draws.
     let local: Vec<usize> = learnt.rounds.iter().map(|r| r.local_candidates).collect();
@@ -63,15 +62,14 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         assert_eq!(row.iter().map(|c| c.flights).sum::<u32>(), 12);
     }
     // Every flight is counted under the proposal that drew it.
-    let (near, misses, other, unranked) = (
+    let (near, misses, other) = (
         learnt.drawn_near_failures,
         learnt.drawn_near_misses,
         learnt.drawn_elsewhere,
-        learnt.drawn_unranked,
     );
-    assert_eq!(near.flights + misses.flights + other.flights + unranked.flights, 12);
+    assert_eq!(near.flights + misses.flights + other.flights, 12);
     assert_eq!(
-        near.failures + misses.failures + other.failures + unranked.failures,
+        near.failures + misses.failures + other.failures,
         learnt.failure_counts.total.failures
     );
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
@@ -183,21 +181,19 @@ fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
     let later: Vec<_> = learnt.rounds[1..].iter().filter(|r| r.near_miss_parents).collect();
     assert!(!later.is_empty(), "{:?}", learnt.rounds);
     assert!(later.iter().all(|r| r.local_candidates > 0));
-    let (near, misses, other, unranked) = (
+    let (near, misses, other) = (
         learnt.drawn_near_failures,
         learnt.drawn_near_misses,
         learnt.drawn_elsewhere,
-        learnt.drawn_unranked,
     );
     assert_eq!(near.flights, 0, "no failure, no failure's child");
-    assert!(misses.flights > 0 && unranked.flights > 0, "{misses:?} {unranked:?}");
-    assert_eq!(misses.flights + other.flights + unranked.flights, 24);
+    assert!(misses.flights > 0, "{misses:?}");
+    assert_eq!(misses.flights + other.flights, 24);
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("near misses) |"), "{md}");
     let line = format!(
-        "near the closest flights before the first failure, 0 of {}; the histogram's draws flown by the LFS's \
-         ranking 0 of {}, and those flown in draw order (unranked) 0 of {}.",
-        misses.flights, other.flights, unranked.flights
+        "near the closest flights before the first failure, 0 of {}; the others 0 of {}.",
+        misses.flights, other.flights
     );
     assert!(md.contains(&line), "{md}");
 }
@@ -221,41 +217,4 @@ fn below_the_diversity_floor_the_failures_still_get_children() {
     // rounds still draw some.
     let late: Vec<usize> = learnt.rounds[4..].iter().map(|r| r.local_candidates).collect();
     assert!(late.iter().any(|&c| c > 0), "{:?}", learnt.rounds);
-}
-
-/// Flies the scripted LFS's ranking upside down: the closer it predicts a test, the farther the flight.
-struct Inverted;
-
-impl Vehicle for Inverted {
-    fn name(&self) -> String {
-        "inverted".into()
-    }
-    fn fly(&mut self, test: &TestCase, csv: &Path, _: &AtomicBool) -> Result<Flown, VehicleError> {
-        std::fs::write(csv, "timestamp,x,y,z,r\n0,0,0,0,\n1000000,0,10,10,\n").unwrap();
-        let predicted = (test.obstacles[0].position.y - 20.0).abs() / 2.0;
-        Ok(landed((4.0 - predicted).max(0.5)))
-    }
-}
-
-#[test]
-fn where_the_lfs_ranking_misleads_the_unranked_arm_finds_the_failures_and_takes_the_flights() {
-    let unranked_share = |vehicle: Box<dyn Vehicle>| {
-        let dir = tempfile::tempdir().unwrap();
-        let cfg = CampaignConfig {
-            candidates: 120,
-            ..adapted(32)
-        };
-        let r = run_with(&cfg, dir.path(), vec![vehicle]).unwrap();
-        let l = r.learning.unwrap();
-        let last = l.rounds.last().unwrap().unranked_flight_share;
-        (l.drawn_unranked, l.drawn_elsewhere, last)
-    };
-    let (unranked, ranked, last) = unranked_share(Box::new(Inverted));
-    assert!(unranked.flights > 0 && ranked.flights > 0, "{unranked:?} {ranked:?}");
-    assert!(unranked.rate() > ranked.rate(), "{unranked:?} against {ranked:?}");
-    assert!(last > 0.5, "{last}");
-    // Where the ranking is right, the ranked arm keeps most of the histogram's flights.
-    let flown = Arc::new(Mutex::new(Vec::new()));
-    let (_, _, last) = unranked_share(vehicle(&flown, None).remove(0));
-    assert!(last < 0.5, "{last}");
 }
