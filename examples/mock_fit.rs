@@ -11,6 +11,9 @@
 //! on the other folds predicts each fold. `mock_fit cv OUT mission`: one fold per mission instead, so each
 //! mission's cases are predicted by the setting chosen on the other missions'.
 
+#[path = "common/setting.rs"]
+mod setting;
+
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -27,6 +30,7 @@ use prgenuav::judge::Judge;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, fold_of, load_dir};
 use prgenuav::lfs::px4_flights::{self, Px4Flight};
 use prgenuav::model::TestCase;
+use setting::parse_setting;
 use tokio::sync::Semaphore;
 
 const SPEED: f64 = 100.0;
@@ -37,24 +41,6 @@ fn reference() -> anyhow::Result<(Vec<FlightCase>, Vec<Px4Flight>)> {
     let cases: Vec<FlightCase> = cases.into_iter().filter(|c| !c.obstacles.is_empty()).collect();
     let px4 = px4_flights::load(Path::new("tests/data/px4-flights"), &cases)?;
     Ok((cases, px4))
-}
-
-/// `profile:NAME` picks the base profile (default `px4-sitl`), every other `KEY=VALUE` overrides a value.
-fn parse_setting(s: &str) -> anyhow::Result<MockProfile> {
-    let mut profile = MockProfile::by_name("px4-sitl").context("no px4-sitl profile")?;
-    let mut overrides = Vec::new();
-    for kv in s.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        if let Some(name) = kv.strip_prefix("profile:") {
-            profile = MockProfile::by_name(name).with_context(|| format!("no profile {name:?}"))?;
-        } else {
-            let (k, v) = kv.split_once('=').with_context(|| format!("{kv:?} is not KEY=VALUE"))?;
-            overrides.push((k.trim().to_string(), v.trim().parse::<f64>()?));
-        }
-    }
-    for (k, v) in overrides {
-        profile.set(&k, v).map_err(|e| anyhow::anyhow!(e))?;
-    }
-    Ok(profile)
 }
 
 async fn fly_case(case: FlightCase, profile: MockProfile) -> anyhow::Result<(Option<f64>, f64, String)> {

@@ -10,6 +10,8 @@
 
 #[path = "common/mock_flight.rs"]
 mod mock_flight;
+#[path = "common/setting.rs"]
+mod setting;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -7,10 +7,13 @@
 //! each model orders PX4's first flights (Spearman) and separates its failures (ROC AUC of the distance).
 //!
 //! `cargo run --release --example px4_campaign_draws -- [PARALLEL=2]` (about 35 minutes on 2 cores; env
-//! `NO_MOCK=1`: the LFS alone, about 3 minutes; `MOCK_PROFILE=NAME`: that mock profile)
+//! `NO_MOCK=1`: the LFS alone, about 3 minutes; `MOCK_PROFILE=NAME` or `MOCK_SETTING=...`: that mock profile or
+//! setting, as `mock_fit` takes them; `ONLY=no-screen` or `ONLY=learning`: those tests only)
 
 #[path = "common/mock_flight.rs"]
 mod mock_flight;
+#[path = "common/setting.rs"]
+mod setting;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -48,8 +51,10 @@ fn main() -> anyhow::Result<()> {
     let parallel: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
     let with_mock = std::env::var_os("NO_MOCK").is_none();
     let text = std::fs::read_to_string(DATA).with_context(|| format!("reading {DATA}"))?;
+    let only = std::env::var("ONLY").ok();
     let rows: Vec<Row> = (text.lines().enumerate())
         .map(|(i, l)| serde_json::from_str(l).with_context(|| format!("{DATA}:{}", i + 1)))
+        .filter(|r: &anyhow::Result<Row>| r.as_ref().map_or(true, |r| only.as_ref().is_none_or(|o| r.draws == *o)))
         .collect::<anyhow::Result<_>>()?;
     let rt = tokio::runtime::Runtime::new()?;
     let gate = Arc::new(Semaphore::new(parallel.max(1)));

@@ -18,14 +18,16 @@ const SPEED: f64 = 100.0;
 pub type Flown = (String, Option<f64>, f64);
 
 /// Flies `test` on a fresh mock with the campaign's mock profile (env `MOCK_PROFILE=NAME`: that profile;
-/// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults).
+/// `MOCK_SETTING=...`: a setting as `mock_fit` takes them, e.g. `MPC_XY_VEL_MAX=2.0,vel_gain=1.0`;
+/// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults). Needs `mod setting` (`common/setting.rs`) beside it.
 pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
     let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
         mock_autopilot::MockAutopilot::builder()
     } else {
-        let profile = match std::env::var("MOCK_PROFILE") {
-            Ok(name) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
-            Err(_) => MockProfile::default(),
+        let profile = match (std::env::var("MOCK_SETTING"), std::env::var("MOCK_PROFILE")) {
+            (Ok(setting), _) => crate::setting::parse_setting(&setting).context("MOCK_SETTING")?,
+            (_, Ok(name)) => MockProfile::named(&name).map_err(|e| anyhow::anyhow!("MOCK_PROFILE: {e}"))?,
+            _ => MockProfile::default(),
         };
         mock_builder_with(&profile, FlyMode::Avoidance)
     };
