@@ -11,6 +11,10 @@
 //! on the other folds predicts each fold. `mock_fit cv OUT mission`: one fold per mission instead, so each
 //! mission's cases are predicted by the setting chosen on the other missions'.
 
+// The shared module's env-driven `fly_mock` is for the other examples; this one flies its own settings.
+#[allow(dead_code)]
+#[path = "common/mock_flight.rs"]
+mod mock_flight;
 #[path = "common/setting.rs"]
 mod setting;
 
@@ -18,12 +22,10 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::Context;
-use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
-use mock_autopilot::{LinkSpec, SpeedFactor};
-use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use mock_flight::fly_on_mock;
+use prgenuav::bridge::{FlyMode, FlyOptions};
 use prgenuav::campaign::mock_profile::MockProfile;
 use prgenuav::campaign::vehicles::mock_builder_with;
 use prgenuav::judge::Judge;
@@ -33,7 +35,6 @@ use prgenuav::model::TestCase;
 use setting::parse_setting;
 use tokio::sync::Semaphore;
 
-const SPEED: f64 = 100.0;
 const HEADER: &str = "setting,id,mock_m,flight_time_s,status";
 
 fn reference() -> anyhow::Result<(Vec<FlightCase>, Vec<Px4Flight>)> {
@@ -47,27 +48,14 @@ async fn fly_case(case: FlightCase, profile: MockProfile) -> anyhow::Result<(Opt
     let base = TestCase::load(Path::new(&format!("missions/{}.yaml", case.mission_name)))?;
     let mut test = base.with_obstacles(case.obstacles.clone());
     test.params = case.params.clone();
-    let mock = mock_builder_with(&profile, FlyMode::Avoidance)
-        .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
-        .speed_factor(SpeedFactor::Times(SPEED))
-        .lockstep(Some(DEFAULT_LOCKSTEP_WAIT))
-        .spawn()
-        .await?;
-    let port = mock.local_addr().map(|a| a.port()).context("no port")?;
     let opts = FlyOptions {
-        connect: format!("udpout:127.0.0.1:{port}"),
-        mode: FlyMode::Avoidance,
-        time_scale: SPEED,
-        lockstep: Some(Duration::ZERO),
         timeout_s: 400.0,
         judge: Judge::E2025,
         // TRAJ_DIR=DIR keeps each flown trajectory as DIR/<id>.csv (to compare phases with PX4's).
         trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
         ..FlyOptions::default()
     };
-    let r = fly(&test, &opts, CancelToken::new()).await;
-    let _ = mock.shutdown().await;
-    let r = r?;
+    let r = fly_on_mock(&test, mock_builder_with(&profile, FlyMode::Avoidance), opts).await?;
     let d = r.min_distance.map(|d| (d - case.definition_offset_m).max(0.0));
     Ok((d, r.flight_time_s, r.status.as_str().to_string()))
 }

@@ -6,7 +6,7 @@
 //! mission: the share of first flights below 1.5 m on PX4, on the mock and by the LFS, the medians, and how
 //! each model orders PX4's first flights (Spearman) and separates its failures (ROC AUC of the distance).
 //!
-//! `cargo run --release --example px4_campaign_draws -- [PARALLEL=2]` (about 35 minutes on 2 cores; env
+//! `cargo run --release --example px4_campaign_draws -- [PARALLEL=2]` (about 25 minutes on 2 cores; env
 //! `NO_MOCK=1`: the LFS alone, about 3 minutes; `MOCK_PROFILE=NAME` or `MOCK_SETTING=...`: that mock profile or
 //! setting, as `mock_fit` takes them; `ONLY=no-screen` or `ONLY=learning`: those tests only)
 
@@ -51,11 +51,13 @@ fn main() -> anyhow::Result<()> {
     let parallel: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
     let with_mock = std::env::var_os("NO_MOCK").is_none();
     let text = std::fs::read_to_string(DATA).with_context(|| format!("reading {DATA}"))?;
-    let only = std::env::var("ONLY").ok();
-    let rows: Vec<Row> = (text.lines().enumerate())
+    let mut rows: Vec<Row> = (text.lines().enumerate())
         .map(|(i, l)| serde_json::from_str(l).with_context(|| format!("{DATA}:{}", i + 1)))
-        .filter(|r: &anyhow::Result<Row>| r.as_ref().map_or(true, |r| only.as_ref().is_none_or(|o| r.draws == *o)))
         .collect::<anyhow::Result<_>>()?;
+    if let Ok(only) = std::env::var("ONLY") {
+        rows.retain(|r| r.draws == only);
+    }
+    let motion = MotionModel::by_name("px4").context("the px4 motion model")?;
     let rt = tokio::runtime::Runtime::new()?;
     let gate = Arc::new(Semaphore::new(parallel.max(1)));
     let judged = rt.block_on(async {
@@ -67,7 +69,6 @@ fn main() -> anyhow::Result<()> {
             let gate = gate.clone();
             handles.push(tokio::spawn(async move {
                 let _permit = gate.acquire_owned().await?;
-                let motion = MotionModel::by_name("px4").context("the px4 motion model")?;
                 let lfs = predict(&test, motion, Default::default())
                     .ok()
                     .and_then(|p| p.min_distance);

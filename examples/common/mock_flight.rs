@@ -5,8 +5,8 @@ use std::time::Duration;
 
 use anyhow::Context;
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
-use mock_autopilot::{LinkSpec, SpeedFactor};
-use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use mock_autopilot::{Builder, LinkSpec, SpeedFactor};
+use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, fly};
 use prgenuav::campaign::mock_profile::MockProfile;
 use prgenuav::campaign::vehicles::mock_builder_with;
 use prgenuav::model::TestCase;
@@ -18,7 +18,7 @@ const SPEED: f64 = 100.0;
 pub type Flown = (String, Option<f64>, f64);
 
 /// Flies `test` on a fresh mock with the campaign's mock profile (env `MOCK_PROFILE=NAME`: that profile;
-/// `MOCK_SETTING=...`: a setting as `mock_fit` takes them, e.g. `MPC_XY_VEL_MAX=2.0,vel_gain=1.0`;
+/// `MOCK_SETTING=...`: a setting as `mock_fit` takes them, e.g. `MPC_XY_VEL_MAX=2.0,MOCK_VEL_GAIN=1.0`;
 /// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults). Needs `mod setting` (`common/setting.rs`) beside it.
 pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
     let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
@@ -31,6 +31,12 @@ pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
         };
         mock_builder_with(&profile, FlyMode::Avoidance)
     };
+    let r = fly_on_mock(&test, builder, FlyOptions::default()).await?;
+    Ok((r.status.as_str().to_string(), r.min_distance, r.flight_time_s))
+}
+
+/// Flies `test` on a fresh lockstep mock made by `builder`, in `avoidance` mode with `opts`' other options.
+pub async fn fly_on_mock(test: &TestCase, builder: Builder, opts: FlyOptions) -> anyhow::Result<FlightReport> {
     let mock = builder
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse()?))
         .speed_factor(SpeedFactor::Times(SPEED))
@@ -43,10 +49,9 @@ pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
         mode: FlyMode::Avoidance,
         time_scale: SPEED,
         lockstep: Some(Duration::ZERO),
-        ..FlyOptions::default()
+        ..opts
     };
-    let r = fly(&test, &opts, CancelToken::new()).await;
+    let r = fly(test, &opts, CancelToken::new()).await;
     let _ = mock.shutdown().await;
-    let r = r?;
-    Ok((r.status.as_str().to_string(), r.min_distance, r.flight_time_s))
+    Ok(r?)
 }
