@@ -142,7 +142,11 @@ fn main() -> anyhow::Result<()> {
          confirming a test whose first flight failed {:.3}",
         p_confirm / extra.max(f64::MIN_POSITIVE)
     );
-    let rate = probs.iter().filter(|x| x.2).count() as f64 / probs.len().max(1) as f64;
+    if probs.is_empty() {
+        println!("Brier: no first flight with an ensemble's p_fail");
+        return Ok(());
+    }
+    let rate = probs.iter().filter(|x| x.2).count() as f64 / probs.len() as f64;
     println!(
         "Brier over {} first flights with an ensemble: ensemble p_fail {:.3}, a constant rate ({rate:.3}) {:.3}, \
          normal model of the calibrated prediction {:.3}",

@@ -10,6 +10,10 @@
 //! obstacle set (`fidelity::fold_of`, repeats of a layout share a fold), the setting with the lowest objective
 //! on the other folds predicts each fold. `mock_fit cv OUT mission`: one fold per mission instead, so each
 //! mission's cases are predicted by the setting chosen on the other missions'.
+//!
+//! A setting with gusts (`MOCK_GUST_ACC`) differs from flight to flight: fly it once per seed with env
+//! `MOCK_SEED=S` under the names `NAME@s0`, `NAME@s1`, ...; `cv` scores such a family by the mean of its
+//! seeds' figures (the expected figure of one flight), so the choice cannot fall on a lucky seed.
 
 // The shared module's env-driven `fly_mock` is for the other examples; this one flies its own settings.
 #[allow(dead_code)]
@@ -55,7 +59,10 @@ async fn fly_case(case: FlightCase, profile: MockProfile) -> anyhow::Result<(Opt
         trajectory_csv: std::env::var_os("TRAJ_DIR").map(|d| PathBuf::from(d).join(format!("{}.csv", case.id))),
         ..FlyOptions::default()
     };
-    let r = fly_on_mock(&test, mock_builder_with(&profile, FlyMode::Avoidance), opts).await?;
+    // MOCK_SEED=S: the gusts' seed (a setting with MOCK_GUST_ACC scatters from flight to flight).
+    let seed = std::env::var("MOCK_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
+    let builder = mock_builder_with(&profile, FlyMode::Avoidance).seed(seed);
+    let r = fly_on_mock(&test, builder, opts).await?;
     let d = r.min_distance.map(|d| (d - case.definition_offset_m).max(0.0));
     Ok((d, r.flight_time_s, r.status.as_str().to_string()))
 }
@@ -221,11 +228,37 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
             s.1
         );
     }
-    let mut oof: BTreeMap<String, (Option<f64>, f64)> = BTreeMap::new();
+    // A gusty setting flown with several seeds (`NAME@sK`) is one candidate: its figures are the mean over its
+    // seeds', the expected figure of one flight, so the choice cannot fall on a lucky seed.
+    let mut families: BTreeMap<String, Vec<&BTreeMap<String, (Option<f64>, f64)>>> = BTreeMap::new();
+    for (name, rows) in &by {
+        families.entry(name.split('@').next().unwrap_or(name).to_string()).or_default().push(rows);
+    }
+    let family_figures = |members: &[&BTreeMap<String, (Option<f64>, f64)>], ids: &[&str]| {
+        let fs: Vec<_> = members.iter().map(|rows| figures(rows, &px4, ids)).collect();
+        let mean = |g: fn(&(f64, f64, f64, f64, usize)) -> f64| fs.iter().map(g).sum::<f64>() / fs.len() as f64;
+        (mean(|f| f.0), mean(|f| f.1), mean(|f| f.2), mean(|f| f.3), fs.first().map_or(0, |f| f.4))
+    };
+    for (name, members) in families.iter().filter(|(_, m)| m.len() > 1) {
+        let f = family_figures(members, &all);
+        println!(
+            "| {name}, mean of {} seeds | {} | {:.3} | {:.3} | {:.3} | {:+.3} | {:.3} | |",
+            members.len(),
+            f.4,
+            f.0,
+            f.1,
+            f.2,
+            f.3,
+            objective(&f)
+        );
+    }
     println!("\n| fold | cases | chosen on the other folds | test MAE m | Spearman | time ratio |");
     println!("|---|---|---|---|---|---|");
     let (fold_of_case, folds_name) = folds.assign(&cases);
     let k = fold_of_case.iter().max().map_or(0, |m| m + 1);
+    // Out of fold, one map per seed slot: a family of m seeds fills slot j with seed j % m.
+    let slots = families.values().map(Vec::len).max().unwrap_or(1);
+    let mut oof: Vec<BTreeMap<String, (Option<f64>, f64)>> = vec![BTreeMap::new(); slots];
     for fold in 0..k {
         let (mut test, mut train): (Vec<&FlightCase>, Vec<&FlightCase>) = (Vec::new(), Vec::new());
         for (c, f) in cases.iter().zip(&fold_of_case) {
@@ -233,13 +266,13 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
         }
         let train_ids: Vec<&str> = train.iter().map(|c| c.id.as_str()).collect();
         let test_ids: Vec<&str> = test.iter().map(|c| c.id.as_str()).collect();
-        let best = by
+        let best = families
             .iter()
             .min_by(|a, b| {
-                objective(&figures(a.1, &px4, &train_ids)).total_cmp(&objective(&figures(b.1, &px4, &train_ids)))
+                objective(&family_figures(a.1, &train_ids)).total_cmp(&objective(&family_figures(b.1, &train_ids)))
             })
             .context("no settings flown")?;
-        let f = figures(best.1, &px4, &test_ids);
+        let f = family_figures(best.1, &test_ids);
         println!(
             "| {fold} | {} | {} | {:.3} | {:.3} | {:.3} |",
             test_ids.len(),
@@ -248,16 +281,21 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
             f.1,
             f.2
         );
-        for id in test_ids {
-            if let Some(r) = best.1.get(id) {
-                oof.insert(id.to_string(), *r);
+        for (j, slot) in oof.iter_mut().enumerate() {
+            let rows = best.1[j % best.1.len()];
+            for id in &test_ids {
+                if let Some(r) = rows.get(*id) {
+                    slot.insert((*id).to_string(), *r);
+                }
             }
         }
     }
     repeat_noise(&cases, &px4);
-    let f = figures(&oof, &px4, &all);
+    let oof: Vec<&BTreeMap<String, (Option<f64>, f64)>> = oof.iter().collect();
+    let f = family_figures(&oof, &all);
     println!(
-        "\ncross-validated ({folds_name}): n {} MAE {:.3} m, Spearman {:.3}, time ratio {:.3}, signed {:+.3} m",
+        "\ncross-validated ({folds_name}; mean over {slots} seed slot(s)): n {} MAE {:.3} m, Spearman {:.3}, \
+         time ratio {:.3}, signed {:+.3} m",
         f.4, f.0, f.1, f.2, f.3
     );
     Ok(())

@@ -69,12 +69,12 @@ fn fly_all(tests: &Path, names: &[String], parallel: usize) -> anyhow::Result<Ve
     let gate = Arc::new(Semaphore::new(parallel.max(1)));
     let rows = rt.block_on(async {
         let mut handles = Vec::new();
-        for name in names {
+        for (seed, name) in (0u64..).zip(names) {
             let test = TestCase::load(&tests.join(format!("{name}.yaml")))?;
             let gate = gate.clone();
             handles.push(tokio::spawn(async move {
                 let _permit = gate.acquire_owned().await?;
-                fly_mock(test).await
+                fly_mock(test, seed).await
             }));
         }
         let mut rows = Vec::new();

@@ -62,7 +62,7 @@ fn main() -> anyhow::Result<()> {
     let gate = Arc::new(Semaphore::new(parallel.max(1)));
     let judged = rt.block_on(async {
         let mut handles = Vec::new();
-        for row in &rows {
+        for (seed, row) in (0u64..).zip(&rows) {
             let case = TestCase::load(Path::new(&format!("missions/mission{}.yaml", row.mission)))?;
             let test = case.with_obstacles(row.obstacles.clone());
             let px4 = *row.px4_min_distance.first().context("a test without a PX4 flight")?;
@@ -73,7 +73,7 @@ fn main() -> anyhow::Result<()> {
                     .ok()
                     .and_then(|p| p.min_distance);
                 let mock = if with_mock {
-                    let (status, d, _) = mock_flight::fly_mock(test).await?;
+                    let (status, d, _) = mock_flight::fly_mock(test, seed).await?;
                     d.filter(|_| status == "landed")
                 } else {
                     None

@@ -19,8 +19,9 @@ pub type Flown = (String, Option<f64>, f64);
 
 /// Flies `test` on a fresh mock with the campaign's mock profile (env `MOCK_PROFILE=NAME`: that profile;
 /// `MOCK_SETTING=...`: a setting as `mock_fit` takes them, e.g. `MPC_XY_VEL_MAX=2.0,MOCK_VEL_GAIN=1.0`;
-/// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults). Needs `mod setting` (`common/setting.rs`) beside it.
-pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
+/// `MOCK_PX4_DEFAULTS=1`: PX4's own defaults), its gusts (if the setting has any) drawn from `seed`. Needs
+/// `mod setting` (`common/setting.rs`) beside it.
+pub async fn fly_mock(test: TestCase, seed: u64) -> anyhow::Result<Flown> {
     let builder = if std::env::var_os("MOCK_PX4_DEFAULTS").is_some() {
         mock_autopilot::MockAutopilot::builder()
     } else {
@@ -31,7 +32,7 @@ pub async fn fly_mock(test: TestCase) -> anyhow::Result<Flown> {
         };
         mock_builder_with(&profile, FlyMode::Avoidance)
     };
-    let r = fly_on_mock(&test, builder, FlyOptions::default()).await?;
+    let r = fly_on_mock(&test, builder.seed(seed), FlyOptions::default()).await?;
     Ok((r.status.as_str().to_string(), r.min_distance, r.flight_time_s))
 }
 

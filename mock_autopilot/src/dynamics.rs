@@ -26,6 +26,11 @@ pub struct Tuning {
     /// which runs ahead of the vehicle while it follows (PositionSmoothing.cpp `_getMaxXYSpeed`). 0: from the
     /// vehicle.
     pub lead_s: f64,
+    /// RMS of the seeded horizontal gust acceleration per axis (m/s²; 0: none), the stand-in for a real
+    /// vehicle's flight-to-flight scatter ([`crate::gusts`]).
+    pub gust_acc_m_s2: f64,
+    /// Correlation time of the gusts, s.
+    pub gust_tau_s: f64,
 }
 
 impl Default for Tuning {
@@ -34,13 +39,21 @@ impl Default for Tuning {
             pos_gain: 1.5,
             vel_gain: 2.5,
             lead_s: 0.0,
+            gust_acc_m_s2: 0.0,
+            gust_tau_s: 1.0,
         }
     }
 }
 
 impl Tuning {
     /// The constants' names for [`Tuning::set`].
-    pub const NAMES: [&'static str; 3] = ["MOCK_POS_GAIN", "MOCK_VEL_GAIN", "MOCK_LEAD_S"];
+    pub const NAMES: [&'static str; 5] = [
+        "MOCK_POS_GAIN",
+        "MOCK_VEL_GAIN",
+        "MOCK_LEAD_S",
+        "MOCK_GUST_ACC",
+        "MOCK_GUST_TAU",
+    ];
 
     /// Sets a constant by its name in [`Tuning::NAMES`] (clamped to a workable range); false for other names.
     pub fn set(&mut self, name: &str, value: f64) -> bool {
@@ -48,6 +61,8 @@ impl Tuning {
             "MOCK_POS_GAIN" => self.pos_gain = value.clamp(0.05, 20.0),
             "MOCK_VEL_GAIN" => self.vel_gain = value.clamp(0.05, 50.0),
             "MOCK_LEAD_S" => self.lead_s = value.clamp(0.0, 10.0),
+            "MOCK_GUST_ACC" => self.gust_acc_m_s2 = value.clamp(0.0, 5.0),
+            "MOCK_GUST_TAU" => self.gust_tau_s = value.clamp(0.05, 60.0),
             _ => return false,
         }
         true
@@ -258,6 +273,12 @@ impl Body {
 
     /// Advance by `dt_s` seconds towards `sp` within `lim`.
     pub fn step(&mut self, sp: &Setpoint, lim: &Limits, dt_s: f64) {
+        self.step_disturbed(sp, lim, dt_s, Ned::zeros());
+    }
+
+    /// [`Body::step`] with an external acceleration `disturbance_ned` (local NED m/s², e.g. a gust) acting
+    /// on the airframe beside the commanded one; the controller only sees its effect on the velocity.
+    pub fn step_disturbed(&mut self, sp: &Setpoint, lim: &Limits, dt_s: f64, disturbance_ned: Ned) {
         let Some((vel_des, yaw_des)) = self.velocity_setpoint(sp, lim) else {
             self.vel_ned = Ned::zeros();
             self.acc_ned = Ned::zeros();
@@ -280,7 +301,7 @@ impl Body {
         } else {
             delta
         };
-        self.vel_ned += self.acc_ned * dt_s;
+        self.vel_ned += (self.acc_ned + disturbance_ned) * dt_s;
         self.pos_ned += self.vel_ned * dt_s;
         if self.pos_ned.z >= 0.0 && self.vel_ned.z >= 0.0 {
             // Ground contact: no sliding, no sinking.

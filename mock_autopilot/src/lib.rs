@@ -21,6 +21,7 @@ pub mod commands;
 pub mod dynamics;
 pub mod fence;
 pub mod geo;
+pub mod gusts;
 pub mod land_detector;
 pub mod link;
 pub mod messages;

@@ -35,9 +35,16 @@ struct Args {
     /// Fixed physics step, milliseconds.
     #[arg(long, default_value_t = 4.0)]
     step_ms: f64,
-    /// Seed of every random fault.
+    /// Seed of every random choice: link faults and gusts.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Seeded horizontal gusts, RMS per axis in m/s² (0: none): a flight-to-flight scatter like real PX4
+    /// SITL's, each arming drawing new gusts from --seed.
+    #[arg(long, default_value_t = 0.0)]
+    gust_acc: f64,
+    /// Correlation time of the gusts, seconds.
+    #[arg(long, default_value_t = 1.0)]
+    gust_tau: f64,
     /// Probability of dropping each message (both directions).
     #[arg(long, default_value_t = 0.0)]
     loss: f64,
@@ -141,7 +148,20 @@ async fn run(args: Args) -> Result<()> {
     if !(args.step_ms.is_finite() && args.step_ms > 0.0 && args.step_ms <= 100.0) {
         bail!("--step-ms {}: expected 0 < step <= 100", args.step_ms);
     }
+    if !(args.gust_acc.is_finite() && (0.0..=5.0).contains(&args.gust_acc)) {
+        bail!("--gust-acc {}: expected 0 to 5 m/s²", args.gust_acc);
+    }
+    if !(args.gust_tau.is_finite() && (0.05..=60.0).contains(&args.gust_tau)) {
+        bail!("--gust-tau {}: expected 0.05 to 60 seconds", args.gust_tau);
+    }
+    let tuning = mock_autopilot::dynamics::Tuning {
+        gust_acc_m_s2: args.gust_acc,
+        gust_tau_s: args.gust_tau,
+        ..Default::default()
+    };
     let mut builder = MockAutopilot::builder()
+        .seed(args.seed)
+        .tuning(tuning)
         .link(link_spec(&args)?)
         .speed_factor(args.speed_factor)
         .step(Duration::from_secs_f64(args.step_ms / 1000.0))

@@ -181,6 +181,13 @@ impl Builder {
         self
     }
 
+    /// Seed of the gusts (the tuning's `MOCK_GUST_ACC`): the same seed flies the same gusts, flight by
+    /// flight since the vehicle started.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.vehicle.seed = seed;
+        self
+    }
+
     /// Boot (and keep the EKF origin) at `home`.
     pub fn home(mut self, home: crate::geo::GeoPoint) -> Self {
         self.vehicle.home = home;

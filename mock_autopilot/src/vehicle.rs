@@ -15,6 +15,7 @@ use crate::avoidance::Avoidance;
 use crate::dynamics::{Body, Limits, Ned, Setpoint, Tuning};
 use crate::fence::Fence;
 use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
+use crate::gusts::{Gusts, flight_seed};
 use crate::land_detector::{LandDetector, LandInputs, LandParams};
 use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
@@ -52,6 +53,9 @@ pub struct VehicleConfig {
     pub estimator_settle: Duration,
     /// The kinematic model's constants (defaults: the mock's original model).
     pub tuning: Tuning,
+    /// Seed of the gusts (`tuning.gust_acc_m_s2`): flight k since the vehicle started flies the gusts of
+    /// [`crate::gusts::flight_seed`]`(seed, k)`.
+    pub seed: u64,
 }
 
 impl Default for VehicleConfig {
@@ -64,6 +68,7 @@ impl Default for VehicleConfig {
             params: Vec::new(),
             estimator_settle: Duration::ZERO,
             tuning: Tuning::default(),
+            seed: 0,
         }
     }
 }
@@ -77,6 +82,7 @@ impl std::fmt::Debug for VehicleConfig {
             .field("collision", &self.collision.is_some())
             .field("estimator_settle", &self.estimator_settle)
             .field("tuning", &self.tuning)
+            .field("seed", &self.seed)
             .finish()
     }
 }
@@ -140,6 +146,9 @@ pub struct Vehicle {
     due: Vec<u32>,
     pub(crate) estimator_settle: Duration,
     pub(crate) feasibility_pending: bool,
+    seed: u64,
+    flights: u64,
+    gusts: Gusts,
 }
 
 impl Vehicle {
@@ -183,6 +192,9 @@ impl Vehicle {
             due: Vec::new(),
             estimator_settle: cfg.estimator_settle,
             feasibility_pending: false,
+            seed: cfg.seed,
+            flights: 0,
+            gusts: Gusts::calm(),
         }
     }
 
@@ -366,6 +378,9 @@ impl Vehicle {
             self.failsafe = false;
             self.crashed = false;
             self.home_ned = self.body.pos_ned;
+            let t = self.limits.tuning;
+            self.gusts = Gusts::new(flight_seed(self.seed, self.flights), t.gust_acc_m_s2, t.gust_tau_s);
+            self.flights += 1;
             self.text(MavSeverity::MAV_SEVERITY_INFO, "Armed by external command");
             self.outbox.push(self.home_position());
             // Armed in AUTO.MISSION the flight starts here: streams in phase with it, as after a mode switch.
@@ -417,7 +432,10 @@ impl Vehicle {
         // What the controller tracks this step: PX4's trajectory setpoint, which the land detector watches.
         let vel_sp_ned = self.body.velocity_setpoint(&sp, &self.limits).map(|(v, _)| v);
         if !self.crashed {
-            self.body.step(&sp, &self.limits, dt.as_secs_f64());
+            // Gusts blow while armed and act only in the air.
+            let gust = if self.armed { self.gusts.step(dt.as_secs_f64()) } else { Ned::zeros() };
+            let gust = if self.body.on_ground() { Ned::zeros() } else { gust };
+            self.body.step_disturbed(&sp, &self.limits, dt.as_secs_f64(), gust);
         }
         let inputs = LandInputs::of(self.armed, &self.body, vel_sp_ned.filter(|_| !self.crashed));
         self.land_detector

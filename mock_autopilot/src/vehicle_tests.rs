@@ -89,6 +89,54 @@ fn same_inputs_give_identical_flights() {
     assert_eq!(a, run());
 }
 
+/// The horizontal track of `flights` mission-2 flights in a row on one vehicle with `tuning` and `seed`.
+fn gusty_tracks(tuning: Tuning, seed: u64, flights: usize) -> Vec<Vec<(f32, f32)>> {
+    let mut v = Vehicle::new(VehicleConfig {
+        params: case_study_params(),
+        tuning,
+        seed,
+        ..Default::default()
+    });
+    upload(&mut v, MavMissionType::MAV_MISSION_TYPE_MISSION, &mission2());
+    (0..flights)
+        .map(|_| {
+            let mut track = Vec::new();
+            fly_until_disarmed(&mut v, DT, Duration::from_secs(200), |_, m| {
+                if let MavMessage::LOCAL_POSITION_NED(p) = m {
+                    track.push((p.x, p.y));
+                }
+            })
+            .expect("each flight lands");
+            track
+        })
+        .collect()
+}
+
+#[test]
+fn gusts_scatter_each_flight_and_repeat_for_the_same_seed() {
+    let gusty = Tuning {
+        gust_acc_m_s2: 0.5,
+        ..Tuning::default()
+    };
+    let a = gusty_tracks(gusty, 3, 2);
+    assert_eq!(a, gusty_tracks(gusty, 3, 2), "same seed, same flights, bit for bit");
+    assert_ne!(a[0], a[1], "each arming draws new gusts");
+    assert_ne!(a[0], gusty_tracks(gusty, 4, 1)[0], "another seed, other gusts");
+    // Calm: the seed changes nothing.
+    let calm = gusty_tracks(Tuning::default(), 3, 2);
+    assert_eq!(calm[0], gusty_tracks(Tuning::default(), 9, 1)[0]);
+    let end = |t: &Vec<(f32, f32)>| t.last().copied().unwrap_or_default();
+    // Gusts move the vehicle off the calm track by a bounded amount: it still flies the mission.
+    let off = a[0]
+        .iter()
+        .zip(&calm[0])
+        .map(|(p, q)| f64::from((p.0 - q.0).hypot(p.1 - q.1)))
+        .fold(0.0, f64::max);
+    assert!(off > 0.05 && off < 5.0, "largest offset from the calm track {off} m");
+    let (e, c) = (end(&a[0]), end(&calm[0]));
+    assert!((e.0 - c.0).hypot(e.1 - c.1) < 1.0, "lands near the calm landing: {e:?} vs {c:?}");
+}
+
 fn header(component_id: u8) -> MavHeader {
     MavHeader {
         system_id: 1,

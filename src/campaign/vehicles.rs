@@ -110,6 +110,16 @@ impl Vehicle for LinkVehicle {
     }
 }
 
+/// The mock's seed for the flight recorded in `trajectory_csv` of a campaign seeded with `seed`: its file name
+/// (FNV-1a) mixed with the seed.
+fn flight_seed(seed: u64, trajectory_csv: &Path) -> u64 {
+    let name = trajectory_csv.file_name().map(|n| n.as_encoded_bytes()).unwrap_or_default();
+    let fnv = name
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3));
+    mock_autopilot::gusts::flight_seed(seed, fnv)
+}
+
 /// The embedded mock autopilot, started afresh for every flight on an ephemeral loopback port.
 pub struct MockVehicle {
     handle: Handle,
@@ -121,6 +131,7 @@ pub struct MockVehicle {
     anchor: bool,
     timeout_s: f64,
     profile: MockProfile,
+    seed: u64,
 }
 
 /// The embedded mock for `mode` with the default profile ([`super::mock_profile::DEFAULT_PROFILE`]).
@@ -153,7 +164,16 @@ impl MockVehicle {
             anchor: false,
             timeout_s: FlyOptions::default().timeout_s,
             profile: MockProfile::default(),
+            seed: 0,
         }
+    }
+
+    /// Draw each flight's gusts (the profile's flight-to-flight scatter) from the campaign's `seed` and the
+    /// flight's trajectory file name (`flights/candidate_N_K.csv`: which test, which flight of it), so a
+    /// campaign flies the same flights whichever vehicle takes them, in whatever order, and on resume.
+    pub fn seeded(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
     }
 
     /// Judge its flights by `judge`; re-anchor each test at the vehicle's home if `anchor`.
@@ -191,6 +211,7 @@ impl Vehicle for MockVehicle {
             .handle
             .block_on(
                 mock_builder_with(&self.profile, self.mode)
+                    .seed(flight_seed(self.seed, csv))
                     .link(LinkSpec::UdpIn(addr))
                     .speed_factor(SpeedFactor::Times(self.speed))
                     .lockstep(self.lockstep.map(|_| DEFAULT_LOCKSTEP_WAIT))
@@ -217,5 +238,20 @@ impl Vehicle for MockVehicle {
         // Stopping the mock cannot fail in a way that matters to the flight already recorded.
         let _ = self.handle.block_on(mock.shutdown());
         result.map(flown).map_err(|e| unreachable(e.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_flight_of_a_campaign_has_its_own_seed_whatever_the_folder() {
+        let s = |seed, p: &str| flight_seed(seed, Path::new(p));
+        let names = ["flights/candidate_1.csv", "flights/candidate_1_2.csv", "flights/candidate_2.csv"];
+        let seeds: std::collections::BTreeSet<u64> = names.iter().map(|n| s(7, n)).collect();
+        assert_eq!(seeds.len(), names.len());
+        assert_eq!(s(7, "flights/candidate_1_2.csv"), s(7, "/tmp/other/flights/candidate_1_2.csv"));
+        assert_ne!(s(7, "flights/candidate_1.csv"), s(8, "flights/candidate_1.csv"));
     }
 }

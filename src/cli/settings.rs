@@ -456,8 +456,8 @@ pub const KEYS: &[KeyDoc] = &[
     key(
         "flight",
         "confirm",
-        "1",
-        "1 with mock vehicles, 3 with MAVLink ones",
+        "3",
+        "3; 1 on a mock profile without gusts (`competition`)",
         "--confirm",
         "Flights a failing test gets at most (K, at least 1). A test whose flight fails is flown again, before \
          any new candidate and within the budget, until the majority of K flights is settled (K = 3: two \

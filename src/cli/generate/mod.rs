@@ -77,8 +77,8 @@ pub struct Args {
     #[arg(long)]
     no_learn: bool,
     /// Flights a failing test gets at most: it is flown again until the majority of K flights is settled, and
-    /// written as test_N.yaml only when more than half of its flights fail (default: 3 with --connect URLs,
-    /// 1 with the embedded mock; 1 flies every test once).
+    /// written as test_N.yaml only when more than half of its flights fail (default: 3; 1 on the embedded
+    /// mock's gust-free `competition` profile, whose flights repeat; 1 flies every test once).
     #[arg(long, value_name = "K")]
     confirm: Option<usize>,
     /// Start from what an earlier campaign learnt (its output folder's learnt.json).
@@ -292,7 +292,8 @@ fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicl
                     MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
                         .judged(cfg.judge, cfg.anchor_at_vehicle_home)
                         .with_timeout(cfg.flight_timeout_s)
-                        .with_profile(profile.clone()),
+                        .with_profile(profile.clone())
+                        .seeded(cfg.seed),
                 ) as Box<dyn Vehicle>
             })
             .collect());

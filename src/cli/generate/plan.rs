@@ -31,9 +31,10 @@ const CHILD_MAX_IOU: f64 = 0.85;
 /// Ensemble members ranking the shortlist when the vehicles are MAVLink ones (an ensemble costs more CPU than
 /// a mock flight, far less than a PX4 or hardware flight).
 const LINK_ENSEMBLE: usize = 8;
-/// Flights a failing test gets at most when the vehicles are MAVLink ones: on PX4 a test that failed once
-/// often passes when flown again (the embedded mock, whose flights repeat, flies each test once).
-const LINK_CONFIRM: usize = 3;
+/// Flights a failing test gets at most on a vehicle whose flights scatter: on PX4 a test that failed once often
+/// passes when flown again, and so on the default mock profile, whose gusts are fitted to that. A mock without
+/// gusts repeats every flight, so it flies each test once.
+const DEFAULT_CONFIRM: usize = 3;
 
 /// The campaign to run.
 pub struct Plan {
@@ -338,6 +339,9 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
     let screen = s.screening.screen.unwrap_or(true);
     let learn = screen && s.learning.learn.unwrap_or(true);
     let mock = hfs == ["mock"];
+    let mock_profile = s.mock.profile.clone().unwrap_or_else(|| DEFAULT_PROFILE.into());
+    // An unknown profile is refused when the plan is checked; here it just flies each test once.
+    let scatters = MockProfile::by_name(&mock_profile).is_some_and(|p| p.tuning.gust_acc_m_s2 > 0.0);
     CampaignConfig {
         case,
         seed: args.seed,
@@ -354,7 +358,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         mock_speed: s.mock.speed.unwrap_or(MOCK_SPEED),
         mock_lockstep: s.mock.lockstep.unwrap_or(true),
         mock_latency_ms: s.mock.latency_ms.unwrap_or(DEFAULT_MOCK_LATENCY_MS),
-        mock_profile: s.mock.profile.clone().unwrap_or_else(|| DEFAULT_PROFILE.into()),
+        mock_profile: mock_profile.clone(),
         screen,
         judge: args.judge.into(),
         anchor_at_vehicle_home: s.flight.anchor_at_vehicle_home.unwrap_or(false),
@@ -365,7 +369,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         prior: args.prior.clone(),
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
-        confirm: s.flight.confirm.unwrap_or(if mock { 1 } else { LINK_CONFIRM }),
+        confirm: s.flight.confirm.unwrap_or(if mock && !scatters { 1 } else { DEFAULT_CONFIRM }),
         overlap: s.flight.overlap.unwrap_or(!mock),
         runner: args.runner.clone(),
         px4,
