@@ -41,6 +41,9 @@ use tokio::sync::Semaphore;
 
 const HEADER: &str = "setting,id,mock_m,flight_time_s,status";
 
+/// One setting's flights by case id: (minimum distance if landed, flight time s).
+type Flights = BTreeMap<String, (Option<f64>, f64)>;
+
 fn reference() -> anyhow::Result<(Vec<FlightCase>, Vec<Px4Flight>)> {
     let (cases, _) = load_dir(Path::new("tests/data/hfs-flights"))?;
     let cases: Vec<FlightCase> = cases.into_iter().filter(|c| !c.obstacles.is_empty()).collect();
@@ -60,15 +63,18 @@ async fn fly_case(case: FlightCase, profile: MockProfile) -> anyhow::Result<(Opt
         ..FlyOptions::default()
     };
     // MOCK_SEED=S: the gusts' seed (a setting with MOCK_GUST_ACC scatters from flight to flight).
-    let seed = std::env::var("MOCK_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(0);
+    let seed = std::env::var("MOCK_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
     let builder = mock_builder_with(&profile, FlyMode::Avoidance).seed(seed);
     let r = fly_on_mock(&test, builder, opts).await?;
     let d = r.min_distance.map(|d| (d - case.definition_offset_m).max(0.0));
     Ok((d, r.flight_time_s, r.status.as_str().to_string()))
 }
 
-fn read_rows(out: &Path) -> BTreeMap<String, BTreeMap<String, (Option<f64>, f64)>> {
-    let mut by: BTreeMap<String, BTreeMap<String, (Option<f64>, f64)>> = BTreeMap::new();
+fn read_rows(out: &Path) -> BTreeMap<String, Flights> {
+    let mut by: BTreeMap<String, Flights> = BTreeMap::new();
     let text = std::fs::read_to_string(out.join("flights.csv")).unwrap_or_default();
     for line in text.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
@@ -125,11 +131,7 @@ fn fly_setting(out: &Path, name: &str, setting: &str, parallel: usize) -> anyhow
 }
 
 /// MAE, Spearman, median flight-time ratio (mock / PX4), mean signed error over `ids`.
-fn figures(
-    rows: &BTreeMap<String, (Option<f64>, f64)>,
-    px4: &BTreeMap<&str, &Px4Flight>,
-    ids: &[&str],
-) -> (f64, f64, f64, f64, usize) {
+fn figures(rows: &Flights, px4: &BTreeMap<&str, &Px4Flight>, ids: &[&str]) -> (f64, f64, f64, f64, usize) {
     let mut pairs = Vec::new();
     let mut ratios = Vec::new();
     for id in ids {
@@ -230,14 +232,23 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
     }
     // A gusty setting flown with several seeds (`NAME@sK`) is one candidate: its figures are the mean over its
     // seeds', the expected figure of one flight, so the choice cannot fall on a lucky seed.
-    let mut families: BTreeMap<String, Vec<&BTreeMap<String, (Option<f64>, f64)>>> = BTreeMap::new();
+    let mut families: BTreeMap<String, Vec<&Flights>> = BTreeMap::new();
     for (name, rows) in &by {
-        families.entry(name.split('@').next().unwrap_or(name).to_string()).or_default().push(rows);
+        families
+            .entry(name.split('@').next().unwrap_or(name).to_string())
+            .or_default()
+            .push(rows);
     }
-    let family_figures = |members: &[&BTreeMap<String, (Option<f64>, f64)>], ids: &[&str]| {
+    let family_figures = |members: &[&Flights], ids: &[&str]| {
         let fs: Vec<_> = members.iter().map(|rows| figures(rows, &px4, ids)).collect();
         let mean = |g: fn(&(f64, f64, f64, f64, usize)) -> f64| fs.iter().map(g).sum::<f64>() / fs.len() as f64;
-        (mean(|f| f.0), mean(|f| f.1), mean(|f| f.2), mean(|f| f.3), fs.first().map_or(0, |f| f.4))
+        (
+            mean(|f| f.0),
+            mean(|f| f.1),
+            mean(|f| f.2),
+            mean(|f| f.3),
+            fs.first().map_or(0, |f| f.4),
+        )
     };
     for (name, members) in families.iter().filter(|(_, m)| m.len() > 1) {
         let f = family_figures(members, &all);
@@ -258,7 +269,7 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
     let k = fold_of_case.iter().max().map_or(0, |m| m + 1);
     // Out of fold, one map per seed slot: a family of m seeds fills slot j with seed j % m.
     let slots = families.values().map(Vec::len).max().unwrap_or(1);
-    let mut oof: Vec<BTreeMap<String, (Option<f64>, f64)>> = vec![BTreeMap::new(); slots];
+    let mut oof: Vec<Flights> = vec![BTreeMap::new(); slots];
     for fold in 0..k {
         let (mut test, mut train): (Vec<&FlightCase>, Vec<&FlightCase>) = (Vec::new(), Vec::new());
         for (c, f) in cases.iter().zip(&fold_of_case) {
@@ -291,7 +302,7 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
         }
     }
     repeat_noise(&cases, &px4);
-    let oof: Vec<&BTreeMap<String, (Option<f64>, f64)>> = oof.iter().collect();
+    let oof: Vec<&Flights> = oof.iter().collect();
     let f = family_figures(&oof, &all);
     println!(
         "\ncross-validated ({folds_name}; mean over {slots} seed slot(s)): n {} MAE {:.3} m, Spearman {:.3}, \

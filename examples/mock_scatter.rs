@@ -92,7 +92,10 @@ fn pairs() -> anyhow::Result<Vec<Pair>> {
     names.sort();
     for name in names {
         let json = format!("{name}.json");
-        if let (Some(a), Some(b)) = (landed(&dir.join("px4").join(&json)), landed(&dir.join("px4-again").join(&json))) {
+        if let (Some(a), Some(b)) = (
+            landed(&dir.join("px4").join(&json)),
+            landed(&dir.join("px4-again").join(&json)),
+        ) {
             let mission = name.split('_').nth(1).unwrap_or("m?").to_string();
             out.push(Pair {
                 fold: format!("heldout-{mission}"),
@@ -113,14 +116,19 @@ async fn fly_once(test: &TestCase, setting: &str, seed: u64) -> anyhow::Result<O
     Ok(r.min_distance.filter(|_| r.status.as_str() == "landed"))
 }
 
-fn read_rows(out: &Path) -> BTreeMap<String, Vec<(String, f64, f64, f64, f64)>> {
-    let mut by: BTreeMap<String, Vec<_>> = BTreeMap::new();
+/// One test's row: its fold, PX4's two distances and the mock's two (m).
+type FlownPair = (String, f64, f64, f64, f64);
+
+fn read_rows(out: &Path) -> BTreeMap<String, Vec<FlownPair>> {
+    let mut by: BTreeMap<String, Vec<FlownPair>> = BTreeMap::new();
     let text = std::fs::read_to_string(out.join("scatter.csv")).unwrap_or_default();
     for line in text.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         let num = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok());
         if let (Some(a), Some(b), Some(c), Some(d)) = (num(3), num(4), num(5), num(6)) {
-            by.entry(f[0].to_string()).or_default().push((f[1].to_string(), a, b, c, d));
+            by.entry(f[0].to_string())
+                .or_default()
+                .push((f[1].to_string(), a, b, c, d));
         }
     }
     by
@@ -196,11 +204,19 @@ fn cv(out: &Path) -> anyhow::Result<()> {
             let p = spread(&r.iter().map(|x| (x.1, x.2)).collect::<Vec<_>>()).0;
             (m - p).abs()
         };
-        let chosen = rows.keys().min_by(|a, b| gap(a).total_cmp(&gap(b))).context("no setting")?;
+        let chosen = rows
+            .keys()
+            .min_by(|a, b| gap(a).total_cmp(&gap(b)))
+            .context("no setting")?;
         let held: Vec<_> = rows[chosen].iter().filter(|x| x.0 == fold).collect();
         let mock: Vec<(f64, f64)> = held.iter().map(|x| (x.3, x.4)).collect();
         let px4: Vec<(f64, f64)> = held.iter().map(|x| (x.1, x.2)).collect();
-        println!("| {fold} | {} | {chosen} | {:.3} / {:.3} |", held.len(), spread(&mock).0, spread(&px4).0);
+        println!(
+            "| {fold} | {} | {chosen} | {:.3} / {:.3} |",
+            held.len(),
+            spread(&mock).0,
+            spread(&px4).0
+        );
         mock_all.extend(mock);
         px4_all.extend(px4);
     }

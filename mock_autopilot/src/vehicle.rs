@@ -433,7 +433,11 @@ impl Vehicle {
         let vel_sp_ned = self.body.velocity_setpoint(&sp, &self.limits).map(|(v, _)| v);
         if !self.crashed {
             // Gusts blow while armed and act only in the air.
-            let gust = if self.armed { self.gusts.step(dt.as_secs_f64()) } else { Ned::zeros() };
+            let gust = if self.armed {
+                self.gusts.step(dt.as_secs_f64())
+            } else {
+                Ned::zeros()
+            };
             let gust = if self.body.on_ground() { Ned::zeros() } else { gust };
             self.body.step_disturbed(&sp, &self.limits, dt.as_secs_f64(), gust);
         }

@@ -134,7 +134,10 @@ fn gusts_scatter_each_flight_and_repeat_for_the_same_seed() {
         .fold(0.0, f64::max);
     assert!(off > 0.05 && off < 5.0, "largest offset from the calm track {off} m");
     let (e, c) = (end(&a[0]), end(&calm[0]));
-    assert!((e.0 - c.0).hypot(e.1 - c.1) < 1.0, "lands near the calm landing: {e:?} vs {c:?}");
+    assert!(
+        (e.0 - c.0).hypot(e.1 - c.1) < 1.0,
+        "lands near the calm landing: {e:?} vs {c:?}"
+    );
 }
 
 fn header(component_id: u8) -> MavHeader {

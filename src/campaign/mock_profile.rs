@@ -54,7 +54,7 @@ pub const PX4_SITL_VEL_GAIN: f64 = 1.3;
 /// `px4-sitl`: RMS of the mock's seeded horizontal gusts (m/s² per axis, correlation time 1 s), FITTED so the
 /// mock disagrees with itself flight to flight as PX4 v1.14 SIH does: over 117 tests PX4 flew twice (the 42
 /// held-out tests on missions 4-7 and 75 campaign tests on missions 2 and 5), PX4's two flights differ by a
-/// median 0.185 m; the mock's by 0.199 m at this value, chosen by cross-validation with folds by campaign and
+/// median 0.185 m; the mock's by 0.199 m at this value, and by 0.193 m cross-validated with folds by campaign and
 /// mission (`examples/mock_scatter.rs`, docs/validation/mock-vs-px4.md). Without gusts the lockstep mock flies
 /// a test identically every time, so a failure on it always repeats where PX4's often does not.
 pub const PX4_SITL_GUST_ACC_M_S2: f64 = 0.1;

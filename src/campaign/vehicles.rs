@@ -113,10 +113,13 @@ impl Vehicle for LinkVehicle {
 /// The mock's seed for the flight recorded in `trajectory_csv` of a campaign seeded with `seed`: its file name
 /// (FNV-1a) mixed with the seed.
 fn flight_seed(seed: u64, trajectory_csv: &Path) -> u64 {
-    let name = trajectory_csv.file_name().map(|n| n.as_encoded_bytes()).unwrap_or_default();
-    let fnv = name
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3));
+    let name = trajectory_csv
+        .file_name()
+        .map(|n| n.as_encoded_bytes())
+        .unwrap_or_default();
+    let fnv = name.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+    });
     mock_autopilot::gusts::flight_seed(seed, fnv)
 }
 
@@ -248,10 +251,17 @@ mod tests {
     #[test]
     fn each_flight_of_a_campaign_has_its_own_seed_whatever_the_folder() {
         let s = |seed, p: &str| flight_seed(seed, Path::new(p));
-        let names = ["flights/candidate_1.csv", "flights/candidate_1_2.csv", "flights/candidate_2.csv"];
+        let names = [
+            "flights/candidate_1.csv",
+            "flights/candidate_1_2.csv",
+            "flights/candidate_2.csv",
+        ];
         let seeds: std::collections::BTreeSet<u64> = names.iter().map(|n| s(7, n)).collect();
         assert_eq!(seeds.len(), names.len());
-        assert_eq!(s(7, "flights/candidate_1_2.csv"), s(7, "/tmp/other/flights/candidate_1_2.csv"));
+        assert_eq!(
+            s(7, "flights/candidate_1_2.csv"),
+            s(7, "/tmp/other/flights/candidate_1_2.csv")
+        );
         assert_ne!(s(7, "flights/candidate_1.csv"), s(8, "flights/candidate_1.csv"));
     }
 }

@@ -457,7 +457,7 @@ pub const KEYS: &[KeyDoc] = &[
         "flight",
         "confirm",
         "3",
-        "3; 1 on a mock profile without gusts (`competition`)",
+        "3; 1 on the embedded mock without gusts (the `competition` profile, or outside avoidance mode)",
         "--confirm",
         "Flights a failing test gets at most (K, at least 1). A test whose flight fails is flown again, before \
          any new candidate and within the budget, until the majority of K flights is settled (K = 3: two \

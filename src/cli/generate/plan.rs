@@ -340,8 +340,10 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
     let learn = screen && s.learning.learn.unwrap_or(true);
     let mock = hfs == ["mock"];
     let mock_profile = s.mock.profile.clone().unwrap_or_else(|| DEFAULT_PROFILE.into());
-    // An unknown profile is refused when the plan is checked; here it just flies each test once.
-    let scatters = MockProfile::by_name(&mock_profile).is_some_and(|p| p.tuning.gust_acc_m_s2 > 0.0);
+    // The profile (and its gusts) flies only in avoidance mode. An unknown profile is refused when the plan is
+    // checked; here it just flies each test once.
+    let scatters = args.mode == crate::cli::values::Mode::Avoidance
+        && MockProfile::by_name(&mock_profile).is_some_and(|p| p.tuning.gust_acc_m_s2 > 0.0);
     CampaignConfig {
         case,
         seed: args.seed,
@@ -369,7 +371,10 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         prior: args.prior.clone(),
         min_diversity: s.learning.min_diversity.unwrap_or(MIN_DIVERSITY),
         child_max_iou: Some(s.learning.child_max_iou.unwrap_or(CHILD_MAX_IOU)),
-        confirm: s.flight.confirm.unwrap_or(if mock && !scatters { 1 } else { DEFAULT_CONFIRM }),
+        confirm: s
+            .flight
+            .confirm
+            .unwrap_or(if mock && !scatters { 1 } else { DEFAULT_CONFIRM }),
         overlap: s.flight.overlap.unwrap_or(!mock),
         runner: args.runner.clone(),
         px4,
@@ -573,5 +578,24 @@ mod tests {
         assert_eq!(show(&serde_json::json!(["udpin:a", "udpin:b"])), "udpin:a,udpin:b");
         assert_eq!(show(&serde_json::json!({"min": 2.0, "max": 4.0})), "2.0,4.0");
         assert_eq!(show(&serde_json::json!(3)), "3");
+    }
+
+    #[test]
+    fn failures_are_confirmed_by_default_wherever_flights_scatter() {
+        let confirm = |extra: &[&str]| {
+            let mut argv = vec!["prgenuav", "generate", "missions/mission2.yaml", "20"];
+            argv.extend_from_slice(extra);
+            let (args, req) = requested(&argv, &Loaded::default());
+            build(args.case.clone().unwrap(), 20, &args, &req).confirm
+        };
+        assert_eq!(confirm(&[]), 3, "the default mock profile has PX4's scatter");
+        assert_eq!(confirm(&["--connect", "udpin:0.0.0.0:14540"]), 3);
+        assert_eq!(confirm(&["--mock-profile", "competition"]), 1, "its flights repeat");
+        assert_eq!(
+            confirm(&["--mode", "mission"]),
+            1,
+            "the profile flies only in avoidance mode"
+        );
+        assert_eq!(confirm(&["--confirm", "5"]), 5);
     }
 }
