@@ -165,6 +165,14 @@ fn default_mock_speed() -> f64 {
     20.0
 }
 
+impl CampaignConfig {
+    /// The vehicles fly a test the same way for the same seed (the embedded mock in lockstep), so the fleet
+    /// flies in waves and the campaign repeats bit for bit ([`super::fleet::FleetSetup::waves`]).
+    pub fn repeatable_vehicles(&self) -> bool {
+        self.hfs == ["mock"] && self.mock_lockstep
+    }
+}
+
 /// The largest budget accepted. A campaign keeps its journal in memory (about 1 KB a flight) and the report
 /// compares failing tests pairwise, so 10,000 flights stay small; on the mock they take about 5 hours.
 pub const MAX_BUDGET: usize = 10_000;

@@ -37,9 +37,26 @@ struct Ledger {
     use_: FleetUse,
     first_takeoff: Option<Instant>,
     last_landing: Option<Instant>,
+    /// Fly in waves (see [`FleetSetup::waves`]).
+    waves: bool,
+    /// Jobs taken in the wave in the air.
+    wave_taken: usize,
+    /// Re-flights the wave in the air asked for, queued when it has landed.
+    wave_again: Vec<Job>,
 }
 
 impl Ledger {
+    /// The wave in the air has landed: its re-flights go to the front of the queue, in the order of their tests
+    /// (not of their landings), and the next wave may take off.
+    fn end_wave(&mut self) {
+        let mut again = std::mem::take(&mut self.wave_again);
+        again.sort_by_key(|j| (j.screened.candidate, j.tally.next_attempt));
+        for job in again.into_iter().rev() {
+            self.queue.push_front(job);
+        }
+        self.wave_taken = 0;
+    }
+
     fn settle(&mut self, round: usize) {
         if let Some(n) = self.outstanding.get_mut(&round) {
             *n = n.saturating_sub(1);
@@ -79,6 +96,12 @@ pub struct FleetSetup<'a> {
     pub cancel: &'a AtomicBool,
     /// Told of each journaled flight.
     pub on_flight: &'a (dyn Fn(&FlightRecord) + Sync),
+    /// Fly in waves: one job per vehicle, the next wave only once the whole wave has landed, and each round's
+    /// flights handed back sorted by test. Which flights a campaign makes, and in which order it learns from
+    /// them, then no longer depends on which vehicle lands first: with repeatable vehicles (the lockstep mock)
+    /// the same seed flies the same campaign, re-flights included. Costs the vehicles' idle time at the end of
+    /// each wave.
+    pub waves: bool,
 }
 
 /// Runs `body` on this thread while a worker per vehicle flies what it pushes; when `body` returns, the queue
@@ -157,6 +180,7 @@ pub fn fly_all(
         journal,
         cancel,
         on_flight,
+        waves: false,
     };
     run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1
 }
@@ -178,6 +202,9 @@ impl<'a> Fleet<'a> {
                 },
                 first_takeoff: None,
                 last_landing: None,
+                waves: setup.waves,
+                wave_taken: 0,
+                wave_again: Vec::new(),
             }),
             changed: Condvar::new(),
             journal: Mutex::new((setup.journal, Vec::new())),
@@ -232,7 +259,11 @@ impl<'a> Fleet<'a> {
         let mut j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
         let (mine, later): (Vec<_>, Vec<_>) = std::mem::take(&mut j.1).into_iter().partition(|(r, _)| *r <= round);
         j.1 = later;
-        mine.into_iter().map(|(_, r)| r).collect()
+        let mut records: Vec<FlightRecord> = mine.into_iter().map(|(_, r)| r).collect();
+        if self.lock().waves {
+            records.sort_by_key(|r| (r.candidate, r.attempt));
+        }
+        records
     }
 
     /// No queued job can be taken any more, and nothing in the air can change that.
@@ -321,13 +352,20 @@ impl Fleet<'_> {
                         // Queued before the flight is journaled, so no vehicle takes a new candidate meanwhile.
                         if let Some(next) = job.again(&Journal::read_back(&record)) {
                             *l.outstanding.entry(round).or_default() += 1;
-                            l.queue.push_front(next);
+                            if l.waves {
+                                l.wave_again.push(next);
+                            } else {
+                                l.queue.push_front(next);
+                            }
                         }
                     }
                     drop(l);
                     let journaled = self.journal(round, &record);
                     let mut l = self.lock();
                     l.airborne.retain(|(c, _)| *c != candidate);
+                    if l.waves && l.airborne.is_empty() {
+                        l.end_wave();
+                    }
                     l.settle(round);
                     drop(l);
                     self.changed.notify_all();
@@ -340,6 +378,9 @@ impl Fleet<'_> {
                     let cancelled = self.cancel.load(Ordering::Relaxed);
                     l.airborne.retain(|(c, _)| *c != job.screened.candidate);
                     l.queue.push_front(job);
+                    if l.waves && l.airborne.is_empty() {
+                        l.end_wave();
+                    }
                     if !cancelled {
                         l.alive -= 1;
                     }
@@ -378,8 +419,10 @@ impl Fleet<'_> {
                 return None;
             }
             if l.finished + l.airborne.len() < l.limit
+                && (!l.waves || l.wave_taken < l.alive)
                 && let Some(job) = l.queue.pop_front()
             {
+                l.wave_taken += 1;
                 l.airborne.push((job.screened.candidate, job.test.obstacles.clone()));
                 l.first_takeoff.get_or_insert_with(Instant::now);
                 return Some(job);

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use super::candidate::{Candidate, Screened};
 use super::config::CampaignError;
 use super::confirm::pending;
-use super::fleet::fly_all;
+use super::fleet::{FleetSetup, run_fleet};
 use super::journal::{FlightRecord, Journal};
 use super::pool::{FleetUse, Job, PoolOutcome, Vehicle};
 use super::screener::Progress;
@@ -30,6 +30,8 @@ pub struct FlightStage<'a> {
     pub done: &'a [FlightRecord],
     /// Flights a failing test gets at most (`--confirm`).
     pub confirm: usize,
+    /// Fly in waves, so repeatable vehicles repeat the campaign ([`super::fleet::FleetSetup::waves`]).
+    pub waves: bool,
 }
 
 /// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
@@ -130,10 +132,16 @@ fn fly_stage(
 ) -> Result<PoolOutcome, CampaignError> {
     let progress = ctx.progress;
     progress.stage(name, jobs.len());
-    let count = AtomicUsize::new(0);
-    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r, true);
-    let journal = Journal::open(&ctx.folder.join("journal.jsonl"))?;
-    let outcome = fly_all(vehicles, jobs, budget, ctx.folder, journal, ctx.cancel, &on_flight);
+    let count = FlightCount::default();
+    let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, true);
+    let setup = FleetSetup {
+        folder: ctx.folder,
+        journal: Journal::open(&ctx.folder.join("journal.jsonl"))?,
+        cancel: ctx.cancel,
+        on_flight: &on_flight,
+        waves: ctx.waves,
+    };
+    let outcome = run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1;
     for d in &outcome.dropped {
         progress.note(&format!("dropped {d}"));
     }
@@ -157,10 +165,32 @@ fn screened_as_flown(first: &FlightRecord) -> Screened {
     }
 }
 
-/// Tells the user of the `n`th flight of the stage.
-pub(super) fn announce(progress: &dyn Progress, n: usize, r: &FlightRecord, tick: bool) {
+/// Counts a campaign's flights for its progress lines: each flight's number in the campaign, and in the flight
+/// stage under way (what the stage's progress counts to).
+#[derive(Debug, Default)]
+pub(super) struct FlightCount {
+    total: AtomicUsize,
+    stage_start: AtomicUsize,
+}
+
+impl FlightCount {
+    /// A flight stage starts after the flights counted so far.
+    pub(super) fn new_stage(&self) {
+        self.stage_start
+            .store(self.total.load(Ordering::Relaxed), Ordering::Relaxed);
+    }
+
+    /// Counts one flight: its number in the campaign and in the stage, both from 1.
+    pub(super) fn next(&self) -> (usize, usize) {
+        let n = self.total.fetch_add(1, Ordering::Relaxed) + 1;
+        (n, n.saturating_sub(self.stage_start.load(Ordering::Relaxed)))
+    }
+}
+
+/// Tells the user of a flight, numbered `(in the campaign, in the stage)`.
+pub(super) fn announce(progress: &dyn Progress, (n, in_stage): (usize, usize), r: &FlightRecord, tick: bool) {
     if tick {
-        progress.tick(n);
+        progress.tick(in_stage);
     }
     progress.note(&format!(
         "flight {n}: candidate {}{} predicted {:.2} m, flew {} ({})",

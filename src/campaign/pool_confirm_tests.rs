@@ -110,3 +110,74 @@ fn a_failing_test_is_flown_again_before_the_next_candidate_until_its_majority_is
         [(0, 0), (1, 0), (2, 0), (3, 0)]
     );
 }
+
+/// As [`Scripted`], each flight taking a random few milliseconds from `rng`: which vehicle lands first varies.
+struct Jittery {
+    inner: Scripted,
+    rng: rand_chacha::ChaCha8Rng,
+}
+
+impl Vehicle for Jittery {
+    fn name(&self) -> String {
+        "jittery".into()
+    }
+    fn fly(&mut self, test: &TestCase, csv: &Path, c: &AtomicBool) -> Result<Flown, VehicleError> {
+        use rand::Rng;
+        std::thread::sleep(std::time::Duration::from_millis(self.rng.random_range(0..15)));
+        self.inner.fly(test, csv, c)
+    }
+}
+
+/// Two jittery vehicles flying in waves: the round's records as `wait_round` hands them back.
+fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, u32, f64)> {
+    use rand::SeedableRng;
+    let dir = tempfile::tempdir().unwrap();
+    let flown = Arc::new(Mutex::new(Vec::new()));
+    let mut fleet: Vec<Box<dyn Vehicle>> = (0..2)
+        .map(|i| {
+            Box::new(Jittery {
+                inner: Scripted {
+                    script: script.to_vec(),
+                    flown: flown.clone(),
+                },
+                rng: rand_chacha::ChaCha8Rng::seed_from_u64(jitter_seed * 2 + i),
+            }) as Box<dyn Vehicle>
+        })
+        .collect();
+    let jobs: Vec<Job> = (jobs(script.len() as u64).into_iter())
+        .map(|j| Job { confirm: 3, ..j })
+        .collect();
+    let setup = crate::campaign::fleet::FleetSetup {
+        folder: dir.path(),
+        journal: Journal::open(&dir.path().join("journal.jsonl")).unwrap(),
+        cancel: &AtomicBool::new(false),
+        on_flight: &|_| {},
+        waves: true,
+    };
+    let (records, _) = crate::campaign::fleet::run_fleet(&mut fleet, setup, |fleet| {
+        fleet.push(0, jobs, budget);
+        fleet.wait_round(0)
+    });
+    (records.iter())
+        .map(|r| (r.candidate, r.attempt, r.min_distance.unwrap()))
+        .collect()
+}
+
+#[test]
+fn in_waves_the_same_jobs_fly_the_same_flights_whoever_lands_first() {
+    // Failures to confirm, refuted ones and passes, with a budget that cuts the last confirmations short.
+    let script: Vec<Vec<f64>> = (0..12)
+        .map(|i| match i % 4 {
+            0 => vec![1.0, 2.0, 1.1],
+            1 => vec![1.2, 1.3],
+            2 => vec![2.0],
+            _ => vec![1.4, 2.2, 2.3],
+        })
+        .collect();
+    let first = waves_run(&script, 0, 20);
+    assert_eq!(first.len(), 20);
+    assert!(first.iter().any(|f| f.1 == 2), "some tests were flown a third time");
+    for jitter in 1..6 {
+        assert_eq!(waves_run(&script, jitter, 20), first, "jitter seed {jitter}");
+    }
+}

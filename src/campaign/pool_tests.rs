@@ -290,6 +290,7 @@ fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) ->
         journal: Journal::open(&dir.path().join("journal.jsonl")).unwrap(),
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
+        waves: false,
     };
     run_fleet(&mut v, setup, body)
 }

@@ -22,7 +22,7 @@
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use super::candidate::{Candidate, Lineage, Screened, is_child};
@@ -32,7 +32,7 @@ use super::diversity_guard::DiversityGuard;
 use super::draw::{DrawPlan, draw};
 use super::failure_counts::{arm_counts, counted_failures};
 use super::fleet::{Fleet, FleetSetup, run_fleet};
-use super::flights::{FlightStage, announce, stage_jobs};
+use super::flights::{FlightCount, FlightStage, announce, stage_jobs};
 use super::journal::{FlightRecord, Journal, flights_charged};
 use super::learn::{Calibration, Learnt, RoundLog};
 use super::learning::{Learning, refit};
@@ -82,16 +82,17 @@ pub fn run_rounds(
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     stages: &mut StageTimes,
 ) -> Result<(Learnt, usize), CampaignError> {
-    let mut campaign = Rounds::start(input)?;
+    let count = FlightCount::default();
+    let mut campaign = Rounds::start(input, &count)?;
     let progress = input.progress;
-    let count = AtomicUsize::new(0);
     let tick = !input.cfg.overlap;
-    let on_flight = |r: &FlightRecord| announce(progress, count.fetch_add(1, Ordering::Relaxed) + 1, r, tick);
+    let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, tick);
     let setup = FleetSetup {
         folder: input.folder,
         journal: Journal::open(&input.folder.join("journal.jsonl"))?,
         cancel: input.cancel,
         on_flight: &on_flight,
+        waves: input.cfg.repeatable_vehicles(),
     };
     let (flown, outcome) = run_fleet(vehicles, setup, |fleet| {
         let flown = campaign.fly_rounds(fleet, stages);
@@ -132,6 +133,8 @@ struct Rounds<'a> {
     charged_before: usize,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
     in_air: VecDeque<Pushed>,
+    /// The flights' numbering in the progress lines.
+    flight_count: &'a FlightCount,
 }
 
 /// A round in the fleet, with what its log needs once it has flown.
@@ -169,7 +172,7 @@ struct Ranking {
 
 impl<'a> Rounds<'a> {
     /// Loads the prior and the journal.
-    fn start(input: &'a CampaignInput<'a>) -> Result<Self, CampaignError> {
+    fn start(input: &'a CampaignInput<'a>, flight_count: &'a FlightCount) -> Result<Self, CampaignError> {
         let cfg = input.cfg;
         let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
         let start_calibration = prior
@@ -201,6 +204,7 @@ impl<'a> Rounds<'a> {
             carried: None,
             charged_before: 0,
             in_air: VecDeque::new(),
+            flight_count,
         })
     }
 
@@ -244,10 +248,12 @@ impl<'a> Rounds<'a> {
             cancel: self.input.cancel,
             done: &self.flights,
             confirm: self.input.cfg.confirm,
+            waves: self.input.cfg.repeatable_vehicles(),
         };
         let busy: Vec<u64> = busy.iter().map(|(c, _)| *c).collect();
         let jobs = stage_jobs(&flight, ranking.ranked, &busy);
         if !self.input.cfg.overlap {
+            self.flight_count.new_stage();
             self.input.progress.stage("fly", jobs.len().min(ranking.remaining));
         }
         if !jobs.is_empty() && ranking.remaining > 0 && fleet.alive() == 0 {

@@ -59,6 +59,7 @@ pub fn run_campaign(
         cancel,
         done: &done,
         confirm: cfg.confirm,
+        waves: cfg.repeatable_vehicles(),
     };
     fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
     if cfg.learn && cfg.screen {

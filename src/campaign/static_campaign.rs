@@ -42,6 +42,7 @@ pub fn run_static(
         cancel: input.cancel,
         done: &done,
         confirm: input.cfg.confirm,
+        waves: input.cfg.repeatable_vehicles(),
     };
     let (_, fleet) = fly_ranked(&flight, ranked, vehicles, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
