@@ -52,6 +52,11 @@ pub struct CampaignConfig {
     /// mock there was before profiles, and a resume must match.
     #[serde(default = "profile_before_profiles")]
     pub mock_profile: String,
+    /// RMS of the embedded mocks' gusts, m/s² per horizontal axis (`mock_autopilot::dynamics::Tuning`), as the
+    /// profile had them when the campaign began. 0 when the key is absent: the mocks had no gusts before, and
+    /// a resume must fly as the campaign began.
+    #[serde(default)]
+    pub mock_gust_acc_m_s2: f64,
     /// Screen with the LFS (off: fly candidates in the order drawn, the paper's baseline without the LFS).
     #[serde(default = "default_screen")]
     pub screen: bool,

@@ -130,8 +130,13 @@ fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
     let json = serde_json::to_value(config(10)).expect("config serialises");
     let mut old = json.as_object().expect("an object").clone();
     old.remove("child_max_iou");
+    old.remove("mock_gust_acc_m_s2");
     let read: CampaignConfig = serde_json::from_value(old.into()).expect("an old campaign.json reads");
     assert_eq!(read.child_max_iou, None);
+    assert_eq!(
+        read.mock_gust_acc_m_s2, 0.0,
+        "campaigns from before the gusts resume without them"
+    );
 }
 
 #[test]

@@ -85,6 +85,7 @@ fn config(budget: usize) -> CampaignConfig {
         mock_lockstep: true,
         mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
         mock_profile: crate::campaign::mock_profile::DEFAULT_PROFILE.into(),
+        mock_gust_acc_m_s2: crate::campaign::mock_profile::PX4_SITL_GUST_ACC_M_S2,
         screen: true,
         hfs_time_scale: None,
         flight_timeout_s: 500.0,

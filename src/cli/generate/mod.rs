@@ -285,7 +285,9 @@ fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicl
         let lockstep = cfg
             .mock_lockstep
             .then(|| Duration::from_secs_f64(cfg.mock_latency_ms / 1000.0));
-        let profile = MockProfile::named(&cfg.mock_profile).map_err(|e| anyhow::anyhow!("mock.profile: {e}"))?;
+        let mut profile = MockProfile::named(&cfg.mock_profile).map_err(|e| anyhow::anyhow!("mock.profile: {e}"))?;
+        // The gusts the campaign began with: a campaign begun before the mock had them resumes without.
+        profile.tuning.gust_acc_m_s2 = cfg.mock_gust_acc_m_s2;
         return Ok((0..count)
             .map(|i| {
                 Box::new(

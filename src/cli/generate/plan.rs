@@ -342,8 +342,8 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
     let mock_profile = s.mock.profile.clone().unwrap_or_else(|| DEFAULT_PROFILE.into());
     // The profile (and its gusts) flies only in avoidance mode. An unknown profile is refused when the plan is
     // checked; here it just flies each test once.
-    let scatters = args.mode == crate::cli::values::Mode::Avoidance
-        && MockProfile::by_name(&mock_profile).is_some_and(|p| p.tuning.gust_acc_m_s2 > 0.0);
+    let mock_gust_acc_m_s2 = MockProfile::by_name(&mock_profile).map_or(0.0, |p| p.tuning.gust_acc_m_s2);
+    let scatters = args.mode == crate::cli::values::Mode::Avoidance && mock_gust_acc_m_s2 > 0.0;
     CampaignConfig {
         case,
         seed: args.seed,
@@ -361,6 +361,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
         mock_lockstep: s.mock.lockstep.unwrap_or(true),
         mock_latency_ms: s.mock.latency_ms.unwrap_or(DEFAULT_MOCK_LATENCY_MS),
         mock_profile: mock_profile.clone(),
+        mock_gust_acc_m_s2,
         screen,
         judge: args.judge.into(),
         anchor_at_vehicle_home: s.flight.anchor_at_vehicle_home.unwrap_or(false),
