@@ -16,6 +16,8 @@
 //! seeds' figures (the expected figure of one flight), so the choice cannot fall on a lucky seed.
 
 // The shared module's env-driven `fly_mock` is for the other examples; this one flies its own settings.
+#[path = "common/csv_append.rs"]
+mod csv_append;
 #[allow(dead_code)]
 #[path = "common/mock_flight.rs"]
 mod mock_flight;
@@ -116,13 +118,7 @@ fn fly_setting(out: &Path, name: &str, setting: &str, parallel: usize) -> anyhow
         }
         anyhow::Ok(rows)
     })?;
-    std::fs::create_dir_all(out)?;
-    let path = out.join("flights.csv");
-    let fresh = !path.exists();
-    let mut f = std::fs::OpenOptions::new().create(true).append(true).open(&path)?;
-    if fresh {
-        writeln!(f, "{HEADER}")?;
-    }
+    let mut f = csv_append::append_csv(out, "flights.csv", HEADER)?;
     for (id, (d, t, status)) in rows {
         let d = d.map_or(String::new(), |d| format!("{d:.3}"));
         writeln!(f, "{},{id},{d},{t:.1},{status}", name.replace(',', ";"))?;

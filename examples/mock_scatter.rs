@@ -15,6 +15,8 @@
 //! the other folds.
 
 // The shared module's env-driven `fly_mock` is for the other examples; this one flies its own settings.
+#[path = "common/csv_append.rs"]
+mod csv_append;
 #[allow(dead_code)]
 #[path = "common/mock_flight.rs"]
 mod mock_flight;
@@ -160,13 +162,7 @@ fn fly_setting(out: &Path, rms: f64, tau: f64, parallel: usize) -> anyhow::Resul
         }
         anyhow::Ok(rows)
     })?;
-    std::fs::create_dir_all(out)?;
-    let path = out.join("scatter.csv");
-    let fresh = !path.exists();
-    let mut f = std::fs::OpenOptions::new().create(true).append(true).open(&path)?;
-    if fresh {
-        writeln!(f, "{HEADER}")?;
-    }
+    let mut f = csv_append::append_csv(out, "scatter.csv", HEADER)?;
     let show = |d: Option<f64>| d.map_or(String::new(), |d| format!("{d:.4}"));
     for (p, a, b) in rows {
         let (pa, pb) = p.px4;

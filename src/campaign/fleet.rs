@@ -255,12 +255,13 @@ impl<'a> Fleet<'a> {
                 l.queue.push_back(job);
             }
         }
+        let waves = l.waves;
         drop(l);
         let mut j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
         let (mine, later): (Vec<_>, Vec<_>) = std::mem::take(&mut j.1).into_iter().partition(|(r, _)| *r <= round);
         j.1 = later;
         let mut records: Vec<FlightRecord> = mine.into_iter().map(|(_, r)| r).collect();
-        if self.lock().waves {
+        if waves {
             records.sort_by_key(|r| (r.candidate, r.attempt));
         }
         records
