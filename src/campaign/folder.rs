@@ -6,13 +6,19 @@
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{ErrorKind, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use std::time::SystemTime;
+use std::time::{Duration, Instant, SystemTime};
 
 use super::config::CampaignError;
 use crate::model::ModelError;
 
 /// The lock file inside a campaign folder; it holds the writer's process id.
 pub const LOCK_FILE: &str = "campaign.lock";
+
+/// How long a held lock is waited for before refusing. A process that spawns a child shares the lock file
+/// with it between its fork and its exec (close-on-exec closes it only at the exec), so a lock just released
+/// can stay held for that moment.
+const LOCK_PATIENCE: Duration = Duration::from_millis(1500);
+const LOCK_POLL: Duration = Duration::from_millis(25);
 
 /// Suffixes tried after the timestamp itself (`-2`, `-3`, ...): far more campaigns than start in one second.
 const MAX_SUFFIX: u32 = 1000;
@@ -99,7 +105,7 @@ impl FolderLock {
             .truncate(false)
             .open(&path)
             .map_err(io("cannot open the lock file"))?;
-        match file.try_lock() {
+        match try_lock_patiently(&file) {
             Ok(()) => {}
             Err(TryLockError::WouldBlock) => {
                 let mut holder = String::new();
@@ -126,10 +132,21 @@ impl FolderLock {
     }
 }
 
+/// Polls the lock until it is free or [`LOCK_PATIENCE`] has passed.
+fn try_lock_patiently(file: &File) -> Result<(), TryLockError> {
+    let deadline = Instant::now() + LOCK_PATIENCE;
+    loop {
+        match file.try_lock() {
+            Err(TryLockError::WouldBlock) if Instant::now() < deadline => std::thread::sleep(LOCK_POLL),
+            other => return other,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::time::{Duration, UNIX_EPOCH};
+    use std::time::UNIX_EPOCH;
 
     #[test]
     fn folder_name_is_day_month_time() {
@@ -165,5 +182,17 @@ mod tests {
         assert!(e.contains("one writer per campaign folder"), "{e}");
         drop(held);
         FolderLock::acquire(dir.path()).unwrap();
+    }
+
+    #[test]
+    fn a_lock_released_a_moment_later_is_taken_rather_than_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let held = FolderLock::acquire(dir.path()).unwrap();
+        let releaser = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(200));
+            drop(held);
+        });
+        FolderLock::acquire(dir.path()).unwrap();
+        releaser.join().unwrap();
     }
 }
