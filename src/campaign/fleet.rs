@@ -14,6 +14,7 @@ use super::journal::{FlightRecord, INTERRUPTED, Journal};
 use super::pool::{
     FleetUse, Job, PoolOutcome, Vehicle, fly_counting_rejections, interrupted_if_cancelled, rejected_in_a_row,
 };
+use super::replay::Replay;
 use crate::model::Obstacle;
 
 /// How long an idle worker or a waiting campaign sleeps before looking at the cancel flag again.
@@ -43,6 +44,10 @@ struct Ledger {
     wave_taken: usize,
     /// Re-flights the wave in the air asked for, queued when it has landed.
     wave_again: Vec<Job>,
+    /// A resumed campaign's journaled flights, taken in place of flying them.
+    replay: Replay,
+    /// Flights taken from the replay and not yet collected, with their round.
+    replayed: Vec<(usize, FlightRecord)>,
 }
 
 impl Ledger {
@@ -68,6 +73,52 @@ impl Ledger {
 
     fn outstanding_through(&self, round: usize) -> usize {
         self.outstanding.range(..=round).map(|(_, n)| n).sum()
+    }
+
+    /// A wave may take another job.
+    fn wave_open(&self) -> bool {
+        !self.waves || self.wave_taken < self.alive
+    }
+
+    /// No queued job may take off: the round's budget is spent, or only new flights are queued and the budget
+    /// is held by journaled flights not yet replayed.
+    fn blocked(&self) -> bool {
+        let charged = self.finished + self.airborne.len();
+        charged >= self.limit || (!self.replay.any_in(&self.queue) && !self.replay.allows_new(charged))
+    }
+
+    /// Takes the queued jobs the journal already holds, as if each had flown and landed at once (re-flights
+    /// queued, waves ended), within the same budget and waves as flights.
+    fn serve_replays(&mut self) {
+        loop {
+            while self.finished + self.airborne.len() < self.limit && self.wave_open() {
+                let Some((job, record)) = self.replay.take_next(&mut self.queue) else {
+                    break;
+                };
+                self.wave_taken += 1;
+                self.finished += 1;
+                if let Some(next) = job.again(&record) {
+                    *self.outstanding.entry(job.round).or_default() += 1;
+                    if self.waves {
+                        self.wave_again.push(next);
+                    } else {
+                        self.queue.push_front(next);
+                    }
+                }
+                self.replayed.push((job.round, record));
+                self.settle(job.round);
+            }
+            // A wave of replayed flights only has landed once no flight of it is in the air and it can take no
+            // more: then its re-flights are queued, and may be replayed in turn.
+            let can_take = !self.queue.is_empty() && self.wave_open() && !self.blocked();
+            if !(self.waves && self.wave_taken > 0 && self.airborne.is_empty() && !can_take) {
+                return;
+            }
+            self.end_wave();
+            if !self.replay.any_in(&self.queue) {
+                return;
+            }
+        }
     }
 }
 
@@ -102,6 +153,8 @@ pub struct FleetSetup<'a> {
     /// the same seed flies the same campaign, re-flights included. Costs the vehicles' idle time at the end of
     /// each wave.
     pub waves: bool,
+    /// A resumed campaign's journaled flights, taken in place of flying them when its plan queues them.
+    pub replay: Replay,
 }
 
 /// Runs `body` on this thread while a worker per vehicle flies what it pushes; when `body` returns, the queue
@@ -181,6 +234,7 @@ pub fn fly_all(
         cancel,
         on_flight,
         waves: false,
+        replay: Replay::none(),
     };
     run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1
 }
@@ -205,6 +259,8 @@ impl<'a> Fleet<'a> {
                 waves: setup.waves,
                 wave_taken: 0,
                 wave_again: Vec::new(),
+                replay: setup.replay,
+                replayed: Vec::new(),
             }),
             changed: Condvar::new(),
             journal: Mutex::new((setup.journal, Vec::new())),
@@ -256,11 +312,16 @@ impl<'a> Fleet<'a> {
             }
         }
         let waves = l.waves;
+        // Replayed flights were journaled before any flight of this run.
+        let (replayed, later): (Vec<_>, Vec<_>) = std::mem::take(&mut l.replayed)
+            .into_iter()
+            .partition(|(r, _)| *r <= round);
+        l.replayed = later;
         drop(l);
         let mut j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
         let (mine, later): (Vec<_>, Vec<_>) = std::mem::take(&mut j.1).into_iter().partition(|(r, _)| *r <= round);
         j.1 = later;
-        let mut records: Vec<FlightRecord> = mine.into_iter().map(|(_, r)| r).collect();
+        let mut records: Vec<FlightRecord> = replayed.into_iter().chain(mine).map(|(_, r)| r).collect();
         if waves {
             records.sort_by_key(|r| (r.candidate, r.attempt));
         }
@@ -270,7 +331,7 @@ impl<'a> Fleet<'a> {
     /// No queued job can be taken any more, and nothing in the air can change that.
     fn stuck(&self, l: &Ledger) -> bool {
         let halted = self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) || l.alive == 0;
-        l.airborne.is_empty() && (halted || l.finished >= l.limit)
+        l.airborne.is_empty() && (halted || l.blocked())
     }
 
     /// Charged flights journaled, plus jobs queued or in the air: what the budget has promised.
@@ -285,6 +346,7 @@ impl<'a> Fleet<'a> {
         let mut busy: Vec<(u64, Vec<Obstacle>)> = (l.queue.iter())
             .map(|j| (j.screened.candidate, j.test.obstacles.clone()))
             .chain(l.airborne.iter().cloned())
+            .chain(l.replayed.iter().map(|(_, r)| (r.candidate, r.obstacles.clone())))
             .collect();
         drop(l);
         let j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
@@ -310,6 +372,11 @@ impl<'a> Fleet<'a> {
             .errors
             .first()
             .cloned()
+    }
+
+    /// The journaled flights the replayed plan has not asked for; they are no longer served.
+    pub fn unreplayed(&self) -> Vec<FlightRecord> {
+        std::mem::replace(&mut self.lock().replay, Replay::none()).into_left()
     }
 
     /// Empties the queue: the flights in the air finish, nothing else takes off.
@@ -419,8 +486,11 @@ impl Fleet<'_> {
             if self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) {
                 return None;
             }
-            if l.finished + l.airborne.len() < l.limit
-                && (!l.waves || l.wave_taken < l.alive)
+            l.serve_replays();
+            let charged = l.finished + l.airborne.len();
+            if charged < l.limit
+                && l.replay.allows_new(charged)
+                && l.wave_open()
                 && let Some(job) = l.queue.pop_front()
             {
                 l.wave_taken += 1;
@@ -428,7 +498,7 @@ impl Fleet<'_> {
                 l.first_takeoff.get_or_insert_with(Instant::now);
                 return Some(job);
             }
-            if l.airborne.is_empty() && !l.open && (l.queue.is_empty() || l.finished >= l.limit) {
+            if l.airborne.is_empty() && !l.open && (l.queue.is_empty() || l.blocked()) {
                 return None; // nothing can come: no job will be pushed or handed back
             }
             // A flight in the air may hand its job back, or the campaign push more; wait, bounded so cancel is seen.

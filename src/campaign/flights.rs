@@ -10,6 +10,7 @@ use super::confirm::pending;
 use super::fleet::{FleetSetup, run_fleet};
 use super::journal::{FlightRecord, Journal};
 use super::pool::{FleetUse, Job, PoolOutcome, Vehicle};
+use super::replay::Replay;
 use super::screener::Progress;
 use crate::model::TestCase;
 
@@ -140,6 +141,7 @@ fn fly_stage(
         cancel: ctx.cancel,
         on_flight: &on_flight,
         waves: ctx.waves,
+        replay: Replay::none(),
     };
     let outcome = run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1;
     for d in &outcome.dropped {

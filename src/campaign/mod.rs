@@ -19,6 +19,7 @@ pub mod parallel;
 pub mod pool;
 pub mod px4_vehicle;
 pub mod rank;
+pub mod replay;
 pub mod report;
 pub mod rounds;
 pub mod run;

@@ -153,6 +153,7 @@ fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, 
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: true,
+        replay: crate::campaign::replay::Replay::none(),
     };
     let (records, _) = crate::campaign::fleet::run_fleet(&mut fleet, setup, |fleet| {
         fleet.push(0, jobs, budget);

@@ -291,6 +291,7 @@ fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) ->
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: false,
+        replay: crate::campaign::replay::Replay::none(),
     };
     run_fleet(&mut v, setup, body)
 }

@@ -16,8 +16,9 @@
 //! The rounds fly on one [`Fleet`] whose queue stays open: with `overlap` a round is planned while the previous
 //! one flies, learning from the rounds before that (one round of lag), so remote vehicles do not wait on the LFS.
 //!
-//! The journal is read once; each round's flights are added to it in memory in the order they were journaled.
-//! A test's later flights (`--confirm`) only confirm it: the rounds learn from each test's first flight, and
+//! A resumed campaign replays its plan ([`super::replay`]): every round is planned again from the start, the
+//! fleet takes the journaled flights in place of flying them, and only what the journal lacks is flown. Each
+//! round's flights are added in memory in the order they were journaled. A test's later flights (`--confirm`) only confirm it: the rounds learn from each test's first flight, and
 //! fly the tests waiting for confirmation before the round's new candidates, within the round's budget.
 
 use std::collections::VecDeque;
@@ -25,7 +26,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use super::candidate::{Candidate, Lineage, Screened, is_child};
+use super::candidate::{Candidate, Lineage, Screened, check_journaled_as_drawn, is_child};
 use super::config::{CampaignError, CampaignInput};
 use super::confirm::as_learnt;
 use super::diversity_guard::DiversityGuard;
@@ -39,6 +40,7 @@ use super::learning::{Learning, refit};
 use super::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use super::pool::Vehicle;
 use super::rank::rank_unflown;
+use super::replay::Replay;
 use super::report::StageTimes;
 use super::screening::{ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all};
 use super::surrogate::Surrogate;
@@ -84,6 +86,7 @@ pub fn run_rounds(
 ) -> Result<(Learnt, usize), CampaignError> {
     let count = FlightCount::default();
     let mut campaign = Rounds::start(input, &count)?;
+    let replay = Replay::new(&campaign.resumed, input.cfg.budget);
     let progress = input.progress;
     let tick = !input.cfg.overlap;
     let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, tick);
@@ -93,6 +96,7 @@ pub fn run_rounds(
         cancel: input.cancel,
         on_flight: &on_flight,
         waves: input.cfg.repeatable_vehicles(),
+        replay,
     };
     let (flown, outcome) = run_fleet(vehicles, setup, |fleet| {
         let flown = campaign.fly_rounds(fleet, stages);
@@ -129,8 +133,8 @@ struct Rounds<'a> {
     surrogate: Option<Surrogate>,
     /// The last round's learning, reused while no flight has landed since.
     carried: Option<(usize, Learning)>,
-    /// Flights charged before the fleet started (resumed, or flown first as interrupted).
-    charged_before: usize,
+    /// The journal as the campaign was resumed from (empty for a new one): what the replayed plan takes.
+    resumed: Vec<FlightRecord>,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
     in_air: VecDeque<Pushed>,
     /// The flights' numbering in the progress lines.
@@ -182,12 +186,13 @@ impl<'a> Rounds<'a> {
             Some(p) if cfg.adapt => p.distribution.clone(),
             _ => DrawDistribution::uniform(),
         };
-        let flights = Journal::read(&input.folder.join("journal.jsonl"))?;
-        if !flights.is_empty() {
+        let resumed = Journal::read(&input.folder.join("journal.jsonl"))?;
+        if !resumed.is_empty() {
             input.progress.note(&format!(
-                "resuming: {} flights already journaled, {} left in the budget",
-                flights_charged(&flights),
-                cfg.budget.saturating_sub(flights_charged(&flights))
+                "resuming: {} flights already journaled, {} left in the budget; the rounds are planned again \
+                 and take the journaled flights rather than flying them",
+                flights_charged(&resumed),
+                cfg.budget.saturating_sub(flights_charged(&resumed))
             ));
         }
         Ok(Self {
@@ -196,13 +201,13 @@ impl<'a> Rounds<'a> {
             calibration: start_calibration.clone(),
             start_calibration,
             distribution,
-            journal: as_learnt(&flights),
-            flights,
+            journal: Vec::new(),
+            flights: Vec::new(),
+            resumed,
             candidates: Vec::new(),
             log: Vec::new(),
             surrogate: None,
             carried: None,
-            charged_before: 0,
             in_air: VecDeque::new(),
             flight_count,
         })
@@ -213,10 +218,9 @@ impl<'a> Rounds<'a> {
     fn fly_rounds(&mut self, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let cfg = self.input.cfg;
         let lag = usize::from(cfg.overlap);
-        self.charged_before = flights_charged(&self.flights);
         for index in 0..ROUNDS + EXTRA_ROUNDS {
             // Past the planned rounds only while the near-duplicate filter left budget unflown.
-            if index >= ROUNDS && self.charged_before + fleet.committed() >= cfg.budget {
+            if index >= ROUNDS && fleet.committed() >= cfg.budget {
                 break;
             }
             if self.input.cancel.load(Ordering::Relaxed) {
@@ -230,12 +234,35 @@ impl<'a> Rounds<'a> {
         while !self.in_air.is_empty() {
             self.absorb(fleet, stages)?;
         }
+        self.keep_unreplayed(fleet);
         Ok(())
+    }
+
+    /// Journaled flights the replayed plan never asked for (the campaign flew on vehicles that do not repeat,
+    /// so its rounds came out otherwise) are kept: they count, are reported and are learnt from.
+    fn keep_unreplayed(&mut self, fleet: &Fleet) {
+        let left = fleet.unreplayed();
+        if left.is_empty() || self.input.cancel.load(Ordering::Relaxed) {
+            return;
+        }
+        self.input.progress.warn(&format!(
+            "resumed: {} journaled flight(s) were not planned again (candidates {}); they are kept and counted",
+            left.len(),
+            left.iter()
+                .map(|r| r.candidate.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        self.flights.extend(left);
+        self.journal = as_learnt(&self.flights);
     }
 
     /// Round `index`: draw, screen and rank (from the flights learnt so far), then push its flights.
     fn plan(&mut self, index: usize, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let round = self.draw(index, stages)?;
+        let journal = self.input.folder.join("journal.jsonl");
+        let range = round.first..round.first + round.drawn as u64;
+        check_journaled_as_drawn(&self.resumed, &self.candidates, range, &journal).map_err(CampaignError::Config)?;
         self.screen(&round, stages)?;
         let busy = fleet.busy();
         let ranking = self.rank(&round, &busy, fleet.committed(), stages)?;
@@ -259,8 +286,7 @@ impl<'a> Rounds<'a> {
         if !jobs.is_empty() && ranking.remaining > 0 && fleet.alive() == 0 {
             return Err(self.no_vehicle_left(fleet));
         }
-        let limit = round.planned.saturating_sub(self.charged_before);
-        fleet.push(index, jobs, limit);
+        fleet.push(index, jobs, round.planned);
         self.in_air.push_back(Pushed {
             round,
             remaining: ranking.remaining,
@@ -421,7 +447,7 @@ impl<'a> Rounds<'a> {
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = round.planned.saturating_sub(self.charged_before + committed);
+        let remaining = round.planned.saturating_sub(committed);
         if cfg.ensemble > 0 && remaining > 0 {
             let t = Instant::now();
             let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;

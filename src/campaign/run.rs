@@ -61,11 +61,12 @@ pub fn run_campaign(
         confirm: cfg.confirm,
         waves: cfg.repeatable_vehicles(),
     };
-    fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
     if cfg.learn && cfg.screen {
+        // The replayed rounds fly the interrupted flights again where their plan has them.
         let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
         return finish(&input, drawn, stages, Some(&learnt));
     }
+    fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
     let drawn = run_static(&input, &mut vehicles, &mut stages)?;
     finish(&input, drawn, stages, None)
 }

@@ -202,3 +202,53 @@ fn one_flight_per_test_writes_no_unconfirmed_list() {
     assert!(!dir.path().join("unconfirmed.json").exists());
     assert!(flown.lock().unwrap().iter().all(|f| f.1 == 0));
 }
+
+/// Every flight of a campaign's journal, sorted: (candidate, flight, distance in mm, status).
+fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, String)> {
+    let mut all: Vec<_> = Journal::read(&dir.join("journal.jsonl"))
+        .unwrap()
+        .into_iter()
+        .map(|r| {
+            let mm = (r.min_distance.unwrap() * 1000.0).round() as i64;
+            (r.candidate, r.attempt, mm, r.status)
+        })
+        .collect();
+    all.sort();
+    all
+}
+
+#[test]
+fn a_learning_campaign_killed_after_any_flight_resumes_to_the_uninterrupted_end() {
+    let cfg = CampaignConfig {
+        confirm: 3,
+        ..adapted(16)
+    };
+    let whole = tempfile::tempdir().unwrap();
+    run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();
+    let journal = std::fs::read_to_string(whole.path().join("journal.jsonl")).unwrap();
+    let lines: Vec<&str> = journal.lines().collect();
+    let expected = flights_in(whole.path());
+    assert!(expected.iter().any(|f| f.1 > 0), "the campaign confirms: {expected:?}");
+    let learnt = std::fs::read_to_string(whole.path().join("learnt.json")).unwrap();
+    for kept in 1..lines.len() {
+        // A kill -9 after `kept` flights: their journal lines and trajectories, nothing else.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join("flights")).unwrap();
+        let mut cut = lines[..kept].join("\n");
+        cut.push('\n');
+        std::fs::write(dir.path().join("journal.jsonl"), cut).unwrap();
+        for r in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
+            std::fs::copy(whole.path().join(&r.trajectory), dir.path().join(&r.trajectory)).unwrap();
+        }
+        let flown = Arc::new(Mutex::new(Vec::new()));
+        run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
+        assert_eq!(flights_in(dir.path()), expected, "killed after {kept} flights");
+        assert_eq!(
+            flown.lock().unwrap().len(),
+            lines.len() - kept,
+            "killed after {kept}: flew again"
+        );
+        let resumed = std::fs::read_to_string(dir.path().join("learnt.json")).unwrap();
+        assert_eq!(resumed, learnt, "killed after {kept} flights: learnt otherwise");
+    }
+}
