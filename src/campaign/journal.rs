@@ -66,6 +66,30 @@ pub const BACKEND_FAILED: &str = "backend_failed";
 pub const UNCHARGED: &[&str] = &[INTERRUPTED, BACKEND_FAILED];
 
 impl FlightRecord {
+    /// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
+    pub fn queued(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
+        busy.iter()
+            .map(|(candidate, obstacles)| FlightRecord {
+                candidate: *candidate,
+                attempt: 0,
+                obstacles: obstacles.clone(),
+                predicted_min_distance: f64::NAN,
+                predicted_flight_time_s: 0.0,
+                predicted_p_fail: None,
+                predicted_raw_min_distance: None,
+                min_distance: None,
+                min_distance_raw: None,
+                status: "queued".into(),
+                flight_time_s: 0.0,
+                warnings: Vec::new(),
+                reason: None,
+                vehicle: String::new(),
+                trajectory: PathBuf::new(),
+                wall_s: 0.0,
+            })
+            .collect()
+    }
+
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
         !UNCHARGED.contains(&self.status.as_str())

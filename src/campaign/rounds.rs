@@ -22,7 +22,7 @@
 //! fly the tests waiting for confirmation before the round's new candidates, within the round's budget.
 
 use std::collections::VecDeque;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -455,7 +455,7 @@ impl<'a> Rounds<'a> {
             apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
             stages.ensemble_s += t.elapsed().as_secs_f64();
         }
-        let (ranked, share) = self.choose(round, &fresh, remaining, &queued_as_flown(busy));
+        let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
         Ok(Ranking {
             ranked,
             remaining,
@@ -572,30 +572,6 @@ impl<'a> Rounds<'a> {
         Ok((learnt, drawn.len()))
     }
 }
-/// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
-fn queued_as_flown(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
-    busy.iter()
-        .map(|(candidate, obstacles)| FlightRecord {
-            candidate: *candidate,
-            attempt: 0,
-            obstacles: obstacles.clone(),
-            predicted_min_distance: f64::NAN,
-            predicted_flight_time_s: 0.0,
-            predicted_p_fail: None,
-            predicted_raw_min_distance: None,
-            min_distance: None,
-            min_distance_raw: None,
-            status: "queued".into(),
-            flight_time_s: 0.0,
-            warnings: Vec::new(),
-            reason: None,
-            vehicle: String::new(),
-            trajectory: PathBuf::new(),
-            wall_s: 0.0,
-        })
-        .collect()
-}
-
 #[cfg(test)]
 #[path = "rounds_tests.rs"]
 mod tests;
