@@ -105,6 +105,20 @@ impl Screened {
 /// How far a journaled obstacle may lie from the one drawn (metres or degrees): a JSON round trip, not a change.
 const SAME_OBSTACLE_TOLERANCE: f64 = 1e-6;
 
+/// Whether `record` is a flight of `candidate` as drawn (the same obstacles, up to a JSON round trip).
+pub fn drawn_as(candidate: &Candidate, record: &super::journal::FlightRecord) -> bool {
+    let values = |o: &Obstacle| {
+        let (s, p) = (&o.size, &o.position);
+        [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
+    };
+    let same = |a: &Obstacle, b: &Obstacle| {
+        let (a, b) = (values(a), values(b));
+        a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= SAME_OBSTACLE_TOLERANCE)
+    };
+    let (c, r) = (&candidate.obstacles, &record.obstacles);
+    c.len() == r.len() && c.iter().zip(r).all(|(a, b)| same(a, b))
+}
+
 /// Refuses journal records, among those whose candidate index is in `drawn`, that this campaign never drew
 /// (no such entry of `candidates`) or drew with other obstacles: a record of another campaign (another seed
 /// or case) would otherwise be counted as this campaign's flight.
@@ -114,14 +128,6 @@ pub fn check_journaled_as_drawn(
     drawn: std::ops::Range<u64>,
     journal: &std::path::Path,
 ) -> Result<(), String> {
-    let values = |o: &Obstacle| {
-        let (s, p) = (&o.size, &o.position);
-        [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
-    };
-    let same = |a: &Obstacle, b: &Obstacle| {
-        let (a, b) = (values(a), values(b));
-        a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= SAME_OBSTACLE_TOLERANCE)
-    };
     for r in records.iter().filter(|r| drawn.contains(&r.candidate)) {
         let Some(c) = candidates.get(r.candidate as usize) else {
             return Err(format!(
@@ -132,9 +138,7 @@ pub fn check_journaled_as_drawn(
                 candidates.len()
             ));
         };
-        let matches =
-            c.obstacles.len() == r.obstacles.len() && c.obstacles.iter().zip(&r.obstacles).all(|(a, b)| same(a, b));
-        if !matches {
+        if !drawn_as(c, r) {
             return Err(format!(
                 "{}: the record of candidate {} has other obstacles than this campaign draws for it: it comes \
                  from another campaign (seed or case); remove its line or restore the journal, then resume",

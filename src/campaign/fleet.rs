@@ -374,6 +374,11 @@ impl<'a> Fleet<'a> {
             .cloned()
     }
 
+    /// Stops serving the journaled flights of `candidates` (see [`Replay::set_aside`]).
+    pub fn set_aside(&self, candidates: &[u64]) {
+        self.lock().replay.set_aside(candidates);
+    }
+
     /// The journaled flights the replayed plan has not asked for; they are no longer served.
     pub fn unreplayed(&self) -> Vec<FlightRecord> {
         std::mem::replace(&mut self.lock().replay, Replay::none()).into_left()

@@ -3,7 +3,7 @@
 //! uninterrupted campaign saw when it planned that round, so on repeatable vehicles (the lockstep mock) the
 //! resumed campaign ends as the uninterrupted one would have, bit for bit.
 
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 use super::journal::FlightRecord;
 use super::pool::Job;
@@ -16,6 +16,8 @@ pub struct Replay {
     /// The campaign's budget: a new flight takes off only while it and the journaled flights not yet taken stay
     /// within it, so a journaled flight the replayed plan never asks for still counts.
     budget: usize,
+    /// Candidates whose journaled flights are not served: the replayed draw gave them other obstacles.
+    aside: BTreeSet<u64>,
 }
 
 impl Replay {
@@ -24,6 +26,7 @@ impl Replay {
         Self {
             records: BTreeMap::new(),
             budget: usize::MAX,
+            aside: BTreeSet::new(),
         }
     }
 
@@ -33,7 +36,25 @@ impl Replay {
             .filter(|(_, r)| r.charged())
             .map(|(i, r)| ((r.candidate, r.attempt), (i, r.clone())))
             .collect();
-        Self { records, budget }
+        Self {
+            records,
+            budget,
+            aside: BTreeSet::new(),
+        }
+    }
+
+    /// Stops serving `candidates`' flights (they stay pending: counted in the budget, and left over).
+    pub fn set_aside(&mut self, candidates: &[u64]) {
+        self.aside.extend(candidates);
+    }
+
+    /// The journaled flight a job would be served, if any.
+    fn served(&self, job: &Job) -> Option<&(usize, FlightRecord)> {
+        let (candidate, attempt) = key(job);
+        if self.aside.contains(&candidate) {
+            return None;
+        }
+        self.records.get(&(candidate, attempt))
     }
 
     /// Journaled flights not yet taken.
@@ -48,14 +69,14 @@ impl Replay {
 
     /// Whether `queue` holds a journaled flight.
     pub fn any_in(&self, queue: &VecDeque<Job>) -> bool {
-        queue.iter().any(|j| self.records.contains_key(&key(j)))
+        queue.iter().any(|j| self.served(j).is_some())
     }
 
     /// Takes the queued job journaled earliest out of `queue`, with its record: the replay hands the flights
     /// back in the order they were journaled, as the uninterrupted campaign learnt from them.
     pub fn take_next(&mut self, queue: &mut VecDeque<Job>) -> Option<(Job, FlightRecord)> {
         let (at, _) = (queue.iter().enumerate())
-            .filter_map(|(at, j)| self.records.get(&key(j)).map(|(line, _)| (at, *line)))
+            .filter_map(|(at, j)| self.served(j).map(|(line, _)| (at, *line)))
             .min_by_key(|(_, line)| *line)?;
         let job = queue.remove(at)?;
         let (_, record) = self.records.remove(&key(&job))?;

@@ -26,7 +26,7 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use super::candidate::{Candidate, Lineage, Screened, check_journaled_as_drawn, is_child};
+use super::candidate::{Candidate, Lineage, Screened, drawn_as, is_child};
 use super::config::{CampaignError, CampaignInput};
 use super::confirm::as_learnt;
 use super::diversity_guard::DiversityGuard;
@@ -135,6 +135,8 @@ struct Rounds<'a> {
     carried: Option<(usize, Learning)>,
     /// The journal as the campaign was resumed from (empty for a new one): what the replayed plan takes.
     resumed: Vec<FlightRecord>,
+    /// Journaled candidates the replayed draw gave other obstacles: never flown again under their index.
+    set_aside: Vec<u64>,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
     in_air: VecDeque<Pushed>,
     /// The flights' numbering in the progress lines.
@@ -144,6 +146,8 @@ struct Rounds<'a> {
 /// A round in the fleet, with what its log needs once it has flown.
 struct Pushed {
     round: Round,
+    /// The flights it was planned to make.
+    promised: usize,
     remaining: usize,
     share: f64,
     bias_m: f64,
@@ -204,6 +208,7 @@ impl<'a> Rounds<'a> {
             journal: Vec::new(),
             flights: Vec::new(),
             resumed,
+            set_aside: Vec::new(),
             candidates: Vec::new(),
             log: Vec::new(),
             surrogate: None,
@@ -220,7 +225,7 @@ impl<'a> Rounds<'a> {
         let lag = usize::from(cfg.overlap);
         for index in 0..ROUNDS + EXTRA_ROUNDS {
             // Past the planned rounds only while the near-duplicate filter left budget unflown.
-            if index >= ROUNDS && fleet.committed() >= cfg.budget {
+            if index >= ROUNDS && self.promised() >= cfg.budget {
                 break;
             }
             if self.input.cancel.load(Ordering::Relaxed) {
@@ -260,12 +265,10 @@ impl<'a> Rounds<'a> {
     /// Round `index`: draw, screen and rank (from the flights learnt so far), then push its flights.
     fn plan(&mut self, index: usize, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let round = self.draw(index, stages)?;
-        let journal = self.input.folder.join("journal.jsonl");
-        let range = round.first..round.first + round.drawn as u64;
-        check_journaled_as_drawn(&self.resumed, &self.candidates, range, &journal).map_err(CampaignError::Config)?;
+        self.set_aside_diverged(&round, fleet);
         self.screen(&round, stages)?;
         let busy = fleet.busy();
-        let ranking = self.rank(&round, &busy, fleet.committed(), stages)?;
+        let ranking = self.rank(&round, &busy, self.promised(), stages)?;
         self.note(&round, &ranking);
         let flight = FlightStage {
             case: self.input.case,
@@ -286,14 +289,54 @@ impl<'a> Rounds<'a> {
         if !jobs.is_empty() && ranking.remaining > 0 && fleet.alive() == 0 {
             return Err(self.no_vehicle_left(fleet));
         }
+        let promised = jobs.len().min(ranking.remaining);
         fleet.push(index, jobs, round.planned);
         self.in_air.push_back(Pushed {
+            promised,
             round,
             remaining: ranking.remaining,
             share: ranking.share,
             bias_m: ranking.bias_m,
         });
         Ok(())
+    }
+
+    /// The flights promised when a round is planned: those of the rounds learnt from, and those the rounds in the
+    /// air were planned to make. Unlike the fleet's count, it does not depend on how many flights of those rounds
+    /// have landed, so a replayed plan asks for what the uninterrupted one did.
+    fn promised(&self) -> usize {
+        flights_charged(&self.flights) + self.in_air.iter().map(|p| p.promised).sum::<usize>()
+    }
+
+    /// A resumed campaign's journaled flights of `round`'s candidates drawn with other obstacles this time (the
+    /// rounds before came out otherwise, or the record is another campaign's) are not served to the plan; they
+    /// are kept, and their candidate indices never flown again.
+    fn set_aside_diverged(&mut self, round: &Round, fleet: &Fleet) {
+        let range = round.first..round.first + round.drawn as u64;
+        let mut diverged: Vec<u64> = (self.resumed.iter())
+            .filter(|r| range.contains(&r.candidate))
+            .filter(|r| {
+                !self
+                    .candidates
+                    .get(r.candidate as usize)
+                    .is_some_and(|c| drawn_as(c, r))
+            })
+            .map(|r| r.candidate)
+            .collect();
+        diverged.sort_unstable();
+        diverged.dedup();
+        if diverged.is_empty() {
+            return;
+        }
+        self.input.progress.warn(&format!(
+            "{}: the journaled flights of candidate(s) {} have other obstacles than the resumed campaign drew for \
+             them (the rounds before came out otherwise, or the lines come from another campaign); they are kept \
+             and counted, and those candidates are not flown again",
+            self.input.folder.join("journal.jsonl").display(),
+            diverged.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
+        ));
+        fleet.set_aside(&diverged);
+        self.set_aside.extend(diverged);
     }
 
     /// Waits for the oldest round in the air to land, then learns from it.
@@ -417,8 +460,7 @@ impl<'a> Rounds<'a> {
 
     /// Learns from every flight so far, then ranks the unflown candidates with the calibrated LFS moved towards
     /// the flights near them (and the ensembles), within the round's share of the budget.
-    /// `busy` are the candidates queued or in the air, `committed` the flights the fleet has promised (journaled,
-    /// in the air or queued).
+    /// `busy` are the candidates queued or in the air, `committed` the flights promised ([`Self::promised`]).
     fn rank(
         &mut self,
         round: &Round,
@@ -436,6 +478,7 @@ impl<'a> Rounds<'a> {
         self.surrogate = taught.kernel;
         let flown: Vec<u64> = (self.journal.iter().map(|r| r.candidate))
             .chain(busy.iter().map(|(c, _)| *c))
+            .chain(self.set_aside.iter().copied())
             .collect();
         let mut fresh: Vec<Screened> = (self.candidates.iter())
             .filter_map(|c| c.screened.as_ref())
