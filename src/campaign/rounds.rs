@@ -26,7 +26,7 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use super::candidate::{Candidate, Lineage, Screened, drawn_as, is_child};
+use super::candidate::{Candidate, Lineage, Screened, is_child};
 use super::config::{CampaignError, CampaignInput};
 use super::confirm::as_learnt;
 use super::diversity_guard::DiversityGuard;
@@ -243,25 +243,6 @@ impl<'a> Rounds<'a> {
         Ok(())
     }
 
-    /// Journaled flights the replayed plan never asked for (the campaign flew on vehicles that do not repeat,
-    /// so its rounds came out otherwise) are kept: they count, are reported and are learnt from.
-    fn keep_unreplayed(&mut self, fleet: &Fleet) {
-        let left = fleet.unreplayed();
-        if left.is_empty() || self.input.cancel.load(Ordering::Relaxed) {
-            return;
-        }
-        self.input.progress.warn(&format!(
-            "resumed: {} journaled flight(s) were not planned again (candidates {}); they are kept and counted",
-            left.len(),
-            left.iter()
-                .map(|r| r.candidate.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-        self.flights.extend(left);
-        self.journal = as_learnt(&self.flights);
-    }
-
     /// Round `index`: draw, screen and rank (from the flights learnt so far), then push its flights.
     fn plan(&mut self, index: usize, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let round = self.draw(index, stages)?;
@@ -306,37 +287,6 @@ impl<'a> Rounds<'a> {
     /// have landed, so a replayed plan asks for what the uninterrupted one did.
     fn promised(&self) -> usize {
         flights_charged(&self.flights) + self.in_air.iter().map(|p| p.promised).sum::<usize>()
-    }
-
-    /// A resumed campaign's journaled flights of `round`'s candidates drawn with other obstacles this time (the
-    /// rounds before came out otherwise, or the record is another campaign's) are not served to the plan; they
-    /// are kept, and their candidate indices never flown again.
-    fn set_aside_diverged(&mut self, round: &Round, fleet: &Fleet) {
-        let range = round.first..round.first + round.drawn as u64;
-        let mut diverged: Vec<u64> = (self.resumed.iter())
-            .filter(|r| range.contains(&r.candidate))
-            .filter(|r| {
-                !self
-                    .candidates
-                    .get(r.candidate as usize)
-                    .is_some_and(|c| drawn_as(c, r))
-            })
-            .map(|r| r.candidate)
-            .collect();
-        diverged.sort_unstable();
-        diverged.dedup();
-        if diverged.is_empty() {
-            return;
-        }
-        self.input.progress.warn(&format!(
-            "{}: the journaled flights of candidate(s) {} have other obstacles than the resumed campaign drew for \
-             them (the rounds before came out otherwise, or the lines come from another campaign); they are kept \
-             and counted, and those candidates are not flown again",
-            self.input.folder.join("journal.jsonl").display(),
-            diverged.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
-        ));
-        fleet.set_aside(&diverged);
-        self.set_aside.extend(diverged);
     }
 
     /// Waits for the oldest round in the air to land, then learns from it.
@@ -615,6 +565,9 @@ impl<'a> Rounds<'a> {
         Ok((learnt, drawn.len()))
     }
 }
+#[path = "rounds_resume.rs"]
+mod resume;
+
 #[cfg(test)]
 #[path = "rounds_tests.rs"]
 mod tests;
