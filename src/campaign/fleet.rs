@@ -1,7 +1,8 @@
 //! The fleet: one worker per vehicle taking jobs from one queue, each finished flight journaled before the
 //! vehicle takes the next. The queue can stay open while the campaign plans its next round, so the vehicles
 //! fly while the LFS screens: a round's jobs are pushed with the budget they may use, and the campaign waits
-//! for a round's flights only when it needs them to learn.
+//! for a round's flights only when it needs them to learn. A resumed campaign's journaled flights are taken
+//! from its [`Replay`] as their jobs come up, in place of flying them.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
