@@ -17,7 +17,7 @@ fn run_bounded(args: &[&str], limit: Duration) -> (i32, String, String) {
     wait_bounded(child, limit)
 }
 
-fn spawn(args: &[&str]) -> Child {
+pub fn spawn(args: &[&str]) -> Child {
     Command::new(env!("CARGO_BIN_EXE_prgenuav"))
         .args(args)
         .current_dir(repo())
@@ -27,7 +27,7 @@ fn spawn(args: &[&str]) -> Child {
         .expect("start prgenuav")
 }
 
-fn wait_bounded(mut child: Child, limit: Duration) -> (i32, String, String) {
+pub fn wait_bounded(mut child: Child, limit: Duration) -> (i32, String, String) {
     let start = Instant::now();
     loop {
         if let Some(status) = child.try_wait().expect("wait") {
@@ -51,7 +51,7 @@ fn wait_bounded(mut child: Child, limit: Duration) -> (i32, String, String) {
     }
 }
 
-fn output_folder(stdout: &str) -> PathBuf {
+pub fn output_folder(stdout: &str) -> PathBuf {
     let line = stdout
         .lines()
         .find_map(|l| l.strip_prefix("output folder: "))
@@ -60,7 +60,7 @@ fn output_folder(stdout: &str) -> PathBuf {
 }
 
 /// Recomputes every reported number from the folder's files and compares with report.json.
-fn verify_folder(folder: &Path) -> serde_json::Value {
+pub fn verify_folder(folder: &Path) -> serde_json::Value {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap()).unwrap();
     let flights = report["flights"].as_array().unwrap();

@@ -15,6 +15,7 @@ use prgenuav::campaign::pool::Vehicle;
 use prgenuav::campaign::px4_vehicle::{Px4Settings, Px4Vehicle};
 use prgenuav::generator::{Generator, GeneratorConfig};
 
+use super::campaign::{output_folder, spawn, verify_folder, wait_bounded};
 use super::case;
 use super::px4_fake::killed_parent_leaves_no_px4;
 
@@ -96,4 +97,48 @@ fn px4_sitl_a_killed_prgenuav_leaves_no_px4_behind() {
     let Some(build) = px4_build() else { return };
     // Killed once PX4 has booted and the flight is under way.
     killed_parent_leaves_no_px4(&build, Duration::from_secs(15), Some("px4"));
+}
+
+#[test]
+#[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
+fn px4_sitl_a_campaign_killed_mid_flight_resumes_without_flying_twice() {
+    let Some(build) = px4_build() else { return };
+    let out = tempfile::tempdir().unwrap();
+    let (build, dir) = (build.to_str().unwrap(), out.path().to_str().unwrap());
+    let args = ["generate", "missions/mission2.yaml", "4", "--candidates", "12"];
+    let mut child = spawn(&[&args[..], &["--px4", build, "--instances", "1", "--out", dir]].concat());
+    // Killed with -9 once a flight is journaled, most likely with the next one in the air.
+    let start = Instant::now();
+    let folder = loop {
+        let found = (std::fs::read_dir(out.path()).ok())
+            .and_then(|mut d| d.next())
+            .and_then(|e| e.ok())
+            .map(|e| e.path());
+        if let Some(f) = found.filter(|f| std::fs::read_to_string(f.join("journal.jsonl")).is_ok_and(|j| !j.is_empty()))
+        {
+            break f;
+        }
+        if start.elapsed() > Duration::from_secs(300) || child.try_wait().is_ok_and(|s| s.is_some()) {
+            let _ = child.kill();
+            panic!("no flight journaled on PX4 within 300 s");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    std::thread::sleep(Duration::from_secs(5));
+    child.kill().expect("SIGKILL prgenuav");
+    child.wait().expect("reap prgenuav");
+    let resume = spawn(&["generate", "--resume", folder.to_str().unwrap()]);
+    let (code, stdout, stderr) = wait_bounded(resume, Duration::from_secs(900));
+    eprintln!("px4_sitl: resumed campaign\n{stderr}");
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("resuming"), "{stderr}");
+    let report = verify_folder(&output_folder(&stdout));
+    assert_eq!(report["suite"]["flown"], 4, "the budget is 4");
+    let flights = report["flights"].as_array().unwrap();
+    let mut ids: Vec<(u64, u64)> = (flights.iter())
+        .map(|f| (f["candidate"].as_u64().unwrap(), f["attempt"].as_u64().unwrap_or(0)))
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    assert_eq!(ids.len(), flights.len(), "a flight was flown twice: {flights:?}");
 }
