@@ -246,33 +246,25 @@ fn cv(out: &Path, folds: &Folds) -> anyhow::Result<()> {
             fs.first().map_or(0, |f| f.4),
         )
     };
-    for (name, members) in families.iter().filter(|(_, m)| m.len() > 1) {
-        let f = family_figures(members, &all);
+    let row = |label: String, f: (f64, f64, f64, f64, usize)| {
+        let o = objective(&f);
         println!(
-            "| {name}, mean of {} seeds | {} | {:.3} | {:.3} | {:.3} | {:+.3} | {:.3} | |",
-            members.len(),
-            f.4,
-            f.0,
-            f.1,
-            f.2,
-            f.3,
-            objective(&f)
+            "| {label} | {} | {:.3} | {:.3} | {:.3} | {:+.3} | {o:.3} | |",
+            f.4, f.0, f.1, f.2, f.3
+        );
+    };
+    let seeded = || families.iter().filter(|(_, m)| m.len() > 1);
+    for (name, members) in seeded() {
+        row(
+            format!("{name}, mean of {} seeds", members.len()),
+            family_figures(members, &all),
         );
     }
     // The same families' expected distance (each case's mean over the seeds): what a mock with PX4's scatter
     // predicts of a PX4 flight at best, so its figures are the ceiling of a one-flight comparison.
-    for (name, members) in families.iter().filter(|(_, m)| m.len() > 1) {
+    for (name, members) in seeded() {
         let f = figures(&seed_mean(members), &px4, &all);
-        println!(
-            "| {name}, distance averaged over {} seeds | {} | {:.3} | {:.3} | {:.3} | {:+.3} | {:.3} | |",
-            members.len(),
-            f.4,
-            f.0,
-            f.1,
-            f.2,
-            f.3,
-            objective(&f)
-        );
+        row(format!("{name}, distance averaged over {} seeds", members.len()), f);
     }
     println!("\n| fold | cases | chosen on the other folds | test MAE m | Spearman | time ratio |");
     println!("|---|---|---|---|---|---|");

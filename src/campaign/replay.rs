@@ -69,7 +69,7 @@ impl Replay {
 
     /// Whether `queue` holds a journaled flight.
     pub fn any_in(&self, queue: &VecDeque<Job>) -> bool {
-        queue.iter().any(|j| self.served(j).is_some())
+        !self.records.is_empty() && queue.iter().any(|j| self.served(j).is_some())
     }
 
     /// Takes the queued job journaled earliest out of `queue`, with its record: the replay hands the flights

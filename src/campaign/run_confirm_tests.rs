@@ -217,6 +217,19 @@ fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, String)> {
     all
 }
 
+/// A campaign folder as a `kill -9` after `records` leaves it: their journal lines and trajectories (copied
+/// from the folder `whole`), nothing else.
+fn killed_after(whole: &Path, records: &[FlightRecord]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("flights")).unwrap();
+    let mut journal = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
+    for r in records {
+        journal.append(r).unwrap();
+        std::fs::copy(whole.join(&r.trajectory), dir.path().join(&r.trajectory)).unwrap();
+    }
+    dir
+}
+
 #[test]
 fn a_learning_campaign_killed_after_any_flight_resumes_to_the_uninterrupted_end() {
     let cfg = CampaignConfig {
@@ -225,21 +238,12 @@ fn a_learning_campaign_killed_after_any_flight_resumes_to_the_uninterrupted_end(
     };
     let whole = tempfile::tempdir().unwrap();
     run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();
-    let journal = std::fs::read_to_string(whole.path().join("journal.jsonl")).unwrap();
-    let lines: Vec<&str> = journal.lines().collect();
+    let lines = Journal::read(&whole.path().join("journal.jsonl")).unwrap();
     let expected = flights_in(whole.path());
     assert!(expected.iter().any(|f| f.1 > 0), "the campaign confirms: {expected:?}");
     let learnt = std::fs::read_to_string(whole.path().join("learnt.json")).unwrap();
     for kept in 1..lines.len() {
-        // A kill -9 after `kept` flights: their journal lines and trajectories, nothing else.
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::create_dir_all(dir.path().join("flights")).unwrap();
-        let mut cut = lines[..kept].join("\n");
-        cut.push('\n');
-        std::fs::write(dir.path().join("journal.jsonl"), cut).unwrap();
-        for r in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
-            std::fs::copy(whole.path().join(&r.trajectory), dir.path().join(&r.trajectory)).unwrap();
-        }
+        let dir = killed_after(whole.path(), &lines[..kept]);
         let flown = Arc::new(Mutex::new(Vec::new()));
         run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         assert_eq!(flights_in(dir.path()), expected, "killed after {kept} flights");
@@ -264,15 +268,9 @@ fn a_resumed_campaign_that_plans_while_flying_keeps_every_journaled_flight_withi
     };
     let whole = tempfile::tempdir().unwrap();
     run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();
-    let journal = std::fs::read_to_string(whole.path().join("journal.jsonl")).unwrap();
-    let lines: Vec<&str> = journal.lines().collect();
+    let lines = Journal::read(&whole.path().join("journal.jsonl")).unwrap();
     for kept in [1, 4, 9, 13] {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::create_dir_all(dir.path().join("flights")).unwrap();
-        std::fs::write(dir.path().join("journal.jsonl"), lines[..kept].join("\n") + "\n").unwrap();
-        for r in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
-            std::fs::copy(whole.path().join(&r.trajectory), dir.path().join(&r.trajectory)).unwrap();
-        }
+        let dir = killed_after(whole.path(), &lines[..kept]);
         let flown = Arc::new(Mutex::new(Vec::new()));
         let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         let all = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
@@ -298,17 +296,9 @@ fn a_resume_whose_rounds_come_out_otherwise_keeps_the_journaled_flights_and_flie
     // The first flight journaled 5 m off what this vehicle flies: the replayed rounds learn otherwise and draw
     // other children, so later journaled candidates no longer match their draws.
     let kept = 12;
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir_all(dir.path().join("flights")).unwrap();
-    let mut lines = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
-    for (i, r) in journal.iter().take(kept).enumerate() {
-        let mut r = r.clone();
-        if i == 0 {
-            r.min_distance = r.min_distance.map(|d| d + 5.0);
-        }
-        lines.append(&r).unwrap();
-        std::fs::copy(whole.path().join(&r.trajectory), dir.path().join(&r.trajectory)).unwrap();
-    }
+    let mut cut = journal[..kept].to_vec();
+    cut[0].min_distance = cut[0].min_distance.map(|d| d + 5.0);
+    let dir = killed_after(whole.path(), &cut);
     let flown = Arc::new(Mutex::new(Vec::new()));
     let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
     let all = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
