@@ -4,7 +4,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use prgenuav::campaign::surrogate::{Flown, Surrogate};
+use prgenuav::campaign::learn::surrogate::{Flown, Surrogate};
 
 /// `n` flights spread over the unit draws, a smooth truth the LFS partly misses (deterministic).
 fn flights(n: usize) -> Vec<Flown> {

@@ -18,8 +18,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use prgenuav::campaign::confirm::failed;
-use prgenuav::campaign::journal::{FlightRecord, Journal};
+use prgenuav::campaign::fly::confirm::failed;
+use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::competition::FAIL_BELOW_M as FAIL_M;
 

@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use prgenuav::bridge::{FlyMode, FlyOptions};
-use prgenuav::campaign::vehicles::mock_builder_with;
+use prgenuav::campaign::fly::mock_mavlink::mock_builder_with;
 use prgenuav::model::{Obstacle, TestCase};
 use serde::Deserialize;
 use tokio::sync::Semaphore;

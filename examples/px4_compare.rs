@@ -15,7 +15,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use prgenuav::campaign::learn::{Calibration, prequential_errors};
+use prgenuav::campaign::learn::calibration::{Calibration, prequential_errors};
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, evaluate, load_dir};
 use prgenuav::lfs::px4_flights;
 use prgenuav::lfs::sim::{MotionModel, SimConfig};

@@ -11,7 +11,7 @@ use crate::model::Obstacle;
 pub enum Lineage {
     /// The failing flights so far.
     Failures,
-    /// No flight has failed yet: the closest flights within [`super::neighbours::NEAR_MISS_M`] of failing.
+    /// No flight has failed yet: the closest flights within [`super::plan::neighbours::NEAR_MISS_M`] of failing.
     NearMisses,
 }
 
@@ -106,7 +106,7 @@ impl Screened {
 const SAME_OBSTACLE_TOLERANCE: f64 = 1e-6;
 
 /// Whether `record` is a flight of `candidate` as drawn (the same obstacles, up to a JSON round trip).
-pub fn drawn_as(candidate: &Candidate, record: &super::journal::FlightRecord) -> bool {
+pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRecord) -> bool {
     let values = |o: &Obstacle| {
         let (s, p) = (&o.size, &o.position);
         [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
@@ -123,7 +123,7 @@ pub fn drawn_as(candidate: &Candidate, record: &super::journal::FlightRecord) ->
 /// (no such entry of `candidates`) or drew with other obstacles: a record of another campaign (another seed
 /// or case) would otherwise be counted as this campaign's flight.
 pub fn check_journaled_as_drawn(
-    records: &[super::journal::FlightRecord],
+    records: &[super::store::journal::FlightRecord],
     candidates: &[Candidate],
     drawn: std::ops::Range<u64>,
     journal: &std::path::Path,

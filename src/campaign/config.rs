@@ -5,7 +5,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use super::screener::{Progress, Screener};
+use super::screen::screener::{Progress, Screener};
 use crate::generator::{GenerateError, GeneratorConfig};
 use crate::judge::Judge;
 use crate::model::{ModelError, TestCase};
@@ -89,16 +89,16 @@ pub struct CampaignConfig {
     #[serde(default = "default_min_diversity")]
     pub min_diversity: f64,
     /// With `adapt`, a child of a failing flight may overlap a flown test up to this IoU (above `max_iou`)
-    /// while the failing tests would keep `min_diversity` ([`super::diversity_guard`]); `None` (also when the
+    /// while the failing tests would keep `min_diversity` ([`super::plan::diversity_guard`]); `None` (also when the
     /// key is absent): children obey `max_iou` like every candidate.
     #[serde(default)]
     pub child_max_iou: Option<f64>,
     /// Flights a failing test gets at most (`--confirm`): it is flown again until the majority of this many
-    /// flights is settled, and reported only when more than half of them fail ([`super::confirm`]). 1 (also
+    /// flights is settled, and reported only when more than half of them fail ([`super::fly::confirm`]). 1 (also
     /// when the key is absent: such campaigns flew every test once) is one flight per test.
     #[serde(default = "one_flight")]
     pub confirm: usize,
-    /// Plan each learning round while the previous one flies ([`super::rounds`]); `false` (also when the key is
+    /// Plan each learning round while the previous one flies ([`super::plan::rounds`]); `false` (also when the key is
     /// absent: such campaigns planned after each round landed) plans after.
     #[serde(default)]
     pub overlap: bool,
@@ -172,7 +172,7 @@ fn default_mock_speed() -> f64 {
 
 impl CampaignConfig {
     /// The vehicles fly a test the same way for the same seed (the embedded mock in lockstep), so the fleet
-    /// flies in waves and the campaign repeats bit for bit ([`super::fleet::FleetSetup::waves`]).
+    /// flies in waves and the campaign repeats bit for bit ([`super::fly::fleet::FleetSetup::waves`]).
     pub fn repeatable_vehicles(&self) -> bool {
         self.hfs == ["mock"] && self.mock_lockstep
     }

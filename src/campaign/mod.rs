@@ -1,35 +1,14 @@
-//! The competition-ready campaign: screening, flights within a budget, journal, reports and scores.
+//! The competition-ready campaign, one pipeline in stages: [`plan`] draws and ranks candidates, [`screen`]
+//! predicts them with the LFS, [`fly`] flies the best on the vehicles within the budget, [`learn`] calibrates
+//! the LFS on the flights, [`store`] keeps the folder, journal and resume, and [`report`] writes the tests.
+//! [`run`] runs the stages in order; [`candidate`] is the record they pass along.
 
-pub mod backends;
 pub mod candidate;
 pub mod config;
-pub mod confirm;
-pub mod diversity_guard;
-pub mod draw;
-pub mod failure_counts;
-pub mod fleet;
-pub mod flights;
-pub mod folder;
-pub mod journal;
+pub mod fly;
 pub mod learn;
-pub mod learning;
-pub mod mock_profile;
-pub mod neighbours;
-pub mod parallel;
-pub mod pool;
-pub mod px4_vehicle;
-pub mod rank;
-pub mod replay;
+pub mod plan;
 pub mod report;
-pub mod rounds;
 pub mod run;
-pub mod runner;
-pub mod score;
 pub mod screen;
-pub mod screener;
-pub mod screening;
-pub mod static_campaign;
-pub mod suite;
-pub mod surrogate;
-pub mod vehicles;
-pub mod verdicts;
+pub mod store;

@@ -1,5 +1,5 @@
 //! The campaign's orchestrator: sample candidates, screen them with the LFS, fly the most promising within the
-//! budget (in learning rounds, [`super::rounds`], or in one pass, [`super::static_campaign`]), then report the
+//! budget (in learning rounds, [`super::plan::rounds`], or in one pass, [`super::plan::single_pass`]), then report the
 //! failing ones best first. Resumable from its folder.
 
 use std::collections::HashSet;
@@ -7,16 +7,16 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS, check_counts};
-use super::flights::{FlightStage, fly_interrupted};
-use super::folder::FolderLock;
-use super::journal::{Journal, flights_charged};
-use super::learn::Learnt;
-use super::pool::Vehicle;
-pub use super::report::Report;
-use super::report::{StageTimes, write_outputs};
-use super::rounds::run_rounds;
-pub use super::screener::{Progress, Screener};
-use super::static_campaign::run_static;
+use super::fly::stage::{FlightStage, fly_interrupted};
+use super::fly::vehicle::Vehicle;
+use super::learn::calibration::Learnt;
+use super::plan::rounds::run_rounds;
+use super::plan::single_pass::run_static;
+pub use super::report::outputs::Report;
+use super::report::outputs::{StageTimes, write_outputs};
+pub use super::screen::screener::{Progress, Screener};
+use super::store::folder::FolderLock;
+use super::store::journal::{Journal, flights_charged};
 use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
 

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use super::*;
-use crate::campaign::journal::FlightRecord;
+use crate::campaign::store::journal::FlightRecord;
 
 /// The candidate and flight number of a trajectory file `candidate_N.csv` / `candidate_N_K.csv`.
 fn flight_of(csv: &Path) -> (u64, u32) {

@@ -11,7 +11,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     let r = run_scripted(&cfg, dir.path(), &flown);
     assert_eq!(r.suite.flown, 12);
     let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
-    assert!(learnt.rounds.len() >= crate::campaign::rounds::ROUNDS);
+    assert!(learnt.rounds.len() >= crate::campaign::plan::rounds::ROUNDS);
     // The scripted vehicle flies 0.2 m farther than predicted: the bias goes there, shrunk by the prior.
     let bias = learnt.calibration.bias_m();
     assert!((bias - 0.2 * 12.0 / 13.0).abs() < 1e-9, "{bias}");
@@ -31,7 +31,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     for round in &learnt.rounds[1..] {
         // A box without a distinct child gives its draw to the histogram.
         assert!(
-            round.local_candidates <= crate::campaign::neighbours::CHILDREN,
+            round.local_candidates <= crate::campaign::plan::neighbours::CHILDREN,
             "{round:?}"
         );
         assert!((0.25..=0.85).contains(&round.local_flight_share), "{round:?}");
@@ -120,7 +120,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
 
 #[test]
 fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
-    use crate::campaign::diversity_guard::child_max_iou;
+    use crate::campaign::plan::diversity_guard::child_max_iou;
     let mut cfg = config(10);
     assert_eq!(child_max_iou(&cfg), 0.5, "no --child-max-iou: max_iou");
     cfg.child_max_iou = Some(0.75);
@@ -214,7 +214,7 @@ fn below_the_diversity_floor_the_failures_still_get_children() {
     let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");
     assert!(
-        r.suite.failing >= crate::campaign::neighbours::MIN_FAILING_FOR_DIVERSITY,
+        r.suite.failing >= crate::campaign::plan::neighbours::MIN_FAILING_FOR_DIVERSITY,
         "{:?}",
         r.suite
     );

@@ -5,9 +5,9 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use crate::campaign::journal::Journal;
-use crate::campaign::pool::{Flown, Vehicle, VehicleError};
+use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
 use crate::campaign::run::{CampaignConfig, CampaignError, Progress, Screener, run_campaign};
+use crate::campaign::store::journal::Journal;
 use crate::generator::GeneratorConfig;
 use crate::generator::adaptive::DIMS;
 use crate::model::TestCase;
@@ -84,8 +84,8 @@ fn config(budget: usize) -> CampaignConfig {
         mock_speed: 20.0,
         mock_lockstep: true,
         mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
-        mock_profile: crate::campaign::mock_profile::DEFAULT_PROFILE.into(),
-        mock_gust_acc_m_s2: crate::campaign::mock_profile::PX4_SITL_GUST_ACC_M_S2,
+        mock_profile: crate::campaign::fly::mock_profile::DEFAULT_PROFILE.into(),
+        mock_gust_acc_m_s2: crate::campaign::fly::mock_profile::PX4_SITL_GUST_ACC_M_S2,
         screen: true,
         hfs_time_scale: None,
         flight_timeout_s: 500.0,
@@ -335,12 +335,12 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
     distinct.dedup();
     assert_eq!(distinct.len(), seeds.len());
     assert_ne!(
-        crate::campaign::screening::member_seed(3, 0),
-        crate::campaign::screening::member_seed(4, 0)
+        crate::campaign::screen::stages::member_seed(3, 0),
+        crate::campaign::screen::stages::member_seed(4, 0)
     );
     assert_eq!(
-        crate::campaign::screening::member_seed(3, 7),
-        crate::campaign::screening::member_seed(3, 7)
+        crate::campaign::screen::stages::member_seed(3, 7),
+        crate::campaign::screen::stages::member_seed(3, 7)
     );
 }
 

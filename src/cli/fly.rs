@@ -14,7 +14,7 @@ use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
 };
-use prgenuav::campaign::px4_vehicle::DEFAULT_SPEED_FACTOR;
+use prgenuav::campaign::fly::px4::DEFAULT_SPEED_FACTOR;
 use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use super::values::JudgeEdition;
 use anyhow::bail;
-use prgenuav::campaign::score::score_folder;
+use prgenuav::campaign::report::folder_score::score_folder;
 
 /// Arguments of `score`.
 #[derive(Debug, clap::Args)]

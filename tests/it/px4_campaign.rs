@@ -11,8 +11,8 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
-use prgenuav::campaign::pool::Vehicle;
-use prgenuav::campaign::px4_vehicle::{Px4Settings, Px4Vehicle};
+use prgenuav::campaign::fly::px4::{Px4Settings, Px4Vehicle};
+use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::generator::{Generator, GeneratorConfig};
 
 use super::campaign::{output_folder, spawn, verify_folder, wait_bounded};

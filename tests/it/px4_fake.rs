@@ -9,10 +9,10 @@ use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::candidate::Screened;
-use prgenuav::campaign::fleet::fly_all;
-use prgenuav::campaign::journal::{BACKEND_FAILED, Journal};
-use prgenuav::campaign::pool::{Job, Vehicle, VehicleError};
-use prgenuav::campaign::px4_vehicle::{Px4Settings, Px4Vehicle};
+use prgenuav::campaign::fly::fleet::fly_all;
+use prgenuav::campaign::fly::px4::{Px4Settings, Px4Vehicle};
+use prgenuav::campaign::fly::vehicle::{Job, Vehicle, VehicleError};
+use prgenuav::campaign::store::journal::{BACKEND_FAILED, Journal};
 
 use super::{case, repo, test_file, valid_pair};
 

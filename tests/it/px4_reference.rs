@@ -9,7 +9,7 @@ use std::time::Duration;
 use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
-use prgenuav::campaign::vehicles::mock_builder;
+use prgenuav::campaign::fly::mock_mavlink::mock_builder;
 use prgenuav::judge::Judge;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, evaluate, load_dir};
 use prgenuav::lfs::px4_flights::{self, Px4Flight};

@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use prgenuav::bridge::FlyMode;
-use prgenuav::campaign::journal::{BACKEND_FAILED, Journal};
-use prgenuav::campaign::pool::Vehicle;
-use prgenuav::campaign::vehicles::MockVehicle;
+use prgenuav::campaign::fly::mock_mavlink::MockVehicle;
+use prgenuav::campaign::fly::vehicle::Vehicle;
+use prgenuav::campaign::store::journal::{BACKEND_FAILED, Journal};
 use prgenuav::model::{Trajectory, load_ulog_trajectory};
 
 use super::ulog::ULogWriter;

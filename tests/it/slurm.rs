@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use prgenuav::campaign::journal::Journal;
+use prgenuav::campaign::store::journal::Journal;
 
 use super::repo;
 

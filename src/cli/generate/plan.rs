@@ -9,9 +9,9 @@ use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 use prgenuav::campaign::config::Px4Backend;
-use prgenuav::campaign::mock_profile::{DEFAULT_PROFILE, MockProfile};
+use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
+use prgenuav::campaign::fly::runner::RunnerSettings;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
-use prgenuav::campaign::runner::RunnerSettings;
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
 use serde_json::Value;
@@ -141,7 +141,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
         Some(folder) => folder.clone(),
-        None => prgenuav::campaign::folder::create_new(&args.out, std::time::SystemTime::now())?,
+        None => prgenuav::campaign::store::folder::create_new(&args.out, std::time::SystemTime::now())?,
     };
     if let Some(r) = &mut runner {
         r.campaign_folder = folder.clone();
@@ -403,7 +403,7 @@ fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
             bail!("--prior needs a learning campaign (the settings turn learning off)");
         }
         // Refuse a bad prior before anything is sampled or flown.
-        prgenuav::campaign::rounds::load_prior(p)?;
+        prgenuav::campaign::plan::rounds::load_prior(p)?;
     }
     Ok(cfg)
 }

@@ -7,12 +7,10 @@ use anyhow::bail;
 use prgenuav::bridge::FlyMode;
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::config::Px4Backend;
-use prgenuav::campaign::parallel::available_threads;
-use prgenuav::campaign::pool::Vehicle;
-use prgenuav::campaign::px4_vehicle::{
-    DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots,
-};
+use prgenuav::campaign::fly::px4::{DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots};
+use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::campaign::run::CampaignConfig;
+use prgenuav::campaign::screen::parallel::available_threads;
 use tokio::runtime::Handle;
 
 /// The `--px4` flags.

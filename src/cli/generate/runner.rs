@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use anyhow::bail;
+use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::campaign::run::CampaignConfig;
-use prgenuav::campaign::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::model::Spelling as ModelSpelling;
 
 use super::Args;

@@ -1,0 +1,554 @@
+//! The fleet: one worker per vehicle taking jobs from one queue, each finished flight journaled before the
+//! vehicle takes the next. The queue can stay open while the campaign plans its next round, so the vehicles
+//! fly while the LFS screens: a round's jobs are pushed with the budget they may use, and the campaign waits
+//! for a round's flights only when it needs them to learn. A resumed campaign's journaled flights are taken
+//! from its [`Replay`] as their jobs come up, in place of flying them.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use crate::campaign::fly::confirm::trajectory_name;
+use crate::campaign::fly::retry::{fly_counting_rejections, rejected_in_a_row};
+use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle, interrupted_if_cancelled};
+use crate::campaign::store::journal::{FlightRecord, INTERRUPTED, Journal};
+use crate::campaign::store::replay::Replay;
+use crate::model::Obstacle;
+
+/// How long an idle worker or a waiting campaign sleeps before looking at the cancel flag again.
+const POLL: Duration = Duration::from_millis(200);
+
+/// What the workers and the campaign share, under one lock.
+struct Ledger {
+    queue: VecDeque<Job>,
+    /// Flights taken and not yet journaled: candidate and obstacles.
+    airborne: Vec<(u64, Vec<Obstacle>)>,
+    /// Charged flights journaled.
+    finished: usize,
+    /// Charged flights the fleet may make in all, raised as rounds are pushed.
+    limit: usize,
+    /// More jobs may be pushed: idle workers wait rather than stop.
+    open: bool,
+    /// Workers still running (a dropped vehicle's worker stops).
+    alive: usize,
+    /// Jobs queued, in the air or being journaled, by round.
+    outstanding: BTreeMap<usize, usize>,
+    use_: FleetUse,
+    first_takeoff: Option<Instant>,
+    last_landing: Option<Instant>,
+    /// Fly in waves (see [`FleetSetup::waves`]).
+    waves: bool,
+    /// Jobs taken in the wave in the air.
+    wave_taken: usize,
+    /// Re-flights the wave in the air asked for, queued when it has landed.
+    wave_again: Vec<Job>,
+    /// A resumed campaign's journaled flights, taken in place of flying them.
+    replay: Replay,
+    /// Flights taken from the replay and not yet collected, with their round.
+    replayed: Vec<(usize, FlightRecord)>,
+}
+
+impl Ledger {
+    /// The wave in the air has landed: its re-flights go to the front of the queue, in the order of their tests
+    /// (not of their landings), and the next wave may take off.
+    fn end_wave(&mut self) {
+        let mut again = std::mem::take(&mut self.wave_again);
+        again.sort_by_key(|j| (j.screened.candidate, j.tally.next_attempt));
+        for job in again.into_iter().rev() {
+            self.queue.push_front(job);
+        }
+        self.wave_taken = 0;
+    }
+
+    fn settle(&mut self, round: usize) {
+        if let Some(n) = self.outstanding.get_mut(&round) {
+            *n = n.saturating_sub(1);
+            if *n == 0 {
+                self.outstanding.remove(&round);
+            }
+        }
+    }
+
+    fn outstanding_through(&self, round: usize) -> usize {
+        self.outstanding.range(..=round).map(|(_, n)| n).sum()
+    }
+
+    /// A wave may take another job.
+    fn wave_open(&self) -> bool {
+        !self.waves || self.wave_taken < self.alive
+    }
+
+    /// No queued job may take off: the round's budget is spent, or only new flights are queued and the budget
+    /// is held by journaled flights not yet replayed.
+    fn blocked(&self) -> bool {
+        let charged = self.finished + self.airborne.len();
+        charged >= self.limit || (!self.replay.any_in(&self.queue) && !self.replay.allows_new(charged))
+    }
+
+    /// Takes the queued jobs the journal already holds, as if each had flown and landed at once (re-flights
+    /// queued, waves ended), within the same budget and waves as flights.
+    fn serve_replays(&mut self) {
+        loop {
+            while self.finished + self.airborne.len() < self.limit && self.wave_open() {
+                let Some((job, record)) = self.replay.take_next(&mut self.queue) else {
+                    break;
+                };
+                self.wave_taken += 1;
+                self.finished += 1;
+                if let Some(next) = job.again(&record) {
+                    *self.outstanding.entry(job.round).or_default() += 1;
+                    if self.waves {
+                        self.wave_again.push(next);
+                    } else {
+                        self.queue.push_front(next);
+                    }
+                }
+                self.replayed.push((job.round, record));
+                self.settle(job.round);
+            }
+            // A wave of replayed flights only has landed once no flight of it is in the air and it can take no
+            // more: then its re-flights are queued, and may be replayed in turn.
+            let can_take = !self.queue.is_empty() && self.wave_open() && !self.blocked();
+            if !(self.waves && self.wave_taken > 0 && self.airborne.is_empty() && !can_take) {
+                return;
+            }
+            self.end_wave();
+            if !self.replay.any_in(&self.queue) {
+                return;
+            }
+        }
+    }
+}
+
+/// The fleet as the campaign sees it while the workers fly.
+pub struct Fleet<'a> {
+    ledger: Mutex<Ledger>,
+    changed: Condvar,
+    /// The journal, and the charged flights appended to it and not yet collected, with their round, in its order.
+    journal: Mutex<(Journal, Vec<(usize, FlightRecord)>)>,
+    outcome: Mutex<PoolOutcome>,
+    stop: AtomicBool,
+    /// Indices of the vehicles dropped.
+    dead: Mutex<Vec<usize>>,
+    folder: &'a Path,
+    cancel: &'a AtomicBool,
+    on_flight: &'a (dyn Fn(&FlightRecord) + Sync),
+}
+
+/// Where the fleet writes, and what stops it.
+pub struct FleetSetup<'a> {
+    /// The campaign folder: trajectories go under `flights/`.
+    pub folder: &'a Path,
+    /// The campaign's journal, each flight appended as it lands.
+    pub journal: Journal,
+    /// The campaign's stop: vehicles in the air land, none takes off.
+    pub cancel: &'a AtomicBool,
+    /// Told of each journaled flight.
+    pub on_flight: &'a (dyn Fn(&FlightRecord) + Sync),
+    /// Fly in waves: one job per vehicle, the next wave only once the whole wave has landed, and each round's
+    /// flights handed back sorted by test. Which flights a campaign makes, and in which order it learns from
+    /// them, then no longer depends on which vehicle lands first: with repeatable vehicles (the lockstep mock)
+    /// the same seed flies the same campaign, re-flights included. Costs the vehicles' idle time at the end of
+    /// each wave.
+    pub waves: bool,
+    /// A resumed campaign's journaled flights, taken in place of flying them when its plan queues them.
+    pub replay: Replay,
+}
+
+/// Runs `body` on this thread while a worker per vehicle flies what it pushes; when `body` returns, the queue
+/// closes (the workers fly what is left in it, within the budget, then stop). Vehicles dropped as unreachable
+/// are removed from `vehicles`. Returns `body`'s result and what the fleet did.
+pub fn run_fleet<R>(
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    setup: FleetSetup<'_>,
+    body: impl FnOnce(&Fleet) -> R,
+) -> (R, PoolOutcome) {
+    // Rejections count across calls (a campaign's stages) and resumes: the journal holds them.
+    let history = match Journal::read(setup.journal.path()) {
+        Ok(h) => h,
+        Err(e) => {
+            let fleet = Fleet::new(setup, 0);
+            fleet.stop.store(true, Ordering::Relaxed);
+            let result = body(&fleet);
+            let outcome = PoolOutcome {
+                errors: vec![e.to_string()],
+                ..PoolOutcome::default()
+            };
+            return (result, outcome);
+        }
+    };
+    let fleet = Fleet::new(setup, vehicles.len());
+    let result = std::thread::scope(|scope| {
+        for (index, vehicle) in vehicles.iter_mut().enumerate() {
+            let rejected = rejected_in_a_row(&history, &vehicle.name());
+            let fleet = &fleet;
+            scope.spawn(move || fleet.work(index, vehicle.as_mut(), rejected));
+        }
+        let result = body(&fleet);
+        fleet.lock().open = false;
+        fleet.changed.notify_all();
+        result
+    });
+    let dead = fleet.dead.into_inner().unwrap_or_else(|p| p.into_inner());
+    let mut index = 0;
+    vehicles.retain(|_| {
+        index += 1;
+        !dead.contains(&(index - 1))
+    });
+    let ledger = fleet.ledger.into_inner().unwrap_or_else(|p| p.into_inner());
+    let mut outcome = fleet.outcome.into_inner().unwrap_or_else(|p| p.into_inner());
+    let journaled = fleet.journal.into_inner().unwrap_or_else(|p| p.into_inner()).1;
+    outcome.records = journaled.into_iter().map(|(_, r)| r).collect();
+    outcome.fleet = FleetUse {
+        span_s: match (ledger.first_takeoff, ledger.last_landing) {
+            (Some(a), Some(b)) => b.saturating_duration_since(a).as_secs_f64(),
+            _ => 0.0,
+        },
+        ..ledger.use_
+    };
+    (result, outcome)
+}
+
+/// Flies `jobs` in order on `vehicles`, at most `budget` flights, appending each to `journal`.
+/// `folder` is the campaign folder; trajectories go to `folder/flights/candidate_<n>.csv` (a test's later
+/// flights to `candidate_<n>_<flight>.csv`). A failing flight whose test is to be confirmed puts the test's
+/// next flight at the front of the queue, before the new candidates: within the budget like any flight.
+///
+/// A vehicle that turns out unreachable, or rejects [`super::retry::REJECTED_IN_A_ROW_TO_DROP`] flights in a row, gives its
+/// job back; the others wait for that (rather than stopping at a budget that is only reserved) so the job is
+/// still flown. Such vehicles are removed from `vehicles`; the others stay for the next call.
+pub fn fly_all(
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    jobs: Vec<Job>,
+    budget: usize,
+    folder: &Path,
+    journal: Journal,
+    cancel: &AtomicBool,
+    on_flight: &(dyn Fn(&FlightRecord) + Sync),
+) -> PoolOutcome {
+    let setup = FleetSetup {
+        folder,
+        journal,
+        cancel,
+        on_flight,
+        waves: false,
+        replay: Replay::none(),
+    };
+    run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1
+}
+
+impl<'a> Fleet<'a> {
+    fn new(setup: FleetSetup<'a>, vehicles: usize) -> Self {
+        Self {
+            ledger: Mutex::new(Ledger {
+                queue: VecDeque::new(),
+                airborne: Vec::new(),
+                finished: 0,
+                limit: 0,
+                open: true,
+                alive: vehicles,
+                outstanding: BTreeMap::new(),
+                use_: FleetUse {
+                    vehicles,
+                    ..FleetUse::default()
+                },
+                first_takeoff: None,
+                last_landing: None,
+                waves: setup.waves,
+                wave_taken: 0,
+                wave_again: Vec::new(),
+                replay: setup.replay,
+                replayed: Vec::new(),
+            }),
+            changed: Condvar::new(),
+            journal: Mutex::new((setup.journal, Vec::new())),
+            outcome: Mutex::new(PoolOutcome::default()),
+            stop: AtomicBool::new(false),
+            dead: Mutex::new(Vec::new()),
+            folder: setup.folder,
+            cancel: setup.cancel,
+            on_flight: setup.on_flight,
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Ledger> {
+        self.ledger.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Queues `jobs` as round `round`'s (after those queued before) and lets the fleet make `limit` charged
+    /// flights in all (a limit below the current one is ignored).
+    pub fn push(&self, round: usize, jobs: Vec<Job>, limit: usize) {
+        let mut l = self.lock();
+        l.limit = l.limit.max(limit);
+        for mut job in jobs {
+            job.round = round;
+            *l.outstanding.entry(round).or_default() += 1;
+            l.queue.push_back(job);
+        }
+        drop(l);
+        self.changed.notify_all();
+    }
+
+    /// Waits until every job of round `round` and earlier is journaled, or can no longer be flown (budget
+    /// spent, no vehicle left, cancelled, journal failed); drops those still queued (they stay unflown) and
+    /// returns their charged flights, in journal order, not returned before.
+    pub fn wait_round(&self, round: usize) -> Vec<FlightRecord> {
+        let mut l = self.lock();
+        while l.outstanding_through(round) > 0 && !self.stuck(&l) {
+            l = self
+                .changed
+                .wait_timeout(l, POLL)
+                .map(|(g, _)| g)
+                .unwrap_or_else(|p| p.into_inner().0);
+        }
+        let queued = std::mem::take(&mut l.queue);
+        for job in queued {
+            if job.round <= round {
+                l.settle(job.round);
+            } else {
+                l.queue.push_back(job);
+            }
+        }
+        let waves = l.waves;
+        // Replayed flights were journaled before any flight of this run.
+        let (replayed, later): (Vec<_>, Vec<_>) = std::mem::take(&mut l.replayed)
+            .into_iter()
+            .partition(|(r, _)| *r <= round);
+        l.replayed = later;
+        drop(l);
+        let mut j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
+        let (mine, later): (Vec<_>, Vec<_>) = std::mem::take(&mut j.1).into_iter().partition(|(r, _)| *r <= round);
+        j.1 = later;
+        let mut records: Vec<FlightRecord> = replayed.into_iter().chain(mine).map(|(_, r)| r).collect();
+        if waves {
+            records.sort_by_key(|r| (r.candidate, r.attempt));
+        }
+        records
+    }
+
+    /// No queued job can be taken any more, and nothing in the air can change that.
+    fn stuck(&self, l: &Ledger) -> bool {
+        let halted = self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) || l.alive == 0;
+        l.airborne.is_empty() && (halted || l.blocked())
+    }
+
+    /// Charged flights journaled, plus jobs queued or in the air: what the budget has promised.
+    pub fn committed(&self) -> usize {
+        let l = self.lock();
+        l.finished + l.airborne.len() + l.queue.len()
+    }
+
+    /// The candidates queued, in the air, or flown and not yet collected by [`Self::wait_round`].
+    pub fn busy(&self) -> Vec<(u64, Vec<Obstacle>)> {
+        let l = self.lock();
+        let mut busy: Vec<(u64, Vec<Obstacle>)> = (l.queue.iter())
+            .map(|j| (j.screened.candidate, j.test.obstacles.clone()))
+            .chain(l.airborne.iter().cloned())
+            .chain(l.replayed.iter().map(|(_, r)| (r.candidate, r.obstacles.clone())))
+            .collect();
+        drop(l);
+        let j = self.journal.lock().unwrap_or_else(|p| p.into_inner());
+        busy.extend(j.1.iter().map(|(_, r)| (r.candidate, r.obstacles.clone())));
+        busy
+    }
+
+    /// Vehicles still flying (a dropped one is gone).
+    pub fn alive(&self) -> usize {
+        self.lock().alive
+    }
+
+    /// The vehicles dropped so far, with why.
+    pub fn dropped(&self) -> Vec<String> {
+        self.outcome.lock().unwrap_or_else(|p| p.into_inner()).dropped.clone()
+    }
+
+    /// The first journal error (the fleet stopped on it).
+    pub fn journal_error(&self) -> Option<String> {
+        self.outcome
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .errors
+            .first()
+            .cloned()
+    }
+
+    /// Stops serving the journaled flights of `candidates` (see [`Replay::set_aside`]).
+    pub fn set_aside(&self, candidates: &[u64]) {
+        self.lock().replay.set_aside(candidates);
+    }
+
+    /// The journaled flights the replayed plan has not asked for; they are no longer served.
+    pub fn unreplayed(&self) -> Vec<FlightRecord> {
+        std::mem::replace(&mut self.lock().replay, Replay::none()).into_left()
+    }
+
+    /// Empties the queue: the flights in the air finish, nothing else takes off.
+    pub fn abandon(&self) {
+        let mut l = self.lock();
+        let queued = std::mem::take(&mut l.queue);
+        for job in queued {
+            l.settle(job.round);
+        }
+        drop(l);
+        self.changed.notify_all();
+    }
+}
+
+impl Fleet<'_> {
+    /// One vehicle's worker: flies jobs until the queue is closed and empty, the budget is spent, the campaign
+    /// stops, or the vehicle is dropped.
+    fn work(&self, index: usize, vehicle: &mut dyn Vehicle, mut rejected: usize) {
+        while let Some(job) = self.next_job() {
+            let rel = trajectory_name(job.screened.candidate, job.tally.next_attempt);
+            let t0 = Instant::now();
+            let result =
+                fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
+            let mut l = self.lock();
+            l.use_.busy_s += t0.elapsed().as_secs_f64();
+            l.last_landing = Some(Instant::now());
+            match result {
+                Ok(flown) => {
+                    let flown = interrupted_if_cancelled(flown, self.cancel);
+                    let rel = if flown.status == INTERRUPTED {
+                        self.keep_interrupted(rel)
+                    } else {
+                        rel
+                    };
+                    let (round, candidate) = (job.round, job.screened.candidate);
+                    let record = job
+                        .clone()
+                        .record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
+                    if record.charged() {
+                        l.finished += 1;
+                        // Queued before the flight is journaled, so no vehicle takes a new candidate meanwhile.
+                        if let Some(next) = job.again(&Journal::read_back(&record)) {
+                            *l.outstanding.entry(round).or_default() += 1;
+                            if l.waves {
+                                l.wave_again.push(next);
+                            } else {
+                                l.queue.push_front(next);
+                            }
+                        }
+                    }
+                    drop(l);
+                    let journaled = self.journal(round, &record);
+                    let mut l = self.lock();
+                    l.airborne.retain(|(c, _)| *c != candidate);
+                    if l.waves && l.airborne.is_empty() {
+                        l.end_wave();
+                    }
+                    l.settle(round);
+                    drop(l);
+                    self.changed.notify_all();
+                    if !journaled {
+                        return;
+                    }
+                }
+                Err(e) => {
+                    // Give the job back: stopped before it flew, or for another vehicle (this one is out).
+                    let cancelled = self.cancel.load(Ordering::Relaxed);
+                    l.airborne.retain(|(c, _)| *c != job.screened.candidate);
+                    l.queue.push_front(job);
+                    if l.waves && l.airborne.is_empty() {
+                        l.end_wave();
+                    }
+                    if !cancelled {
+                        l.alive -= 1;
+                    }
+                    drop(l);
+                    self.changed.notify_all();
+                    if !cancelled {
+                        self.outcome
+                            .lock()
+                            .unwrap_or_else(|p| p.into_inner())
+                            .dropped
+                            .push(e.to_string());
+                        self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
+                    }
+                    return;
+                }
+            }
+        }
+    }
+
+    /// Moves an interrupted flight's partial trajectory aside (`candidate_N.interrupted.csv`), so flying the
+    /// candidate again on resume keeps it; returns where it is.
+    fn keep_interrupted(&self, rel: PathBuf) -> PathBuf {
+        let aside = rel.with_extension("interrupted.csv");
+        match std::fs::rename(self.folder.join(&rel), self.folder.join(&aside)) {
+            Ok(()) => aside,
+            Err(_) => rel, // nothing was recorded: the record keeps the planned path
+        }
+    }
+
+    /// The next job, or `None` when there will be none (cancelled, stopped, budget spent, or the queue closed
+    /// and empty).
+    fn next_job(&self) -> Option<Job> {
+        let mut l = self.lock();
+        loop {
+            if self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) {
+                return None;
+            }
+            l.serve_replays();
+            let charged = l.finished + l.airborne.len();
+            if charged < l.limit
+                && l.replay.allows_new(charged)
+                && l.wave_open()
+                && let Some(job) = l.queue.pop_front()
+            {
+                l.wave_taken += 1;
+                l.airborne.push((job.screened.candidate, job.test.obstacles.clone()));
+                l.first_takeoff.get_or_insert_with(Instant::now);
+                return Some(job);
+            }
+            if l.airborne.is_empty() && !l.open && (l.queue.is_empty() || l.blocked()) {
+                return None; // nothing can come: no job will be pushed or handed back
+            }
+            // A flight in the air may hand its job back, or the campaign push more; wait, bounded so cancel is seen.
+            l = self
+                .changed
+                .wait_timeout(l, POLL)
+                .map(|(g, _)| g)
+                .unwrap_or_else(|p| p.into_inner().0);
+        }
+    }
+
+    /// Appends `record` to the journal; on failure stops the fleet and returns false.
+    fn journal(&self, round: usize, record: &FlightRecord) -> bool {
+        let written = self
+            .journal
+            .lock()
+            .map_err(|_| "journal lock poisoned".to_string())
+            .and_then(|mut j| {
+                j.0.append(record).map_err(|e| e.to_string())?;
+                if record.charged() {
+                    j.1.push((round, Journal::read_back(record)));
+                }
+                Ok(())
+            });
+        let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
+        match written {
+            Ok(()) => {
+                o.flown += usize::from(record.charged());
+                drop(o);
+                (self.on_flight)(record);
+                true
+            }
+            Err(e) => {
+                o.errors.push(e);
+                self.stop.store(true, Ordering::Relaxed);
+                false
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "fleet_tests.rs"]
+mod tests;
+
+#[cfg(test)]
+#[path = "fleet_confirm_tests.rs"]
+mod confirm_tests;

@@ -1,0 +1,375 @@
+//! PX4 SITL instances prgenuav starts itself (`--px4 BUILD`): every flight on a fresh SIH instance at the
+//! test's home, so no flight inherits another's state (a reused PX4 1.14 SIH instance can stop arming:
+//! "Preflight Fail: horizontal velocity unstable"), in the instance slot its vehicle owns.
+//!
+//! A PX4 that never boots, dies or cannot be flown is the backend's fault, not the test's: the flight is
+//! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::store::journal::BACKEND_FAILED`] (not charged).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use tokio::runtime::Handle;
+
+use crate::bridge::sitl::slot::{self, Slot};
+use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
+use crate::bridge::{FlyMode, FlyOptions};
+use crate::campaign::fly::mock_mavlink::{flown, fly_blocking};
+use crate::campaign::fly::retry::{Attempt, Retry, Tried};
+use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
+use crate::judge::Judge;
+use crate::model::TestCase;
+
+/// Instances on one machine: instance `i` listens for the bridge on UDP `14540 + i`, and instance 10's port
+/// would be 14550, where every instance's GCS link sends (QGroundControl's port).
+pub const MAX_INSTANCES: usize = slot::SLOTS as usize;
+
+/// `PX4_SIM_SPEED_FACTOR` when `--speed-factor` is not given (the factor the PX4 campaigns of
+/// docs/experiments.md flew at).
+pub const DEFAULT_SPEED_FACTOR: f64 = 5.0;
+
+/// Real time one core carries of a flying SIH instance and its avoidance companion: an instance at speed
+/// factor F needs about F / this many cores (measured in docs/px4.md).
+pub const SIH_RTF_PER_CORE: f64 = 5.0;
+
+/// The instance numbers of `k` vehicles: `0..k`, one slot each, so no two live instances share one.
+pub fn instance_slots(k: usize) -> Result<Vec<u8>, String> {
+    if k == 0 {
+        return Err("--instances must be at least 1".into());
+    }
+    if k > MAX_INSTANCES {
+        return Err(format!(
+            "--instances {k}: at most {MAX_INSTANCES} PX4 instances on one machine (instance {MAX_INSTANCES} would \
+             listen on UDP 14550, where every instance's GCS link sends)"
+        ));
+    }
+    Ok((0..k).filter_map(|i| u8::try_from(i).ok()).collect())
+}
+
+/// The instances a machine with `cores` cores carries at `speed_factor`: `cores * SIH_RTF_PER_CORE /
+/// speed_factor`, at least 1, at most [`MAX_INSTANCES`].
+pub fn default_instances(cores: usize, speed_factor: f64) -> usize {
+    let k = (cores as f64 * SIH_RTF_PER_CORE / speed_factor).floor();
+    if k.is_finite() {
+        (k as usize).clamp(1, MAX_INSTANCES)
+    } else {
+        1
+    }
+}
+
+/// How every instance of a fleet is started and flown.
+#[derive(Debug, Clone)]
+pub struct Px4Settings {
+    /// The user's build folder, checked.
+    pub build: Px4Build,
+    /// `PX4_SIM_SPEED_FACTOR`.
+    pub speed_factor: f64,
+    /// Copy PX4's ULog of each flight beside its trajectory (`candidate_N.ulg`).
+    pub keep_ulog: bool,
+    /// Obstacle mode.
+    pub mode: FlyMode,
+    /// Judge edition.
+    pub judge: Judge,
+    /// Re-anchor each test at the vehicle's home (the instance starts at the test's home anyway).
+    pub anchor: bool,
+    /// A flight is given up (LAND) after this many vehicle seconds.
+    pub timeout_s: f64,
+    /// How long PX4's startup script may take.
+    pub boot_timeout: Duration,
+}
+
+impl Px4Settings {
+    /// Avoidance mode, the 2026 judge, PX4's boot bound, the bridge's flight timeout.
+    pub fn new(build: Px4Build, speed_factor: f64) -> Self {
+        Px4Settings {
+            build,
+            speed_factor,
+            keep_ulog: false,
+            mode: FlyMode::Avoidance,
+            judge: Judge::default(),
+            anchor: false,
+            timeout_s: FlyOptions::default().timeout_s,
+            boot_timeout: BOOT_TIMEOUT,
+        }
+    }
+}
+
+/// One instance slot: each flight on a fresh PX4 started there, stopped when the flight ends.
+pub struct Px4Vehicle {
+    handle: Handle,
+    settings: Px4Settings,
+    instance: u8,
+    retry: Retry,
+    /// The machine-wide claim on `instance` (none when the caller chose the instance).
+    _slot: Option<Slot>,
+}
+
+impl Px4Vehicle {
+    /// `k` vehicles on the `k` lowest instance slots free on this machine (claimed for the campaign, so another
+    /// campaign or `fly --px4` job on the machine takes others).
+    pub fn fleet(handle: &Handle, settings: &Px4Settings, k: usize) -> Result<Vec<Px4Vehicle>, String> {
+        instance_slots(k)?;
+        let slots = slot::claim_many(k).map_err(|e| e.to_string())?;
+        Ok(slots
+            .into_iter()
+            .map(|s| Px4Vehicle::new(handle.clone(), settings.clone(), s.instance()).claimed(s))
+            .collect())
+    }
+
+    fn claimed(mut self, slot: Slot) -> Self {
+        self._slot = Some(slot);
+        self
+    }
+
+    /// The vehicle of instance slot `instance`.
+    pub fn new(handle: Handle, settings: Px4Settings, instance: u8) -> Self {
+        Px4Vehicle {
+            handle,
+            settings,
+            instance,
+            retry: Retry::default(),
+            _slot: None,
+        }
+    }
+
+    /// One fresh instance at the test's home, flown and stopped; its console appended to `log`.
+    fn attempt(&self, test: &TestCase, csv: &Path, stop: &AtomicBool, log: &mut String) -> Attempt {
+        let s = &self.settings;
+        let spec = SitlSpec {
+            boot_timeout: s.boot_timeout,
+            ..SitlSpec::new(s.build.bin(), self.instance, s.speed_factor).at(test.home)
+        };
+        let mut px4 = match Px4Sitl::start_until(&spec, stop) {
+            Ok(px4) => px4,
+            Err(SitlError::Cancelled { .. }) => return Attempt::Stopped,
+            Err(e) => {
+                if let SitlError::Boot { tail, .. } | SitlError::Died { tail, .. } = &e {
+                    push_lines(log, tail);
+                }
+                return Attempt::Failed(e.to_string());
+            }
+        };
+        let opts = FlyOptions {
+            connect: px4.url(),
+            mode: s.mode,
+            time_scale: s.speed_factor,
+            // Under load an instance holds less than its speed factor: measured at connection.
+            detect_time_scale: true,
+            trajectory_csv: Some(csv.to_path_buf()),
+            heartbeat_wait_s: 30.0,
+            // Instance i is system i + 1: another vehicle heard on the port (a mock, a hand-started PX4) is not
+            // flown by mistake.
+            target_system: Some(self.instance.saturating_add(1)),
+            judge: s.judge,
+            anchor_at_vehicle_home: s.anchor,
+            timeout_s: s.timeout_s,
+            ..FlyOptions::default()
+        };
+        let result = fly_blocking(&self.handle, test, &opts, stop);
+        let died = px4.exited();
+        if s.keep_ulog {
+            keep_ulog(&px4, &csv.with_extension("ulg"), log);
+        }
+        push_lines(log, &px4.console_tail(usize::MAX));
+        drop(px4);
+        match (result, died) {
+            (Ok(r), _) if r.status.completed() => Attempt::Flew(flown(r)),
+            (_, Some(status)) => {
+                Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance))
+            }
+            (Err(e), None) => Attempt::Failed(format!("PX4 instance {}: {e}", self.instance)),
+            (Ok(r), None) => never_ready(flown(r), self.instance),
+        }
+    }
+}
+
+/// A fresh instance at the test's home that never became ready to arm (`rejected`) failed on PX4's side, or on
+/// the machine's (a starved instance that is late with its home position), not on the test's: the flight is
+/// retried on a fresh instance like a failed boot, and never charged to the budget.
+fn never_ready(f: Flown, instance: u8) -> Attempt {
+    if f.status == "rejected" {
+        Attempt::Failed(format!(
+            "PX4 instance {instance} was never ready to fly: {}",
+            f.reason.as_deref().unwrap_or("no reason given")
+        ))
+    } else {
+        Attempt::Flew(f)
+    }
+}
+
+impl Vehicle for Px4Vehicle {
+    fn name(&self) -> String {
+        format!("px4-sih#{}", self.instance)
+    }
+
+    fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
+        let log_path = csv.with_extension("px4.log");
+        let mut log = String::new();
+        let mut retry = std::mem::take(&mut self.retry);
+        let tried = retry.tries(stop, |n| {
+            let _ = writeln!(log, "=== attempt {n}: PX4 instance {} ===", self.instance);
+            match self.attempt(test, csv, stop, &mut log) {
+                Attempt::Failed(_) if stop.load(Ordering::Relaxed) => Attempt::Stopped,
+                other => other,
+            }
+        });
+        self.retry = retry;
+        let written = write_log(&log_path, &log);
+        let failures = match tried {
+            Tried::Flew(f) => return Ok(pointing_to_console(f, &written)),
+            Tried::Stopped => return Ok(stopped_before_flying(&written)),
+            Tried::Failed(failures) => failures,
+        };
+        let what = match failures.as_slice() {
+            [a, b] if a == b => format!("PX4 failed the same way on two fresh instances: {a}"),
+            [a, b] => format!("PX4 failed on two fresh instances: {a}; retry: {b}"),
+            _ => format!("PX4 failed: {}", failures.join("; ")),
+        };
+        let reason = format!("{what}; {}", console_note(&written));
+        self.retry.failed(self.name(), reason)
+    }
+}
+
+fn push_lines(log: &mut String, lines: &[String]) {
+    for l in lines {
+        log.push_str(l);
+        log.push('\n');
+    }
+}
+
+/// Writes PX4's console beside the trajectory; the path as the journal shows it (`flights/candidate_N.px4.log`),
+/// or why it could not be written.
+fn write_log(path: &Path, log: &str) -> Result<String, String> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    crate::io::write_atomic(path, log.as_bytes()).map_err(|e| e.to_string())?;
+    Ok(shown(path).display().to_string())
+}
+
+/// `flights/candidate_N.px4.log` of `.../campaign/flights/candidate_N.px4.log`.
+fn shown(path: &Path) -> PathBuf {
+    let parts: Vec<_> = path.components().collect();
+    parts[parts.len().saturating_sub(2)..].iter().collect()
+}
+
+fn console_note(written: &Result<String, String>) -> String {
+    match written {
+        Ok(p) => format!("PX4's console: {p}"),
+        Err(e) => format!("PX4's console not kept: {e}"),
+    }
+}
+
+/// A flight that did not run to its end names PX4's console in its reason.
+fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown {
+    if !matches!(f.status.as_str(), "landed" | "collision") {
+        let note = console_note(written);
+        f.reason = Some(match f.reason {
+            Some(r) => format!("{r}; {note}"),
+            None => note,
+        });
+    }
+    f
+}
+
+/// The campaign's stop came before the flight took off: `aborted`, which the pool journals as interrupted.
+fn stopped_before_flying(written: &Result<String, String>) -> Flown {
+    Flown {
+        status: "aborted".into(),
+        min_distance: None,
+        min_distance_raw: None,
+        flight_time_s: 0.0,
+        warnings: Vec::new(),
+        reason: Some(format!("stopped before PX4 was flying; {}", console_note(written))),
+    }
+}
+
+/// Copies the instance's newest ULog to `to` (PX4 closes it at disarm, a moment after the landing the bridge
+/// saw, so the copy waits until its size settles, bounded).
+fn keep_ulog(px4: &Px4Sitl, to: &Path, log: &mut String) {
+    let Some(newest) = px4.ulogs().pop() else {
+        let _ = writeln!(log, "(--keep-ulog: PX4 wrote no ULog)");
+        return;
+    };
+    let size = || std::fs::metadata(&newest).map_or(0, |m| m.len());
+    let mut last = size();
+    for _ in 0..20 {
+        std::thread::sleep(Duration::from_millis(100));
+        let now = size();
+        if now == last {
+            break;
+        }
+        last = now;
+    }
+    if let Err(e) = std::fs::copy(&newest, to) {
+        let _ = writeln!(
+            log,
+            "(--keep-ulog: copying {} to {}: {e})",
+            newest.display(),
+            to.display()
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fresh_instance_that_never_arms_is_a_backend_failure_and_a_flown_one_is_not() {
+        let f = |status: &str| Flown {
+            status: status.into(),
+            min_distance: None,
+            min_distance_raw: None,
+            flight_time_s: 0.0,
+            warnings: Vec::new(),
+            reason: Some("not ready to arm within 60 s (missing: home position)".into()),
+        };
+        match never_ready(f("rejected"), 3) {
+            Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
+            _ => panic!("a rejected flight on a fresh instance must be retried, not journaled as flown"),
+        }
+        for status in ["landed", "collision", "timeout"] {
+            assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");
+        }
+    }
+
+    #[test]
+    fn k_vehicles_own_k_distinct_slots() {
+        assert_eq!(instance_slots(3).unwrap(), vec![0, 1, 2]);
+        assert_eq!(instance_slots(MAX_INSTANCES).unwrap().len(), MAX_INSTANCES);
+        assert!(instance_slots(0).unwrap_err().contains("at least 1"));
+        let e = instance_slots(MAX_INSTANCES + 1).unwrap_err();
+        assert!(e.contains("at most 10") && e.contains("14550"), "{e}");
+    }
+
+    #[test]
+    fn the_default_fleet_follows_cores_and_speed() {
+        assert_eq!(default_instances(2, SIH_RTF_PER_CORE * 2.0), 1);
+        assert_eq!(default_instances(2, SIH_RTF_PER_CORE), 2);
+        assert_eq!(default_instances(4, SIH_RTF_PER_CORE / 2.0), 8);
+        assert_eq!(default_instances(1, 1000.0), 1, "at least one");
+        assert_eq!(default_instances(64, 1.0), MAX_INSTANCES, "at most the slots there are");
+        assert_eq!(default_instances(2, 0.0), 1, "a nonsense factor (refused earlier): one");
+    }
+
+    #[test]
+    fn the_console_is_named_relative_to_the_campaign() {
+        let p = Path::new("/x/campaign/flights/candidate_4.px4.log");
+        assert_eq!(shown(p), PathBuf::from("flights/candidate_4.px4.log"));
+        let f = Flown {
+            status: "timeout".into(),
+            min_distance: None,
+            min_distance_raw: None,
+            flight_time_s: 1.0,
+            warnings: Vec::new(),
+            reason: Some("still flying".into()),
+        };
+        let f = pointing_to_console(f, &Ok("flights/candidate_4.px4.log".into()));
+        assert_eq!(
+            f.reason.as_deref(),
+            Some("still flying; PX4's console: flights/candidate_4.px4.log")
+        );
+    }
+}

@@ -1,0 +1,193 @@
+//! Flights as jobs on an existing engine (`generate --runner 'COMMAND'`): each flight is a job folder with the
+//! test and its files, a shell command run on it (Aerialist with its Docker or Kubernetes agent, `srun`, a
+//! `kubectl` Job, ...), and what the job left read back and judged here. A failed job is retried once; a flight
+//! whose retry fails too is journaled `backend_failed` (not charged to the budget) and the campaign goes on.
+
+pub mod job;
+pub mod process;
+pub mod readback;
+pub mod template;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use crate::campaign::fly::retry::{Attempt, Retry, Tried};
+use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
+use crate::judge::Judge;
+use crate::model::{Spelling, TestCase, write_atomic};
+use process::Ended;
+pub use template::Template;
+
+/// Default wall-time limit of one job, seconds: above Aerialist's own limit on a Docker test (its
+/// `DOCKER_TIMEOUT`, 1000 s) plus a container's start.
+pub const DEFAULT_JOB_TIMEOUT_S: f64 = 1200.0;
+/// The command as run, kept in the job folder.
+pub const COMMAND_FILE: &str = "prgenuav-job.sh";
+/// Bytes of a failed job's stderr quoted in its reason.
+const TAIL_BYTES: usize = 600;
+
+/// What every runner of a campaign shares.
+#[derive(Debug, Clone)]
+pub struct RunnerSettings {
+    /// The command template.
+    pub template: Template,
+    /// Wall-time limit of one job.
+    pub timeout: Duration,
+    /// The judge edition of the flights.
+    pub judge: Judge,
+    /// Key spelling of the job's test YAML.
+    pub spelling: Spelling,
+    /// The campaign folder; jobs go to its `jobs/`.
+    pub campaign_folder: PathBuf,
+}
+
+/// One job slot: `--jobs N` of them run at most N jobs at once.
+pub struct RunnerVehicle {
+    index: usize,
+    settings: Arc<RunnerSettings>,
+    retry: Retry,
+}
+
+impl RunnerVehicle {
+    /// Slot `index` (named `runner#index` in the journal).
+    pub fn new(index: usize, settings: Arc<RunnerSettings>) -> Self {
+        Self {
+            index,
+            settings,
+            retry: Retry::default(),
+        }
+    }
+
+    /// `jobs` slots sharing `settings`; `jobs` must be at least 1.
+    pub fn fleet(settings: RunnerSettings, jobs: usize) -> Result<Vec<Box<dyn Vehicle>>, String> {
+        if jobs == 0 {
+            return Err("--jobs must be at least 1".into());
+        }
+        let shared = Arc::new(settings);
+        Ok((0..jobs)
+            .map(|i| Box::new(Self::new(i, shared.clone())) as Box<dyn Vehicle>)
+            .collect())
+    }
+
+    /// One run of the job for `test` in `jobs/<candidate>`.
+    fn attempt(&self, test: &TestCase, candidate: &str, attempt: usize, csv: &Path, cancel: &AtomicBool) -> Attempt {
+        let s = &self.settings;
+        let folder = match job::prepare(&s.campaign_folder.join("jobs").join(candidate), test, s.spelling) {
+            Ok(f) => f,
+            Err(e) => return Attempt::Failed(format!("job folder: {e}")),
+        };
+        let id = job_id(&s.campaign_folder, candidate, attempt);
+        let command = s
+            .template
+            .render(&folder.test.to_string_lossy(), &folder.dir.to_string_lossy(), &id);
+        let mut skip = folder.inputs.clone();
+        skip.push(folder.dir.join(COMMAND_FILE));
+        // Kept for a look or a rerun by hand; a job runs without it.
+        let _ = std::fs::write(folder.dir.join(COMMAND_FILE), format!("{command}\n"));
+        let (stdout, stderr) = (folder.dir.join(job::STDOUT_FILE), folder.dir.join(job::STDERR_FILE));
+        let ran = match process::run(&command, &folder.dir, &stdout, &stderr, s.timeout, cancel) {
+            Ok(r) => r,
+            Err(e) => return Attempt::Failed(format!("cannot start `sh -c {command}`: {e}")),
+        };
+        let code = match ran.ended {
+            Ended::Cancelled => return Attempt::Flew(stopped()),
+            Ended::TimedOut => {
+                return Attempt::Failed(format!(
+                    "timed out after {:.0} s (--job-timeout), killed{}",
+                    s.timeout.as_secs_f64(),
+                    tail(&stderr)
+                ));
+            }
+            Ended::Exited(code) => code,
+        };
+        let out = std::fs::read(&stdout).unwrap_or_default();
+        let back = readback::read_back(&folder.dir, &skip, &out, &test.obstacles, s.judge);
+        match (code, back) {
+            // `fly` exits 1 when a flight did not complete, with its report: a result, not a failure.
+            (Some(0), Ok(b)) | (_, Ok(b @ readback::Readback { reported: true, .. })) => {
+                if let Some(t) = &b.trajectory
+                    && let Err(e) = write_atomic(csv, t.to_csv().as_bytes())
+                {
+                    return Attempt::Failed(e.to_string());
+                }
+                Attempt::Flew(b.flown)
+            }
+            (Some(0), Err(e)) => Attempt::Failed(format!("{e}{}", tail(&stderr))),
+            (code, _) => Attempt::Failed(format!(
+                "exited with {}{}",
+                code.map_or("a signal".into(), |c| format!("code {c}")),
+                tail(&stderr)
+            )),
+        }
+    }
+}
+
+impl Vehicle for RunnerVehicle {
+    fn name(&self) -> String {
+        format!("runner#{}", self.index)
+    }
+
+    fn fly(&mut self, test: &TestCase, csv: &Path, cancel: &AtomicBool) -> Result<Flown, VehicleError> {
+        let candidate = csv
+            .file_stem()
+            .map_or_else(|| "candidate".into(), |s| s.to_string_lossy().into_owned());
+        let mut retry = std::mem::take(&mut self.retry);
+        let tried = retry.tries(cancel, |n| match self.attempt(test, &candidate, n, csv, cancel) {
+            Attempt::Failed(why) => Attempt::Failed(format!("attempt {n}: {why}")),
+            other => other,
+        });
+        self.retry = retry;
+        match tried {
+            Tried::Flew(f) => Ok(f),
+            Tried::Stopped => Ok(stopped()),
+            Tried::Failed(failures) => {
+                let reason = format!("the job failed twice ({})", failures.join("; "));
+                self.retry.failed(self.name(), reason)
+            }
+        }
+    }
+}
+
+/// A flight the campaign's stop ended (`aborted`: the pool journals it `interrupted`).
+fn stopped() -> Flown {
+    Flown {
+        status: "aborted".into(),
+        min_distance: None,
+        min_distance_raw: None,
+        flight_time_s: 0.0,
+        warnings: Vec::new(),
+        reason: Some("the job was stopped".into()),
+    }
+}
+
+/// `{id}`: unique per campaign, flight and attempt, and a valid Slurm job name and Kubernetes object name
+/// (lowercase letters, digits, `-`): `prg-<campaign hash>-<candidate>-<attempt>`.
+pub fn job_id(campaign_folder: &Path, candidate: &str, attempt: usize) -> String {
+    // FNV-1a: stable across runs and platforms (the std hasher is not).
+    let hash = campaign_folder
+        .to_string_lossy()
+        .bytes()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+        });
+    let number: String = candidate.chars().filter(char::is_ascii_digit).collect();
+    format!("prg-{:08x}-{number}-{attempt}", hash as u32)
+}
+
+/// The last lines of a job's stderr, for a failure's reason.
+fn tail(stderr: &Path) -> String {
+    let bytes = std::fs::read(stderr).unwrap_or_default();
+    let text = String::from_utf8_lossy(&bytes[bytes.len().saturating_sub(TAIL_BYTES)..]);
+    let text = text.trim();
+    if text.is_empty() {
+        String::new()
+    } else {
+        format!("; stderr ends: {}", text.replace('\n', " | "))
+    }
+}
+
+#[cfg(test)]
+#[path = "runner_tests.rs"]
+mod tests;

@@ -1,0 +1,244 @@
+//! What a finished job left: a `prgenuav fly --json` report (its stdout or a `.json` file), a PX4 ULog
+//! (`*.ulg`, Aerialist's output) or an Aerialist trajectory CSV, found anywhere under its folder. The flight is
+//! judged here, from the trajectory, by the campaign's judge edition (as `prgenuav distance` judges a log), so
+//! every backend's distances mean the same.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::campaign::fly::vehicle::Flown;
+use crate::judge::{Judge, judge_flight};
+use crate::model::{Obstacle, Trajectory, load_ulog_trajectory};
+
+/// Folder levels searched below the job folder.
+const MAX_DEPTH: usize = 8;
+/// Entries looked at, at most: a job that leaves a huge tree is not searched to its end.
+const MAX_ENTRIES: usize = 20_000;
+/// `.json` files larger than this are not a `fly --json` report and are not read.
+const MAX_JSON_BYTES: u64 = 4 << 20;
+
+/// The statuses of `prgenuav fly --json`.
+const FLY_STATUSES: [&str; 6] = ["landed", "collision", "timeout", "link_lost", "aborted", "rejected"];
+
+/// The part of a `prgenuav fly --json` report the campaign uses (the distances are judged again here).
+#[derive(Debug, Clone, Deserialize)]
+struct FlyReport {
+    status: String,
+    #[serde(default)]
+    reason: Option<String>,
+    #[serde(default)]
+    warnings: Vec<String>,
+    #[serde(default)]
+    flight_time_s: Option<f64>,
+}
+
+/// A job's flight as read back.
+#[derive(Debug, Clone)]
+pub struct Readback {
+    /// The flight, judged.
+    pub flown: Flown,
+    /// The judged (origin-aligned) trajectory, if there was one.
+    pub trajectory: Option<Trajectory>,
+    /// The file it came from.
+    pub source: Option<PathBuf>,
+    /// Whether a `fly --json` report said how the flight ended.
+    pub reported: bool,
+}
+
+/// Files found under a job folder, by kind, in the order they are tried.
+#[derive(Debug, Default)]
+struct Found {
+    ulogs: Vec<PathBuf>,
+    csvs: Vec<PathBuf>,
+    jsons: Vec<PathBuf>,
+}
+
+/// Reads back the flight a job left in `dir` (its own inputs `skip` excepted) and on its `stdout`, judged
+/// against `obstacles` by `judge`. An error says what was missing or unreadable.
+pub fn read_back(
+    dir: &Path,
+    skip: &[PathBuf],
+    stdout: &[u8],
+    obstacles: &[Obstacle],
+    judge: Judge,
+) -> Result<Readback, String> {
+    let found = search(dir, skip);
+    let report = fly_report(stdout).or_else(|| found.jsons.iter().find_map(|p| json_file(p)));
+    let mut problems = Vec::new();
+    let trajectory = trajectory(&found, &mut problems);
+    match (trajectory, report) {
+        (Some((path, t)), report) => Ok(judged(t, path, report, obstacles, judge)),
+        // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
+        (None, Some(r)) if !matches!(r.status.as_str(), "landed" | "collision") && problems.is_empty() => {
+            Ok(Readback {
+                flown: Flown {
+                    status: r.status,
+                    min_distance: None,
+                    min_distance_raw: None,
+                    flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
+                    warnings: r.warnings,
+                    reason: r.reason,
+                },
+                trajectory: None,
+                source: None,
+                reported: true,
+            })
+        }
+        (None, report) => {
+            let said = report.map_or(String::new(), |r| {
+                format!(
+                    " (its fly report says {}, but a report alone cannot be judged)",
+                    r.status
+                )
+            });
+            if problems.is_empty() {
+                Err(format!(
+                    "no trajectory: the job left no flight log (*.ulg) or trajectory CSV (timestamp,x,y,z,r) in {}{said}",
+                    dir.display()
+                ))
+            } else {
+                Err(format!("no usable trajectory{said}: {}", problems.join("; ")))
+            }
+        }
+    }
+}
+
+/// The first trajectory that reads: ULogs newest first, then trajectory CSVs. Files that look like flights
+/// but do not read are listed in `problems`.
+fn trajectory(found: &Found, problems: &mut Vec<String>) -> Option<(PathBuf, Trajectory)> {
+    for path in &found.ulogs {
+        match load_ulog_trajectory(path) {
+            Ok(t) => return Some((path.clone(), t)),
+            Err(e) => problems.push(e.to_string()),
+        }
+    }
+    for path in &found.csvs {
+        let Ok(text) = std::fs::read_to_string(path) else {
+            problems.push(format!("{}: not UTF-8 text", path.display()));
+            continue;
+        };
+        if !looks_like_trajectory(&text) {
+            continue; // a commands or params table, say
+        }
+        match Trajectory::parse_csv(&text, path) {
+            Ok(t) => return Some((path.clone(), t)),
+            Err(e) => problems.push(e.to_string()),
+        }
+    }
+    None
+}
+
+/// Whether a CSV's header names Aerialist's trajectory columns.
+fn looks_like_trajectory(text: &str) -> bool {
+    let header = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+    let cols: Vec<String> = header.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
+    ["timestamp", "x", "y", "z"].iter().all(|c| cols.iter().any(|h| h == c))
+}
+
+/// The flight judged from its trajectory; the fly report, if any, gives the ending and warnings.
+fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[Obstacle], judge: Judge) -> Readback {
+    let verdict = judge_flight(&t, obstacles, judge);
+    let reported = report.is_some();
+    let (mut status, mut reason, warnings, time) = match report {
+        Some(r) => (r.status, r.reason, r.warnings, r.flight_time_s),
+        None => ("landed".to_string(), None, Vec::new(), None),
+    };
+    if let Some(v) = verdict.as_ref().filter(|v| v.collision)
+        && matches!(status.as_str(), "landed" | "timeout")
+    {
+        status = "collision".into();
+        let c = v.closest;
+        reason = Some(format!(
+            "entered obstacle {} at t = {:.1} s, ({:.2}, {:.2}, {:.2}) m",
+            c.obstacle, c.t_s, c.x, c.y, c.z
+        ));
+    }
+    Readback {
+        flown: Flown {
+            status,
+            min_distance: verdict.as_ref().map(|v| v.min_distance),
+            min_distance_raw: verdict.as_ref().map(|v| v.min_distance_raw),
+            flight_time_s: time.filter(|t| t.is_finite()).unwrap_or_else(|| t.duration_s()),
+            warnings,
+            reason,
+        },
+        trajectory: Some(t.origin_aligned()),
+        source: Some(path),
+        reported,
+    }
+}
+
+/// A `fly --json` report on stdout: the whole of it, or from its first line opening a JSON object.
+fn fly_report(stdout: &[u8]) -> Option<FlyReport> {
+    let text = std::str::from_utf8(stdout).ok()?;
+    let parse = |s: &str| serde_json::from_str::<FlyReport>(s.trim()).ok().filter(known);
+    parse(text).or_else(|| {
+        let start = text
+            .match_indices('\n')
+            .map(|(i, _)| i + 1)
+            .find(|&i| text[i..].starts_with('{'))?;
+        parse(&text[start..])
+    })
+}
+
+fn json_file(path: &Path) -> Option<FlyReport> {
+    let small = std::fs::metadata(path).is_ok_and(|m| m.len() <= MAX_JSON_BYTES);
+    let bytes = small.then(|| std::fs::read(path).ok()).flatten()?;
+    serde_json::from_slice::<FlyReport>(&bytes).ok().filter(known)
+}
+
+fn known(r: &FlyReport) -> bool {
+    FLY_STATUSES.contains(&r.status.as_str())
+}
+
+/// Every `.ulg`, `.csv` and `.json` under `dir` but `skip`, bounded in depth and count; ULogs newest first,
+/// the rest by path.
+fn search(dir: &Path, skip: &[PathBuf]) -> Found {
+    let mut found = Found::default();
+    let mut ulogs = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), 0usize)];
+    let mut seen = 0;
+    while let Some((folder, depth)) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            seen += 1;
+            if seen > MAX_ENTRIES {
+                break;
+            }
+            let path = entry.path();
+            // Not following links into folders: a job cannot send the search around the disk.
+            let Ok(kind) = entry.file_type() else { continue };
+            if kind.is_dir() {
+                if depth < MAX_DEPTH {
+                    stack.push((path, depth + 1));
+                }
+                continue;
+            }
+            if skip.contains(&path) || !path.is_file() {
+                continue;
+            }
+            let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+            match ext.as_deref() {
+                Some("ulg") => {
+                    let modified = entry.metadata().and_then(|m| m.modified()).ok();
+                    ulogs.push((modified, path));
+                }
+                Some("csv") => found.csvs.push(path),
+                Some("json") => found.jsons.push(path),
+                _ => {}
+            }
+        }
+    }
+    ulogs.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
+    found.ulogs = ulogs.into_iter().map(|(_, p)| p).collect();
+    found.csvs.sort();
+    found.jsons.sort();
+    found
+}
+
+#[cfg(test)]
+#[path = "readback_tests.rs"]
+mod tests;

@@ -1,0 +1,216 @@
+//! The flight stage: the tests waiting for confirmation, then a ranking, flown on the vehicles within the
+//! budget, each flight journaled.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use crate::campaign::candidate::{Candidate, Screened};
+use crate::campaign::config::CampaignError;
+use crate::campaign::fly::confirm::pending;
+use crate::campaign::fly::fleet::{FleetSetup, run_fleet};
+use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle};
+use crate::campaign::screen::screener::Progress;
+use crate::campaign::store::journal::{FlightRecord, Journal};
+use crate::campaign::store::replay::Replay;
+use crate::model::TestCase;
+
+/// What the flight stage reads.
+pub struct FlightStage<'a> {
+    /// The case study.
+    pub case: &'a TestCase,
+    /// Every candidate drawn so far, by index.
+    pub candidates: &'a [Candidate],
+    /// The campaign folder (journal, trajectories).
+    pub folder: &'a Path,
+    /// Progress output.
+    pub progress: &'a dyn Progress,
+    /// Stops the flights (vehicles in the air land).
+    pub cancel: &'a AtomicBool,
+    /// Every flight journaled before this stage: the tests among them whose confirmation is not settled are
+    /// flown first.
+    pub done: &'a [FlightRecord],
+    /// Flights a failing test gets at most (`--confirm`).
+    pub confirm: usize,
+    /// Fly in waves, so repeatable vehicles repeat the campaign ([`crate::campaign::fly::fleet::FleetSetup::waves`]).
+    pub waves: bool,
+}
+
+/// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
+/// within `remaining` flights, journaling each; returns the flights made, as the journal reads them back, in
+/// its order, and how busy the vehicles were. A failing flight's test is flown again before the next new candidate (see [`fly_all`]).
+/// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
+/// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
+/// must not end as a clean run that found no failing test.
+pub fn fly_ranked(
+    ctx: &FlightStage,
+    ranked: Vec<Screened>,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    remaining: usize,
+) -> Result<(Vec<FlightRecord>, FleetUse), CampaignError> {
+    let jobs = stage_jobs(ctx, ranked, &[]);
+    if jobs.is_empty() || remaining == 0 {
+        return Ok((Vec::new(), FleetUse::default()));
+    }
+    let no_vehicle_left = |why: String| {
+        CampaignError::NoVehicle(format!(
+            "{why}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
+            ctx.folder.display()
+        ))
+    };
+    if vehicles.is_empty() {
+        return Err(no_vehicle_left("every vehicle was dropped in an earlier round".into()));
+    }
+    let outcome = fly_stage(ctx, "fly", jobs, vehicles, remaining)?;
+    if vehicles.is_empty() {
+        return Err(no_vehicle_left(outcome.dropped.join("; ")));
+    }
+    Ok((outcome.records, outcome.fleet))
+}
+
+/// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
+/// or in the air already, left out), then `ranked` in order.
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec<Job> {
+    let again = pending(ctx.done, ctx.confirm)
+        .into_iter()
+        .filter(|(_, first)| !busy.contains(&first.candidate))
+        .map(|(tally, first)| Job {
+            tally,
+            confirm: ctx.confirm,
+            ..Job::new(
+                screened_as_flown(first),
+                ctx.case.with_obstacles(first.obstacles.clone()),
+            )
+        });
+    let fresh = ranked.into_iter().map(|s| {
+        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());
+        Job {
+            confirm: ctx.confirm,
+            ..Job::new(s, test)
+        }
+    });
+    again.chain(fresh).collect()
+}
+
+/// On resume, flies the flights the user interrupted before anything else (they were the most promising
+/// candidates when they took off), within what the budget has left; returns how many were flown.
+pub fn fly_interrupted(
+    ctx: &FlightStage,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    budget_left: usize,
+) -> Result<usize, CampaignError> {
+    let journal_path = ctx.folder.join("journal.jsonl");
+    let pending = Journal::interrupted(&journal_path)?;
+    if pending.is_empty() || budget_left == 0 || vehicles.is_empty() {
+        return Ok(0);
+    }
+    ctx.progress.note(&format!(
+        "resuming: flying first the {} flight(s) interrupted last time (candidates {})",
+        pending.len(),
+        pending
+            .iter()
+            .map(|r| r.candidate.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    let jobs: Vec<Job> = pending
+        .into_iter()
+        .map(|r| Job {
+            confirm: ctx.confirm,
+            ..Job::new(screened_as_flown(&r), ctx.case.with_obstacles(r.obstacles.clone()))
+        })
+        .collect();
+    Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, budget_left)?.flown)
+}
+
+/// Flies `jobs` within `budget` on the pool, announcing each flight under stage `name` and the vehicles
+/// dropped; a journal error stops the campaign.
+fn fly_stage(
+    ctx: &FlightStage,
+    name: &str,
+    jobs: Vec<Job>,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    budget: usize,
+) -> Result<PoolOutcome, CampaignError> {
+    let progress = ctx.progress;
+    progress.stage(name, jobs.len());
+    let count = FlightCount::default();
+    let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, true);
+    let setup = FleetSetup {
+        folder: ctx.folder,
+        journal: Journal::open(&ctx.folder.join("journal.jsonl"))?,
+        cancel: ctx.cancel,
+        on_flight: &on_flight,
+        waves: ctx.waves,
+        replay: Replay::none(),
+    };
+    let outcome = run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1;
+    for d in &outcome.dropped {
+        progress.note(&format!("dropped {d}"));
+    }
+    if let Some(e) = outcome.errors.first() {
+        return Err(CampaignError::Config(format!("journal: {e}")));
+    }
+    Ok(outcome)
+}
+
+/// The prediction a test was first flown with, for its later flights' records.
+fn screened_as_flown(first: &FlightRecord) -> Screened {
+    Screened {
+        p_fail: first.predicted_p_fail,
+        raw_min_distance: first.predicted_raw_min_distance,
+        ..Screened::point(
+            first.candidate,
+            first.predicted_min_distance,
+            first.predicted_flight_time_s,
+            "landed".into(),
+        )
+    }
+}
+
+/// Counts a campaign's flights for its progress lines: each flight's number in the campaign, and in the flight
+/// stage under way (what the stage's progress counts to).
+#[derive(Debug, Default)]
+pub(in crate::campaign) struct FlightCount {
+    total: AtomicUsize,
+    stage_start: AtomicUsize,
+}
+
+impl FlightCount {
+    /// A flight stage starts after the flights counted so far.
+    pub(in crate::campaign) fn new_stage(&self) {
+        self.stage_start
+            .store(self.total.load(Ordering::Relaxed), Ordering::Relaxed);
+    }
+
+    /// Counts one flight: its number in the campaign and in the stage, both from 1.
+    pub(in crate::campaign) fn next(&self) -> (usize, usize) {
+        let n = self.total.fetch_add(1, Ordering::Relaxed) + 1;
+        (n, n.saturating_sub(self.stage_start.load(Ordering::Relaxed)))
+    }
+}
+
+/// Tells the user of a flight, numbered `(in the campaign, in the stage)`.
+pub(in crate::campaign) fn announce(
+    progress: &dyn Progress,
+    (n, in_stage): (usize, usize),
+    r: &FlightRecord,
+    tick: bool,
+) {
+    if tick {
+        progress.tick(in_stage);
+    }
+    progress.note(&format!(
+        "flight {n}: candidate {}{} predicted {:.2} m, flew {} ({})",
+        r.candidate,
+        match r.attempt {
+            0 => String::new(),
+            a => format!(" (its flight {})", a + 1),
+        },
+        r.predicted_min_distance,
+        r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
+        r.status
+    ));
+    for w in &r.warnings {
+        progress.note(&format!("  warning: {w}"));
+    }
+}

@@ -1,0 +1,153 @@
+//! The high-fidelity flight pool: the vehicles, the jobs they fly, and one pass of jobs flown on them within a
+//! budget ([`crate::campaign::fly::fleet`]).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::campaign::candidate::Screened;
+use crate::campaign::fly::confirm::Tally;
+use crate::campaign::store::journal::{FlightRecord, INTERRUPTED};
+use crate::model::TestCase;
+
+/// How one flight ended, as the vehicle's side reports it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Flown {
+    /// `landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...
+    pub status: String,
+    /// The competition's minimum distance, metres, if anything was recorded.
+    pub min_distance: Option<f64>,
+    /// The un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+    /// What the flight side warned about (e.g. the avoidance planner falling behind).
+    pub warnings: Vec<String>,
+    /// Why the flight stopped, in words, when it did not land.
+    pub reason: Option<String>,
+}
+
+/// Why a vehicle could not fly.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VehicleError {
+    /// The vehicle cannot be reached or used: the pool drops it and gives its test to another.
+    #[error("vehicle {vehicle} unreachable: {reason}")]
+    Unreachable {
+        /// The vehicle.
+        vehicle: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// A high-fidelity vehicle: the embedded mock, a PX4 SITL instance or a real flight controller.
+pub trait Vehicle: Send {
+    /// A name for logs and the journal (a MAVLink URL or `mock`).
+    fn name(&self) -> String;
+    /// Flies `test`, appending the trajectory to `trajectory_csv`; returns when landed or given up.
+    fn fly(&mut self, test: &TestCase, trajectory_csv: &Path, cancel: &AtomicBool) -> Result<Flown, VehicleError>;
+}
+
+/// One flight to make.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The candidate as screened.
+    pub screened: Screened,
+    /// The test to fly.
+    pub test: TestCase,
+    /// The test's flights before this one (none for a new candidate).
+    pub tally: Tally,
+    /// Flights a failing test gets at most (`--confirm`): a failing flight whose majority is not settled puts
+    /// the test's next flight at the front of the queue.
+    pub confirm: usize,
+    /// The campaign round that queued it (its re-flights keep it): what [`crate::campaign::fly::fleet::Fleet::wait_round`]
+    /// waits for.
+    pub round: usize,
+}
+
+impl Job {
+    /// The first flight of a candidate, not flown again (`--confirm 1`).
+    pub fn new(screened: Screened, test: TestCase) -> Self {
+        Self {
+            screened,
+            test,
+            tally: Tally::default(),
+            confirm: 1,
+            round: 0,
+        }
+    }
+
+    /// The test's next flight after `record` (this job's), if its majority is not settled.
+    pub(in crate::campaign) fn again(&self, record: &FlightRecord) -> Option<Job> {
+        let tally = self.tally.with(record);
+        tally.wants_another(self.confirm).then(|| Job { tally, ..self.clone() })
+    }
+}
+
+/// What the pool did.
+#[derive(Debug, Default)]
+pub struct PoolOutcome {
+    /// Flights finished (journaled) in this run.
+    pub flown: usize,
+    /// Those flights' records in journal order, as the journal reads them back.
+    pub records: Vec<FlightRecord>,
+    /// Vehicles dropped as unreachable, with the reason.
+    pub dropped: Vec<String>,
+    /// Journal errors (the flight happened but could not be recorded): the campaign stops on the first.
+    pub errors: Vec<String>,
+    /// How busy the vehicles were.
+    pub fleet: FleetUse,
+}
+
+/// How busy a fleet's vehicles were, wall time.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FleetUse {
+    /// Vehicles at the start.
+    pub vehicles: usize,
+    /// Seconds the vehicles spent flying (setting up, in the air, landing), summed over the vehicles.
+    pub busy_s: f64,
+    /// Seconds from the first take-off to the last landing.
+    pub span_s: f64,
+}
+
+/// A flight the user's stop cut short (`aborted` after the campaign's cancel) is `interrupted`: not charged,
+/// flown again first on resume. A flight that ended on its own while the stop came keeps its status.
+pub(in crate::campaign) fn interrupted_if_cancelled(mut flown: Flown, cancel: &AtomicBool) -> Flown {
+    if flown.status == "aborted" && cancel.load(Ordering::Relaxed) {
+        flown.status = INTERRUPTED.to_string();
+        flown.reason = Some(format!(
+            "stopped by the user ({}); not charged to the budget, flown again first on --resume",
+            flown.reason.as_deref().unwrap_or("cancelled")
+        ));
+    }
+    flown
+}
+
+impl Job {
+    /// The journal record of this job flown by `vehicle`.
+    pub(in crate::campaign) fn record(
+        self,
+        flown: Flown,
+        vehicle: String,
+        trajectory: PathBuf,
+        wall_s: f64,
+    ) -> FlightRecord {
+        FlightRecord {
+            candidate: self.screened.candidate,
+            attempt: self.tally.next_attempt,
+            obstacles: self.test.obstacles,
+            predicted_min_distance: self.screened.min_distance,
+            predicted_flight_time_s: self.screened.flight_time_s,
+            predicted_p_fail: self.screened.p_fail,
+            predicted_raw_min_distance: self.screened.raw_min_distance,
+            min_distance: flown.min_distance,
+            min_distance_raw: flown.min_distance_raw,
+            status: flown.status,
+            flight_time_s: flown.flight_time_s,
+            warnings: flown.warnings,
+            reason: flown.reason,
+            vehicle,
+            trajectory,
+            wall_s,
+        }
+    }
+}

@@ -1,0 +1,9 @@
+//! Which candidates a campaign draws and in what order it flies them: the draws of each round (histogram
+//! and children near failures), the diversity guard, the ranking, and the rounds themselves.
+
+pub mod diversity_guard;
+pub mod draw;
+pub mod neighbours;
+pub mod rank;
+pub mod rounds;
+pub mod single_pass;

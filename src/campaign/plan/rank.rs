@@ -1,0 +1,147 @@
+//! Ranking screened candidates: the most expected competition points per minute of flight first (from the
+//! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
+//! tests skipped.
+
+use crate::campaign::candidate::Candidate;
+pub use crate::campaign::candidate::Screened;
+use crate::campaign::config::CampaignConfig;
+use crate::campaign::store::journal::FlightRecord;
+use crate::geometry::{Footprint, union_iou};
+use crate::model::Obstacle;
+
+/// Orders candidates with an ensemble by expected points per minute (most first), then those without by
+/// predicted distance (then shorter flight, then index), keeping only those predicted below `threshold_m`
+/// whose footprints overlap every already chosen one by at most `max_iou`; at most `limit`.
+///
+/// `footprints(candidate)` gives a candidate's obstacle footprints.
+pub fn rank(
+    screened: &[Screened],
+    threshold_m: f64,
+    max_iou: f64,
+    limit: usize,
+    footprints: impl Fn(u64) -> Vec<Footprint>,
+) -> Vec<Screened> {
+    let mut order: Vec<&Screened> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
+    order.sort_by(|a, b| {
+        let rate = |s: &Screened| s.points_per_minute().map_or(f64::INFINITY, |r| -r);
+        rate(a)
+            .total_cmp(&rate(b))
+            .then(a.min_distance.total_cmp(&b.min_distance))
+            .then(a.flight_time_s.total_cmp(&b.flight_time_s))
+            .then(a.candidate.cmp(&b.candidate))
+    });
+    let mut chosen: Vec<(Screened, Vec<Footprint>)> = Vec::new();
+    for s in order {
+        if chosen.len() >= limit {
+            break;
+        }
+        let f = footprints(s.candidate);
+        if chosen.iter().all(|(_, g)| union_iou(&f, g) <= max_iou) {
+            chosen.push((s.clone(), f));
+        }
+    }
+    chosen.into_iter().map(|(s, _)| s).collect()
+}
+
+/// Whether two tests' footprints overlap by more than `max_iou`.
+pub(in crate::campaign) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: f64) -> bool {
+    let fa: Vec<_> = a.iter().map(Obstacle::footprint).collect();
+    let fb: Vec<_> = b.iter().map(Obstacle::footprint).collect();
+    union_iou(&fa, &fb) > max_iou
+}
+
+/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
+/// most `remaining`.
+pub fn rank_unflown(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Vec<Screened> {
+    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
+}
+
+/// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
+/// failing flights admitted by [`crate::campaign::plan::diversity_guard`]); among themselves they still obey `max_iou`.
+pub fn rank_unflown_within(
+    fresh: &[Screened],
+    done: &[FlightRecord],
+    candidates: &[Candidate],
+    cfg: &CampaignConfig,
+    remaining: usize,
+    flown_max_iou: f64,
+) -> Vec<Screened> {
+    let footprints = |c: u64| {
+        candidates[c as usize]
+            .obstacles
+            .iter()
+            .map(Obstacle::footprint)
+            .collect()
+    };
+    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    ranked.retain(|s| {
+        !done
+            .iter()
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
+    });
+    ranked.truncate(remaining);
+    ranked
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn s(candidate: u64, d: f64, t: f64) -> Screened {
+        Screened::point(candidate, d, t, "landed".into())
+    }
+
+    fn with_points(candidate: u64, d: f64, t: f64, points: f64) -> Screened {
+        Screened {
+            expected_points: Some(points),
+            p_fail: Some(points.min(1.0)),
+            ..s(candidate, d, t)
+        }
+    }
+
+    #[test]
+    fn ensemble_candidates_go_first_by_points_per_minute() {
+        let screened = [
+            s(0, 0.2, 40.0),
+            // 1 point in 60 s beats 2 points in 180 s; both beat a point prediction without an ensemble.
+            with_points(1, 1.4, 60.0, 1.0),
+            with_points(2, 0.3, 180.0, 2.0),
+            // Above the threshold: never flown, however promising its ensemble.
+            with_points(3, 3.5, 30.0, 5.0),
+        ];
+        let fp = |c: u64| vec![Footprint::from_aerialist(c as f64 * 20.0, 20.0, 4.0, 2.0, 0.0)];
+        let r = rank(&screened, 3.0, 0.5, 10, fp);
+        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![1, 2, 0]);
+        assert_eq!(with_points(1, 1.4, 30.0, 1.0).points_per_minute(), Some(2.0));
+    }
+
+    #[test]
+    fn severity_order_threshold_limit_and_similarity() {
+        let screened = [
+            s(0, 2.0, 40.0),
+            s(1, 0.5, 50.0),
+            s(2, 0.5, 45.0),
+            s(3, 5.0, 30.0),
+            s(4, 0.1, 60.0),
+        ];
+        // Candidates 2 and 4 have identical footprints; 4 is more severe, so 2 is skipped.
+        let fp = |c: u64| {
+            let x = if c == 2 { 40.0 } else { c as f64 * 10.0 };
+            vec![Footprint::from_aerialist(x, 20.0, 4.0, 2.0, 0.0)]
+        };
+        let r = rank(&screened, 3.0, 0.5, 10, fp);
+        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![4, 1, 0]);
+        let r = rank(&screened, 3.0, 1.0, 2, fp);
+        assert_eq!(
+            r.iter().map(|s| s.candidate).collect::<Vec<_>>(),
+            vec![4, 2],
+            "ties broken by flight time"
+        );
+    }
+}

@@ -1,0 +1,244 @@
+//! The stages of one round, in order: draw its candidates, screen them with the LFS, rank them with what the
+//! campaign learnt so far and choose the flights, then learn from the flights that landed.
+
+use super::{ROUNDS, Ranking, Round, Rounds};
+use crate::campaign::candidate::{Lineage, Screened, is_child};
+use crate::campaign::config::CampaignError;
+use crate::campaign::learn::calibration::RoundLog;
+use crate::campaign::learn::failure_counts::arm_counts;
+use crate::campaign::learn::refit::{Learning, refit};
+use crate::campaign::plan::diversity_guard::DiversityGuard;
+use crate::campaign::plan::draw::{DrawPlan, draw};
+use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
+use crate::campaign::plan::rank::rank_unflown;
+use crate::campaign::report::outputs::StageTimes;
+use crate::campaign::screen::stages::{
+    ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all,
+};
+use crate::campaign::store::journal::FlightRecord;
+use crate::model::Obstacle;
+use crate::model::competition::FAIL_BELOW_M;
+use std::time::Instant;
+
+impl Rounds<'_> {
+    /// Draws round `index`'s candidates: its share of `--candidates` from the histogram, and with `adapt`
+    /// children around the parents on top (as many as the round's own draws, at most [`neighbours::CHILDREN`]).
+    pub(super) fn draw(&mut self, index: usize, stages: &mut StageTimes) -> Result<Round, CampaignError> {
+        let cfg = self.input.cfg;
+        let own = if index < ROUNDS {
+            cfg.candidates * (index + 1) / ROUNDS - cfg.candidates * index / ROUNDS
+        } else {
+            cfg.candidates.div_ceil(ROUNDS)
+        };
+        let t = Instant::now();
+        // Below the diversity floor the children go on: the guard admits only those that do not lower it, so
+        // the failures keep getting children for the rest of the campaign.
+        let (around, lineage) = if cfg.adapt {
+            neighbours::parents(
+                &self.journal,
+                |c| self.candidates.get(c as usize).map(|x| x.unit),
+                FAIL_BELOW_M,
+            )
+        } else {
+            (Vec::new(), Lineage::Failures)
+        };
+        let children = if around.is_empty() {
+            0
+        } else {
+            neighbours::CHILDREN.min(own)
+        };
+        // Children are measured against their own lineage: a near miss's children fail at about the base rate
+        // on the mock, and counting them with the failures' children would starve the latter of flights.
+        let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage))
+            .0
+            .rate();
+        let planned = cfg.budget * (index + 1).min(ROUNDS) / ROUNDS;
+        let later = cfg.budget - planned;
+        // A child must differ from its siblings and from every flown test (or come close where the failing tests'
+        // diversity can afford it), and keep their expected diversity above the floor.
+        let flown: &[FlightRecord] = if children == 0 { &[] } else { &self.journal };
+        let mut guard = DiversityGuard::for_round(flown, FAIL_BELOW_M, cfg, later);
+        let first = self.candidates.len() as u64;
+        let plan = DrawPlan {
+            first,
+            count: own + children,
+            children,
+            around: &around,
+            lineage,
+            child_rate,
+        };
+        let drawn = draw(&self.base, &self.distribution, &plan, &mut guard)?;
+        self.candidates.extend(drawn);
+        stages.sample_s += t.elapsed().as_secs_f64();
+        Ok(Round {
+            index,
+            first,
+            drawn: own + children,
+            children,
+            around,
+            lineage,
+            planned,
+            later,
+        })
+    }
+
+    pub(super) fn stage(&self) -> Stage<'_> {
+        Stage {
+            case: self.input.case,
+            candidates: &self.candidates,
+            folder: self.input.folder,
+            screener: self.input.screener,
+            progress: self.input.progress,
+            cancel: self.input.cancel,
+        }
+    }
+
+    /// Screens the round's candidates (cached per round, with the distribution and the parents they came from).
+    pub(super) fn screen(&mut self, round: &Round, stages: &mut StageTimes) -> Result<(), CampaignError> {
+        let t = Instant::now();
+        let range = round.first..round.first + round.drawn as u64;
+        let cache = format!("screening_round{}.json", round.index);
+        let screened = screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?;
+        for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
+            c.screened = Some(s);
+        }
+        stages.screen_s += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Learns from every flight so far, then ranks the unflown candidates with the calibrated LFS moved towards
+    /// the flights near them (and the ensembles), within the round's share of the budget.
+    /// `busy` are the candidates queued or in the air, `committed` the flights promised ([`Self::promised`]).
+    pub(super) fn rank(
+        &mut self,
+        round: &Round,
+        busy: &[(u64, Vec<Obstacle>)],
+        committed: usize,
+        stages: &mut StageTimes,
+    ) -> Result<Ranking, CampaignError> {
+        let cfg = self.input.cfg;
+        let t = Instant::now();
+        let taught = match self.carried.take() {
+            Some((at, l)) if at == self.flights.len() => l,
+            _ => Learning::from(&self.start_calibration, &self.journal, &self.candidates),
+        };
+        self.calibration = taught.calibration.clone();
+        self.surrogate = taught.kernel;
+        let flown: Vec<u64> = (self.journal.iter().map(|r| r.candidate))
+            .chain(busy.iter().map(|(c, _)| *c))
+            .chain(self.set_aside.iter().copied())
+            .collect();
+        let mut fresh: Vec<Screened> = (self.candidates.iter())
+            .filter_map(|c| c.screened.as_ref())
+            .filter(|s| !flown.contains(&s.candidate))
+            .map(|s| Screened {
+                min_distance: taught.predict(s, &self.candidates),
+                raw_min_distance: Some(s.min_distance),
+                ..s.clone()
+            })
+            .collect();
+        stages.learn_s += t.elapsed().as_secs_f64();
+        let remaining = round.planned.saturating_sub(committed);
+        if cfg.ensemble > 0 && remaining > 0 {
+            let t = Instant::now();
+            let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;
+            let members = ensemble_shortlist(&self.stage(), &fresh, cfg, shortlist)?;
+            apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
+            stages.ensemble_s += t.elapsed().as_secs_f64();
+        }
+        let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
+        Ok(Ranking {
+            ranked,
+            remaining,
+            share,
+            bias_m: self.calibration.bias_m(),
+        })
+    }
+
+    /// The round's flights among `fresh`: with `adapt`, a share for the children that follows their failure
+    /// rate, each admitted by the diversity guard; else the ranking's best distinct ones.
+    /// `queued` stand for the flights in the fleet: the ranking keeps away from them as from the flown tests.
+    pub(super) fn choose(
+        &self,
+        round: &Round,
+        fresh: &[Screened],
+        remaining: usize,
+        queued: &[FlightRecord],
+    ) -> (Vec<Screened>, f64) {
+        let seen: Vec<FlightRecord> = self.journal.iter().chain(queued).cloned().collect();
+        let cfg = self.input.cfg;
+        let is_arm = |c| is_child(&self.candidates, c, round.lineage);
+        let (near_flown, other_flown) = arm_counts(&self.journal, is_arm);
+        let share = match round.lineage {
+            Lineage::Failures => local_flight_share(near_flown, other_flown),
+            Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
+        };
+        if !cfg.adapt {
+            return (rank_unflown(fresh, &seen, &self.candidates, cfg, remaining), share);
+        }
+        let mut guard = DiversityGuard::for_round(&self.journal, FAIL_BELOW_M, cfg, round.later);
+        let ranked = rank_split(
+            fresh,
+            is_arm,
+            share,
+            (&seen, &self.candidates),
+            cfg,
+            remaining,
+            (&mut guard, (near_flown.rate(), other_flown.rate())),
+        );
+        (ranked, share)
+    }
+
+    pub(super) fn note(&self, round: &Round, ranking: &Ranking) {
+        self.input.progress.note(&format!(
+            "round {} of {ROUNDS}: {} candidates ({} near the {}), LFS bias {:+.2} m learnt from {} flights{}; \
+             flying {}",
+            round.index + 1,
+            round.drawn,
+            round.children,
+            match round.lineage {
+                Lineage::Failures => "failing flights",
+                Lineage::NearMisses => "closest flights, none failing yet",
+            },
+            ranking.bias_m,
+            self.journal.len(),
+            self.surrogate.map_or(String::new(), |k| format!(
+                ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
+                k.bandwidth, k.loo_error_m, k.lfs_error_m
+            )),
+            ranking.ranked.len()
+        ));
+    }
+
+    pub(super) fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
+        let adapt = self.input.cfg.adapt;
+        self.log.push(RoundLog {
+            round: round.index,
+            first_candidate: round.first,
+            candidates: round.drawn,
+            local_candidates: (self.candidates[round.first as usize..].iter())
+                .filter(|c| c.parents.is_some())
+                .count(),
+            local_flight_share: if adapt { share } else { 0.0 },
+            near_miss_parents: round.children > 0 && round.lineage == Lineage::NearMisses,
+            flights,
+            bias_m,
+            surrogate: self.surrogate,
+            draw_means: std::array::from_fn(|d| self.distribution.mean(d)),
+        });
+    }
+
+    /// Learns from every flight so far; with `adapt`, refits the histogram (backed off when the round flew
+    /// fewer than its share of the budget: `starved`).
+    pub(super) fn learn(&mut self, starved: bool, stages: &mut StageTimes) {
+        let t = Instant::now();
+        let taught = Learning::from(&self.start_calibration, &self.journal, &self.candidates);
+        self.calibration = taught.calibration.clone();
+        if self.input.cfg.adapt {
+            let fit = (self.input.cfg, starved);
+            self.distribution = refit(&self.distribution, &self.candidates, &self.journal, &taught, fit);
+        }
+        self.carried = Some((self.flights.len(), taught));
+        stages.learn_s += t.elapsed().as_secs_f64();
+    }
+}

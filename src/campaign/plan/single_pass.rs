@@ -1,0 +1,138 @@
+//! The static campaign (`--no-learn`, or without screening): every candidate drawn and screened at once, the
+//! budget flown in one pass down the ranking. It shares the stage functions of the learning campaign's rounds
+//! but not their loop: its screening cache (`screening.json`), its journal records (no calibrated prediction
+//! beside the LFS's own) and its unscreened mode (flights in draw order) must stay as they are, so resumes of
+//! existing campaign folders and the paper's baseline keep their meaning.
+
+use std::time::Instant;
+
+use crate::campaign::candidate::{Candidate, Screened, check_journaled_as_drawn};
+use crate::campaign::config::{CampaignError, CampaignInput};
+use crate::campaign::fly::stage::{FlightStage, fly_ranked};
+use crate::campaign::fly::vehicle::Vehicle;
+use crate::campaign::plan::rank::rank_unflown;
+use crate::campaign::report::outputs::StageTimes;
+use crate::campaign::screen::stages::{
+    ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all,
+};
+use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
+use crate::generator::{DrawDistribution, Generator};
+
+/// Draws, screens, ranks and flies; returns the number of candidates drawn.
+pub fn run_static(
+    input: &CampaignInput,
+    vehicles: &mut Vec<Box<dyn Vehicle>>,
+    stages: &mut StageTimes,
+) -> Result<usize, CampaignError> {
+    let t = Instant::now();
+    let mut candidates = draw_all(input)?;
+    let journal = input.folder.join("journal.jsonl");
+    check_journaled_as_drawn(&Journal::read_all(&journal)?, &candidates, 0..u64::MAX, &journal)
+        .map_err(CampaignError::Config)?;
+    stages.sample_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    screen(input, &mut candidates)?;
+    stages.screen_s = t.elapsed().as_secs_f64();
+    let done = Journal::read(&input.folder.join("journal.jsonl"))?;
+    let (ranked, remaining) = rank(input, &candidates, &done, stages)?;
+    let t = Instant::now();
+    let flight = FlightStage {
+        case: input.case,
+        candidates: &candidates,
+        folder: input.folder,
+        progress: input.progress,
+        cancel: input.cancel,
+        done: &done,
+        confirm: input.cfg.confirm,
+        waves: input.cfg.repeatable_vehicles(),
+    };
+    let (_, fleet) = fly_ranked(&flight, ranked, vehicles, remaining)?;
+    stages.fly_s = t.elapsed().as_secs_f64();
+    stages.add_fleet(fleet);
+    Ok(input.cfg.candidates)
+}
+
+/// Every candidate, from the generator's uniform distribution.
+fn draw_all(input: &CampaignInput) -> Result<Vec<Candidate>, CampaignError> {
+    let cfg = input.cfg;
+    let generator = Generator::new(input.case, cfg.generator.clone(), cfg.seed)?;
+    input.progress.stage("sample", cfg.candidates);
+    let candidates = (0..cfg.candidates as u64)
+        .map(|i| {
+            generator
+                .sample(i)
+                .map(|p| Candidate::drawn(p.obstacles.to_vec(), p.draw.unit))
+        })
+        .collect::<Result<_, _>>()?;
+    input.progress.tick(cfg.candidates);
+    Ok(candidates)
+}
+
+fn stage<'a>(input: &CampaignInput<'a>, candidates: &'a [Candidate]) -> Stage<'a> {
+    Stage {
+        case: input.case,
+        candidates,
+        folder: input.folder,
+        screener: input.screener,
+        progress: input.progress,
+        cancel: input.cancel,
+    }
+}
+
+/// Screens every candidate; without screening each is "predicted" at 0 m, so the ranking keeps the order they
+/// were drawn in.
+fn screen(input: &CampaignInput, candidates: &mut [Candidate]) -> Result<(), CampaignError> {
+    let n = candidates.len() as u64;
+    let screened: Vec<Screened> = if input.cfg.screen {
+        let uniform = DrawDistribution::uniform();
+        screen_all(&stage(input, candidates), 0..n, "screening.json", &uniform, &[])?
+    } else {
+        (0..n)
+            .map(|candidate| Screened::point(candidate, 0.0, 0.0, "unscreened".into()))
+            .collect()
+    };
+    for (c, s) in candidates.iter_mut().zip(screened) {
+        c.screened = Some(s);
+    }
+    Ok(())
+}
+
+/// The unflown candidates to fly within what the budget has left after the journaled flights `done`, and that
+/// many.
+fn rank(
+    input: &CampaignInput,
+    candidates: &[Candidate],
+    done: &[FlightRecord],
+    stages: &mut StageTimes,
+) -> Result<(Vec<Screened>, usize), CampaignError> {
+    let cfg = input.cfg;
+    let remaining = cfg.budget.saturating_sub(flights_charged(done));
+    let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
+    let mut fresh: Vec<Screened> = (candidates.iter())
+        .filter_map(|c| c.screened.clone())
+        .filter(|s| !flown.contains(&s.candidate))
+        .collect();
+    if cfg.screen && cfg.ensemble > 0 {
+        let t = Instant::now();
+        let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
+        let members = ensemble_shortlist(&stage(input, candidates), &fresh, cfg, shortlist)?;
+        apply_ensemble(&mut fresh, &members, &input.screener.ensemble_params());
+        stages.ensemble_s = t.elapsed().as_secs_f64();
+    }
+    let ranked = rank_unflown(&fresh, done, candidates, cfg, remaining);
+    if !done.is_empty() {
+        input.progress.note(&format!(
+            "resuming: {} flights already journaled, {} left in the budget",
+            flights_charged(done),
+            remaining
+        ));
+    }
+    input.progress.note(&format!(
+        "{} of {} candidates predicted below {} m; flying {}",
+        fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count(),
+        cfg.candidates,
+        cfg.threshold_m,
+        ranked.len()
+    ));
+    Ok((ranked, remaining))
+}

@@ -1,0 +1,407 @@
+//! The campaign's journal: one JSON line per finished flight, synced to disk before anything else happens,
+//! so a killed campaign can resume without flying a test twice.
+
+use std::collections::{HashMap, HashSet};
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::io::write_atomic;
+use crate::model::{ModelError, Obstacle};
+
+/// One finished flight.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlightRecord {
+    /// The candidate's index (its generator index for the campaign's seed).
+    pub candidate: u64,
+    /// Which flight of the candidate this is, from 0: a failing test is flown again to confirm it
+    /// (`--confirm`). Left out when 0, so journals without re-flights read and write as before.
+    #[serde(default, skip_serializing_if = "is_first")]
+    pub attempt: u32,
+    /// Its obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// The LFS's predicted minimum distance, metres.
+    pub predicted_min_distance: f64,
+    /// The LFS's predicted flight time, seconds.
+    pub predicted_flight_time_s: f64,
+    /// The LFS ensemble's probability of a flight below 1.5 m (absent without an ensemble).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub predicted_p_fail: Option<f64>,
+    /// The LFS's own prediction when `predicted_min_distance` is calibrated (a learning campaign), metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub predicted_raw_min_distance: Option<f64>,
+    /// The flown minimum distance (competition definition), metres; `None` if nothing usable was recorded.
+    pub min_distance: Option<f64>,
+    /// The flown un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// How the flight ended (`landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...).
+    pub status: String,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+    /// Warnings of the flight side (e.g. the avoidance planner falling behind).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+    /// Why the flight stopped, in words, when it did not land (optional: journals without it still resume).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// The vehicle (MAVLink URL or `mock`) that flew it.
+    pub vehicle: String,
+    /// The trajectory CSV, relative to the campaign folder.
+    pub trajectory: PathBuf,
+    /// Wall-clock seconds the flight took.
+    pub wall_s: f64,
+}
+
+/// The status of a flight cut short by the user (Ctrl-C): journaled so the trajectory is kept, but not charged to
+/// the budget, not learnt from, and flown first on `--resume`.
+pub const INTERRUPTED: &str = "interrupted";
+
+/// The status of a flight whose backend failed around it (a PX4 that died or never booted, a runner job that
+/// exited non-zero or left no trajectory) after its one retry: the vehicle, not the test, is at fault.
+pub const BACKEND_FAILED: &str = "backend_failed";
+
+/// Statuses of flights that are journaled but not charged to the budget: nothing was learnt about the test.
+pub const UNCHARGED: &[&str] = &[INTERRUPTED, BACKEND_FAILED];
+
+impl FlightRecord {
+    /// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
+    pub fn queued(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
+        busy.iter()
+            .map(|(candidate, obstacles)| FlightRecord {
+                candidate: *candidate,
+                attempt: 0,
+                obstacles: obstacles.clone(),
+                predicted_min_distance: f64::NAN,
+                predicted_flight_time_s: 0.0,
+                predicted_p_fail: None,
+                predicted_raw_min_distance: None,
+                min_distance: None,
+                min_distance_raw: None,
+                status: "queued".into(),
+                flight_time_s: 0.0,
+                warnings: Vec::new(),
+                reason: None,
+                vehicle: String::new(),
+                trajectory: PathBuf::new(),
+                wall_s: 0.0,
+            })
+            .collect()
+    }
+
+    /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
+    pub fn charged(&self) -> bool {
+        !UNCHARGED.contains(&self.status.as_str())
+    }
+}
+
+/// A test's first flight (serde leaves its `attempt` out).
+pub(crate) fn is_first(attempt: &u32) -> bool {
+    *attempt == 0
+}
+
+/// The flights of `records` charged to the budget. Every budget count goes through here.
+pub fn flights_charged(records: &[FlightRecord]) -> usize {
+    records.iter().filter(|r| r.charged()).count()
+}
+
+/// An append-only JSONL journal.
+#[derive(Debug)]
+pub struct Journal {
+    path: PathBuf,
+    file: File,
+}
+
+impl Journal {
+    /// Opens (creating if needed) the journal at `path` for appending.
+    pub fn open(path: &Path) -> Result<Self, ModelError> {
+        let file = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|source| ModelError::Io {
+                path: path.to_path_buf(),
+                action: "cannot open for appending",
+                source,
+            })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// Where the journal is.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Appends one record and syncs it to disk before returning.
+    pub fn append(&mut self, record: &FlightRecord) -> Result<(), ModelError> {
+        let io = |source| ModelError::Io {
+            path: self.path.clone(),
+            action: "cannot append to",
+            source,
+        };
+        let mut line = serde_json::to_string(record).map_err(|e| io(std::io::Error::other(e)))?;
+        line.push('\n');
+        self.file.write_all(line.as_bytes()).map_err(io)?;
+        self.file.sync_data().map_err(io)
+    }
+
+    /// `record` as [`Self::read`] gives it back (a non-finite optional distance is stored as `null`), so a
+    /// campaign keeping its journal in memory sees what a resumed one reads.
+    pub fn read_back(record: &FlightRecord) -> FlightRecord {
+        serde_json::to_string(record)
+            .ok()
+            .and_then(|line| serde_json::from_str(&line).ok())
+            .unwrap_or_else(|| record.clone())
+    }
+
+    /// Reads the flights charged to the budget, the ones a campaign learns from and reports (not those
+    /// [`UNCHARGED`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
+    /// [`Self::heal`] drops it; a damaged line elsewhere, or a flight (candidate and attempt) journaled twice,
+    /// is an error.
+    pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        Ok(Self::read_all(path)?
+            .into_iter()
+            .filter(FlightRecord::charged)
+            .collect())
+    }
+
+    /// Reads every record, charged or not, in journal order. Errors as [`Self::read`].
+    pub fn read_all(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        Ok(parse(&read_bytes(path)?, path)?.records)
+    }
+
+    /// The interrupted flights still to fly: the last interrupted record of each candidate that has no charged
+    /// flight, in journal order.
+    pub fn interrupted(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
+        let all = Self::read_all(path)?;
+        let charged: HashSet<u64> = all.iter().filter(|r| r.charged()).map(|r| r.candidate).collect();
+        let mut pending: Vec<FlightRecord> = Vec::new();
+        for r in all
+            .into_iter()
+            .filter(|r| r.status == INTERRUPTED && !charged.contains(&r.candidate))
+        {
+            pending.retain(|p| p.candidate != r.candidate);
+            pending.push(r);
+        }
+        Ok(pending)
+    }
+
+    /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so
+    /// the next record starts on a line of its own; says what was dropped, for the user. Errors as
+    /// [`Self::read`].
+    pub fn heal(path: &Path) -> Result<Option<String>, ModelError> {
+        let bytes = read_bytes(path)?;
+        let parsed = parse(&bytes, path)?;
+        let Some(tail) = parsed.unterminated else {
+            return Ok(None);
+        };
+        let (kept, message) = match parsed.torn {
+            Some(line) => {
+                let dropped = String::from_utf8_lossy(&bytes[tail..]);
+                let preview: String = dropped.chars().take(60).collect();
+                let message = format!(
+                    "{}:{line}: dropped a torn last line ({} bytes, {preview:?}...): the flight being written \
+                     when the campaign stopped; it is flown again",
+                    path.display(),
+                    bytes.len() - tail
+                );
+                (bytes[..tail].to_vec(), Some(message))
+            }
+            None => ([bytes.as_slice(), b"\n"].concat(), None),
+        };
+        write_atomic(path, &kept)?;
+        Ok(message)
+    }
+}
+
+/// The journal's bytes; none when there is no journal yet.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
+    match std::fs::read(path) {
+        Ok(b) => Ok(b),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
+        Err(source) => Err(ModelError::Io {
+            path: path.to_path_buf(),
+            action: "cannot read",
+            source,
+        }),
+    }
+}
+
+/// A journal's records, checked line by line.
+struct Parsed {
+    records: Vec<FlightRecord>,
+    /// Where the last line starts when it has no newline.
+    unterminated: Option<usize>,
+    /// That line's number when it is not a record (a torn write).
+    torn: Option<usize>,
+}
+
+fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
+    let syntax = |line: usize, message: String| ModelError::Syntax {
+        path: path.to_path_buf(),
+        line: Some(line),
+        column: None,
+        message,
+    };
+    let mut parsed = Parsed {
+        records: Vec::new(),
+        unterminated: None,
+        torn: None,
+    };
+    let mut lines_of: HashMap<(u64, u32), usize> = HashMap::new();
+    let mut offset = 0;
+    for (i, line) in bytes.split(|b| *b == b'\n').enumerate() {
+        let (number, start) = (i + 1, offset);
+        offset += line.len() + 1;
+        let last = offset > bytes.len();
+        if last && !line.is_empty() {
+            parsed.unterminated = Some(start);
+        }
+        if line.trim_ascii().is_empty() {
+            continue;
+        }
+        let record = std::str::from_utf8(line)
+            .map_err(|e| e.to_string())
+            .and_then(|text| serde_json::from_str::<FlightRecord>(text).map_err(|e| e.to_string()));
+        let record = match record {
+            Ok(r) => r,
+            Err(_) if last => {
+                parsed.torn = Some(number);
+                break;
+            }
+            Err(e) => {
+                return Err(syntax(
+                    number,
+                    format!(
+                        "not a journal record ({e}); only a torn last line is dropped on resume: delete this \
+                         line (its flight is flown again) or restore the journal, then resume"
+                    ),
+                ));
+            }
+        };
+        if record.charged()
+            && let Some(first) = lines_of.insert((record.candidate, record.attempt), number)
+        {
+            let flight = match record.attempt {
+                0 => String::new(),
+                a => format!(" (flight {})", a + 1),
+            };
+            return Err(syntax(
+                number,
+                format!(
+                    "candidate {}{flight} is journaled twice (lines {first} and {number}); a flight is journaled \
+                     once: delete one of the two lines, then resume",
+                    record.candidate
+                ),
+            ));
+        }
+        parsed.records.push(record);
+    }
+    Ok(parsed)
+}
+
+/// A landed flight with no obstacles for tests: `raw` predicted, `flown` measured.
+#[cfg(test)]
+pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> FlightRecord {
+    FlightRecord {
+        candidate,
+        attempt: 0,
+        obstacles: Vec::new(),
+        predicted_min_distance: raw,
+        predicted_flight_time_s: 60.0,
+        predicted_p_fail: None,
+        predicted_raw_min_distance: Some(raw),
+        min_distance: flown,
+        min_distance_raw: flown,
+        status: "landed".into(),
+        flight_time_s: 60.0,
+        warnings: Vec::new(),
+        reason: None,
+        vehicle: "x".into(),
+        trajectory: "t.csv".into(),
+        wall_s: 1.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(in crate::campaign) fn record(candidate: u64) -> FlightRecord {
+        FlightRecord {
+            candidate,
+            attempt: 0,
+            obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
+            predicted_min_distance: 0.5,
+            predicted_flight_time_s: 40.0,
+            predicted_p_fail: None,
+            predicted_raw_min_distance: None,
+            min_distance: Some(1.0),
+            min_distance_raw: Some(0.9),
+            status: "landed".into(),
+            flight_time_s: 41.0,
+            warnings: Vec::new(),
+            reason: None,
+            vehicle: "mock".into(),
+            trajectory: "flights/candidate_1.csv".into(),
+            wall_s: 0.3,
+        }
+    }
+
+    pub(in crate::campaign) fn line(candidate: u64) -> String {
+        serde_json::to_string(&record(candidate)).unwrap() + "\n"
+    }
+
+    #[test]
+    fn append_and_read_back_ignoring_a_torn_last_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let mut j = Journal::open(&path).unwrap();
+        j.append(&record(1)).unwrap();
+        j.append(&record(7)).unwrap();
+        drop(j);
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(b"{\"candidate\": 9, \"obst").unwrap();
+        let back = Journal::read(&path).unwrap();
+        assert_eq!(back, vec![record(1), record(7)]);
+        assert!(Journal::read(&dir.path().join("none.jsonl")).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_stop_reason_is_kept_and_older_lines_read_without_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let stopped = FlightRecord {
+            status: "link_lost".into(),
+            reason: Some("no MISSION_ACK within 1.0 s".into()),
+            min_distance: None,
+            ..record(2)
+        };
+        let mut j = Journal::open(&path).unwrap();
+        j.append(&stopped).unwrap();
+        drop(j);
+        assert_eq!(Journal::read(&path).unwrap(), vec![stopped]);
+        let old = serde_json::to_string(&record(1)).unwrap();
+        assert!(!old.contains("reason"), "{old}");
+        std::fs::write(&path, format!("{old}\n")).unwrap();
+        assert_eq!(Journal::read(&path).unwrap()[0].reason, None);
+    }
+
+    #[test]
+    fn a_corrupt_middle_line_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("journal.jsonl");
+        let good = serde_json::to_string(&record(1)).unwrap();
+        std::fs::write(&path, format!("{good}\nnot json\n{good}\n")).unwrap();
+        let e = Journal::read(&path).unwrap_err().to_string();
+        assert!(e.contains("journal.jsonl:2"), "{e}");
+    }
+}
+
+#[cfg(test)]
+#[path = "journal_tests.rs"]
+mod journal_tests;
