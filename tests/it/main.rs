@@ -40,6 +40,27 @@ pub fn case(n: u32) -> TestCase {
     TestCase::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The PX4 SITL binary a test flies (`PX4_SITL_BIN`, the user's own build's `bin/px4`). A test that needs it
+/// fails without it, naming the variable: an ignored test run on purpose must check something.
+pub fn px4_sitl_bin() -> PathBuf {
+    match std::env::var_os("PX4_SITL_BIN") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => panic!(
+            "this test flies PX4 SITL: set PX4_SITL_BIN=/path/to/PX4-Autopilot/build/px4_sitl_default/bin/px4 \
+             (a PX4 SITL you built; docs/px4.md)"
+        ),
+    }
+}
+
+/// The build folder of [`px4_sitl_bin`] (`BUILD/bin/px4`).
+pub fn px4_sitl_build() -> PathBuf {
+    let bin = px4_sitl_bin();
+    match bin.parent().and_then(Path::parent) {
+        Some(build) => build.to_path_buf(),
+        None => panic!("PX4_SITL_BIN={} is not BUILD/bin/px4", bin.display()),
+    }
+}
+
 /// Runs the `prgenuav` binary in the repo root; returns (exit code, stdout, stderr).
 pub fn prgenuav(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_prgenuav"))

@@ -6,7 +6,6 @@
 //! The campaign's PX4 vehicle flies each flight on a fresh instance (instance 5 here, apart from the other
 //! PX4 tests' 1-4), keeps its console and ULog, and leaves no process behind, even when prgenuav is killed.
 
-use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
@@ -16,24 +15,13 @@ use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::generator::{Generator, GeneratorConfig};
 
 use super::campaign::{output_folder, spawn, verify_folder, wait_bounded};
-use super::case;
+use super::{case, px4_sitl_build};
 use super::px4_fake::killed_parent_leaves_no_px4;
-
-/// The build folder of `PX4_SITL_BIN` (BUILD/bin/px4), or `None` (the caller skips with a message).
-fn px4_build() -> Option<PathBuf> {
-    let Some(bin) = std::env::var_os("PX4_SITL_BIN") else {
-        eprintln!(
-            "px4_sitl: skipped: set PX4_SITL_BIN=/path/to/build/px4_sitl_default/bin/px4 (PX4 v1.14 SITL you built)"
-        );
-        return None;
-    };
-    PathBuf::from(bin).parent()?.parent().map(PathBuf::from)
-}
 
 #[test]
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
 fn px4_sitl_vehicle_flies_each_flight_on_a_fresh_instance() {
-    let Some(build) = px4_build() else { return };
+    let build = px4_sitl_build();
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -94,7 +82,7 @@ fn px4_sitl_vehicle_flies_each_flight_on_a_fresh_instance() {
 #[test]
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
 fn px4_sitl_a_killed_prgenuav_leaves_no_px4_behind() {
-    let Some(build) = px4_build() else { return };
+    let build = px4_sitl_build();
     // Killed once PX4 has booted and the flight is under way.
     killed_parent_leaves_no_px4(&build, Duration::from_secs(15), Some("px4"));
 }
@@ -102,7 +90,7 @@ fn px4_sitl_a_killed_prgenuav_leaves_no_px4_behind() {
 #[test]
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
 fn px4_sitl_a_campaign_killed_mid_flight_resumes_without_flying_twice() {
-    let Some(build) = px4_build() else { return };
+    let build = px4_sitl_build();
     let out = tempfile::tempdir().unwrap();
     let (build, dir) = (build.to_str().unwrap(), out.path().to_str().unwrap());
     let args = ["generate", "missions/mission2.yaml", "4", "--candidates", "12"];

@@ -9,7 +9,7 @@
 //! and stops every process it started, also when an assertion fails. One line per flight goes to stderr
 //! (mode, status, minimum distance, vehicle and wall time): README's conformance table is made from them.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::{Px4Sitl, SitlSpec};
@@ -17,23 +17,10 @@ use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, f
 use prgenuav::generator::{Generator, GeneratorConfig};
 use prgenuav::model::TestCase;
 
-use super::case;
+use super::{case, px4_sitl_bin};
 
 /// PX4_SIM_SPEED_FACTOR of every instance.
 const SPEED: f64 = 5.0;
-
-/// The user's PX4 binary, or `None` (the caller skips with a message).
-fn px4_bin() -> Option<PathBuf> {
-    match std::env::var_os("PX4_SITL_BIN") {
-        Some(p) => Some(PathBuf::from(p)),
-        None => {
-            eprintln!(
-                "px4_sitl: skipped: set PX4_SITL_BIN=/path/to/build/px4_sitl_default/bin/px4 (PX4 v1.14 SITL you built)"
-            );
-            None
-        }
-    }
-}
 
 /// Starts instance `instance` (its API link sends to UDP 14540 + instance), stopped when dropped.
 fn start(bin: &Path, instance: u8) -> Px4Sitl {
@@ -131,7 +118,7 @@ fn landed_at_the_land_point(r: &FlightReport, test: &TestCase, mode: FlyMode) ->
 }
 
 async fn all_modes(instance: u8, mission: u32) {
-    let Some(bin) = px4_bin() else { return };
+    let bin = px4_sitl_bin();
     let test = generated(mission, 0);
     for mode in [FlyMode::Mission, FlyMode::Avoidance, FlyMode::Offboard] {
         // A fresh instance per mode: every flight starts at home.
@@ -170,7 +157,7 @@ async fn px4_sitl_mission_3_all_modes() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_two_flights_in_a_row() {
-    let Some(bin) = px4_bin() else { return };
+    let bin = px4_sitl_bin();
     let px4 = start(&bin, 4);
     let first = generated(2, 1);
     let r1 = fly_on(&px4, &first, FlyMode::Avoidance, "row 1/2 mission 2").await;

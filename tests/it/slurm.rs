@@ -207,16 +207,7 @@ fn a_campaign_flies_its_tests_as_slurm_jobs() {
 #[test]
 #[ignore = "needs root, slurm-wlm, munge and PX4_SITL_BIN: cargo test --release --test it slurm -- --ignored"]
 fn a_campaign_flies_px4_flights_as_slurm_jobs() {
-    let Some(bin) = std::env::var_os("PX4_SITL_BIN").map(PathBuf::from) else {
-        eprintln!("skipped: set PX4_SITL_BIN to your PX4 v1.14 build's bin/px4 to fly PX4 through Slurm");
-        return;
-    };
-    let build = bin
-        .parent()
-        .and_then(Path::parent)
-        .expect("BUILD/bin/px4")
-        .display()
-        .to_string();
+    let build = super::px4_sitl_build().display().to_string();
     let cluster = Cluster::start();
     let out = tempfile::tempdir().unwrap();
     let srun = format!(
