@@ -4,15 +4,15 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use prgenuav::campaign::learn::surrogate::{Flown, Surrogate};
+use prgenuav::campaign::learn::surrogate::{KernelPoint, Surrogate};
 
 /// `n` flights spread over the unit draws, a smooth truth the LFS partly misses (deterministic).
-fn flights(n: usize) -> Vec<Flown> {
+fn flights(n: usize) -> Vec<KernelPoint> {
     (0..n)
         .map(|i| {
             let unit = std::array::from_fn(|d| ((i * (2 * d + 3) + d) % 97) as f64 / 97.0);
             let flown_m = 1.2 + unit[2] + 0.5 * unit[3];
-            Flown {
+            KernelPoint {
                 unit,
                 lfs_m: 1.6 + 0.3 * unit[2],
                 flown_m,

@@ -25,6 +25,29 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T, pretty: bool) -> Result<
     write_atomic(path, json.as_bytes())
 }
 
+/// FNV-1a of `bytes` from an offset basis mixed with `seed` (seed 0: the standard FNV-1a): a hash that stays
+/// the same across runs, platforms and Rust versions, as file names and fold assignments must (the std
+/// hasher does not).
+pub fn fnv1a(bytes: &[u8], seed: u64) -> u64 {
+    let basis = 0xcbf2_9ce4_8422_2325_u64 ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    bytes
+        .iter()
+        .fold(basis, |h, b| (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+#[cfg(test)]
+mod hash_tests {
+    use super::fnv1a;
+
+    #[test]
+    fn seed_zero_is_the_standard_fnv1a() {
+        assert_eq!(fnv1a(b"", 0), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a", 0), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a(b"foobar", 0), 0x8594_4171_f739_67e8);
+        assert_ne!(fnv1a(b"a", 1), fnv1a(b"a", 0));
+    }
+}
+
 #[cfg(all(test, unix))]
 mod tests {
     use std::os::unix::ffi::OsStrExt;

@@ -15,8 +15,8 @@ use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::generator::{Generator, GeneratorConfig};
 
 use super::campaign::{output_folder, spawn, verify_folder, wait_bounded};
-use super::{case, px4_sitl_build};
 use super::px4_fake::killed_parent_leaves_no_px4;
+use super::{case, px4_sitl_build};
 
 #[test]
 #[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]

@@ -1,7 +1,7 @@
 //! Starting a PX4 SITL binary the user built (PX4 v1.14, SIH quadrotor, headless) for tests and reference
 //! runs. Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
 //! `make px4_sitl sihsim_quadx` target does, in a private working directory, and stops it when dropped
-//! ([`spawn`]: also when prgenuav is killed). [`build`] checks the user's build folder.
+//! (`spawn`: also when prgenuav is killed). `build` checks the user's build folder.
 
 mod build;
 pub mod slot;
@@ -271,7 +271,7 @@ impl Px4Sitl {
         found
     }
 
-    /// The console's last `n` lines (at most [`CONSOLE_LINES`]), oldest first, terminal colours removed.
+    /// The console's last `n` lines (at most `CONSOLE_LINES`), oldest first, terminal colours removed.
     pub fn console_tail(&self, n: usize) -> Vec<String> {
         let lines = self.console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         lines.iter().skip(lines.len().saturating_sub(n)).cloned().collect()

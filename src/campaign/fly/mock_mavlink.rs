@@ -117,10 +117,7 @@ fn flight_seed(seed: u64, trajectory_csv: &Path) -> u64 {
         .file_name()
         .map(|n| n.as_encoded_bytes())
         .unwrap_or_default();
-    let fnv = name.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
-        (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
-    });
-    mock_autopilot::gusts::flight_seed(seed, fnv)
+    mock_autopilot::gusts::flight_seed(seed, crate::io::fnv1a(name, 0))
 }
 
 /// The embedded mock autopilot, started afresh for every flight on an ephemeral loopback port.

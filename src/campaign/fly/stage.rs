@@ -37,7 +37,7 @@ pub struct FlightStage<'a> {
 
 /// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
 /// within `remaining` flights, journaling each; returns the flights made, as the journal reads them back, in
-/// its order, and how busy the vehicles were. A failing flight's test is flown again before the next new candidate (see [`fly_all`]).
+/// its order, and how busy the vehicles were. A failing flight's test is flown again before the next new candidate (see [`crate::campaign::fly::fleet::fly_all`]).
 /// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
 /// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
 /// must not end as a clean run that found no failing test.

@@ -11,7 +11,7 @@
 use crate::campaign::candidate::{Candidate, Screened, unit_of};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::learn::calibration::Calibration;
-use crate::campaign::learn::surrogate::{Flown, Surrogate};
+use crate::campaign::learn::surrogate::{KernelPoint, Surrogate};
 use crate::campaign::plan::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
@@ -47,7 +47,7 @@ pub fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
 pub struct Learning {
     /// The LFS's calibration.
     pub calibration: Calibration,
-    points: Vec<Flown>,
+    points: Vec<KernelPoint>,
     /// The flights' kernel, when there are enough flights to choose one.
     pub kernel: Option<Surrogate>,
 }
@@ -61,10 +61,10 @@ impl Learning {
         done.sort_by_key(|r| r.candidate);
         let done = &done[..];
         let calibration = calibrated(start, done);
-        let points: Vec<Flown> = done
+        let points: Vec<KernelPoint> = done
             .iter()
             .filter_map(|r| {
-                Some(Flown {
+                Some(KernelPoint {
                     unit: unit_of(candidates, r.candidate)?,
                     lfs_m: calibration.predict(r.predicted_raw_min_distance?),
                     flown_m: r.min_distance.filter(|d| d.is_finite())?,

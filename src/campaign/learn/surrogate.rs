@@ -23,9 +23,9 @@ pub const LFS_WEIGHTS: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// Fewer flights than this teach nothing a cross-validation can check.
 pub const MIN_FLIGHTS: usize = 8;
 
-/// One flown test.
+/// One flown test as the kernel sees it: where it was drawn, what the LFS predicted, what it flew.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Flown {
+pub struct KernelPoint {
     /// Its unit draws.
     pub unit: [f64; DIMS],
     /// The calibrated LFS prediction for it, metres.
@@ -52,7 +52,7 @@ pub struct Surrogate {
 impl Surrogate {
     /// The kernel with the lowest leave-one-out error on `flights`; `None` with fewer than [`MIN_FLIGHTS`]
     /// or when none beats the calibrated LFS alone.
-    pub fn fit(flights: &[Flown]) -> Option<Self> {
+    pub fn fit(flights: &[KernelPoint]) -> Option<Self> {
         if flights.len() < MIN_FLIGHTS {
             return None;
         }
@@ -86,11 +86,11 @@ impl Surrogate {
     }
 
     /// The prediction for a test at `unit` whose calibrated LFS prediction is `lfs_m`.
-    pub fn predict(&self, unit: &[f64; DIMS], lfs_m: f64, flights: &[Flown]) -> f64 {
+    pub fn predict(&self, unit: &[f64; DIMS], lfs_m: f64, flights: &[KernelPoint]) -> f64 {
         self.predict_without(unit, lfs_m, flights, None)
     }
 
-    fn predict_without(&self, unit: &[f64; DIMS], lfs_m: f64, flights: &[Flown], skip: Option<usize>) -> f64 {
+    fn predict_without(&self, unit: &[f64; DIMS], lfs_m: f64, flights: &[KernelPoint], skip: Option<usize>) -> f64 {
         let two_h2 = 2.0 * self.bandwidth * self.bandwidth;
         let (mut num, mut den) = (self.lfs_weight * lfs_m, self.lfs_weight);
         for (i, f) in flights.iter().enumerate() {
@@ -112,8 +112,8 @@ mod tests {
 
     use super::*;
 
-    fn flown(x: f64, lfs_m: f64, flown_m: f64) -> Flown {
-        Flown {
+    fn flown(x: f64, lfs_m: f64, flown_m: f64) -> KernelPoint {
+        KernelPoint {
             unit: [x, 0.5, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0],
             lfs_m,
             flown_m,
@@ -123,7 +123,7 @@ mod tests {
     #[test]
     fn a_smooth_truth_the_lfs_misses_is_learnt_from_the_neighbours() {
         // The truth rises with draw 0; the LFS says 2 m everywhere.
-        let flights: Vec<Flown> = (0..40)
+        let flights: Vec<KernelPoint> = (0..40)
             .map(|i| {
                 let x = i as f64 / 40.0;
                 flown(x, 2.0, 1.0 + 2.0 * x)
@@ -142,11 +142,11 @@ mod tests {
 
     #[test]
     fn no_kernel_when_the_lfs_is_right_or_the_flights_are_few() {
-        let exact: Vec<Flown> = (0..20)
+        let exact: Vec<KernelPoint> = (0..20)
             .map(|i| flown(i as f64 / 20.0, 1.0 + i as f64 * 0.1, 1.0 + i as f64 * 0.1))
             .collect();
         assert_eq!(Surrogate::fit(&exact), None);
-        let few: Vec<Flown> = (0..MIN_FLIGHTS - 1).map(|i| flown(i as f64 / 8.0, 2.0, 1.0)).collect();
+        let few: Vec<KernelPoint> = (0..MIN_FLIGHTS - 1).map(|i| flown(i as f64 / 8.0, 2.0, 1.0)).collect();
         assert_eq!(Surrogate::fit(&few), None);
     }
 
@@ -159,7 +159,7 @@ mod tests {
             h in 0usize..BANDWIDTHS.len(),
             k in 0usize..LFS_WEIGHTS.len(),
         ) {
-            let flights: Vec<Flown> = raw.iter().map(|(u, l, f)| Flown { unit: *u, lfs_m: *l, flown_m: *f }).collect();
+            let flights: Vec<KernelPoint> = raw.iter().map(|(u, l, f)| KernelPoint { unit: *u, lfs_m: *l, flown_m: *f }).collect();
             let s = Surrogate { bandwidth: BANDWIDTHS[h], lfs_weight: LFS_WEIGHTS[k], loo_error_m: 0.0, lfs_error_m: 0.0, flights: 0 };
             let p = s.predict(&x, lfs, &flights);
             let lo = flights.iter().map(|f| f.flown_m).fold(lfs, f64::min);

@@ -47,7 +47,7 @@ pub struct TestVerdict {
     pub first_flight: usize,
 }
 
-/// Every test that failed at least once, best first (see [`rank`]), confirmed against `confirm` flights;
+/// Every test that failed at least once, best first (see `rank`), confirmed against `confirm` flights;
 /// with the records of each test's flights, its best failing flight first.
 pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, Vec<&FlightRecord>)> {
     let mut out = Vec::new();

@@ -94,15 +94,6 @@ pub fn obstacle_set_key(case: &FlightCase) -> String {
     format!("{}:{}", case.mission_name, boxes.join(";"))
 }
 
-fn fnv(s: &str, seed: u64) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325 ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    for b in s.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x100_0000_01b3);
-    }
-    h
-}
-
 /// Distinct obstacle sets among `cases` (see [`obstacle_set_key`]): at most this many folds.
 pub fn obstacle_sets(cases: &[FlightCase]) -> usize {
     let mut keys: Vec<String> = cases.iter().map(obstacle_set_key).collect();
@@ -123,7 +114,7 @@ pub fn assign_folds(cases: &[FlightCase], k: usize, seed: u64) -> Option<Vec<usi
     if k < 2 || sets.len() < k {
         return None;
     }
-    sets.sort_by_key(|s| (fnv(s, seed), (*s).clone()));
+    sets.sort_by_key(|s| (crate::io::fnv1a(s.as_bytes(), seed), (*s).clone()));
     let fold_of: BTreeMap<&String, usize> = sets.iter().enumerate().map(|(i, s)| (*s, i % k)).collect();
     Some(keys.iter().map(|key| fold_of[key]).collect())
 }

@@ -11,7 +11,7 @@
 //! [`crate::campaign::plan::neighbours`]), and a share of its flights that follows their failure rate is offered to them. The
 //! others come from the histogram refitted on the elites after each round ([`crate::campaign::learn::refit::refit`]). Every
 //! child drawn and every candidate flown must keep the final failing tests' expected diversity above the
-//! user's floor ([`DiversityGuard`]).
+//! user's floor ([`crate::campaign::plan::diversity_guard::DiversityGuard`]).
 //!
 //! The rounds fly on one [`Fleet`] whose queue stays open: with `overlap` a round is planned while the previous
 //! one flies, learning from the rounds before that (one round of lag), so remote vehicles do not wait on the LFS.
