@@ -4,19 +4,18 @@
 //! (`spawn`: also when prgenuav is killed). `build` checks the user's build folder.
 
 mod build;
+mod console;
 pub mod slot;
 mod spawn;
 
-use std::collections::VecDeque;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::RecvTimeoutError;
-use std::sync::{Arc, Mutex};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 pub use build::{NotABuild, Px4Build};
+use console::{CONSOLE_LINES, Console};
 
 use crate::model::GeoPoint;
 
@@ -24,15 +23,8 @@ use crate::model::GeoPoint;
 /// 5-15 s).
 pub const BOOT_TIMEOUT: Duration = Duration::from_secs(60);
 
-/// Console lines kept for [`Px4Sitl::console_tail`]: enough for a flight's failsafe, landing and disarm
-/// messages, small enough to keep for every instance of a fleet.
-const CONSOLE_LINES: usize = 400;
-
 /// The competition's home (PX4 1.14's SIH reads these integer parameters in 1e-7 degrees).
 pub const COMPETITION_HOME_E7: (i64, i64) = (473_977_420, 85_455_940);
-
-/// The console line PX4's POSIX main prints once its startup script ran.
-const BOOTED: &str = "Startup script returned";
 
 /// What to start.
 #[derive(Debug, Clone)]
@@ -140,7 +132,7 @@ pub struct Px4Sitl {
     child: Child,
     instance: u8,
     dir: PathBuf,
-    console: Arc<Mutex<VecDeque<String>>>,
+    console: Console,
 }
 
 impl Px4Sitl {
@@ -174,27 +166,19 @@ impl Px4Sitl {
                 return Err(spawn_err(e));
             }
         };
-        // The reader thread ends with the process (its stdout closes); it keeps draining so PX4 never blocks,
-        // and keeps the console's last lines: PX4's own account of a flight that went wrong.
-        let (tx, rx) = std::sync::mpsc::channel();
-        let console = Arc::new(Mutex::new(VecDeque::with_capacity(CONSOLE_LINES)));
-        if let Some(out) = child.stdout.take() {
-            let console = Arc::clone(&console);
-            std::thread::spawn(move || {
-                for line in BufReader::new(out).lines().map_while(Result::ok) {
-                    if line.contains(BOOTED) {
-                        let _ = tx.send(());
-                    }
-                    keep_line(&console, line);
-                }
-            });
-        }
+        let (console, booted) = Console::follow(&mut child);
         let mut sitl = Px4Sitl {
             child,
             instance: spec.instance,
             dir,
             console,
         };
+        sitl.wait_booted(spec, &booted, stop)?;
+        Ok(sitl)
+    }
+
+    /// Waits until the console says the startup script ran, PX4 died, the boot timed out or `stop` rose.
+    fn wait_booted(&mut self, spec: &SitlSpec, booted: &Receiver<()>, stop: &AtomicBool) -> Result<(), SitlError> {
         let deadline = Instant::now() + spec.boot_timeout;
         loop {
             if stop.load(Ordering::Relaxed) {
@@ -203,20 +187,20 @@ impl Px4Sitl {
                 });
             }
             let left = deadline.saturating_duration_since(Instant::now());
-            match rx.recv_timeout(left.min(Duration::from_millis(100))) {
-                Ok(()) => return Ok(sitl),
+            match booted.recv_timeout(left.min(Duration::from_millis(100))) {
+                Ok(()) => return Ok(()),
                 Err(RecvTimeoutError::Disconnected) => {
                     return Err(SitlError::Died {
                         instance: spec.instance,
-                        status: sitl.exit_status(Duration::from_secs(2)),
-                        tail: sitl.console_tail(CONSOLE_LINES),
+                        status: self.exit_status(Duration::from_secs(2)),
+                        tail: self.console_tail(CONSOLE_LINES),
                     });
                 }
                 Err(RecvTimeoutError::Timeout) if left.is_zero() => {
                     return Err(SitlError::Boot {
                         instance: spec.instance,
                         secs: spec.boot_timeout.as_secs(),
-                        tail: sitl.console_tail(CONSOLE_LINES),
+                        tail: self.console_tail(CONSOLE_LINES),
                     });
                 }
                 Err(RecvTimeoutError::Timeout) => {}
@@ -273,8 +257,7 @@ impl Px4Sitl {
 
     /// The console's last `n` lines (at most `CONSOLE_LINES`), oldest first, terminal colours removed.
     pub fn console_tail(&self, n: usize) -> Vec<String> {
-        let lines = self.console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        lines.iter().skip(lines.len().saturating_sub(n)).cloned().collect()
+        self.console.tail(n)
     }
 }
 
@@ -288,36 +271,6 @@ fn collect_ulogs(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) {
             found.push(p);
         }
     }
-}
-
-/// Appends `line` without its ANSI colour codes, dropping the oldest line beyond [`CONSOLE_LINES`].
-fn keep_line(console: &Mutex<VecDeque<String>>, line: String) {
-    let plain = strip_ansi(&line);
-    let mut lines = console.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if lines.len() == CONSOLE_LINES {
-        lines.pop_front();
-    }
-    lines.push_back(plain);
-}
-
-/// `line` without `ESC [ ... letter` sequences (PX4 colours its console's INFO/WARN tags).
-fn strip_ansi(line: &str) -> String {
-    let mut out = String::with_capacity(line.len());
-    let mut chars = line.chars();
-    while let Some(c) = chars.next() {
-        if c == '\u{1b}' {
-            if chars.next() == Some('[') {
-                for c in chars.by_ref() {
-                    if c.is_ascii_alphabetic() {
-                        break;
-                    }
-                }
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
 
 impl Drop for Px4Sitl {
@@ -350,30 +303,6 @@ mod tests {
             etc_dir(Path::new("/b/px4_sitl_default/bin/px4")),
             PathBuf::from("/b/px4_sitl_default/etc")
         );
-    }
-
-    #[test]
-    fn colours_are_removed_from_console_lines() {
-        assert_eq!(
-            strip_ansi("INFO  [commander] \u{1b}[32mReady for takeoff!\u{1b}[0m"),
-            "INFO  [commander] Ready for takeoff!"
-        );
-        assert_eq!(
-            strip_ansi("WARN  [failsafe] Failsafe activated\t"),
-            "WARN  [failsafe] Failsafe activated\t"
-        );
-    }
-
-    #[test]
-    fn the_console_keeps_its_last_lines() {
-        let console = Mutex::new(VecDeque::new());
-        for i in 0..CONSOLE_LINES + 5 {
-            keep_line(&console, format!("line {i}"));
-        }
-        let lines = console.lock().unwrap();
-        assert_eq!(lines.len(), CONSOLE_LINES);
-        assert_eq!(lines.front().map(String::as_str), Some("line 5"));
-        assert_eq!(lines.back(), Some(&format!("line {}", CONSOLE_LINES + 4)));
     }
 
     #[test]
