@@ -127,13 +127,7 @@ pub fn draw_test(
     let mut u = unit_draws(rng, family, dist);
     let split = split_of(cfg, family, &mut u);
     let w = cfg.width_m;
-    // Obstacle 2 (length_factor x obstacle 1) must respect the length rule too.
-    let d_max = cfg
-        .diagonal_m
-        .max
-        .min(((arena.l.max.min(arena.w.max) / cfg.length_factor).powi(2) + w * w).sqrt());
-    let diagonal = cfg.diagonal_m.min + (d_max - cfg.diagonal_m.min) * u[0];
-    let length = (diagonal * diagonal - w * w).sqrt();
+    let (diagonal, length) = diagonal_and_length(cfg, arena, u[0]);
 
     // Canonical frame: flown towards +y, A on the left.
     let (s0, s1) = (mirror.point(soi.start, arena), mirror.point(soi.end, arena));
@@ -173,14 +167,7 @@ pub fn draw_test(
             boxes: [(c1, a, length), (c2, a2, length2)],
             w,
         };
-        let (c3, a3) = pair.third(ahead, (s0, s1))?;
-        obstacles.push(oriented(
-            mirror.point(c3, arena),
-            mirror.direction(a3),
-            length,
-            w,
-            cfg.height_m,
-        ));
+        obstacles.push(third_obstacle(&pair, ahead, (s0, s1), (mirror, arena), cfg)?);
     }
     let draw = Draw {
         diagonal_m: diagonal,
@@ -194,6 +181,37 @@ pub fn draw_test(
         unit: u,
     };
     Some((draw, obstacles))
+}
+
+/// Obstacle 1's diagonal and length from draw `t`; the diagonal's top is lowered so that obstacle 2
+/// (`length_factor` x obstacle 1) respects the length rule too.
+fn diagonal_and_length(cfg: &GeneratorConfig, arena: &Arena, t: f64) -> (f64, f64) {
+    let w = cfg.width_m;
+    let d_max = cfg
+        .diagonal_m
+        .max
+        .min(((arena.l.max.min(arena.w.max) / cfg.length_factor).powi(2) + w * w).sqrt());
+    let diagonal = cfg.diagonal_m.min + (d_max - cfg.diagonal_m.min) * t;
+    (diagonal, (diagonal * diagonal - w * w).sqrt())
+}
+
+/// The extended family's third box, `ahead` metres beyond the pair along the SoI, as long as obstacle 1;
+/// `None` when it cannot fit.
+fn third_obstacle(
+    pair: &Pair,
+    ahead: f64,
+    soi: (P2, P2),
+    (mirror, arena): (Mirror, &Arena),
+    cfg: &GeneratorConfig,
+) -> Option<Obstacle> {
+    let (c3, a3) = pair.third(ahead, soi)?;
+    Some(oriented(
+        mirror.point(c3, arena),
+        mirror.direction(a3),
+        pair.boxes[0].2,
+        pair.w,
+        cfg.height_m,
+    ))
 }
 
 fn lerp(r: Range, t: f64) -> f64 {

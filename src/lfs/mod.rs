@@ -15,6 +15,8 @@
 
 pub mod attitude;
 pub mod camera;
+mod column_slopes;
+pub mod delay;
 pub mod eval;
 pub mod frames;
 pub mod mission;

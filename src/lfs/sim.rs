@@ -11,6 +11,7 @@ use nalgebra::Vector3;
 
 use super::attitude::TiltState;
 use super::camera::Camera;
+use super::delay::DelayQueue;
 use super::frames::yaw_enu_to_ned_rad;
 use super::mission::{MissionParams, MissionRunner, Phase};
 use super::motion::{PaperParams, Px4Params, Vehicle, vertical_step};
@@ -55,7 +56,7 @@ pub struct World {
     mission: MissionRunner,
     motion: MotionState,
     command: Command,
-    pending: std::collections::VecDeque<Command>,
+    pending: DelayQueue<Command>,
     samples: Vec<Sample>,
     config: SimConfig,
     best_goal_dist_m: f64,
@@ -88,19 +89,7 @@ impl World {
         px4_params: &[Param],
         config: SimConfig,
     ) -> Result<Self, SimError> {
-        let ok = |v: f64| v.is_finite() && v > 0.0;
-        if !ok(config.dt_s) || !ok(config.timeout_s) || !ok(config.stuck_s) || !ok(config.progress_m) {
-            return Err(SimError::Setting(
-                "dt_s, timeout_s, stuck_s and progress_m must be positive",
-            ));
-        }
-        let mut params = config.planner.clone();
-        params.fovs = vec![config.camera.fov()];
-        // With the data-driven FOV the planner starts it at zero and widens it from each rendered frame.
-        // PX4-Avoidance reads MPC_XY_CRUISE from the vehicle; the case's parameters are what the vehicle has.
-        if let Some(v) = cruise_param(px4_params) {
-            params.mpc_xy_cruise_m_s = v;
-        }
+        let params = config.planner_params(px4_params)?;
         let planner = Planner::new(params.clone())?;
         let mission_params = config.mission.unwrap_or_else(|| MissionParams::from_params(px4_params));
         let mission = MissionRunner::new(mission, mission_params).ok_or(SimError::EmptyMission)?;
@@ -134,7 +123,7 @@ impl World {
             mission,
             motion,
             command: Command::Hold,
-            pending: std::collections::VecDeque::new(),
+            pending: DelayQueue::default(),
             samples: Vec::new(),
             config,
             best_goal_dist_m: f64::INFINITY,
@@ -277,14 +266,7 @@ impl World {
     fn integrate(&mut self, dt: f64) {
         // The motion model's control delay: act on the command of `delay` ticks ago (hold until there is one).
         let delay = self.config.motion.delay_ticks();
-        if delay > 0 {
-            self.pending.push_back(self.command);
-            self.command = if self.pending.len() > delay {
-                self.pending.pop_front().unwrap_or(Command::Hold)
-            } else {
-                Command::Hold
-            };
-        }
+        self.command = self.pending.act_on(self.command, delay, Command::Hold);
         self.move_vehicle(self.command, dt);
         if let Some(p) = &self.config.tilt {
             self.tilt
@@ -376,23 +358,7 @@ impl World {
         }
         let (old, new) = (self.config.motion.delay_ticks(), motion.delay_ticks());
         self.config.motion = motion;
-        if old == new {
-            return Ok(());
-        }
-        if old == 0 {
-            // No queue yet: the command acted on last is what the vehicle keeps doing.
-            self.pending = std::iter::repeat_n(self.command, new).collect();
-        } else if new == 0 {
-            self.pending.clear();
-        } else {
-            while self.pending.len() > new {
-                self.pending.pop_front();
-            }
-            while self.pending.len() < new {
-                let first = self.pending.front().copied().unwrap_or(self.command);
-                self.pending.push_front(first);
-            }
-        }
+        self.pending.resize(old, new, self.command);
         Ok(())
     }
 

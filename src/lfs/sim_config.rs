@@ -87,6 +87,26 @@ pub struct SimConfig {
     pub judge: Judge,
 }
 
+impl SimConfig {
+    /// The planner's parameters for a vehicle with `px4_params`, after checking the loop's own settings.
+    pub fn planner_params(&self, px4_params: &[Param]) -> Result<PlannerParams, SimError> {
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if !ok(self.dt_s) || !ok(self.timeout_s) || !ok(self.stuck_s) || !ok(self.progress_m) {
+            return Err(SimError::Setting(
+                "dt_s, timeout_s, stuck_s and progress_m must be positive",
+            ));
+        }
+        let mut params = self.planner.clone();
+        // With the data-driven FOV the planner starts it at zero and widens it from each rendered frame.
+        params.fovs = vec![self.camera.fov()];
+        // PX4-Avoidance reads MPC_XY_CRUISE from the vehicle; the case's parameters are what the vehicle has.
+        if let Some(v) = cruise_param(px4_params) {
+            params.mpc_xy_cruise_m_s = v;
+        }
+        Ok(params)
+    }
+}
+
 impl Default for SimConfig {
     fn default() -> Self {
         Self {

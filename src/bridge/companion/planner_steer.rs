@@ -12,7 +12,7 @@ use crate::lfs::params::PlannerParams;
 use crate::lfs::planner::{PlanInput, Planner, VehicleState};
 use crate::lfs::render::{CameraPose, Scene};
 use crate::lfs::render_fast::{FastRenderScratch, KeepRange, render_cloud};
-use crate::lfs::waypoint::{NavState, WaypointGenerator, WaypointInput};
+use crate::lfs::waypoint::{NavState, WaypointGenerator, WaypointInput, WaypointOutput};
 use crate::model::Obstacle;
 
 /// Planner period assumed for the first step, seconds.
@@ -88,21 +88,7 @@ impl Steer for PlannerSteer {
         };
         let dt = self.last_s.map_or(FIRST_DT_S, |t| input.now_s - t).max(0.0);
         self.last_s = Some(input.now_s);
-        self.frame.clear();
-        if pos.z > 0.05 {
-            let pose = CameraPose::level(pos, f64::from(state.yaw_enu_rad));
-            // Fails only with the camera inside a box: nothing sensible to plan.
-            render_cloud(
-                &self.scene,
-                &self.camera,
-                &pose,
-                self.keep,
-                &mut self.scratch,
-                &mut self.frame,
-            )
-            .ok()?;
-        }
-        self.planner.update_cloud(&self.frame, &state, dt as f32).ok()?;
+        self.sense(pos, &state, dt)?;
         let goal = ned_to_enu(&v3(input.goal_ned));
         let prev_goal = ned_to_enu(&v3(input.prev_goal_ned));
         let cruising = input.airborne && matches!(input.nav, Nav::Mission | Nav::Offboard);
@@ -115,13 +101,6 @@ impl Steer for PlannerSteer {
             };
             self.planner.plan(&plan_input).ok()?;
         }
-        let nav_state = match input.nav {
-            Nav::Mission => NavState::Mission,
-            Nav::Takeoff => NavState::AutoTakeoff,
-            Nav::Land => NavState::AutoLand,
-            Nav::Offboard => NavState::Offboard,
-            Nav::Other => NavState::AutoLoiter,
-        };
         self.generator.set_fovs(self.planner.fovs());
         let out = self.generator.step(
             &WaypointInput {
@@ -130,7 +109,7 @@ impl Steer for PlannerSteer {
                 prev_goal_enu: prev_goal,
                 stay: false,
                 is_airborne: input.airborne,
-                nav_state,
+                nav_state: nav_state(input.nav),
                 is_land_waypoint: input.nav == Nav::Land,
                 is_takeoff_waypoint: input.nav == Nav::Takeoff,
                 desired_vel_enu: input.desired_vel_ned.map(|v| ned_to_enu(&v3(v))),
@@ -138,17 +117,54 @@ impl Steer for PlannerSteer {
             },
             input.now_s,
         );
-        let sp = enu_to_ned(&out.position_enu);
-        // ENU (east, north, up) -> NED (north, east, down), per axis, unset stays unset.
-        let [ve, vn, vu] = out.velocity_enu;
-        let vel = [vn, ve, vu.map(|v| -v)].map(|v| v.map(f64::from).filter(|v| v.is_finite()));
-        let out = SteerOutput {
-            pos_ned: [f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)],
-            vel_ned: vel,
-            yaw_rad: Some(yaw_enu_to_ned_rad(f64::from(out.yaw_enu_rad))),
-        };
-        out.is_complete().then_some(out)
+        setpoint_ned(&out)
     }
+}
+
+impl PlannerSteer {
+    /// Renders what the camera sees from `pos` (ENU; nothing on the ground) into the planner's cloud. `None`
+    /// only with the camera inside a box, where nothing sensible can be planned.
+    fn sense(&mut self, pos: Vector3<f64>, state: &VehicleState, dt: f64) -> Option<()> {
+        self.frame.clear();
+        if pos.z > 0.05 {
+            let pose = CameraPose::level(pos, f64::from(state.yaw_enu_rad));
+            render_cloud(
+                &self.scene,
+                &self.camera,
+                &pose,
+                self.keep,
+                &mut self.scratch,
+                &mut self.frame,
+            )
+            .ok()?;
+        }
+        self.planner.update_cloud(&self.frame, state, dt as f32).ok()
+    }
+}
+
+/// The waypoint generator's state for the vehicle's navigation state.
+fn nav_state(nav: Nav) -> NavState {
+    match nav {
+        Nav::Mission => NavState::Mission,
+        Nav::Takeoff => NavState::AutoTakeoff,
+        Nav::Land => NavState::AutoLand,
+        Nav::Offboard => NavState::Offboard,
+        Nav::Other => NavState::AutoLoiter,
+    }
+}
+
+/// The generator's ENU setpoint in NED, `None` unless complete. Velocity ENU (east, north, up) -> NED
+/// (north, east, down) per axis, an unset axis staying unset.
+fn setpoint_ned(out: &WaypointOutput) -> Option<SteerOutput> {
+    let sp = enu_to_ned(&out.position_enu);
+    let [ve, vn, vu] = out.velocity_enu;
+    let vel = [vn, ve, vu.map(|v| -v)].map(|v| v.map(f64::from).filter(|v| v.is_finite()));
+    let out = SteerOutput {
+        pos_ned: [f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)],
+        vel_ned: vel,
+        yaw_rad: Some(yaw_enu_to_ned_rad(f64::from(out.yaw_enu_rad))),
+    };
+    out.is_complete().then_some(out)
 }
 
 #[cfg(test)]

@@ -171,26 +171,36 @@ pub async fn wait_ready(s: &mut Session<'_>, st: &mut ReadyState) -> Result<(), 
         if now >= deadline {
             return Err(not_ready(s, budget_s, &missing));
         }
-        if !missing.is_empty()
-            && told
-                .as_ref()
-                .is_none_or(|(t, m)| *m != missing || now >= *t + NOTICE_EVERY)
-        {
-            let waited_s = now.saturating_sub(start).as_secs_f64();
-            tell(
-                s.opts.notices.as_ref(),
-                &Notice::Waiting {
-                    missing: missing.join(", "),
-                    waited_s,
-                },
-            );
-            told = Some((now, missing));
-        }
+        tell_waiting(s, &mut told, missing, (start, now));
         let wait = clock.wall_until(deadline).min(clock.wall(Duration::from_millis(200)));
         next_message(s, st, &clock, wait).await?;
     }
     s.ready.waited_s = Some(clock.now().saturating_sub(start).as_secs_f64());
     Ok(())
+}
+
+/// Tells the user what the vehicle still lacks, waited for since `start`, when that changed or
+/// [`NOTICE_EVERY`] passed since it was last told (`told`: when, and what).
+fn tell_waiting(
+    s: &Session<'_>,
+    told: &mut Option<(Duration, Vec<&'static str>)>,
+    missing: Vec<&'static str>,
+    (start, now): (Duration, Duration),
+) {
+    let stale = told
+        .as_ref()
+        .is_none_or(|(t, m)| *m != missing || now >= *t + NOTICE_EVERY);
+    if missing.is_empty() || !stale {
+        return;
+    }
+    tell(
+        s.opts.notices.as_ref(),
+        &Notice::Waiting {
+            missing: missing.join(", "),
+            waited_s: now.saturating_sub(start).as_secs_f64(),
+        },
+    );
+    *told = Some((now, missing));
 }
 
 /// Switches to AUTO.MISSION while disarmed, so the pre-arm bit covers the mission. False: the switch failed

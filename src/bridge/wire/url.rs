@@ -73,67 +73,27 @@ impl LinkAddress {
             url: url.to_string(),
             reason,
         };
-        let trimmed = url.trim();
-        let (scheme, rest) = trimmed
+        let (scheme, rest) = url
+            .trim()
             .split_once(':')
             .ok_or_else(|| err("no scheme (udpin:, udpout:, tcpout:, tcpin:, serial:)".into()))?;
         // MAVSDK writes `scheme://rest`; `serial:///dev/tty..` keeps the path's own slash.
         let rest = rest.strip_prefix("//").unwrap_or(rest);
         let scheme = scheme.to_ascii_lowercase();
-        let host_port = |rest: &str| -> Result<(String, u16), UrlError> {
-            let (host, port) = rest
-                .rsplit_once(':')
-                .ok_or_else(|| err(format!("{rest:?} has no :PORT")))?;
-            let port: u16 = port
-                .parse()
-                .map_err(|_| err(format!("port {port:?} is not a number from 0 to 65535")))?;
-            // MAVSDK's `udp://:14540` means every interface.
-            let host = if host.is_empty() { "0.0.0.0" } else { host };
-            if host.contains(['/', ' ']) {
-                return Err(err(format!("host {host:?} is not a host name or IP address")));
-            }
-            Ok((host.to_string(), port))
-        };
-        Ok(match scheme.as_str() {
-            "udpin" | "udp" => {
-                let (host, port) = host_port(rest)?;
-                Self::UdpIn { host, port }
-            }
-            "udpout" => {
-                let (host, port) = host_port(rest)?;
-                Self::UdpOut { host, port }
-            }
-            "udpbcast" => {
-                let (host, port) = host_port(rest)?;
-                Self::UdpBcast { host, port }
-            }
-            "tcpout" | "tcp" => {
-                let (host, port) = host_port(rest)?;
-                Self::TcpOut { host, port }
-            }
-            "tcpin" => {
-                let (host, port) = host_port(rest)?;
-                Self::TcpIn { host, port }
-            }
-            "serial" => {
-                let (path, baud) = rest
-                    .rsplit_once(':')
-                    .ok_or_else(|| err(format!("{rest:?} has no :BAUD (e.g. /dev/ttyACM0:57600)")))?;
-                let baud: u32 = baud
-                    .parse()
-                    .ok()
-                    .filter(|b| *b > 0)
-                    .ok_or_else(|| err(format!("baud rate {baud:?} is not a positive number")))?;
-                if path.is_empty() {
-                    return Err(err("no serial device path".into()));
-                }
-                Self::Serial {
-                    path: path.to_string(),
-                    baud,
-                }
-            }
+        if scheme == "serial" {
+            let (path, baud) = serial(rest).map_err(err)?;
+            return Ok(Self::Serial { path, baud });
+        }
+        let socket: fn(String, u16) -> Self = match scheme.as_str() {
+            "udpin" | "udp" => |host, port| Self::UdpIn { host, port },
+            "udpout" => |host, port| Self::UdpOut { host, port },
+            "udpbcast" => |host, port| Self::UdpBcast { host, port },
+            "tcpout" | "tcp" => |host, port| Self::TcpOut { host, port },
+            "tcpin" => |host, port| Self::TcpIn { host, port },
             other => return Err(err(format!("unknown scheme {other:?}"))),
-        })
+        };
+        let (host, port) = host_port(rest).map_err(err)?;
+        Ok(socket(host, port))
     }
 
     /// The address in rust-mavlink's syntax (`mavlink::connect_async`).
@@ -153,6 +113,35 @@ impl fmt::Display for LinkAddress {
             Self::Serial { path, baud } => write!(f, "serial:{path}:{baud}"),
         }
     }
+}
+
+/// `HOST:PORT` of a socket address; an empty host (MAVSDK's `udp://:14540`) means every interface.
+fn host_port(rest: &str) -> Result<(String, u16), String> {
+    let (host, port) = rest.rsplit_once(':').ok_or_else(|| format!("{rest:?} has no :PORT"))?;
+    let port: u16 = port
+        .parse()
+        .map_err(|_| format!("port {port:?} is not a number from 0 to 65535"))?;
+    let host = if host.is_empty() { "0.0.0.0" } else { host };
+    if host.contains(['/', ' ']) {
+        return Err(format!("host {host:?} is not a host name or IP address"));
+    }
+    Ok((host.to_string(), port))
+}
+
+/// `PATH:BAUD` of a serial device.
+fn serial(rest: &str) -> Result<(String, u32), String> {
+    let (path, baud) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| format!("{rest:?} has no :BAUD (e.g. /dev/ttyACM0:57600)"))?;
+    let baud: u32 = baud
+        .parse()
+        .ok()
+        .filter(|b| *b > 0)
+        .ok_or_else(|| format!("baud rate {baud:?} is not a positive number"))?;
+    if path.is_empty() {
+        return Err("no serial device path".into());
+    }
+    Ok((path.to_string(), baud))
 }
 
 #[cfg(test)]
