@@ -1,6 +1,6 @@
 //! Online calibration: the LFS learns the vehicle a campaign flies.
 //!
-//! The LFS is biased for any given stack, so each flown test gives a residual `flown - predicted` and the
+//! The LFS is biased for any given stack: each flown test gives a residual `flown - predicted`, and the
 //! campaign's bias is their mean shrunk towards a prior, `(k b0 + sum r) / (k + n)`, so a few flights cannot
 //! run it away (docs/design-constants.md#lfs-bias-per-vehicle). Calibrated predictions and every ensemble
 //! member move by the bias, so `p_fail` and the expected points follow without simulating again.

@@ -95,7 +95,8 @@ pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
 }
 
 /// The round's flights: the best `share` of `remaining` among the neighbour candidates (`is_local`), the rest
-/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped, and
+/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped (for
+/// neighbours, beyond `--child-max-iou`), and
 /// each flight admitted by `guard` (distinct from the round's others, keeping the failing tests' expected
 /// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(
