@@ -3,7 +3,7 @@
 //! `cargo run --release --example fit_motion -- paper|paper-delay|px4|px4-low-gain [JOBS]` simulates every
 //! usable flight of `tests/data/hfs-flights` for each grid point and prints MAE, Spearman and precision/recall of
 //! "below 1.5 m" (overall, per tier and per fixed half of the flights, for fit-on-one-half numbers). Not a
-//! test: it takes minutes. The chosen values and the numbers are documented in `src/lfs/motion.rs`.
+//! test: it takes minutes. The chosen values and the numbers are documented in docs/design-constants.md.
 
 use std::path::Path;
 

@@ -152,10 +152,8 @@ fn default_motion() -> String {
     "px4".into()
 }
 
-/// Fitted against the recorded competition flights with `examples/mock_fidelity.rs` (see README, *Mock
-/// autopilot fidelity*): with the mock's PX4-like braking and calibrated cruise, 0 ms gives MAE 0.81 m /
-/// Spearman 0.77 on the 127 flights, 100 ms 0.92 / 0.73, 500 ms 1.06 / 0.69 (at cruise 1.5 m/s: 0 ms 0.86, 200 ms
-/// 0.97). Any pose age only adds clearance, so none is modelled.
+/// Fitted against the recorded competition flights: any pose age only adds clearance, so none is modelled
+/// (docs/design-constants.md#mock-pose-latency).
 pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
 
 fn default_mock_latency_ms() -> f64 {

@@ -25,63 +25,12 @@
 //! # Control delay (both models)
 //! `delay_ticks`: the vehicle acts on the command of that many ticks earlier (and holds before the first). The
 //! real pipeline has such a lag (the depth image goes through Gazebo, ROS and the planner, the answer through
-//! MAVROS to PX4), which the paper's same-tick rule leaves out.
+//! MAVROS to PX4), which the paper's same-tick rule leaves out (docs/design-constants.md#why-the-delay-helps).
 //!
 //! # Fitted constants
-//! Fitted by grid searches (`examples/fit_motion.rs`: `cargo run --release --example fit_motion --
-//! paper|paper-delay|px4|px4-low-gain`; single points with `examples/fid_explore.rs`) that simulate all 127
-//! usable flights of `tests/data/hfs-flights` (PX4 v1.12.3 + PX4-Avoidance + Gazebo, tiers A/B/C) and compare
-//! minimum distances. Criterion: lowest mean absolute error, Spearman and precision of "below 1.5 m" as
-//! tie-breakers. Overall MAE / Spearman / precision / recall (the two fitted rows are `prgenuav fidelity`):
-//!
-//! | model | constants | MAE m | Spearman | precision | recall |
-//! |---|---|---|---|---|---|
-//! | paper, printed values | 3 m/s, 13.5 deg/s, 1/3, delay 0 | 0.597 | 0.736 | 0.911 | 0.707 |
-//! | paper, fitted before | 2 m/s, 30 deg/s, 1/3, delay 0 | 0.515 | 0.765 | 0.917 | 0.569 |
-//! | paper, **fitted** | 2 m/s, 30 deg/s, 1/3, **delay 1** (0.1 s) | **0.478** | **0.798** | 1.000 | 0.500 |
-//! | paper | same, delay 2 / 3 / 4 | 0.482 / 0.514 / 0.516 | 0.799 / 0.781 / 0.762 | 1.000 | 0.500 / 0.397 / 0.414 |
-//! | paper | delay 1, 45 deg/s | 0.476 | 0.788 | 1.000 | 0.517 |
-//! | paper | delay 1, 2.5 m/s | 0.510 | 0.781 | 1.000 | 0.517 |
-//! | paper | delay 0, 1.5 / 1.75 m/s | 0.558 / 0.545 | 0.699 / 0.725 | 0.935 / 0.854 | 0.500 / 0.603 |
-//! | paper | delay 0, 2 m/s, 30 deg/s, 1 | 0.527 | 0.747 | 0.972 | 0.603 |
-//! | paper | delay 0, 3 m/s, 30 deg/s, 1/3 | 0.550 | 0.758 | 1.000 | 0.569 |
-//! | px4, PX4 defaults | gain 0.95, 5 m/s, 45 deg/s | 1.100 | 0.731 | 1.000 | 0.155 |
-//! | px4 | gain 0.5, 5 m/s, 45 deg/s | 0.667 | 0.780 | 1.000 | 0.172 |
-//! | px4, **fitted** | gain 0.3, 5 m/s, 45 deg/s, delay 0 | **0.552** | 0.751 | 1.000 | 0.379 |
-//! | px4 | same, delay 1 / 2 | 0.584 / 0.599 | 0.719 / 0.701 | 1.000 | 0.241 / 0.259 |
-//! | px4 | jerk 4 / 8 m/s^3 (MPC_JERK_AUTO / _MAX), gain 0.3 | 0.582 / 0.559 | 0.708 / 0.737 | 1.000 | 0.328 / 0.293 |
-//! | px4 | jerk 4 m/s^3, gain 0.5 / 0.2 | 0.721 / 0.591 | 0.728 / 0.683 | 1.000 | 0.155 / 0.345 |
-//! | px4 | gain 0.3, 5 m/s, 90 deg/s | 0.572 | 0.734 | 1.000 | 0.310 |
-//! | px4 | gain 0.2, 5 m/s, 90 deg/s | 0.634 | 0.630 | 1.000 | 0.345 |
-//!
-//! Per tier (MAE / Spearman / precision / recall), paper fitted: A (34) 0.374 / 0.551 / 1.000 / 0.613, B (16)
-//! 0.550 / 0.482 / 1.000 / 0.625, C (77) 0.510 / 0.688 / - / 0.000; px4 fitted: A 0.646 / 0.583 / 1.000 /
-//! 0.387, B 0.705 / 0.124 / 1.000 / 0.625, C 0.479 / 0.661 / - / 0.000.
-//!
-//! **Honest numbers.** The delay was also chosen on one fixed half of the flights and checked on the other
-//! (`fidelity::split_half`, repeats of one obstacle set kept together): chosen on half 0 (60 flights; MAE 0.558,
-//! 0.516, 0.525, 0.553, 0.568 for delay 0-4) it is 1, which on the held-out half 1 (67) gives 0.445 / 0.833 /
-//! 1.000 / 0.414 against 0.477 / 0.786 / 0.889 / 0.552 without it; chosen on half 1 it is 2 (0.443 vs 0.445),
-//! which on half 0 gives 0.525 / 0.739 / 1.000 / 0.517 against 0.558 / 0.761 / 0.944 / 0.586 (MAE better,
-//! Spearman and recall slightly worse). Speed and yaw rate are fitted on all flights first (a 2 x 2 x 2 grid:
-//! speed {2, 3} x yaw rate {13.5, 30} x fraction {1/3, 1}; px4: gain {0.5, 0.95} x speed {3, 5} x yaw rate
-//! {30, 45}, then gain {0.2, 0.3} x yaw rate {45, 90}). Moving every obstacle 1 or 2 cm changes a single
-//! prediction by 0.08 m on average (up to 0.6 m) and the aggregates by about 0.007 m MAE and 0.005 Spearman
-//! (delay 0: 0.515 / 0.522 / 0.512 and 0.765 / 0.767 / 0.768; delay 1: 0.478 / 0.475 / 0.481 and 0.798 / 0.803 /
-//! 0.801; px4: 0.552 / 0.555 and 0.751 / 0.734), so the delay's gain is well above chance, but differences of
-//! 0.01-0.02 between other rows are not. Flying the tier-C flights on mission 3 instead of their inferred
-//! mission 2 makes them much worse (paper: C MAE 0.723 vs 0.510, Spearman 0.437 vs 0.688), which supports the
-//! inference.
-//!
-//! The delay works by raising predictions: the paper model was too close on tier C (the unselected generator
-//! log: bias -0.18 m without the delay, -0.11 with it) and too far on tiers A and B (+0.18 / +0.32 without,
-//! +0.22 / +0.39 with). Tiers A and B
-//! hold tests their authors kept because they failed (B: the minimum over 1-2 runs), so given the real
-//! simulator's own scatter their recorded distances are biased low. The real simulator disagrees with itself by
-//! 0.29 m on average between repeated runs of the same obstacles (and by up to 3 m, see the flights' README),
-//! about 0.2 m of MAE that no deterministic prediction can remove. The px4 model keeps about 0.5 m more
-//! clearance than the real flights on tiers A and B (low recall); a slower position loop brings it closer, but a
-//! gain below 0.3 loses rank agreement, and a delay, a jerk limit or the tilt model all made it worse.
+//! Fitted by grid searches against the 127 usable recorded competition flights (`examples/fit_motion.rs`),
+//! lowest mean absolute error of the minimum distance first; the grids, the alternatives measured and the
+//! held-out checks are in docs/design-constants.md#fitted-motion-constants.
 
 use nalgebra::Vector3;
 
@@ -117,8 +66,8 @@ pub struct PaperParams {
 }
 
 impl Default for PaperParams {
-    /// FITTED (see the module docs): 2 m/s, 30 deg/s, full speed below 1/3 of the yaw rate (10 degrees), acting
-    /// one tick (0.1 s) after the planner's answer.
+    /// Fitted (docs/design-constants.md#fitted-motion-constants): 2 m/s, 30 deg/s, full speed below 1/3 of the
+    /// yaw rate (10 degrees), acting one tick (0.1 s) after the planner's answer.
     fn default() -> Self {
         Self {
             max_speed_m_s: 2.0,
@@ -183,7 +132,8 @@ pub struct Px4Params {
 }
 
 impl Default for Px4Params {
-    /// FITTED (see the module docs): PX4 defaults except the position gain, 0.3 1/s instead of MPC_XY_P 0.95.
+    /// Fitted (docs/design-constants.md#fitted-motion-constants): PX4 defaults except the position gain, 0.3 1/s
+    /// instead of MPC_XY_P 0.95.
     fn default() -> Self {
         Self {
             pos_gain_per_s: 0.3,

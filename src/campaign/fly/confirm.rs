@@ -83,9 +83,8 @@ pub fn pending(records: &[FlightRecord], k: usize) -> Vec<(Tally, &FlightRecord)
         .collect()
 }
 
-/// Each test's first flight (attempt 0), in journal order: what the campaign learns from. Re-flights only
-/// confirm; counted in the learning they would weigh the failing tests twice and, as copies, pull the failing
-/// tests' diversity down.
+/// Each test's first flight (attempt 0), in journal order: the flights the report's first-flight figures are
+/// over, and the records [`as_learnt`] gives the campaign to learn from.
 pub fn first_flights(records: &[FlightRecord]) -> Vec<FlightRecord> {
     records.iter().filter(|r| r.attempt == 0).cloned().collect()
 }
@@ -93,7 +92,7 @@ pub fn first_flights(records: &[FlightRecord]) -> Vec<FlightRecord> {
 /// Each test once, as the campaign learns from it: its first flight's record, in journal order, with the mean
 /// distance of its charged flights. A repeat flight is evidence about its test, so a test its repeats refuted
 /// stops counting as a failure (as a parent of children, an elite, a point of the flights' kernel); on PX4 the
-/// repeat flights refuted 53 of 122 first failures in [1.25, 1.5) m. Counted as separate
+/// repeats refute many first failures (docs/design-constants.md#confirmed-failures). Counted as separate
 /// records instead, repeats would weigh the failing tests twice and, as copies, pull the failing tests'
 /// diversity down. With one flight per test this is the journal itself.
 pub fn as_learnt(records: &[FlightRecord]) -> Vec<FlightRecord> {

@@ -26,37 +26,20 @@ pub const DEFAULT_PROFILE: &str = "px4-sitl";
 /// Every profile's name, the default first.
 pub const PROFILE_NAMES: [&str; 2] = [DEFAULT_PROFILE, "competition"];
 
-/// `competition`: horizontal speed limit (MPC_XY_VEL_MAX, m/s) calibrated on how fast the recorded competition
-/// flights flew (not on their distances): the median over the 37 trajectory-carrying flights of
-/// `tests/data/hfs-flights` of the 95th-percentile horizontal speed is 1.40 m/s (their median maximum 1.54,
-/// 29 of 37 between 1.2 and 1.63). PX4's defaults (MPC_XY_CRUISE 5, jerk-limited braking towards the
-/// avoidance setpoint about 5 m ahead) would fly about 2.6 m/s; why the recorded stack flew slower is not known.
-/// It is a vehicle-side limit the companion does not read: the companion reads MPC_XY_CRUISE as PX4-Avoidance
-/// does, and that stays PX4's 5 m/s. (Set as MPC_XY_CRUISE instead, the companion would plan at 1.4 m/s:
-/// `examples/mock_fidelity.rs` MAE 0.61 m but Spearman 0.744 and, against real PX4 on 20 mission-2 tests,
-/// 7 flights stuck until the timeout where PX4 landed.)
+/// `competition`: horizontal speed limit (MPC_XY_VEL_MAX, m/s), calibrated on how fast the recorded flights flew;
+/// a vehicle-side limit the companion does not read (docs/design-constants.md#competition-speed-limit).
 pub const COMPETITION_SPEED_LIMIT_M_S: f64 = 1.4;
 
-/// `px4-sitl`: horizontal speed limit (MPC_XY_VEL_MAX, m/s), FITTED to the 127 reference flights of real PX4
-/// v1.14 SITL (`tests/data/px4-flights`) by cross-validation with folds by obstacle set (`examples/mock_fit.rs`;
-/// docs/validation/mock-vs-px4.md). PX4's own limit is 12 m/s, but it flies the avoidance carrot at about 1.5-2
-/// m/s: its braking speed is computed from its smoothed trajectory setpoint, not from the vehicle, and its
-/// controller lags that setpoint. The mock has neither, so this cap stands in for them.
+/// `px4-sitl`: horizontal speed limit (MPC_XY_VEL_MAX, m/s), fitted to real PX4 v1.14 SITL: it stands in for
+/// PX4's braking and controller lag (docs/design-constants.md#px4-sitl-speed-limit-and-velocity-gain).
 pub const PX4_SITL_SPEED_LIMIT_M_S: f64 = 1.7;
 
-/// `px4-sitl`: the mock's velocity-loop gain (1/s; the original model 2.5), FITTED with the speed limit above.
-/// A time constant of about 0.8 s instead of 0.4 s: PX4 follows a jerk-limited trajectory through a
-/// position-velocity cascade (MPC_XY_P 0.95, MPC_XY_VEL_P_ACC 1.8) on a simulated airframe, and turns wider and
-/// later than the original point mass, which keeps more clearance from the boxes and ranks the cases more as PX4
-/// does.
+/// `px4-sitl`: the mock's velocity-loop gain (1/s), fitted with the speed limit above: PX4 turns wider and later
+/// than a point mass (docs/design-constants.md#px4-sitl-speed-limit-and-velocity-gain).
 pub const PX4_SITL_VEL_GAIN: f64 = 1.3;
 
-/// `px4-sitl`: RMS of the mock's seeded horizontal gusts (m/s² per axis, correlation time 1 s), FITTED so the
-/// mock disagrees with itself flight to flight as PX4 v1.14 SIH does: over 117 tests PX4 flew twice (the 42
-/// held-out tests on missions 4-7 and 75 campaign tests on missions 2 and 5), PX4's two flights differ by a
-/// median 0.185 m; the mock's by 0.199 m at this value, and by 0.193 m cross-validated with folds by campaign and
-/// mission (`examples/mock_scatter.rs`, docs/validation/mock-vs-px4.md). Without gusts the lockstep mock flies
-/// a test identically every time, so a failure on it always repeats where PX4's often does not.
+/// `px4-sitl`: RMS of the mock's seeded horizontal gusts (m/s² per axis, correlation time 1 s), fitted so the
+/// mock disagrees with itself flight to flight as PX4 does (docs/design-constants.md#px4-sitl-gusts).
 pub const PX4_SITL_GUST_ACC_M_S2: f64 = 0.1;
 
 impl MockProfile {

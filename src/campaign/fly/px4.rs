@@ -273,7 +273,7 @@ fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown 
     f
 }
 
-/// The campaign's stop came before the flight took off: `aborted`, which the pool journals as interrupted.
+/// The campaign's stop came before the flight took off: `aborted`, which the fleet journals as interrupted.
 fn stopped_before_flying(written: &Result<String, String>) -> Flown {
     Flown {
         status: "aborted".into(),

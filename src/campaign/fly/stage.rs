@@ -122,7 +122,7 @@ pub fn fly_interrupted(
     Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, budget_left)?.flown)
 }
 
-/// Flies `jobs` within `budget` on the pool, announcing each flight under stage `name` and the vehicles
+/// Flies `jobs` within `budget` on the fleet, announcing each flight under stage `name` and the vehicles
 /// dropped; a journal error stops the campaign.
 fn fly_stage(
     ctx: &FlightStage,

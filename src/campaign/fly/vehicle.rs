@@ -1,5 +1,5 @@
-//! The high-fidelity flight pool: the vehicles, the jobs they fly, and one pass of jobs flown on them within a
-//! budget ([`crate::campaign::fly::fleet`]).
+//! The high-fidelity vehicles: the vehicle trait, the jobs it flies and what a fleet's run of them came to (the
+//! fleet that flies them is [`crate::campaign::fly::fleet`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -29,7 +29,7 @@ pub struct Flown {
 /// Why a vehicle could not fly.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum VehicleError {
-    /// The vehicle cannot be reached or used: the pool drops it and gives its test to another.
+    /// The vehicle cannot be reached or used: the fleet drops it and gives its test to another.
     #[error("vehicle {vehicle} unreachable: {reason}")]
     Unreachable {
         /// The vehicle.
@@ -83,7 +83,7 @@ impl Job {
     }
 }
 
-/// What the pool did.
+/// What the fleet did.
 #[derive(Debug, Default)]
 pub struct PoolOutcome {
     /// Flights finished (journaled) in this run.

@@ -1,19 +1,12 @@
 //! Online calibration: the LFS learns the vehicle a campaign flies.
 //!
-//! The LFS is biased for any given stack by half a metre or more (PX4 v1.14 SIH with our companion keeps about
-//! 1 m more clearance than the LFS predicts; the competition's Gazebo stack about 0.1-0.7 m less, per tier).
-//! Each flown test gives a residual `flown - predicted`; the campaign's estimate of the bias is their mean
-//! shrunk towards a prior, `(k b0 + sum r) / (k + n)`, so a few flights cannot run it away. The prior's weight
-//! `k` (pseudo-flights) is chosen by prequential cross-validation on the recorded competition flights and on
-//! the PX4 reference (`examples/fit_learning.rs`). Calibrated predictions and every ensemble member move by
-//! the bias, so `p_fail` and the expected points follow without simulating again.
+//! The LFS is biased for any given stack: each flown test gives a residual `flown - predicted`, and the
+//! campaign's bias is their mean shrunk towards a prior, `(k b0 + sum r) / (k + n)`, so a few flights cannot
+//! run it away (docs/design-constants.md#lfs-bias-per-vehicle). Calibrated predictions and every ensemble
+//! member move by the bias, so `p_fail` and the expected points follow without simulating again.
 //!
-//! **Why the motion model is not refitted online.** Re-simulating the 100 flights of the static mission-2 campaign
-//! (seed 0, embedded mock) with the `px4` tracker's position gain set to the mock's own (0.95 or 1.5 1/s, with
-//! or without its 4 m/s^3 jerk limit) instead of the fitted 0.3 did not rank the mock's flights better:
-//! Spearman 0.31 (fitted) against 0.01-0.33, AUC for a failure 0.71 against 0.47-0.72, each variant costing
-//! 10-23 s of CPU for 100 flights. A constant that does not reorder the candidates is not worth re-screening
-//! them for.
+//! The motion model itself is not refitted online: other gains did not rank the flights better, so they are
+//! not worth re-screening for (docs/design-constants.md#no-online-refit-of-the-motion-model).
 
 use serde::{Deserialize, Serialize};
 
@@ -24,11 +17,8 @@ use crate::generator::adaptive::{DIMS, DrawDistribution};
 /// Residuals are clipped to this many metres: one flight stuck far from the boxes must not swing the bias.
 pub const MAX_RESIDUAL_M: f64 = 3.0;
 
-/// Prior weight in pseudo-flights, chosen by prequential cross-validation (`examples/px4_compare.rs`: 50 random
-/// orders of obstacle sets, the LFS `px4` model against the recorded flights and against PX4). Mean absolute
-/// error over the first 25 flights, recorded / PX4: weight 0: 0.593 / 0.509, **1: 0.579 / 0.509**, 2: 0.573 /
-/// 0.526, 4: 0.567 / 0.566, 8: 0.563 / 0.636, no learning 0.579 / 1.056 (all flights: 1 gives 0.544 / 0.475).
-/// Weight 1 has the lowest mean over both truths for the early flights and for all of them.
+/// Prior weight in pseudo-flights, chosen by prequential cross-validation on the recorded flights and on PX4
+/// (docs/design-constants.md#prior-weight).
 pub const DEFAULT_PRIOR_FLIGHTS: f64 = 1.0;
 
 /// Carried-over knowledge never counts for more than this many flights, so a new campaign can still move.

@@ -1,13 +1,9 @@
 //! Where a learning campaign's flights failed (a diagnostic): flights and failures per bin of each generator draw, for the
 //! report and `learnt.json` (a diagnostic; the campaign does not rank or draw by it).
 //!
-//! Why only a diagnostic: ranking the unflown candidates by these counts (a naive Bayes model of the failure
-//! odds, Beta-shrunk per bin) and steering the generator by them (a cross-entropy target, current mass x
-//! failure rate) was tried on the embedded mock, missions 1-3, seeds 0-2, budget 100: 43 failing tests over the
-//! 9 runs, the same as static screening and fewer than the elite rule the campaign uses (49). On the mock the
-//! failures are rare (about 6 in 100 flights) and a per-bin rate learnt from a handful of them is mostly noise.
-//! The counts still show a user where their stack failed: over 289 distinct mission-2 flights on the mock, 70 %
-//! of the failures had obstacle 1 turned 48-60 degrees.
+//! Why only a diagnostic: a per-bin rate learnt from a campaign's few failures is mostly noise, and ranking or
+//! drawing by it found no more failing tests than static screening
+//! (docs/design-constants.md#failure-counts-are-only-a-diagnostic). It still shows a user where their stack failed.
 
 use serde::{Deserialize, Serialize};
 

@@ -116,7 +116,8 @@ pub fn refit(
     distribution.fitted(&elites(&screened, done, candidates, predict), rate, floor)
 }
 
-/// The elites: the best share of the screened candidates by calibrated prediction, and the flown failures.
+/// The elites: the best share of the screened candidates by `predict`, and the closest quarter of the flights
+/// with every flown failure.
 pub fn elites(
     screened: &[&Screened],
     done: &[FlightRecord],

@@ -1,10 +1,8 @@
 //! The flights as a surrogate: a candidate's prediction moves from the calibrated LFS towards the flown
 //! distances of the tests near it in draw space (Nadaraya-Watson kernel regression shrunk towards the LFS).
 //!
-//! Why: the LFS ranks a vehicle's flights only loosely (on the embedded mock, mission 2: Spearman 0.31, AUC
-//! for a failure 0.41-0.71), while the flown distance of a test's nearest neighbour in draw space correlates
-//! with its own at 0.68 (2147 distinct mission-2 flights). The flights a campaign has made are the best
-//! predictor of the candidates next to them; far from every flight the LFS still speaks.
+//! Why: the LFS ranks a vehicle's flights only loosely, while a test's nearest flown neighbour in draw space
+//! predicts it well; far from every flight the LFS still speaks (docs/design-constants.md#the-flights-kernel).
 //!
 //! `prediction = (k lfs + sum w_i flown_i) / (k + sum w_i)` with `w_i = exp(-|x - x_i|^2 / (2 h^2))` over the
 //! unit draws `x`. The bandwidth `h` and the LFS's weight `k` are chosen before each round by leave-one-out

@@ -1,21 +1,16 @@
 //! Which children of the failing flights may be drawn, and which candidates a round may fly. A candidate must
 //! differ from the round's others by the campaign's near-duplicate rule (`--max-iou`). A child may come closer to
-//! the flown tests, up to `--child-max-iou`: near
-//! copies of a failure fail far more often than their distant neighbours (mission 2 on the mock: 45 % of 29
-//! flights whose closest failure overlapped them by IoU 0.65-0.7, 16 % at 0.25-0.35, 7 % with no failure
-//! overlapping). What bounds them is the failing tests' diversity, the user's floor: every child drawn and
+//! the flown tests, up to `--child-max-iou`, because near copies of a failure fail far more often than their
+//! distant neighbours. What bounds them is the failing tests' diversity, the user's floor: every child drawn and
 //! every candidate flown must leave the failing tests' *expected* diversity above it, counting the failures so
 //! far, each close child as a failure and every other candidate as a failure at its arm's failure rate so far.
-//! Without that, a campaign's failures cluster where the vehicle fails (the histogram follows them there too),
-//! and moderate overlaps (IoU 0.3-0.6) between many of them pull the diversity below the floor by the last
-//! round.
+//! Without that, the failures cluster where the vehicle fails (docs/design-constants.md#close-children).
 //!
 //! The expectation is over the campaign's *final* failing tests: the failures still to come (the flights after
 //! this round at the campaign's failure rate so far, overlapping everything like the flown tests, or like the
 //! failing tests so far when those overlap more: [`projection`]) are counted too. So the rule holds from the
-//! first failure on, lenient early (many failures to come dilute a close pair) and strict late. Held only from
-//! 4 failing tests on, it let a stack that fails rarely (PX4 v1.14 SIH, 3-5 of 30) end with a parent and two of
-//! its children at diversity 0.708.
+//! first failure on, lenient early (many failures to come dilute a close pair) and strict late, also on a stack
+//! that fails rarely (docs/design-constants.md#the-expectation-holds-from-the-first-failure).
 
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::store::journal::FlightRecord;
@@ -171,7 +166,7 @@ impl DiversityGuard {
 /// The failing tests still to come: those of `later` flights at the failure rate of `done` so far (failing
 /// below `fail_m`), and their mean IoU with any other test. That is the flown tests' mean pairwise IoU, or from
 /// [`MIN_FAILING_FOR_DIVERSITY`] failing tests on the failing tests' own if higher: the failures to come cluster
-/// like those so far (mission 2 seed 3 on the mock ended at 0.798 with the flown tests' mean alone).
+/// like those so far (docs/design-constants.md#failures-to-come).
 pub fn projection(done: &[FlightRecord], fail_m: f64, later: usize) -> (f64, f64) {
     let distances: Vec<f64> = done.iter().filter_map(|r| r.min_distance).collect();
     let failing: Vec<Vec<Obstacle>> = done

@@ -1,14 +1,11 @@
 //! Neighbour proposals of the adapted generator: part of each round's candidates are drawn in small boxes of
 //! draw space around the campaign's failing flights so far (its *parents*), where the next failures are
-//! likeliest; before the first failure, around its closest near misses. On the embedded mock (mission 2, 1498
-//! flights of 15 campaigns) a flight whose most-overlapping earlier flight had failed failed itself 22 % of the
-//! time (25 of 113), against 7 % (75 of 1025) when that flight had flown 1.5-1.8 m: a near miss says little
-//! about its neighbours, a failure says much. They come on
-//! top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]), which keep
-//! the campaign exploring. Children are drawn distinct from each other and from the flown tests, or close to
-//! a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]); the near-duplicate filter
-//! would drop them before flight otherwise (at half width [`HALF_WIDTH`] only 31 % of plain children differ
-//! from their parent by IoU <= 0.5).
+//! likeliest (a failure says much about its neighbours, a near miss little:
+//! docs/design-constants.md#drawing-around-failures); before the first failure, around its closest near misses.
+//! They come on top of the round's candidates from the histogram distribution ([`crate::generator::adaptive`]),
+//! which keep the campaign exploring. Children are drawn distinct from each other and from the flown tests, or
+//! close to a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]);
+//! the near-duplicate filter would drop most of them before flight otherwise.
 
 use crate::campaign::candidate::{Candidate, Lineage, Screened};
 use crate::campaign::config::CampaignConfig;
@@ -27,10 +24,8 @@ pub const PARENTS: usize = 12;
 /// Half the side of a parent's box, in unit draws (15 % of each range either side).
 pub const HALF_WIDTH: f64 = 0.15;
 /// Half the side of a parent's narrow box, in unit draws: once close children may fly, every second pass over
-/// the parents draws there, for close variants of the failure ([`child_box`]). The closer a flight is to a
-/// failure the likelier it fails (mission 2 on the mock, 6660 flights: 45 % at IoU 0.7-0.8
-/// with an earlier failure, 39 % at 0.6-0.7, 20 % at 0.4-0.5, 9 % below 0.1), and few draws of the wide box
-/// come that close.
+/// the parents draws there ([`child_box`]), since the closer a flight is to a failure the likelier it fails and
+/// few draws of the wide box come that close (docs/design-constants.md#narrow-box).
 pub const NARROW_HALF_WIDTH: f64 = 0.05;
 
 /// Valid draws a parent's box may offer for one child before it gives way to the histogram.
@@ -41,14 +36,12 @@ pub const CHILD_TRIES: u32 = 64;
 pub const LOCAL_FLIGHT_SHARE: (f64, f64) = (0.25, 0.85);
 
 /// Flights within this margin of the failure distance stand in as parents while the campaign has no failure
-/// yet, metres. On a stack that rarely fails (PX4 v1.14 SIH: 0-1 failures in 30 flights, its closest at
-/// 1.57-1.67 m) the closest flights are all the campaign knows of where failures lie.
+/// yet, metres: on a stack that rarely fails they are all it knows (docs/design-constants.md#near-miss-parents).
 pub const NEAR_MISS_M: f64 = 0.3;
 /// Near-miss parents per round at most (the closest), so their children crowd the closest flights.
 pub const NEAR_MISS_PARENTS: usize = 4;
-/// Share of a round's flights offered to a near miss's children: fixed at the floor of
-/// [`LOCAL_FLIGHT_SHARE`]. On the mock they fail little more often than the histogram's candidates (mission 2,
-/// seeds 0-5: 8 of 72 against 18 of 231), so they get no more than the floor whatever their rate.
+/// Share of a round's flights offered to a near miss's children: fixed at the floor of [`LOCAL_FLIGHT_SHARE`],
+/// as they fail little more often than the histogram's (docs/design-constants.md#near-miss-flight-share).
 pub const NEAR_MISS_FLIGHT_SHARE: f64 = LOCAL_FLIGHT_SHARE.0;
 
 /// The neighbourhoods of the failing flights in `done` (flown closer than `fail_m`; at most [`PARENTS`],
@@ -102,7 +95,8 @@ pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
 }
 
 /// The round's flights: the best `share` of `remaining` among the neighbour candidates (`is_local`), the rest
-/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped, and
+/// from all others, then neighbours again if the others run out; near-duplicates of any flown test skipped (for
+/// neighbours, beyond `--child-max-iou`), and
 /// each flight admitted by `guard` (distinct from the round's others, keeping the failing tests' expected
 /// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(

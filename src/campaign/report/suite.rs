@@ -49,7 +49,7 @@ pub struct SuiteSummary {
     pub lfs_error_last_quarter_m: Option<f64>,
     /// Spearman rank correlation of the prediction the campaign ranked by (in a learning campaign: calibrated,
     /// and moved by the flights' kernel) against the flown distance, over first flights: whether the LFS
-    /// orders this vehicle's flights at all. On PX4 v1.14 SIH it was -0.33 to +0.14 over ten campaigns.
+    /// orders this vehicle's flights at all (docs/design-constants.md#lfs-rank-agreement-on-px4).
     #[serde(default)]
     pub lfs_spearman: Option<f64>,
     /// Candidates screened per second of screening wall time (0 without screening).

@@ -104,8 +104,8 @@ pub fn obstacle_sets(cases: &[FlightCase]) -> usize {
 
 /// Fold (0..k) of each case: the obstacle sets are shuffled by a seeded hash and dealt round-robin, so folds
 /// hold about the same number of sets and a set never straddles two folds. `None` if there are fewer sets
-/// than folds or `k < 2`. (The ensemble's scales were fitted with [`super::fidelity::fold_of`], an unbalanced
-/// hash of the repeat group; its figures stay as published until that fit is re-run with these folds.)
+/// than folds or `k < 2`. (The ensemble's scales were fitted with [`super::fidelity::fold_of`] instead:
+/// docs/design-constants.md#ensemble-perturbation-scales.)
 pub fn assign_folds(cases: &[FlightCase], k: usize, seed: u64) -> Option<Vec<usize>> {
     let keys: Vec<String> = cases.iter().map(obstacle_set_key).collect();
     let mut sets: Vec<&String> = keys.iter().collect();

@@ -97,16 +97,8 @@ impl EnsembleParams {
 }
 
 impl Default for EnsembleParams {
-    /// Chosen by 5-fold cross-validation with folds by obstacle set on the 127 flights of
-    /// `tests/data/hfs-flights` (`cargo run --release --example fit_ensemble`, N = 8, seed 0): lowest Brier on
-    /// the training folds over delay jitter {0, 1} x speed {3, 10} % x box jitter {2 cm / 1 deg, 10 cm / 5 deg}
-    /// x prior pseudo-counts {0, 0.25, 0.5, 1, 2}^2; phase a whole tick (not fitted).
-    ///
-    /// Cross-validated `p_fail` AUC **0.849**, Brier **0.150** (in-sample 0.882 / 0.142; the point prediction
-    /// as a 0/1 probability: 0.750 / 0.228). Per tier, CV (in-sample): A 0.919 / 0.196 (0.892 / 0.180), B - /
-    /// 0.219 (- / 0.202; one class only), C 0.680 / 0.115 (0.685 / 0.113). Four folds of five and the whole set
-    /// chose these values (fold 0: 10 % speed, 2 cm / 1 deg). The box jitter and the prior lie on the grid's
-    /// edge; the prior towards failing makes up for the model keeping more clearance than tiers A and B.
+    /// Chosen by 5-fold cross-validation with folds by obstacle set on the recorded flights, lowest Brier score
+    /// (`examples/fit_ensemble.rs`; grid and figures: docs/design-constants.md#ensemble-perturbation-scales).
     fn default() -> Self {
         Self {
             phase_ticks: 1.0,

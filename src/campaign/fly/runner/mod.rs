@@ -150,7 +150,7 @@ impl Vehicle for RunnerVehicle {
     }
 }
 
-/// A flight the campaign's stop ended (`aborted`: the pool journals it `interrupted`).
+/// A flight the campaign's stop ended (`aborted`: the fleet journals it `interrupted`).
 fn stopped() -> Flown {
     Flown {
         status: "aborted".into(),

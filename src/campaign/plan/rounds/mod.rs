@@ -18,8 +18,10 @@
 //!
 //! A resumed campaign replays its plan ([`crate::campaign::store::replay`]): every round is planned again from the start, the
 //! fleet takes the journaled flights in place of flying them, and only what the journal lacks is flown. Each
-//! round's flights are added in memory in the order they were journaled. A test's later flights (`--confirm`) only confirm it: the rounds learn from each test's first flight, and
-//! fly the tests waiting for confirmation before the round's new candidates, within the round's budget.
+//! round's flights are added in memory in the order they were journaled. A test's later flights (`--confirm`)
+//! are not new tests: the rounds learn from each test once, at the mean of its flights
+//! ([`crate::campaign::fly::confirm::as_learnt`]), and fly the tests waiting for confirmation before the round's
+//! new candidates, within the round's budget.
 
 use std::collections::VecDeque;
 use std::path::Path;
