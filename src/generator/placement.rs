@@ -140,15 +140,9 @@ pub fn draw_test(
     }
     let angle = lerp(cfg.angle_deg, u[2]).to_radians();
     let a = d * angle.cos() + left * angle.sin();
-    let m = V2::new(a.y, -a.x); // perpendicular to a, pointing forward (m . d = sin(angle) > 0)
     let c1 = crossing - a * ((0.5 - split) * length);
-
-    let gap = lerp(cfg.gap_m, u[3]);
-    let overhang = lerp(cfg.overhang, u[4]);
-    let length2 = cfg.length_factor * length;
-    let along_m = w / 2.0 + overhang * length2 - length2 / 2.0;
-    let c2 = crossing + a * (split * length + gap + w / 2.0) + m * along_m;
-    let a2 = V2::new(-a.y, a.x);
+    let (gap, overhang) = (lerp(cfg.gap_m, u[3]), lerp(cfg.overhang, u[4]));
+    let (c2, a2, length2) = second_box(cfg, (crossing, a), split * length, (gap, overhang), length);
 
     let axis = mirror.direction(a);
     let mut obstacles = vec![
@@ -181,6 +175,23 @@ pub fn draw_test(
         unit: u,
     };
     Some((draw, obstacles))
+}
+
+/// Obstacle 2 (`length_factor` x obstacle 1's `length`), `gap` metres beyond obstacle 1's end (`beyond` metres
+/// from the crossing along obstacle 1's axis `a`) and shifted forward by its `overhang`: centre, axis, length.
+fn second_box(
+    cfg: &GeneratorConfig,
+    (crossing, a): (P2, V2),
+    beyond: f64,
+    (gap, overhang): (f64, f64),
+    length: f64,
+) -> (P2, V2, f64) {
+    let w = cfg.width_m;
+    let m = V2::new(a.y, -a.x); // perpendicular to a, pointing forward (m . d = sin(angle) > 0)
+    let length2 = cfg.length_factor * length;
+    let along_m = w / 2.0 + overhang * length2 - length2 / 2.0;
+    let c2 = crossing + a * (beyond + gap + w / 2.0) + m * along_m;
+    (c2, V2::new(-a.y, a.x), length2)
 }
 
 /// Obstacle 1's diagonal and length from draw `t`; the diagonal's top is lowered so that obstacle 2

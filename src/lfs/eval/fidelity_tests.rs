@@ -1,4 +1,5 @@
 use super::*;
+use crate::model::competition::HALF_VEHICLE_WIDTH_M;
 
 #[test]
 fn spearman_known_answers() {

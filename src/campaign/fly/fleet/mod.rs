@@ -5,122 +5,24 @@
 //! from its [`Replay`] as their jobs come up, in place of flying them.
 
 use std::collections::{BTreeMap, VecDeque};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use crate::campaign::fly::confirm::trajectory_name;
-use crate::campaign::fly::retry::{fly_counting_rejections, rejected_in_a_row};
-use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle, interrupted_if_cancelled};
-use crate::campaign::store::journal::{FlightRecord, INTERRUPTED, Journal};
+use crate::campaign::fly::retry::rejected_in_a_row;
+use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle};
+use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::replay::Replay;
 use crate::model::Obstacle;
 
 /// How long an idle worker or a waiting campaign sleeps before looking at the cancel flag again.
 const POLL: Duration = Duration::from_millis(200);
 
-/// What the workers and the campaign share, under one lock.
-struct Ledger {
-    queue: VecDeque<Job>,
-    /// Flights taken and not yet journaled: candidate and obstacles.
-    airborne: Vec<(u64, Vec<Obstacle>)>,
-    /// Charged flights journaled.
-    finished: usize,
-    /// Charged flights the fleet may make in all, raised as rounds are pushed.
-    limit: usize,
-    /// More jobs may be pushed: idle workers wait rather than stop.
-    open: bool,
-    /// Workers still running (a dropped vehicle's worker stops).
-    alive: usize,
-    /// Jobs queued, in the air or being journaled, by round.
-    outstanding: BTreeMap<usize, usize>,
-    use_: FleetUse,
-    first_takeoff: Option<Instant>,
-    last_landing: Option<Instant>,
-    /// Fly in waves (see [`FleetSetup::waves`]).
-    waves: bool,
-    /// Jobs taken in the wave in the air.
-    wave_taken: usize,
-    /// Re-flights the wave in the air asked for, queued when it has landed.
-    wave_again: Vec<Job>,
-    /// A resumed campaign's journaled flights, taken in place of flying them.
-    replay: Replay,
-    /// Flights taken from the replay and not yet collected, with their round.
-    replayed: Vec<(usize, FlightRecord)>,
-}
+mod ledger;
+mod worker;
 
-impl Ledger {
-    /// The wave in the air has landed: its re-flights go to the front of the queue, in the order of their tests
-    /// (not of their landings), and the next wave may take off.
-    fn end_wave(&mut self) {
-        let mut again = std::mem::take(&mut self.wave_again);
-        again.sort_by_key(|j| (j.screened.candidate, j.tally.next_attempt));
-        for job in again.into_iter().rev() {
-            self.queue.push_front(job);
-        }
-        self.wave_taken = 0;
-    }
-
-    fn settle(&mut self, round: usize) {
-        if let Some(n) = self.outstanding.get_mut(&round) {
-            *n = n.saturating_sub(1);
-            if *n == 0 {
-                self.outstanding.remove(&round);
-            }
-        }
-    }
-
-    fn outstanding_through(&self, round: usize) -> usize {
-        self.outstanding.range(..=round).map(|(_, n)| n).sum()
-    }
-
-    /// A wave may take another job.
-    fn wave_open(&self) -> bool {
-        !self.waves || self.wave_taken < self.alive
-    }
-
-    /// No queued job may take off: the round's budget is spent, or only new flights are queued and the budget
-    /// is held by journaled flights not yet replayed.
-    fn blocked(&self) -> bool {
-        let charged = self.finished + self.airborne.len();
-        charged >= self.limit || (!self.replay.any_in(&self.queue) && !self.replay.allows_new(charged))
-    }
-
-    /// Takes the queued jobs the journal already holds, as if each had flown and landed at once (re-flights
-    /// queued, waves ended), within the same budget and waves as flights.
-    fn serve_replays(&mut self) {
-        loop {
-            while self.finished + self.airborne.len() < self.limit && self.wave_open() {
-                let Some((job, record)) = self.replay.take_next(&mut self.queue) else {
-                    break;
-                };
-                self.wave_taken += 1;
-                self.finished += 1;
-                if let Some(next) = job.again(&record) {
-                    *self.outstanding.entry(job.round).or_default() += 1;
-                    if self.waves {
-                        self.wave_again.push(next);
-                    } else {
-                        self.queue.push_front(next);
-                    }
-                }
-                self.replayed.push((job.round, record));
-                self.settle(job.round);
-            }
-            // A wave of replayed flights only has landed once no flight of it is in the air and it can take no
-            // more: then its re-flights are queued, and may be replayed in turn.
-            let can_take = !self.queue.is_empty() && self.wave_open() && !self.blocked();
-            if !(self.waves && self.wave_taken > 0 && self.airborne.is_empty() && !can_take) {
-                return;
-            }
-            self.end_wave();
-            if !self.replay.any_in(&self.queue) {
-                return;
-            }
-        }
-    }
-}
+use ledger::Ledger;
 
 /// The fleet as the campaign sees it while the workers fly.
 pub struct Fleet<'a> {
@@ -396,159 +298,8 @@ impl<'a> Fleet<'a> {
     }
 }
 
-impl Fleet<'_> {
-    /// One vehicle's worker: flies jobs until the queue is closed and empty, the budget is spent, the campaign
-    /// stops, or the vehicle is dropped.
-    fn work(&self, index: usize, vehicle: &mut dyn Vehicle, mut rejected: usize) {
-        while let Some(job) = self.next_job() {
-            let rel = trajectory_name(job.screened.candidate, job.tally.next_attempt);
-            let t0 = Instant::now();
-            let result =
-                fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
-            let mut l = self.lock();
-            l.use_.busy_s += t0.elapsed().as_secs_f64();
-            l.last_landing = Some(Instant::now());
-            match result {
-                Ok(flown) => {
-                    let flown = interrupted_if_cancelled(flown, self.cancel);
-                    let rel = if flown.status == INTERRUPTED {
-                        self.keep_interrupted(rel)
-                    } else {
-                        rel
-                    };
-                    let (round, candidate) = (job.round, job.screened.candidate);
-                    let record = job
-                        .clone()
-                        .record(flown, vehicle.name(), rel, t0.elapsed().as_secs_f64());
-                    if record.charged() {
-                        l.finished += 1;
-                        // Queued before the flight is journaled, so no vehicle takes a new candidate meanwhile.
-                        if let Some(next) = job.again(&Journal::read_back(&record)) {
-                            *l.outstanding.entry(round).or_default() += 1;
-                            if l.waves {
-                                l.wave_again.push(next);
-                            } else {
-                                l.queue.push_front(next);
-                            }
-                        }
-                    }
-                    drop(l);
-                    let journaled = self.journal(round, &record);
-                    let mut l = self.lock();
-                    l.airborne.retain(|(c, _)| *c != candidate);
-                    if l.waves && l.airborne.is_empty() {
-                        l.end_wave();
-                    }
-                    l.settle(round);
-                    drop(l);
-                    self.changed.notify_all();
-                    if !journaled {
-                        return;
-                    }
-                }
-                Err(e) => {
-                    // Give the job back: stopped before it flew, or for another vehicle (this one is out).
-                    let cancelled = self.cancel.load(Ordering::Relaxed);
-                    l.airborne.retain(|(c, _)| *c != job.screened.candidate);
-                    l.queue.push_front(job);
-                    if l.waves && l.airborne.is_empty() {
-                        l.end_wave();
-                    }
-                    if !cancelled {
-                        l.alive -= 1;
-                    }
-                    drop(l);
-                    self.changed.notify_all();
-                    if !cancelled {
-                        self.outcome
-                            .lock()
-                            .unwrap_or_else(|p| p.into_inner())
-                            .dropped
-                            .push(e.to_string());
-                        self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
-                    }
-                    return;
-                }
-            }
-        }
-    }
-
-    /// Moves an interrupted flight's partial trajectory aside (`candidate_N.interrupted.csv`), so flying the
-    /// candidate again on resume keeps it; returns where it is.
-    fn keep_interrupted(&self, rel: PathBuf) -> PathBuf {
-        let aside = rel.with_extension("interrupted.csv");
-        match std::fs::rename(self.folder.join(&rel), self.folder.join(&aside)) {
-            Ok(()) => aside,
-            Err(_) => rel, // nothing was recorded: the record keeps the planned path
-        }
-    }
-
-    /// The next job, or `None` when there will be none (cancelled, stopped, budget spent, or the queue closed
-    /// and empty).
-    fn next_job(&self) -> Option<Job> {
-        let mut l = self.lock();
-        loop {
-            if self.cancel.load(Ordering::Relaxed) || self.stop.load(Ordering::Relaxed) {
-                return None;
-            }
-            l.serve_replays();
-            let charged = l.finished + l.airborne.len();
-            if charged < l.limit
-                && l.replay.allows_new(charged)
-                && l.wave_open()
-                && let Some(job) = l.queue.pop_front()
-            {
-                l.wave_taken += 1;
-                l.airborne.push((job.screened.candidate, job.test.obstacles.clone()));
-                l.first_takeoff.get_or_insert_with(Instant::now);
-                return Some(job);
-            }
-            if l.airborne.is_empty() && !l.open && (l.queue.is_empty() || l.blocked()) {
-                return None; // nothing can come: no job will be pushed or handed back
-            }
-            // A flight in the air may hand its job back, or the campaign push more; wait, bounded so cancel is seen.
-            l = self
-                .changed
-                .wait_timeout(l, POLL)
-                .map(|(g, _)| g)
-                .unwrap_or_else(|p| p.into_inner().0);
-        }
-    }
-
-    /// Appends `record` to the journal; on failure stops the fleet and returns false.
-    fn journal(&self, round: usize, record: &FlightRecord) -> bool {
-        let written = self
-            .journal
-            .lock()
-            .map_err(|_| "journal lock poisoned".to_string())
-            .and_then(|mut j| {
-                j.0.append(record).map_err(|e| e.to_string())?;
-                if record.charged() {
-                    j.1.push((round, Journal::read_back(record)));
-                }
-                Ok(())
-            });
-        let mut o = self.outcome.lock().unwrap_or_else(|p| p.into_inner());
-        match written {
-            Ok(()) => {
-                o.flown += usize::from(record.charged());
-                drop(o);
-                (self.on_flight)(record);
-                true
-            }
-            Err(e) => {
-                o.errors.push(e);
-                self.stop.store(true, Ordering::Relaxed);
-                false
-            }
-        }
-    }
-}
-
 #[cfg(test)]
-#[path = "fleet_tests.rs"]
 mod tests;
 
 #[cfg(test)]
-#[path = "fleet_confirm_tests.rs"]
 mod confirm_tests;
