@@ -17,12 +17,14 @@ use mavlink::dialects::common::{
 use tokio::sync::broadcast;
 use tokio::task::JoinHandle;
 
+use super::pose_history::PoseHistory;
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
 use super::timing::AnswerTiming;
+pub use super::trajectory_points::empty_trajectory;
+use super::trajectory_points::{point, point_xy, velocity_axes};
 use crate::bridge::wire::exchange::Target;
 use crate::bridge::wire::link::{AVOIDANCE_COMPONENT_ID, Link, Sender};
-use crate::bridge::wire::pose::PoseNed;
 use crate::bridge::wire::vehicle::VehicleView;
 
 /// Answer period (10 Hz, as PX4-Avoidance's waypoint generator).
@@ -36,39 +38,6 @@ pub const REQUEST_STALE: Duration = Duration::from_secs(1);
 
 const MAV_CMD_NAV_LAND: u16 = 21;
 const MAV_CMD_NAV_TAKEOFF: u16 = 22;
-
-fn point(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
-    let p = [t.pos_x[i], t.pos_y[i], t.pos_z[i]];
-    p.iter().all(|v| v.is_finite()).then(|| p.map(f64::from))
-}
-
-/// Velocity of point `i`, unset axes as NaN; `None` if no axis is set.
-fn velocity_axes(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
-    let v = [t.vel_x[i], t.vel_y[i], t.vel_z[i]].map(f64::from);
-    v.iter().any(|v| v.is_finite()).then_some(v)
-}
-
-/// A trajectory message with every point unset (NaN, command `u16::MAX`), as the interface expects for
-/// points beyond `valid_points`.
-pub fn empty_trajectory(time_usec: u64, valid_points: u8) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-    let nan = [f32::NAN; 5];
-    TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
-        time_usec,
-        pos_x: nan,
-        pos_y: nan,
-        pos_z: nan,
-        vel_x: nan,
-        vel_y: nan,
-        vel_z: nan,
-        acc_x: nan,
-        acc_y: nan,
-        acc_z: nan,
-        pos_yaw: nan,
-        vel_yaw: nan,
-        command: [u16::MAX; 5],
-        valid_points,
-    }
-}
 
 /// The companion's memory: PX4's latest request and the goal it implies, kept as PX4-Avoidance's
 /// `fcuInputGoalCallback` (local_planner_nodelet.cpp) keeps them.
@@ -87,12 +56,6 @@ pub struct Companion {
     pub mirrored: u64,
     /// Answers sent from the planner.
     pub planned: u64,
-}
-
-/// Position of point `i` with NaN axes kept (PX4's land setpoint has z unset); `None` if x or y is unset.
-fn point_xy(t: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize) -> Option<[f64; 3]> {
-    let p = [t.pos_x[i], t.pos_y[i], t.pos_z[i]].map(f64::from);
-    (p[0].is_finite() && p[1].is_finite()).then_some(p)
 }
 
 impl Companion {
@@ -339,9 +302,6 @@ fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> bool {
     inb_header.component_id != AVOIDANCE_COMPONENT_ID && inb_header.system_id == u32::from(target.system)
 }
 
-/// Poses kept for the lockstep latency (2 s at 50 Hz).
-const POSE_HISTORY: usize = 100;
-
 async fn run_lockstep(
     link: Arc<Link>,
     target: Target,
@@ -447,34 +407,6 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
             },
             _ = tokio::time::sleep(wake) => {}
         }
-    }
-}
-
-/// The latest poses, to plan from an older one (lockstep latency).
-#[derive(Debug, Default)]
-struct PoseHistory(std::collections::VecDeque<PoseNed>);
-
-impl PoseHistory {
-    fn push(&mut self, pose: Option<PoseNed>) {
-        let Some(p) = pose else { return };
-        if self.0.back().is_some_and(|last| last.time_boot_ms > p.time_boot_ms) {
-            self.0.clear(); // a reboot
-        }
-        if self.0.len() == POSE_HISTORY {
-            self.0.pop_front();
-        }
-        self.0.push_back(p);
-    }
-
-    /// The newest pose at or before vehicle time `t` (the oldest kept if all are newer).
-    fn at(&self, t: Duration) -> Option<PoseNed> {
-        let ms = t.as_millis();
-        self.0
-            .iter()
-            .rev()
-            .find(|p| u128::from(p.time_boot_ms) <= ms)
-            .or(self.0.front())
-            .copied()
     }
 }
 

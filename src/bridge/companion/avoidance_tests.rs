@@ -53,29 +53,6 @@ fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
     );
 }
 
-#[test]
-fn pose_history_gives_the_pose_a_latency_ago() {
-    let pose = |ms: u32| PoseNed {
-        time_boot_ms: ms,
-        pos_ned: [f64::from(ms), 0.0, 0.0],
-        vel_ned: [0.0; 3],
-        yaw_rad: None,
-    };
-    let mut h = PoseHistory::default();
-    assert_eq!(h.at(Duration::from_secs(1)), None);
-    for ms in (1000..=3000).step_by(20) {
-        h.push(Some(pose(ms)));
-    }
-    assert_eq!(h.0.len(), POSE_HISTORY, "bounded");
-    let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
-    assert_eq!(at(3000), Some(3000));
-    assert_eq!(at(2999), Some(2980), "the newest at or before");
-    assert_eq!(at(100), Some(1020), "older than kept: the oldest");
-    h.push(Some(pose(40)));
-    let at = |ms: u64| h.at(Duration::from_millis(ms)).map(|p| p.time_boot_ms);
-    assert_eq!(at(3000), Some(40), "a reboot forgets the old boot's poses");
-}
-
 /// A PX4 1.14 request: point 0 = PX4's setpoint (type `cmd0`), point 1 = current item (type `cmd1`).
 fn px4(p0: [f32; 3], v0: [f32; 3], cmd0: u16, p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
     let mut t = request(p0, p1, cmd1);

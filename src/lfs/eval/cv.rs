@@ -268,21 +268,7 @@ pub fn cross_validate(
             held_out_figure: aggregate(&pairs(&preds[g], truth, |i| folds[i] == f)),
         });
     }
-    let mut tiers: Vec<&str> = truth.iter().map(|t| t.tier.as_str()).collect();
-    tiers.sort();
-    tiers.dedup();
-    let mut loto = Vec::new();
-    for tier in tiers {
-        let Some(g) = choose(preds, truth, |i| truth[i].tier != tier) else {
-            continue;
-        };
-        loto.push(FoldChoice {
-            held_out: format!("tier {tier}"),
-            n_held_out: truth.iter().filter(|t| t.tier == tier).count(),
-            chosen: label(g),
-            held_out_figure: aggregate(&pairs(&preds[g], truth, |i| truth[i].tier == tier)),
-        });
-    }
+    let loto = leave_one_tier_out(preds, truth, &label);
     let all = choose(preds, truth, |_| true)?;
     Some(CvReport {
         k,
@@ -302,6 +288,26 @@ pub fn cross_validate(
             .map(|(g, p)| (label(g), aggregate(&pairs(p, truth, |_| true))))
             .collect(),
     })
+}
+
+/// Each tier held out in turn: the grid point chosen on the other tiers, and its figure on the held-out one.
+fn leave_one_tier_out(preds: &[Vec<Option<f64>>], truth: &[Truth], label: &dyn Fn(usize) -> String) -> Vec<FoldChoice> {
+    let mut tiers: Vec<&str> = truth.iter().map(|t| t.tier.as_str()).collect();
+    tiers.sort();
+    tiers.dedup();
+    let mut loto = Vec::new();
+    for tier in tiers {
+        let Some(g) = choose(preds, truth, |i| truth[i].tier != tier) else {
+            continue;
+        };
+        loto.push(FoldChoice {
+            held_out: format!("tier {tier}"),
+            n_held_out: truth.iter().filter(|t| t.tier == tier).count(),
+            chosen: label(g),
+            held_out_figure: aggregate(&pairs(&preds[g], truth, |i| truth[i].tier == tier)),
+        });
+    }
+    loto
 }
 
 #[cfg(test)]

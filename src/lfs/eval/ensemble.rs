@@ -305,20 +305,7 @@ pub fn run_ensemble(
         let d = judge_in_frame(&w.trajectory(), obstacles, config.judge).ok_or(EnsembleError::NoObstacles)?;
         Ok(d.min_distance)
     };
-    let jobs = jobs.clamp(1, n);
-    let mut out: Vec<Option<Result<f64, EnsembleError>>> = vec![None; n];
-    std::thread::scope(|s| {
-        for (t, chunk) in out.chunks_mut(n.div_ceil(jobs)).enumerate() {
-            let from = t * n.div_ceil(jobs);
-            let member = &member;
-            s.spawn(move || {
-                for (i, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(member(from + i));
-                }
-            });
-        }
-    });
-    let member_min_distances = out
+    let member_min_distances = in_chunks(n, jobs, member)
         .into_iter()
         .map(|r| r.unwrap_or(Err(EnsembleError::Members(n))))
         .collect::<Result<Vec<f64>, _>>()?;
@@ -326,6 +313,23 @@ pub fn run_ensemble(
         member_min_distances,
         fork_cycle,
     })
+}
+
+/// `f(0..n)` on up to `jobs` scoped threads, each taking a contiguous chunk; in order, whatever `jobs` is.
+fn in_chunks<T: Clone + Send>(n: usize, jobs: usize, f: impl Fn(usize) -> T + Sync) -> Vec<Option<T>> {
+    let chunk_len = n.div_ceil(jobs.clamp(1, n.max(1))).max(1);
+    let mut out: Vec<Option<T>> = vec![None; n];
+    std::thread::scope(|s| {
+        for (t, chunk) in out.chunks_mut(chunk_len).enumerate() {
+            let f = &f;
+            s.spawn(move || {
+                for (i, slot) in chunk.iter_mut().enumerate() {
+                    *slot = Some(f(t * chunk_len + i));
+                }
+            });
+        }
+    });
+    out
 }
 
 #[cfg(test)]
