@@ -275,14 +275,10 @@ fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown 
 
 /// The campaign's stop came before the flight took off: `aborted`, which the fleet journals as interrupted.
 fn stopped_before_flying(written: &Result<String, String>) -> Flown {
-    Flown {
-        status: "aborted".into(),
-        min_distance: None,
-        min_distance_raw: None,
-        flight_time_s: 0.0,
-        warnings: Vec::new(),
-        reason: Some(format!("stopped before PX4 was flying; {}", console_note(written))),
-    }
+    Flown::unflown(
+        "aborted",
+        format!("stopped before PX4 was flying; {}", console_note(written)),
+    )
 }
 
 /// Copies the instance's newest ULog to `to` (PX4 closes it at disarm, a moment after the landing the bridge

@@ -75,14 +75,7 @@ impl Retry {
                 ),
             });
         }
-        Ok(Flown {
-            status: BACKEND_FAILED.into(),
-            min_distance: None,
-            min_distance_raw: None,
-            flight_time_s: 0.0,
-            warnings: Vec::new(),
-            reason: Some(reason),
-        })
+        Ok(Flown::unflown(BACKEND_FAILED, reason))
     }
 }
 

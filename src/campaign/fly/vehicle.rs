@@ -26,6 +26,20 @@ pub struct Flown {
     pub reason: Option<String>,
 }
 
+impl Flown {
+    /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
+    pub fn unflown(status: &str, reason: String) -> Self {
+        Flown {
+            status: status.into(),
+            min_distance: None,
+            min_distance_raw: None,
+            flight_time_s: 0.0,
+            warnings: Vec::new(),
+            reason: Some(reason),
+        }
+    }
+}
+
 /// Why a vehicle could not fly.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum VehicleError {

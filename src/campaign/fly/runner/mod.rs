@@ -152,14 +152,7 @@ impl Vehicle for RunnerVehicle {
 
 /// A flight the campaign's stop ended (`aborted`: the fleet journals it `interrupted`).
 fn stopped() -> Flown {
-    Flown {
-        status: "aborted".into(),
-        min_distance: None,
-        min_distance_raw: None,
-        flight_time_s: 0.0,
-        warnings: Vec::new(),
-        reason: Some("the job was stopped".into()),
-    }
+    Flown::unflown("aborted", "the job was stopped".into())
 }
 
 /// `{id}`: unique per campaign, flight and attempt, and a valid Slurm job name and Kubernetes object name
