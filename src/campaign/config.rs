@@ -106,6 +106,10 @@ pub struct CampaignConfig {
     /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub runner: Option<String>,
+    /// `--jobs`: runner jobs at once, kept so a resumed campaign runs as many unless told otherwise; `None`
+    /// (also when the key is absent): one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jobs: Option<usize>,
     /// PX4 SITL instances the campaign starts itself (`--px4`), each flight on a fresh one; `None` (also when
     /// the key is absent): the vehicles of `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]

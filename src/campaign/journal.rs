@@ -2,13 +2,15 @@
 //! so a killed campaign can resume without flying a test twice.
 
 use std::collections::{HashMap, HashSet};
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::journal_check::check_record;
 use crate::io::write_atomic;
+use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
 
 /// One finished flight.
@@ -116,15 +118,12 @@ pub struct Journal {
 impl Journal {
     /// Opens (creating if needed) the journal at `path` for appending.
     pub fn open(path: &Path) -> Result<Self, ModelError> {
-        let file = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .map_err(|source| ModelError::Io {
-                path: path.to_path_buf(),
-                action: "cannot open for appending",
-                source,
-            })?;
+        // A link planted in place of the journal is refused, not appended through.
+        let file = open_append_no_follow(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            action: "cannot open for appending",
+            source,
+        })?;
         Ok(Self {
             path: path.to_path_buf(),
             file,
@@ -190,6 +189,24 @@ impl Journal {
         Ok(pending)
     }
 
+    /// Checks every record's values ([`check_record`]; `size_m` is the arena's size): the first line that
+    /// cannot be believed is an error naming it, and what to do. Errors as [`Self::read`] too.
+    pub fn check(path: &Path, size_m: f64) -> Result<(), ModelError> {
+        let parsed = parse(&read_bytes(path)?, path)?;
+        for (record, line) in parsed.records.iter().zip(&parsed.lines) {
+            check_record(record, size_m).map_err(|why| ModelError::Syntax {
+                path: path.to_path_buf(),
+                line: Some(*line),
+                column: None,
+                message: format!(
+                    "{why}; the journal was edited or damaged: delete this line (its flight is flown again) or \
+                     restore the journal, then resume"
+                ),
+            })?;
+        }
+        Ok(())
+    }
+
     /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so
     /// the next record starts on a line of its own; says what was dropped, for the user. Errors as
     /// [`Self::read`].
@@ -220,20 +237,17 @@ impl Journal {
 
 /// The journal's bytes; none when there is no journal yet.
 fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
-    match std::fs::read(path) {
-        Ok(b) => Ok(b),
+    match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
-        Err(source) => Err(ModelError::Io {
-            path: path.to_path_buf(),
-            action: "cannot read",
-            source,
-        }),
+        _ => read_capped(path, MAX_READ_BYTES),
     }
 }
 
 /// A journal's records, checked line by line.
 struct Parsed {
     records: Vec<FlightRecord>,
+    /// Each record's line number.
+    lines: Vec<usize>,
     /// Where the last line starts when it has no newline.
     unterminated: Option<usize>,
     /// That line's number when it is not a record (a torn write).
@@ -249,6 +263,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
     };
     let mut parsed = Parsed {
         records: Vec::new(),
+        lines: Vec::new(),
         unterminated: None,
         torn: None,
     };
@@ -300,6 +315,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
             ));
         }
         parsed.records.push(record);
+        parsed.lines.push(number);
     }
     Ok(parsed)
 }
@@ -330,6 +346,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::OpenOptions;
 
     pub(super) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {

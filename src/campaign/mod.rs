@@ -11,6 +11,7 @@ pub mod fleet;
 pub mod flights;
 pub mod folder;
 pub mod journal;
+pub mod journal_check;
 pub mod learn;
 pub mod learning;
 pub mod mock_profile;

@@ -10,6 +10,7 @@ use super::backends::{self, BackendSummary};
 use super::config::CampaignInput;
 use super::failure_counts::FAIL_BINS;
 use super::journal::{FlightRecord, Journal};
+use super::journal_check::inside_bytes;
 use super::learn::Learnt;
 use super::pool::FleetUse;
 use super::suite::summary;
@@ -185,7 +186,9 @@ fn write_failing_tests(
         let r = flights[0];
         let test = input.case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
-        let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
+        let flown = inside_bytes(folder, &r.trajectory)
+            .and_then(|b| String::from_utf8(b).ok())
+            .and_then(|text| Trajectory::parse_csv(&text, &r.trajectory).ok());
         for (k, f) in flights.iter().enumerate() {
             // The best failing flight is the test's own CSV; the others are its runs, by flight number.
             let run = if k == 0 {
@@ -193,7 +196,7 @@ fn write_failing_tests(
             } else {
                 format!("{name}-{}", f.attempt + 1)
             };
-            if let Ok(bytes) = std::fs::read(folder.join(&f.trajectory)) {
+            if let Some(bytes) = inside_bytes(folder, &f.trajectory) {
                 write_atomic(&folder.join(format!("{run}.csv")), &bytes)?;
             }
         }

@@ -47,8 +47,9 @@ use super::surrogate::Surrogate;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
+use crate::model::Obstacle;
 use crate::model::competition::FAIL_BELOW_M;
-use crate::model::{ModelError, Obstacle};
+use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
@@ -59,13 +60,9 @@ pub const EXTRA_ROUNDS: usize = 4;
 /// Reads `folder/learnt.json` (a previous campaign's), naming the file and the field on error.
 pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
     let path = folder.join("learnt.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| ModelError::Io {
-        path: path.clone(),
-        action: "cannot read the prior",
-        source,
-    })?;
+    let bytes = read_capped(&path, MAX_READ_BYTES)?;
     let learnt: Learnt =
-        serde_json::from_str(&text).map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
+        serde_json::from_slice(&bytes).map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
     learnt
         .calibration
         .validate()
@@ -510,6 +507,16 @@ impl<'a> Rounds<'a> {
             )),
             ranking.ranked.len()
         ));
+        if ranking.ranked.len() < ranking.remaining {
+            self.input.progress.warn(&format!(
+                "round {}: only {} of the {} flights planned have a candidate predicted below --threshold {} m \
+                 (and apart from the tests kept); a threshold few candidates reach leaves budget unspent",
+                round.index + 1,
+                ranking.ranked.len(),
+                ranking.remaining,
+                self.input.cfg.threshold_m
+            ));
+        }
     }
 
     fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
