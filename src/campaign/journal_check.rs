@@ -43,22 +43,35 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
             && !(d.is_finite() && (0.0..=size_m).contains(&d))
         {
             return Err(format!(
-                "{field} {d} m is outside [0, {size_m:.1}] m (a distance within the arena)"
+                "{field} {} m is outside [0, {size_m:.1}] m (a distance within the arena)",
+                number(d)
             ));
         }
     }
     let times = [("flight_time_s", record.flight_time_s), ("wall_s", record.wall_s)];
     for (field, t) in times {
         if !(t.is_finite() && (0.0..=MAX_FLIGHT_TIME_S).contains(&t)) {
-            return Err(format!("{field} {t} s is outside [0, {MAX_FLIGHT_TIME_S}] s"));
+            return Err(format!("{field} {} s is outside [0, {MAX_FLIGHT_TIME_S}] s", number(t)));
         }
     }
     if let Some(p) = record.predicted_p_fail
         && !(0.0..=1.0).contains(&p)
     {
-        return Err(format!("predicted_p_fail {p} is outside [0, 1] (a probability)"));
+        return Err(format!(
+            "predicted_p_fail {} is outside [0, 1] (a probability)",
+            number(p)
+        ));
     }
     Ok(())
+}
+
+/// A number as a user reads it: huge ones in scientific notation, not three hundred digits.
+fn number(v: f64) -> String {
+    if v.is_finite() && v.abs() >= 1e6 {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// Whether `path` names something inside the folder it is relative to: relative, with plain names only (an
