@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::journal_check::check_record;
 use crate::io::write_atomic;
 use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
@@ -189,22 +188,11 @@ impl Journal {
         Ok(pending)
     }
 
-    /// Checks every record's values ([`check_record`]; `size_m` is the arena's size): the first line that
-    /// cannot be believed is an error naming it, and what to do. Errors as [`Self::read`] too.
-    pub fn check(path: &Path, size_m: f64) -> Result<(), ModelError> {
+    /// Every record with its line number, in journal order (errors as [`Self::read`]): for checks that name
+    /// the line.
+    pub fn read_numbered(path: &Path) -> Result<Vec<(usize, FlightRecord)>, ModelError> {
         let parsed = parse(&read_bytes(path)?, path)?;
-        for (record, line) in parsed.records.iter().zip(&parsed.lines) {
-            check_record(record, size_m).map_err(|why| ModelError::Syntax {
-                path: path.to_path_buf(),
-                line: Some(*line),
-                column: None,
-                message: format!(
-                    "{why}; the journal was edited or damaged: delete this line (its flight is flown again) or \
-                     restore the journal, then resume"
-                ),
-            })?;
-        }
-        Ok(())
+        Ok(parsed.lines.into_iter().zip(parsed.records).collect())
     }
 
     /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so

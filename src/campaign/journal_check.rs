@@ -5,9 +5,9 @@
 
 use std::path::{Component, Path};
 
-use super::journal::FlightRecord;
+use super::journal::{FlightRecord, Journal};
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
-use crate::model::{Arena, TestCase};
+use crate::model::{Arena, ModelError, TestCase};
 
 /// The longest flight time a journal line may state, seconds (a day: far above any flight limit).
 pub const MAX_FLIGHT_TIME_S: f64 = 86_400.0;
@@ -24,6 +24,23 @@ pub fn arena_size_m(case: &TestCase) -> f64 {
         top = top.max(p.alt_m.abs());
     }
     ((x1 - x0).powi(2) + (y1 - y0).powi(2) + top.powi(2)).sqrt()
+}
+
+/// Checks every record of the journal at `path` ([`check_record`]; `size_m` is the arena's size): the first
+/// line that cannot be believed is an error naming it, and what to do. Errors as [`Journal::read`] too.
+pub fn check_journal(path: &Path, size_m: f64) -> Result<(), ModelError> {
+    for (line, record) in Journal::read_numbered(path)? {
+        check_record(&record, size_m).map_err(|why| ModelError::Syntax {
+            path: path.to_path_buf(),
+            line: Some(line),
+            column: None,
+            message: format!(
+                "{why}; the journal was edited or damaged: delete this line (its flight is flown again) or \
+                 restore the journal, then resume"
+            ),
+        })?;
+    }
+    Ok(())
 }
 
 /// Why `record` cannot be believed, if it cannot: `size_m` is the arena's size ([`arena_size_m`]).

@@ -10,7 +10,7 @@ pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MO
 use super::flights::{FlightStage, fly_interrupted};
 use super::folder::FolderLock;
 use super::journal::{Journal, flights_charged};
-use super::journal_check::arena_size_m;
+use super::journal_check::{arena_size_m, check_journal};
 use super::learn::Learnt;
 use super::pool::Vehicle;
 pub use super::report::Report;
@@ -38,7 +38,7 @@ pub fn run_campaign(
     if let Some(dropped) = Journal::heal(&folder.join("journal.jsonl"))? {
         progress.warn(&dropped);
     }
-    Journal::check(&folder.join("journal.jsonl"), arena_size_m(&case))?;
+    check_journal(&folder.join("journal.jsonl"), arena_size_m(&case))?;
     if let Some(orphans) = unjournaled_trajectories(folder)? {
         progress.warn(&orphans);
     }

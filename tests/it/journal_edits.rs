@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use prgenuav::campaign::journal::{FlightRecord, Journal};
-use prgenuav::campaign::journal_check::{check_record, is_inside};
+use prgenuav::campaign::journal_check::{check_journal, check_record, is_inside};
 use proptest::prelude::*;
 use serde_json::Value;
 
@@ -121,7 +121,7 @@ fn apply(text: &str, edit: &Edit) -> Vec<u8> {
 /// What a resume does first with the journal: heal a torn last line, then check every record.
 fn resume_checks(path: &Path) -> Result<(), String> {
     Journal::heal(path).map_err(|e| e.to_string())?;
-    Journal::check(path, SIZE_M).map_err(|e| e.to_string())
+    check_journal(path, SIZE_M).map_err(|e| e.to_string())
 }
 
 proptest! {
