@@ -373,3 +373,25 @@ fn ctrl_c_during_screening_exits_1_with_a_report_and_the_resume_command() {
     assert!(folder.join("report.json").exists(), "{stderr}");
     assert!(stderr.contains(&format!("--resume {}", folder.display())), "{stderr}");
 }
+
+#[test]
+fn a_campaign_resumes_from_any_folder_and_another_spelling_of_its_case_is_no_conflict() {
+    let out = tempfile::tempdir().unwrap();
+    let folder = finished(out.path(), "2");
+    let stored: Value = serde_json::from_str(&std::fs::read_to_string(folder.join("campaign.json")).unwrap()).unwrap();
+    assert!(Path::new(stored["case"].as_str().unwrap()).is_absolute(), "{stored}");
+    let f = folder.to_str().unwrap();
+    let (code, _, stderr) = prgenuav(&["generate", "./missions/mission2.yaml", "--resume", f, "--quiet"]);
+    assert_eq!(code, 0, "the same file under another spelling: {stderr}");
+    assert!(
+        stderr.contains("resuming as") && stderr.contains("budget 2"),
+        "{stderr}"
+    );
+    let elsewhere = tempfile::tempdir().unwrap();
+    let out = binary()
+        .current_dir(elsewhere.path())
+        .args(["generate", "--resume", f, "--quiet"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
