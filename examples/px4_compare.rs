@@ -5,7 +5,7 @@
 //! against PX4 (MAE, Spearman, precision / recall of "< 1.5 m", mean signed error), the split of the LFS's
 //! squared error into LFS-vs-PX4 and PX4-vs-recorded, the recorded simulator's own repeat noise, and the
 //! horizontal speeds flown (tier A, the only recorded trajectories); then the prequential cross-validation of
-//! the online calibration's prior weight (`campaign::learn`): for each truth (recorded, PX4) the flights in
+//! the online calibration's prior weight (`campaign::learn::calibration`): for each truth (recorded, PX4) the flights in
 //! 50 random orders of obstacle sets, each predicted by the LFS (`px4` motion) plus the bias learnt from the
 //! flights before it, mean absolute error over the first 25 flights (a campaign's early quarter) and all.
 //!

@@ -5,6 +5,10 @@
 
 use std::time::{Duration, Instant};
 
+/// The largest speed-up parsed: a 4 ms physics step then still lasts 4 µs of wall time; far beyond it the
+/// pacing arithmetic degenerates (`max` is the way to ask for no pacing).
+pub const MAX_SPEED_FACTOR: f64 = 1000.0;
+
 /// How fast simulated time runs relative to wall time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SpeedFactor {
@@ -22,8 +26,10 @@ impl SpeedFactor {
             return Ok(Self::AsFastAsPossible);
         }
         match s.parse::<f64>() {
-            Ok(k) if k.is_finite() && k > 0.0 => Ok(Self::Times(k)),
-            _ => Err(format!("speed factor {s:?}: expected a positive number or \"max\"")),
+            Ok(k) if k.is_finite() && k > 0.0 && k <= MAX_SPEED_FACTOR => Ok(Self::Times(k)),
+            _ => Err(format!(
+                "speed factor {s:?}: expected a number above 0 and at most {MAX_SPEED_FACTOR}, or \"max\""
+            )),
         }
     }
 }
@@ -92,6 +98,8 @@ mod tests {
         assert!(SpeedFactor::parse("0").is_err());
         assert!(SpeedFactor::parse("-1").is_err());
         assert!(SpeedFactor::parse("inf").is_err());
+        assert!(SpeedFactor::parse("1e300").is_err());
+        assert_eq!(SpeedFactor::parse("1000"), Ok(SpeedFactor::Times(1000.0)));
         assert!(SpeedFactor::parse("x").is_err());
     }
 

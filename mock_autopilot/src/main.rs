@@ -100,15 +100,33 @@ fn parse_home(s: &str) -> Result<mock_autopilot::geo::GeoPoint, String> {
     }
 }
 
-fn secs(name: &str, v: f64) -> Result<Duration> {
-    if !(v.is_finite() && v >= 0.0) {
-        bail!("--{name} {v}: expected a non-negative number of seconds");
+/// The one checked conversion of a flag's seconds to a [`Duration`]: `v` within `0..=max`.
+fn secs(name: &str, v: f64, max: f64) -> Result<Duration> {
+    if !(v.is_finite() && (0.0..=max).contains(&v)) {
+        bail!("--{name} {v}: expected 0 to {max} seconds");
     }
-    Ok(Duration::from_secs_f64(v))
+    Duration::try_from_secs_f64(v).with_context(|| format!("--{name} {v}"))
+}
+
+/// The highest `--instance`: its ports 14580+N and 14540+N must exist.
+const MAX_INSTANCE: u16 = u16::MAX - 14580;
+
+/// A probability flag within 0..=1.
+fn probability(name: &str, p: f64) -> Result<f64> {
+    if !(0.0..=1.0).contains(&p) {
+        bail!("--{name} {p}: expected a probability from 0 to 1");
+    }
+    Ok(p)
 }
 
 fn link_spec(args: &Args) -> Result<LinkSpec> {
     let Some(link) = &args.link else {
+        if args.instance > MAX_INSTANCE {
+            bail!(
+                "--instance {}: expected 0 to {MAX_INSTANCE} (it binds port 14580+N, and ports end at 65535)",
+                args.instance
+            );
+        }
         return Ok(LinkSpec::Px4Sitl {
             instance: args.instance,
         });
@@ -139,11 +157,17 @@ async fn run(args: Args) -> Result<()> {
     };
     let faults = Faults {
         seed: args.seed,
-        loss: args.loss,
-        duplicate: args.duplicate,
-        latency: secs("latency", args.latency / 1000.0)?,
-        silence_after: args.silence_after.map(|v| secs("silence-after", v)).transpose()?,
-        reboot_after: args.reboot_after.map(|v| secs("reboot-after", v)).transpose()?,
+        loss: probability("loss", args.loss)?,
+        duplicate: probability("duplicate", args.duplicate)?,
+        latency: secs("latency", args.latency / 1000.0, 10.0).context("--latency is in milliseconds: 0 to 10000")?,
+        silence_after: args
+            .silence_after
+            .map(|v| secs("silence-after", v, 86_400.0))
+            .transpose()?,
+        reboot_after: args
+            .reboot_after
+            .map(|v| secs("reboot-after", v, 86_400.0))
+            .transpose()?,
     };
     if !(args.step_ms.is_finite() && args.step_ms > 0.0 && args.step_ms <= 100.0) {
         bail!("--step-ms {}: expected 0 < step <= 100", args.step_ms);
@@ -168,10 +192,10 @@ async fn run(args: Args) -> Result<()> {
         .faults(faults)
         .reject_mission(reject)
         .fail_arm(args.fail_arm)
-        .estimator_settle(secs("estimator-settle", args.estimator_settle)?)
+        .estimator_settle(secs("estimator-settle", args.estimator_settle, 600.0)?)
         .lockstep(
             args.lockstep
-                .then(|| secs("lockstep-wait", args.lockstep_wait))
+                .then(|| secs("lockstep-wait", args.lockstep_wait, 60.0))
                 .transpose()?,
         );
     if let Some(home) = args.home {

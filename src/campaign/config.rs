@@ -48,7 +48,7 @@ pub struct CampaignConfig {
     /// camera and planner lag behind the vehicle.
     #[serde(default = "default_mock_latency_ms")]
     pub mock_latency_ms: f64,
-    /// The embedded mocks' profile (`campaign::mock_profile`). `competition` when the key is absent: the only
+    /// The embedded mocks' profile (`campaign::fly::mock_profile`). `competition` when the key is absent: the only
     /// mock there was before profiles, and a resume must match.
     #[serde(default = "profile_before_profiles")]
     pub mock_profile: String,
@@ -106,6 +106,10 @@ pub struct CampaignConfig {
     /// `["runner"]`); `None` (also when the key is absent) flies on `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub runner: Option<String>,
+    /// `--jobs`: runner jobs at once, kept so a resumed campaign runs as many unless told otherwise; `None`
+    /// (also when the key is absent): one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jobs: Option<usize>,
     /// PX4 SITL instances the campaign starts itself (`--px4`), each flight on a fresh one; `None` (also when
     /// the key is absent): the vehicles of `hfs`.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -17,6 +17,7 @@ use super::report::outputs::{StageTimes, write_outputs};
 pub use super::screen::screener::{Progress, Screener};
 use super::store::folder::FolderLock;
 use super::store::journal::{Journal, flights_charged};
+use super::store::journal_check::{arena_size_m, check_journal};
 use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
 
@@ -37,6 +38,7 @@ pub fn run_campaign(
     if let Some(dropped) = Journal::heal(&folder.join("journal.jsonl"))? {
         progress.warn(&dropped);
     }
+    check_journal(&folder.join("journal.jsonl"), arena_size_m(&case))?;
     if let Some(orphans) = unjournaled_trajectories(folder)? {
         progress.warn(&orphans);
     }
@@ -63,12 +65,29 @@ pub fn run_campaign(
     };
     if cfg.learn && cfg.screen {
         // The replayed rounds fly the interrupted flights again where their plan has them.
-        let (learnt, drawn) = run_rounds(&input, &mut vehicles, &mut stages)?;
-        return finish(&input, drawn, stages, Some(&learnt));
+        return match run_rounds(&input, &mut vehicles, &mut stages) {
+            Ok((learnt, drawn)) => finish(&input, drawn, stages, Some(&learnt)),
+            Err(e) => report_if_stopped(e, &input, stages),
+        };
     }
-    fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))?;
-    let drawn = run_static(&input, &mut vehicles, &mut stages)?;
-    finish(&input, drawn, stages, None)
+    let flown = fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))
+        .and_then(|_| run_static(&input, &mut vehicles, &mut stages));
+    match flown {
+        Ok(drawn) => finish(&input, drawn, stages, None),
+        Err(e) => report_if_stopped(e, &input, stages),
+    }
+}
+
+/// A campaign stopped (Ctrl-C, SIGTERM, SIGHUP) in a stage that cannot end early with a result, screening
+/// say, still reports the flights journaled so far: the stop is the user's, not an error.
+fn report_if_stopped(e: CampaignError, input: &CampaignInput, stages: StageTimes) -> Result<Report, CampaignError> {
+    if !input.cancel.load(std::sync::atomic::Ordering::SeqCst) {
+        return Err(e);
+    }
+    input
+        .progress
+        .warn(&format!("stopped ({e}); reporting the flights journaled so far"));
+    finish(input, 0, stages, None)
 }
 
 /// Says so when `flights/` holds trajectories the journal has no record of (a journal deleted or emptied, or a
@@ -92,8 +111,9 @@ fn unjournaled_trajectories(folder: &Path) -> Result<Option<String>, CampaignErr
     let shown = orphans.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
     Ok(Some(format!(
         "{}: {} trajectory file(s) in flights/ have no journal record ({shown}{}): flights not journaled (the \
-         campaign was killed mid-flight, or the journal was emptied or removed); their candidates are flown \
-         again and the files overwritten",
+         campaign was killed mid-flight, or the journal was emptied or removed); they are not part of the \
+         campaign's results; a candidate among them that the campaign flies again gets a new file in its place, \
+         the others are left as they are",
         journal.display(),
         orphans.len(),
         if orphans.len() > 5 { ", ..." } else { "" }
@@ -124,6 +144,17 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, Cam
         source,
     })?;
     let lock = FolderLock::acquire(folder)?;
+    // The folders the campaign writes into must be its own: a link there would carry every write elsewhere.
+    for sub in ["flights", "jobs"] {
+        let path = folder.join(sub);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir()) {
+            return Err(CampaignError::Config(format!(
+                "{}: not a folder of the campaign's own (a link or a file); the campaign writes only into its \
+                 folder: remove it, then resume",
+                path.display()
+            )));
+        }
+    }
     write_json(&folder.join("campaign.json"), cfg, true)?;
     Ok(lock)
 }

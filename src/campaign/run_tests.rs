@@ -98,6 +98,7 @@ fn config(budget: usize) -> CampaignConfig {
         confirm: 1,
         overlap: false,
         runner: None,
+        jobs: None,
         px4: None,
     }
 }

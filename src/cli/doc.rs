@@ -41,6 +41,7 @@ pub fn render() -> String {
         command(&mut s, sub);
     }
     campaign_toml(&mut s);
+    super::limits::render(&mut s);
     s
 }
 

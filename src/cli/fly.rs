@@ -19,6 +19,7 @@ use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
+use super::limits;
 use super::values::{JudgeEdition, Mode, Motion};
 
 /// Arguments of `fly`.
@@ -180,12 +181,14 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
     let opts = FlyOptions {
         connect: args.connect.clone(),
         mode: args.mode.into(),
-        timeout_s: args.timeout,
+        timeout_s: limits::FLY_TIMEOUT.check(args.timeout)?,
         trajectory_csv: args.trajectory.clone(),
         fence: !args.no_fence,
-        time_scale: args
-            .time_scale
-            .unwrap_or(if args.px4.is_some() { DEFAULT_SPEED_FACTOR } else { 1.0 }),
+        time_scale: limits::FLY_TIME_SCALE.check(args.time_scale.unwrap_or(if args.px4.is_some() {
+            DEFAULT_SPEED_FACTOR
+        } else {
+            1.0
+        }))?,
         lfs_min_distance: prediction.and_then(|p| p.min_distance),
         lockstep: match args.lockstep {
             None => None,
@@ -194,7 +197,7 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
         },
         judge: args.judge.into(),
         anchor_at_vehicle_home: args.anchor_at_vehicle_home,
-        ready_timeout_s: args.ready_timeout,
+        ready_timeout_s: limits::FLY_READY_TIMEOUT.check(args.ready_timeout)?,
         notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
         ..FlyOptions::default()
     };

@@ -7,12 +7,14 @@ mod doc;
 mod fidelity;
 mod fly;
 mod generate;
+mod limits;
 mod progress;
 mod render;
 mod sample;
 mod score;
 mod settings;
 mod simulate;
+mod stop_signals;
 mod values;
 
 use std::process::ExitCode;

@@ -5,14 +5,12 @@ use std::io::Write;
 use std::path::Path;
 
 use super::error::{ModelError, Result};
+use super::safe_files::{MAX_READ_BYTES, create_temp_beside, read_capped};
 
-/// Reads a whole file as UTF-8 text, naming the file on failure.
+/// Reads a whole file as UTF-8 text, naming the file on failure: a regular file of at most
+/// [`MAX_READ_BYTES`], never blocking ([`read_capped`]).
 pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|source| ModelError::Io {
-        path: path.to_path_buf(),
-        action: "cannot read",
-        source,
-    })?;
+    let bytes = read_capped(path, MAX_READ_BYTES)?;
     String::from_utf8(bytes).map_err(|e| ModelError::Syntax {
         path: path.to_path_buf(),
         line: None,
@@ -24,7 +22,8 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     })
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder, synced, then renamed over `path`.
+/// Writes `bytes` to `path` through a new temporary file in the same folder, synced, then renamed over `path`:
+/// a symbolic link at `path` is replaced, never written through, and so is one planted at a temporary name.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let io_err = |source| ModelError::Io {
         path: path.to_path_buf(),
@@ -36,13 +35,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir).map_err(io_err)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
+    let (tmp, mut f) = create_temp_beside(path).map_err(io_err)?;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
         std::fs::rename(&tmp, path)

@@ -10,6 +10,7 @@ mod files;
 pub mod geo;
 mod mission;
 mod obstacle;
+pub mod safe_files;
 mod tables;
 mod test_case;
 mod trajectory;

@@ -5,6 +5,7 @@ use std::path::Path;
 use px4_ulog::full_parser::{SomeVec, read_file};
 
 use super::error::{ModelError, Result};
+use super::safe_files::MAX_ULOG_BYTES;
 use super::trajectory::{Sample, Trajectory, check_step};
 
 /// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
@@ -17,13 +18,7 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         message,
     };
     let name = path.to_str().ok_or_else(|| bad("the path is not UTF-8".into()))?;
-    if !path.is_file() {
-        return Err(ModelError::Io {
-            path: path.to_path_buf(),
-            action: "cannot read",
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
-        });
-    }
+    check_ulog_file(path)?;
     // The parser asserts its own invariants; a malformed log must be an error, not a crash.
     let parsed = std::panic::catch_unwind(|| read_file(name))
         .map_err(|_| bad("malformed ULog (the parser gave up)".into()))?
@@ -86,4 +81,28 @@ pub fn load_flight(path: &Path) -> Result<Trajectory> {
         Some(e) if e.eq_ignore_ascii_case("ulg") => load_ulog_trajectory(path),
         _ => Trajectory::load_csv(path),
     }
+}
+
+/// The parser opens the log itself: it gets a regular file within [`MAX_ULOG_BYTES`] only, so a FIFO cannot
+/// block it and a device cannot fill memory.
+fn check_ulog_file(path: &Path) -> Result<()> {
+    let refuse = |source| ModelError::Io {
+        path: path.to_path_buf(),
+        action: "cannot read",
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(refuse)?;
+    if !meta.is_file() {
+        return Err(refuse(std::io::Error::other(
+            "not a regular file; only regular files are read",
+        )));
+    }
+    if meta.len() > MAX_ULOG_BYTES {
+        return Err(refuse(std::io::Error::other(format!(
+            "it is {} bytes; flight logs read are at most {} MiB",
+            meta.len(),
+            MAX_ULOG_BYTES >> 20
+        ))));
+    }
+    Ok(())
 }

@@ -440,7 +440,7 @@ fn confirm_2_on_the_mock_flies_each_failure_again_and_writes_its_runs() {
     assert!(err.contains("--confirm 3 conflicts with confirm 2"), "{err}");
     let (code, _, err) = prgenuav(&["generate", "missions/mission2.yaml", "2", "--confirm", "0"]);
     assert_eq!(code, 2);
-    assert!(err.contains("--confirm (flight.confirm) must be at least 1"), "{err}");
+    assert!(err.contains("--confirm (flight.confirm) 0 is out of range"), "{err}");
 }
 
 #[test]

@@ -9,6 +9,7 @@ mod generator;
 mod geometry_props;
 mod hygiene;
 mod journal;
+mod journal_edits;
 mod layering;
 mod lfs;
 mod missions;
@@ -23,6 +24,7 @@ mod rules;
 mod runner;
 mod score;
 mod slurm;
+mod trust;
 mod ulog;
 
 use std::path::{Path, PathBuf};

@@ -209,7 +209,7 @@ fn bad_runner_settings_are_refused_before_anything_runs() {
         ),
         (
             vec!["--runner", "fly {test}", "--jobs", "0"],
-            "--jobs must be at least 1",
+            "--jobs 0 is out of range: 1 to 1024",
         ),
         (vec!["--runner", "fly {test}", "--job-timeout=-1"], "--job-timeout"),
         (vec!["--jobs", "2"], "go with --runner"),

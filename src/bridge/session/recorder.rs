@@ -12,6 +12,7 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use crate::model::safe_files::create_replacing;
 use crate::model::{Sample, Trajectory};
 
 use crate::bridge::wire::pose::PoseNed;
@@ -46,7 +47,8 @@ impl Recorder {
                 if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
                     std::fs::create_dir_all(dir)?;
                 }
-                let mut w = BufWriter::new(File::create(path)?);
+                // A link planted at the path is replaced, never written through.
+                let mut w = BufWriter::new(create_replacing(path)?);
                 w.write_all(b"timestamp,x,y,z,r\n")?;
                 w.flush()?;
                 Some((path.to_path_buf(), w))

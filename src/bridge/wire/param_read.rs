@@ -69,8 +69,10 @@ impl Exchange for ParamRead {
 
     fn on_timeout(&mut self, now: Duration) -> Step<f64> {
         if self.retries >= self.retry.max_retries {
-            return Step::done(Err(ProtocolError::UnknownParam {
-                name: self.name.clone(),
+            // Silence is not a "no": a vehicle without the parameter says so (STATUSTEXT).
+            return Step::done(Err(ProtocolError::Timeout {
+                what: format!("reading parameter {}", self.name),
+                retries: self.retries,
             }));
         }
         self.retries += 1;
@@ -123,7 +125,13 @@ mod tests {
         assert_eq!(sent.len(), 2, "one retry");
         let mut r = ParamRead::new(T, "NOPE", Retry::PARAM);
         let (got, sent) = run_scripted(&mut r, Duration::from_millis(100), |_, _| vec![]);
-        assert_eq!(got, Err(ProtocolError::UnknownParam { name: "NOPE".into() }));
+        assert_eq!(
+            got,
+            Err(ProtocolError::Timeout {
+                what: "reading parameter NOPE".into(),
+                retries: Retry::PARAM.max_retries
+            })
+        );
         assert_eq!(sent.len(), 1 + Retry::PARAM.max_retries as usize);
     }
 }

@@ -197,7 +197,11 @@ impl Exchange for ParamSet {
                     name,
                     got,
                 },
-                (Phase::Reading, _) => ProtocolError::UnknownParam { name },
+                // Silence is not a "no": a vehicle without the parameter says so (STATUSTEXT).
+                (Phase::Reading, _) => ProtocolError::Timeout {
+                    what: format!("reading parameter {name}"),
+                    retries: self.in_a_row,
+                },
                 _ => ProtocolError::Timeout {
                     what: format!("setting parameter {name}"),
                     retries: self.in_a_row,
@@ -321,7 +325,11 @@ mod tests {
         assert!(matches!(r, Err(ProtocolError::ParamMismatch { got: 2.0, .. })), "{r:?}");
         let mut p = ParamSet::new(T, vec![("X".into(), 1.0)], Retry::PARAM);
         let (r, sent) = run_scripted(&mut p, Duration::from_millis(10), |_, _| vec![]);
-        assert!(r.is_err());
+        let e = r.unwrap_err().to_string();
+        assert!(
+            e.contains("reading parameter X: no answer"),
+            "a silence is a timeout: {e}"
+        );
         assert_eq!(sent.len(), 1 + Retry::PARAM.max_retries as usize);
     }
 }

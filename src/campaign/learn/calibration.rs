@@ -94,8 +94,15 @@ impl Calibration {
         if !(self.prior_flights.is_finite() && (0.0..=1000.0).contains(&self.prior_flights)) {
             return Err(format!("prior_flights {} must be within 0..1000", self.prior_flights));
         }
-        if !self.residual_sum_m.is_finite() {
-            return Err("residual_sum_m must be finite".into());
+        // Every residual is clipped, so a sum beyond the clip times the flights was written by hand; it would
+        // shift every prediction far past the threshold, and the campaign would fly nothing.
+        let most = MAX_RESIDUAL_M * self.flights as f64;
+        if !(self.residual_sum_m.is_finite() && self.residual_sum_m.abs() <= most) {
+            return Err(format!(
+                "residual_sum_m {} must be within +-{most} m ({} flights of residuals clipped to +-{MAX_RESIDUAL_M} \
+                 m): beyond it the prior would move every prediction by metres and the campaign would fly nothing",
+                self.residual_sum_m, self.flights
+            ));
         }
         Ok(())
     }

@@ -127,12 +127,30 @@ fn rank(
             remaining
         ));
     }
+    let below = fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count();
     input.progress.note(&format!(
-        "{} of {} candidates predicted below {} m; flying {}",
-        fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count(),
+        "{below} of {} candidates predicted below {} m; flying {}",
         cfg.candidates,
         cfg.threshold_m,
         ranked.len()
     ));
+    if ranked.len() < remaining {
+        input.progress.warn(&unspent_warning(
+            remaining - ranked.len(),
+            remaining,
+            below,
+            cfg.threshold_m,
+        ));
+    }
     Ok((ranked, remaining))
+}
+
+/// Said before the flights start when the ranking cannot fill the budget: a threshold nobody reaches flies
+/// nothing, and the user should know before waiting for it.
+fn unspent_warning(unspent: usize, remaining: usize, below: usize, threshold_m: f64) -> String {
+    format!(
+        "{unspent} of the {remaining} flights left in the budget will go unspent: {below} candidate(s) are predicted \
+         below --threshold {threshold_m} m (or too close to one kept); raise --threshold or --candidates to use \
+         the budget"
+    )
 }

@@ -15,6 +15,7 @@ use crate::campaign::report::suite::summary;
 pub use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
 use crate::campaign::store::journal::{FlightRecord, Journal};
+use crate::campaign::store::journal_check::inside_bytes;
 use crate::generator::adaptive::DRAW_NAMES;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{Judge, judge_in_frame, points, test_score};
@@ -185,7 +186,9 @@ fn write_failing_tests(
         let r = flights[0];
         let test = input.case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
-        let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
+        let flown = inside_bytes(folder, &r.trajectory)
+            .and_then(|b| String::from_utf8(b).ok())
+            .and_then(|text| Trajectory::parse_csv(&text, &r.trajectory).ok());
         for (k, f) in flights.iter().enumerate() {
             // The best failing flight is the test's own CSV; the others are its runs, by flight number.
             let run = if k == 0 {
@@ -193,7 +196,7 @@ fn write_failing_tests(
             } else {
                 format!("{name}-{}", f.attempt + 1)
             };
-            if let Ok(bytes) = std::fs::read(folder.join(&f.trajectory)) {
+            if let Some(bytes) = inside_bytes(folder, &f.trajectory) {
                 write_atomic(&folder.join(format!("{run}.csv")), &bytes)?;
             }
         }

@@ -4,14 +4,16 @@
 //! even by `kill -9`, so a crashed campaign never blocks its own resume.
 
 use std::fs::{File, OpenOptions, TryLockError};
-use std::io::{ErrorKind, Read, Seek, SeekFrom, Write};
+use std::io::ErrorKind;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
 
 use crate::campaign::config::CampaignError;
-use crate::model::ModelError;
+use crate::model::safe_files::read_capped;
+use crate::model::{ModelError, write_atomic};
 
-/// The lock file inside a campaign folder; it holds the writer's process id.
+/// The file inside a campaign folder that holds the writer's process id (the lock is on the folder).
 pub const LOCK_FILE: &str = "campaign.lock";
 
 /// How long a held lock is waited for before refusing. A process that spawns a child shares the lock file
@@ -84,35 +86,34 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
     (yoe + era * 400 + i64::from(m <= 2), m, d)
 }
 
-/// The advisory lock of one campaign folder, held until dropped (or the process ends).
+/// The advisory lock of one campaign folder, held until dropped (or the process ends). It is taken on the
+/// folder itself, not on a file in it: deleting or replacing `campaign.lock` cannot let a second writer in.
+/// The lock file only says which process writes (for the message of the one refused).
 #[derive(Debug)]
 pub struct FolderLock {
-    _file: File,
+    _folder: File,
 }
 
 impl FolderLock {
     /// Takes `folder`'s lock, or says which process holds it.
     pub fn acquire(folder: &Path) -> Result<Self, CampaignError> {
-        let path = folder.join(LOCK_FILE);
         let io = |action: &'static str| {
-            let path = path.clone();
+            let path = folder.to_path_buf();
             move |source| ModelError::Io { path, action, source }
         };
-        let mut file = OpenOptions::new()
+        let handle = OpenOptions::new()
             .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)
-            .map_err(io("cannot open the lock file"))?;
-        match try_lock_patiently(&file) {
+            .custom_flags(libc::O_DIRECTORY)
+            .open(folder)
+            .map_err(io("cannot open the campaign folder to lock it"))?;
+        match try_lock_patiently(&handle) {
             Ok(()) => {}
             Err(TryLockError::WouldBlock) => {
-                let mut holder = String::new();
                 // The pid is for the message only: an unreadable one still refuses.
-                let _ = file.read_to_string(&mut holder);
-                let holder = holder.trim();
-                let who = if holder.is_empty() {
+                let holder = read_capped(&folder.join(LOCK_FILE), 64)
+                    .map(|b| String::from_utf8_lossy(&b).trim().to_string())
+                    .unwrap_or_default();
+                let who = if holder.is_empty() || !holder.bytes().all(|b| b.is_ascii_digit()) {
                     "another process".to_string()
                 } else {
                     format!("pid {holder}")
@@ -125,10 +126,9 @@ impl FolderLock {
             }
             Err(TryLockError::Error(source)) => return Err(io("cannot lock")(source).into()),
         }
-        file.set_len(0).map_err(io("cannot write"))?;
-        file.seek(SeekFrom::Start(0)).map_err(io("cannot write"))?;
-        writeln!(file, "{}", std::process::id()).map_err(io("cannot write"))?;
-        Ok(Self { _file: file })
+        // Replaced by rename: a link planted as the lock file is never written through.
+        write_atomic(&folder.join(LOCK_FILE), format!("{}\n", std::process::id()).as_bytes())?;
+        Ok(Self { _folder: handle })
     }
 }
 
@@ -182,6 +182,21 @@ mod tests {
         assert!(e.contains("one writer per campaign folder"), "{e}");
         drop(held);
         FolderLock::acquire(dir.path()).unwrap();
+    }
+
+    #[test]
+    fn a_deleted_or_linked_lock_file_lets_no_second_writer_in_and_harms_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let held = FolderLock::acquire(dir.path()).unwrap();
+        std::fs::remove_file(dir.path().join(LOCK_FILE)).unwrap();
+        let e = FolderLock::acquire(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("one writer per campaign folder"), "{e}");
+        drop(held);
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, "precious").unwrap();
+        std::os::unix::fs::symlink(&victim, dir.path().join(LOCK_FILE)).unwrap();
+        let _lock = FolderLock::acquire(dir.path()).unwrap();
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious");
     }
 
     #[test]

@@ -2,13 +2,14 @@
 //! so a killed campaign can resume without flying a test twice.
 
 use std::collections::{HashMap, HashSet};
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use crate::io::write_atomic;
+use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
 
 /// One finished flight.
@@ -116,15 +117,12 @@ pub struct Journal {
 impl Journal {
     /// Opens (creating if needed) the journal at `path` for appending.
     pub fn open(path: &Path) -> Result<Self, ModelError> {
-        let file = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .map_err(|source| ModelError::Io {
-                path: path.to_path_buf(),
-                action: "cannot open for appending",
-                source,
-            })?;
+        // A link planted in place of the journal is refused, not appended through.
+        let file = open_append_no_follow(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            action: "cannot open for appending",
+            source,
+        })?;
         Ok(Self {
             path: path.to_path_buf(),
             file,
@@ -190,6 +188,13 @@ impl Journal {
         Ok(pending)
     }
 
+    /// Every record with its line number, in journal order (errors as [`Self::read`]): for checks that name
+    /// the line.
+    pub fn read_numbered(path: &Path) -> Result<Vec<(usize, FlightRecord)>, ModelError> {
+        let parsed = parse(&read_bytes(path)?, path)?;
+        Ok(parsed.lines.into_iter().zip(parsed.records).collect())
+    }
+
     /// Drops a torn last line (or ends a complete one with its newline) by rewriting the journal whole, so
     /// the next record starts on a line of its own; says what was dropped, for the user. Errors as
     /// [`Self::read`].
@@ -220,20 +225,17 @@ impl Journal {
 
 /// The journal's bytes; none when there is no journal yet.
 fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
-    match std::fs::read(path) {
-        Ok(b) => Ok(b),
+    match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
-        Err(source) => Err(ModelError::Io {
-            path: path.to_path_buf(),
-            action: "cannot read",
-            source,
-        }),
+        _ => read_capped(path, MAX_READ_BYTES),
     }
 }
 
 /// A journal's records, checked line by line.
 struct Parsed {
     records: Vec<FlightRecord>,
+    /// Each record's line number.
+    lines: Vec<usize>,
     /// Where the last line starts when it has no newline.
     unterminated: Option<usize>,
     /// That line's number when it is not a record (a torn write).
@@ -249,6 +251,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
     };
     let mut parsed = Parsed {
         records: Vec::new(),
+        lines: Vec::new(),
         unterminated: None,
         torn: None,
     };
@@ -300,6 +303,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
             ));
         }
         parsed.records.push(record);
+        parsed.lines.push(number);
     }
     Ok(parsed)
 }
@@ -330,6 +334,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::OpenOptions;
 
     pub(in crate::campaign) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {

@@ -30,6 +30,7 @@ use tokio::runtime::Runtime;
 
 use super::progress::Reporter;
 use super::settings::{GeneratorFlags, parse_range};
+use super::stop_signals::StopSignals;
 use super::values::{Family, JudgeEdition, Mode, Motion, Spelling, parse_stored};
 use plan::Plan;
 
@@ -200,7 +201,8 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
         .build()
         .context("starting the async runtime")?;
     let stop = Arc::new(AtomicBool::new(false));
-    runtime.spawn(watch_ctrl_c(stop.clone()));
+    let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
+    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
     let vehicles = vehicles(&plan, &runtime)?;
     let progress = Reporter::new(args.quiet || args.json);
     let screener = LfsScreener {
@@ -213,6 +215,14 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     };
     let report = run_campaign(cfg, &plan.folder, &screener, vehicles, &progress, &stop)?;
     print_summary(&report, &plan, args.json)?;
+    let unspent = cfg.budget.saturating_sub(report.suite.flown);
+    if unspent > 0 && !stop.load(Ordering::SeqCst) {
+        eprintln!(
+            "warning: {unspent} of the budget's {} flights went unspent: too few candidates were predicted below \
+             --threshold {} m, or vehicles or backends failed (see the warnings above)",
+            cfg.budget, cfg.threshold_m
+        );
+    }
     if let Some(w) = floor_warning(report.suite.diversity, cfg.adapt, cfg.min_diversity) {
         eprintln!("warning: {w}");
     }
@@ -241,24 +251,21 @@ const STOP_WITHIN: Duration = Duration::from_secs(20);
 /// Exit code after a forced stop (128 + SIGINT, as a shell reports it).
 const EXIT_INTERRUPTED: i32 = 130;
 
-/// First Ctrl-C: stop the campaign (vehicles in the air land; their flights are journaled `interrupted`, not
-/// charged, flown first on resume). A second Ctrl-C, or [`STOP_WITHIN`] without stopping, exits at once: the
-/// journal keeps every finished flight, and a flight cut mid-record is a torn line the next resume drops.
-async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
-    if tokio::signal::ctrl_c().await.is_err() {
-        return;
-    }
+/// First Ctrl-C (or SIGTERM, or SIGHUP): stop the campaign (vehicles in the air land; their flights are
+/// journaled `interrupted`, not charged, flown first on resume; runner jobs are stopped). A second one, or
+/// [`STOP_WITHIN`] without stopping, exits at once: the journal keeps every finished flight, and a flight cut
+/// mid-record is a torn line the next resume drops.
+async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
+    let first = signals.next().await;
     eprintln!(
-        "Ctrl-C: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
+        "{first}: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
          to exit now); resume with --resume",
         STOP_WITHIN.as_secs()
     );
     stop.store(true, Ordering::SeqCst);
     tokio::select! {
-        r = tokio::signal::ctrl_c() => {
-            if r.is_ok() {
-                eprintln!("second Ctrl-C: exiting now; flights in the air are flown again on resume");
-            }
+        second = signals.next() => {
+            eprintln!("second {second}: exiting now; flights in the air are flown again on resume");
         }
         () = tokio::time::sleep(STOP_WITHIN) => {
             eprintln!("did not stop within {} s: exiting now; resume with --resume", STOP_WITHIN.as_secs());

@@ -14,9 +14,11 @@ use prgenuav::campaign::fly::runner::RunnerSettings;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
+use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 use serde_json::Value;
 
 use super::Args;
+use crate::cli::limits;
 use crate::cli::settings::{CampaignToml, Flight, Learning, Loaded, Mock, Output, Screening};
 use crate::cli::values::{Mode, Motion, Spelling, name_of, parse_stored};
 
@@ -46,7 +48,7 @@ pub struct Plan {
     pub connect_timeout_s: f64,
     /// With `--runner`: what its jobs share (the template is stored, the time limit not).
     pub runner: Option<RunnerSettings>,
-    /// Runner jobs at once (not stored).
+    /// Runner jobs at once (stored: a resumed campaign keeps them unless `--jobs` is given).
     pub jobs: Option<usize>,
     /// PX4 instances at once with `--px4` (not stored either).
     pub px4_instances: Option<usize>,
@@ -123,19 +125,23 @@ type Names = (&'static str, &'static str, &'static str);
 pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     let file = Loaded::read(args.config.as_deref())?;
     let req = request(args, matches, &file)?;
-    let cfg = match &args.resume {
+    let mut cfg = match &args.resume {
         Some(folder) => resumed(folder, args, &req)?,
         None => fresh(args, &req)?,
     };
+    // A resumed campaign runs as many jobs as it began with, unless told otherwise.
+    cfg.jobs = args.jobs.or(cfg.jobs);
     check(&cfg)?;
     if cfg.runner.is_some() && cfg.px4.is_some() {
         bail!("--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)");
     }
     args.px4.check(&cfg)?;
     let s = &req.settings;
-    let connect_timeout_s = s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S);
-    if !(connect_timeout_s.is_finite() && connect_timeout_s > 0.0) {
-        bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
+    let connect_timeout_s = limits::CONNECT_TIMEOUT.check(s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S))?;
+    if let Some(n) = s.mock.vehicles {
+        let max = limits::max_mock_vehicles();
+        let why = format!("{} per core of this machine", limits::MOCKS_PER_CORE);
+        limits::count("--mock-vehicles (mock.vehicles)", n, max, &why)?;
     }
     let mut runner = super::runner::runner_settings(&cfg, args)?;
     // Last, once every setting is known good: a new campaign claims a folder of its own.
@@ -147,12 +153,12 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         r.campaign_folder = folder.clone();
     }
     Ok(Plan {
+        jobs: cfg.jobs,
         cfg,
         folder,
         mock_vehicles: s.mock.vehicles,
         connect_timeout_s,
         runner,
-        jobs: args.jobs,
         px4_instances: args.px4.instances,
     })
 }
@@ -378,6 +384,7 @@ fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> Campaign
             .unwrap_or(if mock && !scatters { 1 } else { DEFAULT_CONFIRM }),
         overlap: s.flight.overlap.unwrap_or(!mock),
         runner: args.runner.clone(),
+        jobs: args.jobs,
         px4,
     }
 }
@@ -387,14 +394,14 @@ fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
     let (Some(case), Some(budget)) = (args.case.clone(), args.budget) else {
         bail!("give CASE.yaml and BUDGET, or --resume FOLDER");
     };
-    let cfg = build(case, budget, args, req);
+    let mut cfg = build(absolute(&case)?, budget, args, req);
+    // Stored absolute, so `--resume` works from any working folder.
+    cfg.prior = cfg.prior.as_deref().map(absolute).transpose()?;
     check_counts(cfg.budget, cfg.candidates)?;
     if !(0.0..=1.0).contains(&cfg.min_diversity) {
         bail!("--min-diversity (learning.min_diversity) must be within 0..1");
     }
-    if !(cfg.threshold_m.is_finite() && cfg.threshold_m > 0.0) {
-        bail!("--threshold (screening.threshold_m) must be a positive number of metres");
-    }
+    limits::THRESHOLD.check(cfg.threshold_m)?;
     if !(0.0..=1.0).contains(&cfg.max_iou) || !cfg.child_max_iou.is_some_and(|c| (0.0..=1.0).contains(&c)) {
         bail!("--max-iou (screening.max_iou) and --child-max-iou (learning.child_max_iou) must be within 0..1");
     }
@@ -417,11 +424,21 @@ fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<Campai
         );
     }
     let path = folder.join("campaign.json");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let bytes = read_capped_no_follow(&path, MAX_READ_BYTES)?;
     let stored: CampaignConfig =
-        serde_json::from_str(&text).with_context(|| format!("{}: not a campaign file", path.display()))?;
-    let case = args.case.clone().unwrap_or_else(|| stored.case.clone());
+        serde_json::from_slice(&bytes).with_context(|| format!("{}: not a campaign file", path.display()))?;
+    let case = match &args.case {
+        // The same file under another spelling (`./missions/m.yaml`, an absolute path) is no conflict.
+        Some(c) if same_file(c, &stored.case) => stored.case.clone(),
+        Some(c) => c.clone(),
+        None => stored.case.clone(),
+    };
     let mut wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    if let (Some(p), Some(s)) = (&wanted.prior, &stored.prior)
+        && same_file(p, s)
+    {
+        wanted.prior = stored.prior.clone();
+    }
     // Without --px4, a --speed-factor or --keep-ulog is compared with the stored instances' settings.
     if let (None, Some(p)) = (&wanted.px4, &stored.px4) {
         let f = &args.px4;
@@ -435,7 +452,38 @@ fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<Campai
     if !conflicts.is_empty() {
         bail!("{}", conflicts.join("\n"));
     }
+    // What runs is what the file says now, whoever wrote it last: shown, even with --quiet.
+    eprintln!("{}", stored_summary(&stored, &path));
     Ok(stored)
+}
+
+/// The stored settings that decide what runs and where: the case, the budget, the seed, the vehicles.
+fn stored_summary(cfg: &CampaignConfig, path: &Path) -> String {
+    let vehicles = match (&cfg.runner, &cfg.px4) {
+        (Some(t), _) => format!("runner `{t}`"),
+        (None, Some(p)) => format!("PX4 build {}", p.build.display()),
+        (None, None) => cfg.hfs.join(","),
+    };
+    format!(
+        "resuming as {} says: case {}, budget {}, seed {}, vehicles {vehicles}",
+        path.display(),
+        cfg.case.display(),
+        cfg.budget,
+        cfg.seed
+    )
+}
+
+/// `path` made absolute against the working folder (not resolved through links: the user's spelling stays).
+fn absolute(path: &Path) -> anyhow::Result<PathBuf> {
+    std::path::absolute(path).with_context(|| format!("{}: cannot make the path absolute", path.display()))
+}
+
+/// Whether `a` and `b` name one existing file (or, when either cannot be resolved, are spelled alike).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
 }
 
 /// One line per setting asked for that differs from the stored one.
@@ -494,21 +542,14 @@ fn show(v: &Value) -> String {
 fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
     parse_stored::<Motion>(&cfg.motion, "motion (--motion, screening.motion)")?;
     parse_stored::<Mode>(&cfg.mode, "mode (--mode)")?;
-    if !(cfg.mock_speed.is_finite() && cfg.mock_speed >= 1.0) {
-        bail!("--mock-speed (mock.speed) must be at least 1");
+    limits::MOCK_SPEED.check(cfg.mock_speed)?;
+    if let Some(k) = cfg.hfs_time_scale {
+        limits::CONNECT_TIME_SCALE.check(k)?;
     }
-    if cfg.hfs_time_scale.is_some_and(|k| !(k.is_finite() && k > 0.0)) {
-        bail!("--connect-time-scale (flight.connect_time_scale) must be a positive number");
-    }
-    if !(cfg.flight_timeout_s.is_finite() && cfg.flight_timeout_s > 0.0) {
-        bail!("--timeout (flight.timeout_s) must be a positive number of seconds");
-    }
-    if !(cfg.mock_latency_ms.is_finite() && (0.0..=1000.0).contains(&cfg.mock_latency_ms)) {
-        bail!(
-            "--mock-latency (mock.latency_ms) {} must be between 0 and 1000 ms",
-            cfg.mock_latency_ms
-        );
-    }
+    limits::FLIGHT_TIMEOUT.check(cfg.flight_timeout_s)?;
+    limits::MOCK_LATENCY.check(cfg.mock_latency_ms)?;
+    limits::THRESHOLD.check(cfg.threshold_m)?;
+    limits::CONFIRM.check(cfg.confirm as f64)?;
     if let Err(e) = MockProfile::named(&cfg.mock_profile) {
         bail!("--mock-profile (mock.profile): {e}");
     }
@@ -520,9 +561,6 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
     }
     if cfg.hfs.is_empty() {
         bail!("--connect names no vehicle");
-    }
-    if cfg.confirm == 0 {
-        bail!("--confirm (flight.confirm) must be at least 1 flight per test");
     }
     if cfg.hfs.len() > 1 && cfg.hfs.iter().any(|u| u == "mock") {
         bail!("--connect takes either `mock` or MAVLink URLs, not both");

@@ -52,12 +52,7 @@ impl Px4Flags {
             return Ok(());
         };
         Px4Build::open(&px4.build)?;
-        if !(px4.speed_factor.is_finite() && px4.speed_factor > 0.0 && px4.speed_factor <= 100.0) {
-            bail!(
-                "--speed-factor {}: expected a factor above 0, at most 100",
-                px4.speed_factor
-            );
-        }
+        crate::cli::limits::PX4_SPEED_FACTOR.check(px4.speed_factor)?;
         if let Some(k) = self.instances {
             instance_slots(k).map_err(anyhow::Error::msg)?;
         }

@@ -9,6 +9,7 @@ use prgenuav::campaign::run::CampaignConfig;
 use prgenuav::model::Spelling as ModelSpelling;
 
 use super::Args;
+use crate::cli::limits::{JOB_TIMEOUT, MAX_JOBS, count, seconds};
 
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
 pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
@@ -19,16 +20,13 @@ pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Opti
         return Ok(None);
     };
     let template = Template::parse(text).map_err(anyhow::Error::msg)?;
-    if args.jobs == Some(0) {
-        bail!("--jobs must be at least 1");
+    if let Some(jobs) = cfg.jobs {
+        count("--jobs", jobs, MAX_JOBS, "each job is a thread and a local process")?;
     }
-    let timeout_s = args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S);
-    if !(timeout_s.is_finite() && timeout_s > 0.0) {
-        bail!("--job-timeout must be a positive number of seconds");
-    }
+    let timeout = seconds(&JOB_TIMEOUT, args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S))?;
     Ok(Some(RunnerSettings {
         template,
-        timeout: std::time::Duration::from_secs_f64(timeout_s),
+        timeout,
         judge: cfg.judge,
         spelling: if cfg.old_spelling {
             ModelSpelling::Old

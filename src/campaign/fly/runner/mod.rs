@@ -4,6 +4,7 @@
 //! whose retry fails too is journaled `backend_failed` (not charged to the budget) and the campaign goes on.
 
 pub mod job;
+pub mod leftovers;
 pub mod process;
 pub mod readback;
 pub mod template;
@@ -16,6 +17,7 @@ use std::time::Duration;
 use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
 use crate::judge::Judge;
+use crate::model::safe_files::{MAX_READ_BYTES, read_capped, read_tail};
 use crate::model::{Spelling, TestCase, write_atomic};
 use process::Ended;
 pub use template::Template;
@@ -74,7 +76,12 @@ impl RunnerVehicle {
     /// One run of the job for `test` in `jobs/<candidate>`.
     fn attempt(&self, test: &TestCase, candidate: &str, attempt: usize, csv: &Path, cancel: &AtomicBool) -> Attempt {
         let s = &self.settings;
-        let folder = match job::prepare(&s.campaign_folder.join("jobs").join(candidate), test, s.spelling) {
+        let dir = s.campaign_folder.join("jobs").join(candidate);
+        // A campaign killed outright left its job running: it is stopped before this flight starts again.
+        if let Ok(absolute) = std::path::absolute(&dir) {
+            leftovers::kill_marked(&absolute);
+        }
+        let folder = match job::prepare(&dir, test, s.spelling) {
             Ok(f) => f,
             Err(e) => return Attempt::Failed(format!("job folder: {e}")),
         };
@@ -85,7 +92,7 @@ impl RunnerVehicle {
         let mut skip = folder.inputs.clone();
         skip.push(folder.dir.join(COMMAND_FILE));
         // Kept for a look or a rerun by hand; a job runs without it.
-        let _ = std::fs::write(folder.dir.join(COMMAND_FILE), format!("{command}\n"));
+        let _ = write_atomic(&folder.dir.join(COMMAND_FILE), format!("{command}\n").as_bytes());
         let (stdout, stderr) = (folder.dir.join(job::STDOUT_FILE), folder.dir.join(job::STDERR_FILE));
         let ran = match process::run(&command, &folder.dir, &stdout, &stderr, s.timeout, cancel) {
             Ok(r) => r,
@@ -102,7 +109,8 @@ impl RunnerVehicle {
             }
             Ended::Exited(code) => code,
         };
-        let out = std::fs::read(&stdout).unwrap_or_default();
+        // A stdout past the cap holds no report worth reading; the trajectory is looked for in files.
+        let out = read_capped(&stdout, MAX_READ_BYTES).unwrap_or_default();
         let back = readback::read_back(&folder.dir, &skip, &out, &test.obstacles, s.judge);
         match (code, back) {
             // `fly` exits 1 when a flight did not complete, with its report: a result, not a failure.
@@ -165,14 +173,20 @@ pub fn job_id(campaign_folder: &Path, candidate: &str, attempt: usize) -> String
         .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
             (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
         });
-    let number: String = candidate.chars().filter(char::is_ascii_digit).collect();
+    // Every group of digits is kept, apart: `candidate_1_2` (a re-flight) and `candidate_12` differ.
+    let groups: Vec<&str> = candidate
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|g| !g.is_empty())
+        .collect();
+    // Kubernetes names are at most 63 characters: the hash, the attempt and 40 digits fit.
+    let number: String = groups.join("-").chars().take(40).collect();
     format!("prg-{:08x}-{number}-{attempt}", hash as u32)
 }
 
 /// The last lines of a job's stderr, for a failure's reason.
 fn tail(stderr: &Path) -> String {
-    let bytes = std::fs::read(stderr).unwrap_or_default();
-    let text = String::from_utf8_lossy(&bytes[bytes.len().saturating_sub(TAIL_BYTES)..]);
+    let bytes = read_tail(stderr, TAIL_BYTES as u64).unwrap_or_default();
+    let text = String::from_utf8_lossy(&bytes);
     let text = text.trim();
     if text.is_empty() {
         String::new()

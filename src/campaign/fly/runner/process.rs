@@ -1,12 +1,14 @@
 //! Runs one job's command (`sh -c`) in its folder, in a process group of its own, within a time limit: on
 //! timeout or the campaign's stop the whole group is terminated, then killed, so nothing it started is left.
 
-use std::fs::File;
 use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+use super::leftovers::{MARKER, kill_marked};
+use crate::model::safe_files::create_replacing;
 
 /// After SIGTERM, the group has this long to stop before SIGKILL (srun forwards the signal to its step, and
 /// `docker`/`kubectl` clients get to clean up).
@@ -36,8 +38,8 @@ pub struct Ran {
 }
 
 /// Runs `command` with `sh -c` in `dir`, stdin empty, stdout and stderr to `stdout`/`stderr` files, for at
-/// most `timeout`; polls `cancel`. The process group is signalled at the end in every case, so background
-/// children the command left behind go too.
+/// most `timeout`; polls `cancel`. The process group is signalled at the end in every case, and every process
+/// carrying the job's marker is killed, so background children the command left behind go too, detached or not.
 pub fn run(
     command: &str,
     dir: &Path,
@@ -52,8 +54,9 @@ pub fn run(
         .arg(command)
         .current_dir(dir)
         .stdin(Stdio::null())
-        .stdout(File::create(stdout)?)
-        .stderr(File::create(stderr)?)
+        .stdout(create_replacing(stdout)?)
+        .stderr(create_replacing(stderr)?)
+        .env(MARKER, dir)
         .process_group(0)
         .spawn()?;
     let ended = watch(&mut child, t0 + timeout, cancel);
@@ -63,6 +66,8 @@ pub fn run(
         // The leader is gone; whatever it left in its group is not the campaign's to keep.
         signal_group(&child, libc::SIGKILL);
     }
+    // What left the group (`setsid`, a double fork) still carries the job's marker.
+    kill_marked(dir);
     Ok(Ran {
         ended,
         wall_s: t0.elapsed().as_secs_f64(),

@@ -9,6 +9,7 @@ use serde::Deserialize;
 
 use crate::campaign::fly::vehicle::Flown;
 use crate::judge::{Judge, judge_flight};
+use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
 use crate::model::{Obstacle, Trajectory, load_ulog_trajectory};
 
 /// Folder levels searched below the job folder.
@@ -17,6 +18,9 @@ const MAX_DEPTH: usize = 8;
 const MAX_ENTRIES: usize = 20_000;
 /// `.json` files larger than this are not a `fly --json` report and are not read.
 const MAX_JSON_BYTES: u64 = 4 << 20;
+
+/// A flight said to have ended whose trajectory ends higher than this above its lowest point did not land.
+const ENDS_IN_THE_AIR_M: f64 = 1.0;
 
 /// The statuses of `prgenuav fly --json`.
 const FLY_STATUSES: [&str; 6] = ["landed", "collision", "timeout", "link_lost", "aborted", "rejected"];
@@ -68,7 +72,13 @@ pub fn read_back(
     let mut problems = Vec::new();
     let trajectory = trajectory(&found, &mut problems);
     match (trajectory, report) {
-        (Some((path, t)), report) => Ok(judged(t, path, report, obstacles, judge)),
+        (Some((path, t)), report) => {
+            let claimed = report.as_ref().map_or("landed", |r| r.status.as_str());
+            if let Some(why) = not_a_whole_flight(&t, claimed) {
+                return Err(format!("{}: {why}", path.display()));
+            }
+            Ok(judged(t, path, report, obstacles, judge))
+        }
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
         (None, Some(r)) if !matches!(r.status.as_str(), "landed" | "collision") && problems.is_empty() => {
             Ok(Readback {
@@ -114,9 +124,16 @@ fn trajectory(found: &Found, problems: &mut Vec<String>) -> Option<(PathBuf, Tra
         }
     }
     for path in &found.csvs {
-        let Ok(text) = std::fs::read_to_string(path) else {
-            problems.push(format!("{}: not UTF-8 text", path.display()));
-            continue;
+        let text = match read_capped(path, MAX_READ_BYTES).map(String::from_utf8) {
+            Ok(Ok(text)) => text,
+            Ok(Err(_)) => {
+                problems.push(format!("{}: not UTF-8 text", path.display()));
+                continue;
+            }
+            Err(e) => {
+                problems.push(e.to_string());
+                continue;
+            }
         };
         if !looks_like_trajectory(&text) {
             continue; // a commands or params table, say
@@ -125,6 +142,30 @@ fn trajectory(found: &Found, problems: &mut Vec<String>) -> Option<(PathBuf, Tra
             Ok(t) => return Some((path.clone(), t)),
             Err(e) => problems.push(e.to_string()),
         }
+    }
+    None
+}
+
+/// Why `t` cannot be the flight it is `claimed` to be (`landed`, or `collision`: a flight that ended), if it
+/// cannot: no time span at all, or an end in the air (a log cut short, which would be judged on half a flight).
+fn not_a_whole_flight(t: &Trajectory, claimed: &str) -> Option<String> {
+    let (first, last) = (t.samples.first()?, t.samples.last()?);
+    let span = last.t_s - first.t_s;
+    if !(span.is_finite() && span > 0.0) {
+        return Some(format!(
+            "the trajectory has no time span ({} samples, from t = {} s to t = {} s): not a flight",
+            t.samples.len(),
+            first.t_s,
+            last.t_s
+        ));
+    }
+    let lowest = t.samples.iter().map(|s| s.z).fold(f64::INFINITY, f64::min);
+    let height = last.z - lowest;
+    if matches!(claimed, "landed" | "collision") && height > ENDS_IN_THE_AIR_M {
+        return Some(format!(
+            "the trajectory ends {height:.1} m above its lowest point, at t = {span:.1} s: the flight was cut short \
+             (a truncated log), it did not land"
+        ));
     }
     None
 }
@@ -183,8 +224,7 @@ fn fly_report(stdout: &[u8]) -> Option<FlyReport> {
 }
 
 fn json_file(path: &Path) -> Option<FlyReport> {
-    let small = std::fs::metadata(path).is_ok_and(|m| m.len() <= MAX_JSON_BYTES);
-    let bytes = small.then(|| std::fs::read(path).ok()).flatten()?;
+    let bytes = read_capped(path, MAX_JSON_BYTES).ok()?;
     serde_json::from_slice::<FlyReport>(&bytes).ok().filter(known)
 }
 
@@ -217,7 +257,8 @@ fn search(dir: &Path, skip: &[PathBuf]) -> Found {
                 }
                 continue;
             }
-            if skip.contains(&path) || !path.is_file() {
+            // Links are not followed either: what is read back lies inside the job's folder.
+            if skip.contains(&path) || !kind.is_file() {
                 continue;
             }
             let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());

@@ -189,3 +189,47 @@ proptest! {
         prop_assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
     }
 }
+
+#[test]
+fn a_flight_cut_in_the_air_or_without_a_time_span_is_refused_saying_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Climbs from the ground to 10 m and the log stops there, at 49 s.
+    let mut csv = String::from("timestamp,x,y,z,r\n");
+    for i in 0..50u64 {
+        csv += &format!("{},{},0,{},\n", i * 1_000_000, i as f64 * 0.5, (i as f64).min(10.0));
+    }
+    std::fs::write(tmp.path().join("flight.csv"), csv).unwrap();
+    let e = read(tmp.path(), b"").unwrap_err();
+    assert!(e.contains("ends 10.0 m above") && e.contains("cut short"), "{e}");
+    // The same log with a timeout report is what a timeout looks like: a result.
+    let b = read(tmp.path(), br#"{"status": "timeout"}"#).unwrap();
+    assert_eq!(b.flown.status, "timeout");
+
+    let flat = tempfile::tempdir().unwrap();
+    let mut csv = String::from("timestamp,x,y,z,r\n");
+    for i in 0..50 {
+        csv += &format!("0,{},3.5,5,\n", i as f64 * 0.4);
+    }
+    std::fs::write(flat.path().join("flight.csv"), csv).unwrap();
+    let e = read(flat.path(), b"").unwrap_err();
+    assert!(e.contains("no time span") && e.contains("50 samples"), "{e}");
+}
+
+#[test]
+fn links_fifos_and_huge_files_in_a_job_folder_are_not_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let outside = tempfile::tempdir().unwrap();
+    let mut csv = String::from("timestamp,x,y,z,r\n");
+    for i in 0..100 {
+        csv += &format!("{},{},3.5,5,\n", i * 100_000, i as f64 * 0.4);
+    }
+    std::fs::write(outside.path().join("flight.csv"), csv).unwrap();
+    std::os::unix::fs::symlink(outside.path().join("flight.csv"), tmp.path().join("flight.csv")).unwrap();
+    let fifo = std::ffi::CString::new(tmp.path().join("f.csv").to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo(3) on a path we own; no memory is shared.
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) }, 0);
+    let t0 = Instant::now();
+    let e = read(tmp.path(), b"").unwrap_err();
+    assert!(e.contains("no trajectory"), "a link leading out is not followed: {e}");
+    assert!(t0.elapsed() < Duration::from_secs(5), "a FIFO never blocks");
+}

@@ -125,3 +125,14 @@ fn job_ids_are_names_slurm_and_kubernetes_accept() {
     );
     assert_ne!(id, job_id(Path::new("/other"), "candidate_12", 2));
 }
+
+#[test]
+fn a_re_flight_and_another_candidate_get_different_ids_of_kubernetes_length() {
+    let folder = Path::new("/runs/generated_tests/26-11-2026_10-00");
+    let (a, b) = (job_id(folder, "candidate_1_2", 1), job_id(folder, "candidate_12", 1));
+    assert_ne!(a, b);
+    assert!(a.ends_with("-1-2-1") && b.ends_with("-12-1"), "{a} {b}");
+    let long = job_id(folder, &format!("candidate_{}", "9".repeat(200)), 2);
+    assert!(long.len() <= 63, "{long}");
+    assert!(long.ends_with(|c: char| c.is_ascii_alphanumeric()), "{long}");
+}

@@ -44,7 +44,7 @@ use crate::campaign::store::replay::Replay;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
-use crate::model::ModelError;
+use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
 
 /// Rounds of a learning campaign (the budget and the candidates are split evenly).
 pub const ROUNDS: usize = 8;
@@ -55,13 +55,9 @@ pub const EXTRA_ROUNDS: usize = 4;
 /// Reads `folder/learnt.json` (a previous campaign's), naming the file and the field on error.
 pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
     let path = folder.join("learnt.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| ModelError::Io {
-        path: path.clone(),
-        action: "cannot read the prior",
-        source,
-    })?;
+    let bytes = read_capped(&path, MAX_READ_BYTES)?;
     let learnt: Learnt =
-        serde_json::from_str(&text).map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
+        serde_json::from_slice(&bytes).map_err(|e| CampaignError::Config(format!("{}: {e}", path.display())))?;
     learnt
         .calibration
         .validate()

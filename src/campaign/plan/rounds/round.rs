@@ -208,6 +208,16 @@ impl Rounds<'_> {
             )),
             ranking.ranked.len()
         ));
+        if ranking.ranked.len() < ranking.remaining {
+            self.input.progress.warn(&format!(
+                "round {}: only {} of the {} flights planned have a candidate predicted below --threshold {} m \
+                 (and apart from the tests kept); a threshold few candidates reach leaves budget unspent",
+                round.index + 1,
+                ranking.ranked.len(),
+                ranking.remaining,
+                self.input.cfg.threshold_m
+            ));
+        }
     }
 
     pub(super) fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
