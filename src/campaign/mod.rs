@@ -21,6 +21,7 @@ pub mod px4_vehicle;
 pub mod rank;
 pub mod replay;
 pub mod report;
+pub mod report_user;
 pub mod rounds;
 pub mod run;
 pub mod runner;

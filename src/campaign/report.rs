@@ -12,6 +12,7 @@ use super::failure_counts::FAIL_BINS;
 use super::journal::{FlightRecord, Journal};
 use super::learn::Learnt;
 use super::pool::FleetUse;
+use super::report_user::{self, Invocation};
 use super::suite::summary;
 pub use super::suite::{DISTINCT_IOU, SuiteSummary};
 use super::verdicts::{TestVerdict, verdicts};
@@ -115,6 +116,11 @@ pub struct Report {
     pub learning: Option<Learnt>,
     /// Per backend (mock, px4, runner, MAVLink URL): flights, failed jobs, wall time per flight.
     pub backends: Vec<BackendSummary>,
+    /// The command line and version that made it.
+    pub invocation: Invocation,
+    /// The campaign folder (the next commands report.md suggests name it).
+    #[serde(skip)]
+    pub folder: std::path::PathBuf,
 }
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
@@ -132,7 +138,8 @@ pub fn write_outputs(
     let mut tests = verdicts(records, cfg.confirm);
     let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
-    let tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
+    let mut tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
+    report_user::write_unconfirmed(input, &mut tests, spelling(input))?;
     let mut suite = summary(records, &tests, cfg.screen);
     suite.confirm = cfg.confirm;
     suite.candidates_screened = candidates_screened;
@@ -157,7 +164,10 @@ pub fn write_outputs(
         backends: backends::summarise(
             &Journal::read_all(&input.folder.join("journal.jsonl")).unwrap_or_else(|_| records.to_vec()),
         ),
+        invocation: Invocation::current(),
+        folder: input.folder.to_path_buf(),
     };
+    report_user::write_pictures(input, &report)?;
     if cfg.confirm > 1 {
         let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
@@ -174,16 +184,13 @@ fn write_failing_tests(
     tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
 ) -> Result<Vec<(u64, String)>, ModelError> {
     let folder = input.folder;
-    let spelling = if input.cfg.old_spelling {
-        Spelling::Old
-    } else {
-        Spelling::New
-    };
+    let spelling = spelling(input);
+    let case = input.case.with_absolute_references()?;
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, (verdict, flights)) in tests.iter_mut().filter(|(t, _)| t.confirmed).enumerate() {
         let name = format!("test_{i}");
         let r = flights[0];
-        let test = input.case.with_obstacles(r.obstacles.clone());
+        let test = case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
         let flown = Trajectory::load_csv(&folder.join(&r.trajectory)).ok();
         for (k, f) in flights.iter().enumerate() {
@@ -208,6 +215,15 @@ fn write_failing_tests(
         reported.push((r.candidate, format!("{name}.yaml")));
     }
     Ok(reported)
+}
+
+/// The key spelling the tests are written in.
+fn spelling(input: &CampaignInput) -> Spelling {
+    if input.cfg.old_spelling {
+        Spelling::Old
+    } else {
+        Spelling::New
+    }
 }
 
 /// One flight in the report; `reported` names the failing tests written.
@@ -258,11 +274,16 @@ fn opt(v: Option<f64>) -> String {
 /// The report as Markdown.
 pub fn markdown(r: &Report) -> String {
     let s = &r.suite;
-    let mut md = format!("# prgenuav campaign: {}\n\n", r.case);
+    let mut md = String::new();
+    report_user::opening(&mut md, r, &r.folder);
     let _ = writeln!(
         md,
-        "seed {}, budget {} flights, {} candidates screened; judge {}: {}\n",
-        r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
+        "## Appendix: diagnostics\n\nFor judging the run itself: how well the low-fidelity simulator (LFS) predicted \
+         the flights, what the campaign learnt, and where the time went.\n\n{} candidates screened; judge {}: {}\n\n{}",
+        s.candidates_screened,
+        r.judge,
+        r.judge_definition,
+        report_user::DEFINITIONS
     );
     summary_table(&mut md, r);
     if s.confirm > 1 {

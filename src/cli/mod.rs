@@ -7,6 +7,7 @@ mod doc;
 mod fidelity;
 mod fly;
 mod generate;
+mod out_folder;
 mod progress;
 mod render;
 mod sample;
@@ -14,6 +15,7 @@ mod score;
 mod settings;
 mod simulate;
 mod values;
+mod wording;
 
 use std::process::ExitCode;
 
@@ -52,7 +54,8 @@ enum Command {
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
     Fidelity(fidelity::Args),
     /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
-    /// distance (exit 0 landed or collision, 1 timeout/link lost/aborted/rejected, 2 error).
+    /// distance (exit 0: landed or collision; 1: the flight did not complete (timeout, link lost, aborted,
+    /// refused by the vehicle); 2: an error, also a vehicle too far from the test's home).
     Fly(fly::Args),
 }
 

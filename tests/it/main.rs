@@ -1,9 +1,11 @@
 //! Integration tests: one binary, one module per area, shared helpers here.
 
+mod anywhere;
 mod bridge;
 mod campaign;
 mod campaign_folder;
 mod cli_errors;
+mod documented;
 mod frame;
 mod generator;
 mod geometry_props;

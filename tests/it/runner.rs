@@ -212,7 +212,9 @@ fn bad_runner_settings_are_refused_before_anything_runs() {
             "--jobs must be at least 1",
         ),
         (vec!["--runner", "fly {test}", "--job-timeout=-1"], "--job-timeout"),
-        (vec!["--jobs", "2"], "go with --runner"),
+        (vec!["--job-timeout", "5"], "goes with --runner"),
+        (vec!["--jobs", "2", "--mock-vehicles", "3"], "disagree"),
+        (vec!["--jobs", "2", "--connect", "udpin:0.0.0.0:14540"], "each URL flies one flight"),
         (
             vec!["--runner", "fly {test}", "--connect", "udpin:0.0.0.0:14540"],
             "cannot be used with",

@@ -138,6 +138,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         bail!("--connect-timeout (flight.connect_timeout_s) must be a positive number of seconds");
     }
     let mut runner = super::runner::runner_settings(&cfg, args)?;
+    let at_once = super::jobs::split(&cfg, args.jobs, s.mock.vehicles, args.px4.instances)?;
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
         Some(folder) => folder.clone(),
@@ -149,11 +150,11 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     Ok(Plan {
         cfg,
         folder,
-        mock_vehicles: s.mock.vehicles,
+        mock_vehicles: at_once.mock_vehicles,
         connect_timeout_s,
         runner,
-        jobs: args.jobs,
-        px4_instances: args.px4.instances,
+        jobs: at_once.runner_jobs,
+        px4_instances: at_once.px4_instances,
     })
 }
 

@@ -13,15 +13,12 @@ use super::Args;
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
 pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
     let Some(text) = &cfg.runner else {
-        if args.jobs.is_some() || args.job_timeout.is_some() {
-            bail!("--jobs and --job-timeout go with --runner");
+        if args.job_timeout.is_some() {
+            bail!("--job-timeout goes with --runner");
         }
         return Ok(None);
     };
     let template = Template::parse(text).map_err(anyhow::Error::msg)?;
-    if args.jobs == Some(0) {
-        bail!("--jobs must be at least 1");
-    }
     let timeout_s = args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S);
     if !(timeout_s.is_finite() && timeout_s > 0.0) {
         bail!("--job-timeout must be a positive number of seconds");
