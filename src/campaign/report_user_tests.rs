@@ -2,7 +2,7 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 use crate::campaign::journal::{FlightRecord, test_record};
-use crate::campaign::report::StageTimes;
+use crate::campaign::report::{FlownTest, StageTimes};
 use crate::campaign::suite::summary;
 use crate::campaign::verdicts::verdicts;
 use crate::judge::Judge;
@@ -83,7 +83,22 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
 
 #[test]
 fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
-    let r = report(&[flight(0, 0, 2.5)], 1, 1);
+    let mut r = report(&[flight(0, 0, 2.5)], 1, 1);
+    r.flights.push(FlownTest {
+        candidate: 0,
+        attempt: 0,
+        predicted_min_distance: 1.0,
+        predicted_p_fail: None,
+        min_distance: Some(2.5),
+        min_distance_raw: Some(2.5),
+        status: "landed".into(),
+        reason: None,
+        flight_time_s: 60.0,
+        points: 0,
+        test_score: 0.0,
+        reported_as: None,
+        vehicle: "mock".into(),
+    });
     let v = verdict(&r, Path::new("f")).join("\n");
     assert!(v.contains("No failure: the one flight stayed 1.5 m or farther") && v.contains("2.50 m"), "{v}");
     assert!(v.contains("prgenuav generate missions/mission1.yaml 2 --seed 1"), "{v}");

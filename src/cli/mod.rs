@@ -38,12 +38,14 @@ pub struct Cli {
 enum Command {
     /// The main job: sample candidates, screen them with the LFS, fly the most severe within BUDGET flights,
     /// and write the failing tests best first with a report.
+    #[command(override_usage = "prgenuav generate [OPTIONS] CASE BUDGET\n       prgenuav generate --resume FOLDER")]
     Generate(Box<generate::Args>),
     /// Check a test against the competition's rules (exit 0 valid, 1 violations, 2 unreadable).
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
+    #[command(override_usage = "prgenuav sample [OPTIONS] CASE N")]
     Sample(sample::Args),
     /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
     Score(score::Args),

@@ -45,7 +45,9 @@ pub(crate) fn candidates(base: &Path, name: &str) -> Vec<PathBuf> {
 /// lists every place tried.
 pub(crate) fn resolve(base: &Path, name: &str) -> std::result::Result<PathBuf, String> {
     let tried = candidates(base, name);
-    tried.iter().find(|p| p.is_file()).cloned().ok_or_else(|| {
+    // The file found, without `..` or symbolic links: the name a written test keeps.
+    let found = tried.iter().find(|p| p.is_file()).map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()));
+    found.ok_or_else(|| {
         let list: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
         format!(
             "file {name:?} not found (tried, in order: {}; a relative name is looked for in the working folder, \
@@ -93,7 +95,8 @@ mod tests {
         let c = candidates(&base, "missions/mission2.plan");
         assert_eq!(c[0], std::path::absolute("missions/mission2.plan").unwrap());
         assert_eq!(c[1], base.join("missions/mission2.plan"));
-        assert_eq!(c[2], repo().join("missions/mission2.plan"));
+        // The repository root (a parent of the YAML's folder) is the working folder here: not listed twice.
+        assert_eq!(c[2], repo().parent().unwrap().join("missions/mission2.plan"));
         assert_eq!(c.last().unwrap(), Path::new("/missions/mission2.plan"));
         assert_eq!(candidates(&base, "/x/y.plan"), vec![PathBuf::from("/x/y.plan")]);
     }

@@ -4,7 +4,17 @@
 use std::path::Path;
 
 use super::anywhere::prgenuav_in;
-use super::{repo, test_file, valid_pair};
+use prgenuav::model::{Obstacle, Spelling};
+
+use super::{case, repo, valid_pair};
+
+/// A test of mission 2 with `obstacles` in `dir`, naming its files absolutely (loadable from anywhere).
+fn test_in(dir: &Path, name: &str, obstacles: Vec<Obstacle>) -> String {
+    let path = dir.join(name);
+    let test = case(2).with_absolute_references().unwrap().with_obstacles(obstacles);
+    test.save(&path, Spelling::New).unwrap();
+    path.to_str().unwrap().to_string()
+}
 
 /// The README with its line breaks folded, so a sentence reads the same wherever it wraps.
 fn readme() -> String {
@@ -17,13 +27,12 @@ fn every_documented_exit_code_holds() {
     let doc = readme();
     let tmp = tempfile::tempdir().unwrap();
     let here = tmp.path();
-    let (_keep, valid) = test_file(2, valid_pair());
-    let (_keep2, invalid) = test_file(2, vec![prgenuav::model::Obstacle::new(1.0, 1.0, 30.0, 0.0, 0.0, 0.0)]);
-    let valid = valid.to_str().unwrap();
+    let valid = &test_in(here, "valid.yaml", valid_pair());
+    let invalid = &test_in(here, "invalid.yaml", vec![Obstacle::new(21.0, 3.0, 20.0, -20.0, 25.0, 10.0)]);
 
     assert!(doc.contains("(exit 0 valid, 1 violations, 2 unreadable)"), "check's codes");
     assert_eq!(prgenuav_in(here, &["check", valid]).0, 0);
-    assert_eq!(prgenuav_in(here, &["check", invalid.to_str().unwrap()]).0, 1);
+    assert_eq!(prgenuav_in(here, &["check", invalid]).0, 1);
     assert_eq!(prgenuav_in(here, &["check", "nowhere.yaml"]).0, 2);
 
     assert!(

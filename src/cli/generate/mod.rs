@@ -1,4 +1,4 @@
-//! `prgenuav generate CASE.yaml BUDGET`: the competition's main job. `--help` shows the flags a campaign is
+//! `prgenuav generate CASE BUDGET`: the competition's main job. `--help` shows the flags a campaign is
 //! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
 //! in docs/cli.md.
 
@@ -39,7 +39,7 @@ use plan::Plan;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The case study YAML (mission, params, commands).
-    #[arg(value_name = "CASE.yaml")]
+    #[arg(value_name = "CASE")]
     case: Option<PathBuf>,
     /// High-fidelity flights allowed (the competition's budget): 1 to 10000.
     budget: Option<usize>,
