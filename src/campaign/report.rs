@@ -268,7 +268,7 @@ fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, t
 }
 
 fn opt(v: Option<f64>) -> String {
-    v.map_or("-".into(), |v| format!("{v:.3}"))
+    v.map_or("n/a".into(), |v| format!("{v:.3}"))
 }
 
 /// The report as Markdown.

@@ -56,11 +56,16 @@ fn quote(arg: &str) -> String {
 
 /// Writes each unconfirmed test as `unconfirmed/test_K.yaml`, best first, so it can be flown again, and
 /// names it in its verdict.
-pub fn write_unconfirmed(input: &CampaignInput, tests: &mut [TestVerdict], spelling: Spelling) -> Result<(), ModelError> {
+pub fn write_unconfirmed(
+    input: &CampaignInput,
+    tests: &mut [TestVerdict],
+    spelling: Spelling,
+) -> Result<(), ModelError> {
     let case = input.case.with_absolute_references()?;
     for (k, t) in tests.iter_mut().filter(|t| !t.confirmed).enumerate() {
         let name = format!("{UNCONFIRMED_DIR}/test_{k}.yaml");
-        case.with_obstacles(t.obstacles.clone()).save(&input.folder.join(&name), spelling)?;
+        case.with_obstacles(t.obstacles.clone())
+            .save(&input.folder.join(&name), spelling)?;
         t.reported_as = Some(name);
     }
     Ok(())
@@ -80,7 +85,10 @@ pub fn write_pictures(input: &CampaignInput, r: &Report) -> Result<(), ModelErro
         })
         .collect();
     let title = format!("{} failing tests of {} over the mission", layouts.len(), r.case);
-    write_atomic(&input.folder.join(SUITE_SVG), layouts_svg(input.case, &layouts, &title).as_bytes())?;
+    write_atomic(
+        &input.folder.join(SUITE_SVG),
+        layouts_svg(input.case, &layouts, &title).as_bytes(),
+    )?;
     let points: Vec<Point> = (r.flights.iter())
         .filter_map(|f| {
             Some(Point {
@@ -90,8 +98,14 @@ pub fn write_pictures(input: &CampaignInput, r: &Report) -> Result<(), ModelErro
             })
         })
         .collect();
-    let title = format!("{} flights: the low-fidelity prediction against the flight", points.len());
-    write_atomic(&input.folder.join(SCATTER_SVG), scatter_svg(&points, FAIL_M, &title).as_bytes())
+    let title = format!(
+        "{} flights: the low-fidelity prediction against the flight",
+        points.len()
+    );
+    write_atomic(
+        &input.folder.join(SCATTER_SVG),
+        scatter_svg(&points, FAIL_M, &title).as_bytes(),
+    )
 }
 
 /// The verdict in two or three plain sentences: what was found, how sure, and what to do next (with the
@@ -102,7 +116,11 @@ pub fn verdict(r: &Report, folder: &Path) -> Vec<String> {
     let unsettled = unconfirmed.iter().filter(|t| !t.settled).count();
     let mut lines = Vec::new();
     if s.failing > 0 {
-        let best = r.tests.iter().find(|t| t.confirmed).map_or(f64::NAN, |t| t.best_min_distance);
+        let best = r
+            .tests
+            .iter()
+            .find(|t| t.confirmed)
+            .map_or(f64::NAN, |t| t.best_min_distance);
         lines.push(format!(
             "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; the closest, \
              test_0, at {best:.2} m.",
@@ -131,13 +149,15 @@ pub fn verdict(r: &Report, folder: &Path) -> Vec<String> {
             "No confirmed failing test in {}, but {} failed at least once (the closest at {:.2} m).",
             plural(s.flown, "flight"),
             plural(unconfirmed.len(), "test"),
-            unconfirmed.iter().map(|t| t.best_min_distance).fold(f64::INFINITY, f64::min)
+            unconfirmed
+                .iter()
+                .map(|t| t.best_min_distance)
+                .fold(f64::INFINITY, f64::min)
         ));
         lines.push(if unsettled > 0 {
             format!(
-                "How sure: not yet; the budget ran out before {} could be flown again (a test counts only when \
-                 more than half of up to {} flights fail).",
-                format!("{unsettled} of them"),
+                "How sure: not yet; the budget ran out before {unsettled} of them could be flown again (a test \
+                 counts only when more than half of up to {} flights fail).",
                 s.confirm
             )
         } else {
@@ -200,9 +220,16 @@ pub fn stdout_lines(r: &Report, folder: &Path) -> Vec<String> {
     let meaning = if s.failing == 0 {
         format!("{} {next}", v[0])
     } else if s.confirm > 1 {
+        let others = match unconfirmed {
+            0 => String::new(),
+            n => format!(
+                "; {} failed at least once but not on most flights ({UNCONFIRMED_DIR}/)",
+                plural(n, "more test")
+            ),
+        };
         format!(
-            "Confirmed on more than half of up to {} flights each; {} more failed at least once ({UNCONFIRMED_DIR}/). {next}",
-            s.confirm, unconfirmed
+            "Confirmed on more than half of up to {} flights each{others}. {next}",
+            s.confirm
         )
     } else {
         next
@@ -212,7 +239,11 @@ pub fn stdout_lines(r: &Report, folder: &Path) -> Vec<String> {
 
 /// `1 test`, `2 tests`: a count and its noun, plural when the count is not one.
 pub fn plural(n: usize, noun: &str) -> String {
-    if n == 1 { format!("1 {noun}") } else { format!("{n} {noun}s") }
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
 }
 
 /// The report's opening: title, verdict, how to reproduce it, the written tests and the suite's pictures.
@@ -272,7 +303,11 @@ fn tests_section(md: &mut String, r: &Report) {
         );
         for t in unconfirmed {
             let yaml = t.reported_as.as_deref().unwrap_or("?");
-            let why = if t.settled { "did not hold" } else { "budget spent before its confirmation" };
+            let why = if t.settled {
+                "did not hold"
+            } else {
+                "budget spent before its confirmation"
+            };
             let _ = writeln!(
                 md,
                 "- [{yaml}]({yaml}): {:.2} m, failed {} of {} ({why})",

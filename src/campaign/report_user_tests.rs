@@ -55,30 +55,57 @@ fn a_failure_the_budget_could_not_confirm_says_so_and_what_to_run_next() {
     let records: Vec<FlightRecord> = (0..9).map(|c| flight(c, 0, 3.0)).chain([flight(9, 0, 1.34)]).collect();
     let r = report(&records, 3, 10);
     let v = verdict(&r, &r.folder).join("\n");
-    assert!(v.contains("No confirmed failing test in 10 flights, but 1 test failed at least once"), "{v}");
+    assert!(
+        v.contains("No confirmed failing test in 10 flights, but 1 test failed at least once"),
+        "{v}"
+    );
     assert!(v.contains("1.34 m") && v.contains("budget ran out"), "{v}");
-    assert!(v.contains("prgenuav generate missions/mission1.yaml 20 --seed 0"), "{v}");
+    assert!(
+        v.contains("prgenuav generate missions/mission1.yaml 20 --seed 0"),
+        "{v}"
+    );
     assert!(v.contains("out/2026-11-27T16-16-37/unconfirmed/test_0.yaml"), "{v}");
     let mut md = String::new();
     opening(&mut md, &r, &r.folder);
-    assert!(md.contains("[unconfirmed/test_0.yaml](unconfirmed/test_0.yaml): 1.34 m"), "{md}");
-    assert!(md.contains("`prgenuav generate missions/mission1.yaml 10` (prgenuav 9.9.9"), "{md}");
+    assert!(
+        md.contains("[unconfirmed/test_0.yaml](unconfirmed/test_0.yaml): 1.34 m"),
+        "{md}"
+    );
+    assert!(
+        md.contains("`prgenuav generate missions/mission1.yaml 10` (prgenuav 9.9.9"),
+        "{md}"
+    );
 }
 
 #[test]
 fn confirmed_failures_come_first_with_links_and_the_next_step() {
-    let records = [flight(1, 0, 0.5), flight(1, 1, 0.7), flight(2, 0, 1.0), flight(2, 1, 3.0), flight(2, 2, 3.0)];
+    let records = [
+        flight(1, 0, 0.5),
+        flight(1, 1, 0.7),
+        flight(2, 0, 1.0),
+        flight(2, 1, 3.0),
+        flight(2, 2, 3.0),
+    ];
     let r = report(&records, 3, 5);
     let v = verdict(&r, Path::new("f"));
     assert_eq!(v.len(), 3, "{v:?}");
-    assert!(v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"), "{v:?}");
+    assert!(
+        v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"),
+        "{v:?}"
+    );
     assert!(v[0].contains("test_0, at 0.50 m"), "{v:?}");
     assert!(v[1].contains("1 failed once and did not hold"), "{v:?}");
     assert!(v[2].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");
     let mut md = String::new();
     opening(&mut md, &r, &r.folder);
-    assert!(md.contains("| [test_0.yaml](test_0.yaml) | 0.50 m | 2 / 2 | [test_0.svg](test_0.svg) |"), "{md}");
-    assert!(md.contains("(did not hold)") && md.contains(SUITE_SVG) && md.contains(SCATTER_SVG), "{md}");
+    assert!(
+        md.contains("| [test_0.yaml](test_0.yaml) | 0.50 m | 2 / 2 | [test_0.svg](test_0.svg) |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("(did not hold)") && md.contains(SUITE_SVG) && md.contains(SCATTER_SVG),
+        "{md}"
+    );
 }
 
 #[test]
@@ -100,7 +127,10 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
         vehicle: "mock".into(),
     });
     let v = verdict(&r, Path::new("f")).join("\n");
-    assert!(v.contains("No failure: the one flight stayed 1.5 m or farther") && v.contains("2.50 m"), "{v}");
+    assert!(
+        v.contains("No failure: the one flight stayed 1.5 m or farther") && v.contains("2.50 m"),
+        "{v}"
+    );
     assert!(v.contains("prgenuav generate missions/mission1.yaml 2 --seed 1"), "{v}");
 }
 

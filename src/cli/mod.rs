@@ -100,7 +100,11 @@ pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav
     if violations.is_empty() {
         return Ok(Some(test));
     }
-    eprintln!("{}: {} violation(s)", path.display(), violations.len());
+    eprintln!(
+        "{}: {}",
+        path.display(),
+        prgenuav::campaign::report_user::plural(violations.len(), "violation")
+    );
     for v in &violations {
         eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
     }

@@ -12,7 +12,10 @@ pub fn claim(dir: &Path, force: bool) -> anyhow::Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
         Err(e) => bail!("--out {}: cannot read the folder ({e})", dir.display()),
     };
-    let names: Vec<String> = entries.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    let names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
     if names.is_empty() {
         return Ok(());
     }

@@ -29,7 +29,11 @@ pub(crate) fn candidates(base: &Path, name: &str) -> Vec<PathBuf> {
     if given.is_absolute() {
         return vec![given.to_path_buf()];
     }
-    let base = if base.as_os_str().is_empty() { Path::new(".") } else { base };
+    let base = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
     let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     let mut out = vec![absolute(given)];
     for folder in absolute(base).ancestors() {
@@ -46,7 +50,10 @@ pub(crate) fn candidates(base: &Path, name: &str) -> Vec<PathBuf> {
 pub(crate) fn resolve(base: &Path, name: &str) -> std::result::Result<PathBuf, String> {
     let tried = candidates(base, name);
     // The file found, without `..` or symbolic links: the name a written test keeps.
-    let found = tried.iter().find(|p| p.is_file()).map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()));
+    let found = tried
+        .iter()
+        .find(|p| p.is_file())
+        .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()));
     found.ok_or_else(|| {
         let list: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
         format!(
@@ -111,8 +118,14 @@ mod tests {
     fn not_found_lists_every_place_tried() {
         let dir = tempfile::tempdir().unwrap();
         let e = resolve(&dir.path().join("a/b"), "nowhere.plan").unwrap_err();
-        assert!(e.contains(&dir.path().join("a/b/nowhere.plan").display().to_string()), "{e}");
-        assert!(e.contains(&dir.path().join("a/nowhere.plan").display().to_string()), "{e}");
+        assert!(
+            e.contains(&dir.path().join("a/b/nowhere.plan").display().to_string()),
+            "{e}"
+        );
+        assert!(
+            e.contains(&dir.path().join("a/nowhere.plan").display().to_string()),
+            "{e}"
+        );
         assert!(e.contains("/nowhere.plan;") || e.contains("/nowhere.plan)"), "{e}");
         assert!(e.contains("working folder"), "{e}");
     }
@@ -121,7 +134,11 @@ mod tests {
     fn a_written_test_names_its_files_absolutely_and_loads_from_elsewhere() {
         let case = TestCase::load(&repo().join("missions/mission2.yaml")).unwrap();
         let portable = case.with_absolute_references().unwrap();
-        assert!(Path::new(&portable.mission_file).is_absolute(), "{}", portable.mission_file);
+        assert!(
+            Path::new(&portable.mission_file).is_absolute(),
+            "{}",
+            portable.mission_file
+        );
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("deep/test_0.yaml");
         portable.save(&path, case.spelling).unwrap();

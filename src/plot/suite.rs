@@ -29,7 +29,11 @@ pub fn layouts_svg(case: &TestCase, layouts: &[Layout], title: &str) -> String {
         .map(|p| (p.north_m, p.east_m))
         .collect();
     let footprints: Vec<Vec<[(f64, f64); 4]>> = (layouts.iter())
-        .map(|l| (l.obstacles.iter()).map(|o| o.footprint().corners().map(|c| (c.x, c.y))).collect())
+        .map(|l| {
+            (l.obstacles.iter())
+                .map(|o| o.footprint().corners().map(|c| (c.x, c.y)))
+                .collect()
+        })
         .collect();
     let mut pts = vec![(arena.x.min, arena.y.min), (arena.x.max, arena.y.max)];
     pts.extend(mission.iter().copied());
@@ -63,7 +67,9 @@ pub fn layouts_svg(case: &TestCase, layouts: &[Layout], title: &str) -> String {
                 r#"<polygon points="{}" fill="{colour}" fill-opacity="0.15" stroke="{colour}" stroke-width="1.5"/>"#,
                 c.poly(corners)
             );
-            let (n, e) = corners.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0 / 4.0, a.1 + p.1 / 4.0));
+            let (n, e) = corners
+                .iter()
+                .fold((0.0, 0.0), |a, p| (a.0 + p.0 / 4.0, a.1 + p.1 / 4.0));
             let (x, y) = c.px(n, e);
             let _ = writeln!(
                 s,
@@ -76,7 +82,10 @@ pub fn layouts_svg(case: &TestCase, layouts: &[Layout], title: &str) -> String {
         ("#333".into(), "mission path (dashed)".into()),
         ("#d9b24a".into(), "obstacle area".into()),
     ];
-    legend.extend((layouts.iter().enumerate().take(MAX_LEGEND)).map(|(k, l)| (PALETTE[k % PALETTE.len()].into(), l.label.clone())));
+    legend.extend(
+        (layouts.iter().enumerate().take(MAX_LEGEND))
+            .map(|(k, l)| (PALETTE[k % PALETTE.len()].into(), l.label.clone())),
+    );
     if layouts.len() > MAX_LEGEND {
         legend.push(("#999".into(), format!("and {} more", layouts.len() - MAX_LEGEND)));
     }
@@ -155,7 +164,10 @@ pub fn scatter_svg(points: &[Point], threshold_m: f64, title: &str) -> String {
         s,
         r##"<line x1="{x0:.1}" y1="{y0:.1}" x2="{x1:.1}" y2="{y1:.1}" stroke="#bbb"/>"##
     );
-    for p in points.iter().filter(|p| p.predicted_m.is_finite() && p.flown_m.is_finite()) {
+    for p in points
+        .iter()
+        .filter(|p| p.predicted_m.is_finite() && p.flown_m.is_finite())
+    {
         let fill = if p.highlighted { "#c0392b" } else { "none" };
         let _ = writeln!(
             s,
@@ -192,7 +204,11 @@ fn header(w: f64, h: f64, title: &str) -> String {
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(s, r#"<text x="{MARGIN_PX}" y="20" font-size="14">{}</text>"#, esc(title));
+    let _ = writeln!(
+        s,
+        r#"<text x="{MARGIN_PX}" y="20" font-size="14">{}</text>"#,
+        esc(title)
+    );
     s
 }
 
@@ -229,7 +245,11 @@ mod tests {
             .collect();
         let svg = layouts_svg(&case, &layouts, "failing tests <2>");
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
-        assert_eq!(svg.matches(r#"fill-opacity="0.15""#).count(), 28, "two boxes per layout");
+        assert_eq!(
+            svg.matches(r#"fill-opacity="0.15""#).count(),
+            28,
+            "two boxes per layout"
+        );
         assert!(svg.contains("test_11: 0.11 m") && !svg.contains("test_12: 0.12 m"));
         assert!(svg.contains("and 2 more") && svg.contains("failing tests &lt;2&gt;"));
     }
@@ -237,9 +257,21 @@ mod tests {
     #[test]
     fn the_scatter_clamps_far_flights_and_marks_written_tests() {
         let points = [
-            Point { predicted_m: 0.5, flown_m: 1.0, highlighted: true },
-            Point { predicted_m: 30.0, flown_m: 2.0, highlighted: false },
-            Point { predicted_m: f64::NAN, flown_m: 2.0, highlighted: false },
+            Point {
+                predicted_m: 0.5,
+                flown_m: 1.0,
+                highlighted: true,
+            },
+            Point {
+                predicted_m: 30.0,
+                flown_m: 2.0,
+                highlighted: false,
+            },
+            Point {
+                predicted_m: f64::NAN,
+                flown_m: 2.0,
+                highlighted: false,
+            },
         ];
         let svg = scatter_svg(&points, 1.5, "predicted against flown");
         assert_eq!(svg.matches("<circle").count(), 2, "the NaN is left out");

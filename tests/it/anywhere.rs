@@ -49,7 +49,10 @@ fn a_case_loads_by_absolute_and_relative_path_from_outside_the_repository() {
     let a = std::fs::read_to_string(elsewhere.join("a/test_1.yaml")).unwrap();
     let b = std::fs::read_to_string(elsewhere.join("b/test_1.yaml")).unwrap();
     assert_eq!(a, b);
-    assert!(a.contains(&format!("mission_file: {}", missions.join("mission2.plan").display())), "{a}");
+    assert!(
+        a.contains(&format!("mission_file: {}", missions.join("mission2.plan").display())),
+        "{a}"
+    );
     let (code, out, err) = prgenuav_in(tmp.path(), &["check", "work/deeper/a/test_1.yaml"]);
     assert_eq!(code, 0, "{out}{err}");
 }
@@ -69,10 +72,16 @@ fn a_missing_file_lists_every_place_tried_in_order() {
     ];
     let at: Vec<usize> = tried
         .iter()
-        .map(|p| err.find(&p.display().to_string()).unwrap_or_else(|| panic!("{} not in {err}", p.display())))
+        .map(|p| {
+            err.find(&p.display().to_string())
+                .unwrap_or_else(|| panic!("{} not in {err}", p.display()))
+        })
         .collect();
     assert!(at[0] < at[1], "the working folder first, then beside the YAML: {err}");
-    assert!(err.contains("drone.mission_file") && !tmp.path().join("o").exists(), "{err}");
+    assert!(
+        err.contains("drone.mission_file") && !tmp.path().join("o").exists(),
+        "{err}"
+    );
 }
 
 #[test]
@@ -84,7 +93,10 @@ fn sample_refuses_a_folder_with_files_unless_forced() {
     assert_eq!(code, 0, "{err}");
     let (code, _, err) = prgenuav_in(tmp.path(), &["sample", case, "1", "-o", "s"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("already holds 3 files") && err.contains("--force"), "{err}");
+    assert!(
+        err.contains("already holds 3 files") && err.contains("--force"),
+        "{err}"
+    );
     let (code, _, err) = prgenuav_in(tmp.path(), &["sample", case, "--count", "1", "-o", "s", "--force"]);
     assert_eq!(code, 0, "{err}");
     let left = std::fs::read_dir(tmp.path().join("s")).unwrap().count();

@@ -28,9 +28,16 @@ fn every_documented_exit_code_holds() {
     let tmp = tempfile::tempdir().unwrap();
     let here = tmp.path();
     let valid = &test_in(here, "valid.yaml", valid_pair());
-    let invalid = &test_in(here, "invalid.yaml", vec![Obstacle::new(21.0, 3.0, 20.0, -20.0, 25.0, 10.0)]);
+    let invalid = &test_in(
+        here,
+        "invalid.yaml",
+        vec![Obstacle::new(21.0, 3.0, 20.0, -20.0, 25.0, 10.0)],
+    );
 
-    assert!(doc.contains("(exit 0 valid, 1 violations, 2 unreadable)"), "check's codes");
+    assert!(
+        doc.contains("(exit 0 valid, 1 violations, 2 unreadable)"),
+        "check's codes"
+    );
     assert_eq!(prgenuav_in(here, &["check", valid]).0, 0);
     assert_eq!(prgenuav_in(here, &["check", invalid]).0, 1);
     assert_eq!(prgenuav_in(here, &["check", "nowhere.yaml"]).0, 2);
@@ -48,10 +55,16 @@ fn every_documented_exit_code_holds() {
     assert_eq!(prgenuav_in(here, &["fly", "nowhere.yaml"]).0, 2);
     assert_eq!(prgenuav_in(here, &["fly", valid, "--connect", "bogus:1"]).0, 2);
 
-    assert!(doc.contains("the exit code is 0, or 2 for an error"), "generate's codes");
+    assert!(
+        doc.contains("the exit code is 0, or 2 for an error"),
+        "generate's codes"
+    );
     let (code, _, err) = prgenuav_in(here, &["generate", "nowhere.yaml", "2"]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("nowhere.yaml") && err.matches("os error").count() <= 1, "{err}");
+    assert!(
+        err.contains("nowhere.yaml") && err.matches("os error").count() <= 1,
+        "{err}"
+    );
     let (code, _, err) = prgenuav_in(here, &["generate", valid, "0"]);
     assert_eq!(code, 2, "{err}");
 }
@@ -79,8 +92,13 @@ fn a_campaign_run_from_elsewhere_writes_every_documented_file() {
     assert_eq!(code, 0, "{stdout}{stderr}");
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(lines.len(), 3, "{stdout}");
-    assert!(lines[0].starts_with("1 failing test (1 distinct at IoU 0.5) of 6 flights"), "{stdout}");
-    let folder = tmp.path().join(lines[2].strip_prefix("output folder: ").expect("the folder line"));
+    assert!(
+        lines[0].starts_with("1 failing test (1 distinct at IoU 0.5) of 6 flights"),
+        "{stdout}"
+    );
+    let folder = tmp
+        .path()
+        .join(lines[2].strip_prefix("output folder: ").expect("the folder line"));
     let name = folder.file_name().unwrap().to_string_lossy().into_owned();
     let iso = name.len() == 19
         && name.char_indices().all(|(i, c)| match i {
@@ -92,17 +110,29 @@ fn a_campaign_run_from_elsewhere_writes_every_documented_file() {
 
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap()).unwrap();
-    let unconfirmed = report["tests"].as_array().unwrap().iter().any(|t| t["confirmed"] == false);
+    let unconfirmed = report["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|t| t["confirmed"] == false);
     for documented in documented_files(&readme()) {
         if documented.contains("-K") || (documented.starts_with("unconfirmed") && !unconfirmed) {
             continue;
         }
         let file = documented.replace('N', "0").replace("roundR", "round0");
-        assert!(folder.join(&file).exists(), "{file} (README: {documented}) not in {}", folder.display());
+        assert!(
+            folder.join(&file).exists(),
+            "{file} (README: {documented}) not in {}",
+            folder.display()
+        );
     }
     let md = std::fs::read_to_string(folder.join("report.md")).unwrap();
     assert!(md.starts_with("# prgenuav campaign: "), "{md}");
-    let reproduce = format!("Reproduce: `prgenuav {}` (prgenuav {}", args.join(" "), env!("CARGO_PKG_VERSION"));
+    let reproduce = format!(
+        "Reproduce: `prgenuav {}` (prgenuav {}",
+        args.join(" "),
+        env!("CARGO_PKG_VERSION")
+    );
     assert!(md.contains(&reproduce), "{md}");
     assert!(md.find("## Failing tests") < md.find("## Appendix"), "{md}");
     // The written test flies from anywhere: its files are named absolutely.

@@ -226,7 +226,10 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     }
     let failed_jobs: usize = report.backends.iter().map(|b| b.failed_jobs).sum();
     if failed_jobs > 0 {
-        eprintln!("warning: {failed_jobs} flight(s) failed on their backend (not charged; see report.md)");
+        eprintln!(
+            "warning: {} failed on their backend (not charged; see report.md)",
+            report_user::plural(failed_jobs, "flight")
+        );
         if report.suite.flown == 0 {
             // Every flight failed on the backend: that is a broken setup, not a clean run with no failure.
             return Ok(ExitCode::from(super::EXIT_FAIL));
