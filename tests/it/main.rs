@@ -10,6 +10,7 @@ mod frame;
 mod generator;
 mod geometry_props;
 mod hygiene;
+mod identify;
 mod journal;
 mod layering;
 mod lfs;
