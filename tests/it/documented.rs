@@ -138,7 +138,10 @@ fn a_campaign_run_from_elsewhere_writes_every_documented_file() {
     // Resuming it says it is complete.
     let (code, _, err) = prgenuav_in(tmp.path(), &["generate", "--resume", folder.to_str().unwrap(), "-q"]);
     assert_eq!(code, 0, "{err}");
-    assert!(err.contains("is complete: it flew its budget (6 of 6 flights)"), "{err}");
+    assert!(
+        err.contains("is complete: it flew its budget (6 of 6 flights)"),
+        "{err}"
+    );
     // The written test flies from anywhere: its files are named absolutely.
     let elsewhere = tempfile::tempdir().unwrap();
     let test = folder.join("test_0.yaml");
