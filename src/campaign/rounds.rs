@@ -493,17 +493,16 @@ impl<'a> Rounds<'a> {
 
     fn note(&self, round: &Round, ranking: &Ranking) {
         self.input.progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates ({} near the {}), LFS bias {:+.2} m learnt from {} flights{}; \
-             flying {}",
+            "round {} of {ROUNDS}: {} ({} near the {}), LFS bias {:+.2} m learnt from {}{}; flying {}",
             round.index + 1,
-            round.drawn,
+            super::report_user::plural(round.drawn, "candidate"),
             round.children,
             match round.lineage {
                 Lineage::Failures => "failing flights",
                 Lineage::NearMisses => "closest flights, none failing yet",
             },
             ranking.bias_m,
-            self.journal.len(),
+            super::report_user::plural(self.journal.len(), "flight"),
             self.surrogate.map_or(String::new(), |k| format!(
                 ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
                 k.bandwidth, k.loo_error_m, k.lfs_error_m
