@@ -123,6 +123,30 @@ pub struct Report {
     pub folder: std::path::PathBuf,
 }
 
+impl Report {
+    /// What the user's part of report.md reads.
+    pub fn view(&self) -> report_user::View<'_> {
+        report_user::View {
+            case: &self.case,
+            seed: self.seed,
+            budget: self.budget,
+            judge: self.judge,
+            suite: &self.suite,
+            tests: &self.tests,
+            flights: (self.flights.iter())
+                .filter_map(|f| {
+                    Some(crate::plot::suite::Point {
+                        predicted_m: f.predicted_min_distance,
+                        flown_m: f.min_distance?,
+                        highlighted: f.reported_as.is_some(),
+                    })
+                })
+                .collect(),
+            invocation: &self.invocation,
+        }
+    }
+}
+
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
 /// report.json and report.md (and with `--confirm` above 1, `unconfirmed.json`), for the campaign `input` that
 /// drew `candidates_screened` candidates and flew `records`. Returns the report.
@@ -167,7 +191,7 @@ pub fn write_outputs(
         invocation: Invocation::current(),
         folder: input.folder.to_path_buf(),
     };
-    report_user::write_pictures(input, &report)?;
+    report_user::write_pictures(input, &report.view())?;
     if cfg.confirm > 1 {
         let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
@@ -275,7 +299,7 @@ fn opt(v: Option<f64>) -> String {
 pub fn markdown(r: &Report) -> String {
     let s = &r.suite;
     let mut md = String::new();
-    report_user::opening(&mut md, r, &r.folder);
+    report_user::opening(&mut md, &r.view(), &r.folder);
     let _ = writeln!(
         md,
         "## Appendix: diagnostics\n\nFor judging the run itself: how well the low-fidelity simulator (LFS) predicted \

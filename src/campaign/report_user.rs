@@ -8,9 +8,10 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::config::CampaignInput;
-use super::report::Report;
+use super::suite::SuiteSummary;
 use super::verdicts::TestVerdict;
 use crate::io::write_atomic;
+use crate::judge::Judge;
 use crate::model::{ModelError, Spelling};
 use crate::plot::suite::{Layout, Point, layouts_svg, scatter_svg};
 
@@ -54,6 +55,26 @@ fn quote(arg: &str) -> String {
     }
 }
 
+/// What this part of the report reads of the whole report.
+pub struct View<'a> {
+    /// The case study as given.
+    pub case: &'a str,
+    /// The campaign's seed.
+    pub seed: u64,
+    /// The flight budget.
+    pub budget: usize,
+    /// The judge edition.
+    pub judge: Judge,
+    /// The suite's numbers.
+    pub suite: &'a SuiteSummary,
+    /// Every test that failed at least once, best first.
+    pub tests: &'a [TestVerdict],
+    /// Every flight with a flown distance: predicted and flown distance, and whether its test was written.
+    pub flights: Vec<Point>,
+    /// How the run was started.
+    pub invocation: &'a Invocation,
+}
+
 /// Writes each unconfirmed test as `unconfirmed/test_K.yaml`, best first, so it can be flown again, and
 /// names it in its verdict.
 pub fn write_unconfirmed(
@@ -72,7 +93,7 @@ pub fn write_unconfirmed(
 }
 
 /// Writes [`SUITE_SVG`] and [`SCATTER_SVG`] into the campaign folder.
-pub fn write_pictures(input: &CampaignInput, r: &Report) -> Result<(), ModelError> {
+pub fn write_pictures(input: &CampaignInput, r: &View) -> Result<(), ModelError> {
     let layouts: Vec<Layout> = (r.tests.iter())
         .filter(|t| t.confirmed)
         .map(|t| Layout {
@@ -89,28 +110,19 @@ pub fn write_pictures(input: &CampaignInput, r: &Report) -> Result<(), ModelErro
         &input.folder.join(SUITE_SVG),
         layouts_svg(input.case, &layouts, &title).as_bytes(),
     )?;
-    let points: Vec<Point> = (r.flights.iter())
-        .filter_map(|f| {
-            Some(Point {
-                predicted_m: f.predicted_min_distance,
-                flown_m: f.min_distance?,
-                highlighted: f.reported_as.is_some(),
-            })
-        })
-        .collect();
     let title = format!(
         "{} flights: the low-fidelity prediction against the flight",
-        points.len()
+        r.flights.len()
     );
     write_atomic(
         &input.folder.join(SCATTER_SVG),
-        scatter_svg(&points, FAIL_M, &title).as_bytes(),
+        scatter_svg(&r.flights, FAIL_M, &title).as_bytes(),
     )
 }
 
 /// The verdict in two or three plain sentences: what was found, how sure, and what to do next (with the
 /// command). `folder` is the campaign folder as the user named it.
-pub fn verdict(r: &Report, folder: &Path) -> Vec<String> {
+pub fn verdict(r: &View, folder: &Path) -> Vec<String> {
     let s = &r.suite;
     let unconfirmed: Vec<&TestVerdict> = r.tests.iter().filter(|t| !t.confirmed).collect();
     let unsettled = unconfirmed.iter().filter(|t| !t.settled).count();
@@ -171,9 +183,7 @@ pub fn verdict(r: &Report, folder: &Path) -> Vec<String> {
             r.seed
         ));
     } else {
-        let closest = (r.flights.iter())
-            .filter_map(|f| f.min_distance)
-            .fold(f64::INFINITY, f64::min);
+        let closest = (r.flights.iter()).map(|f| f.flown_m).fold(f64::INFINITY, f64::min);
         let closest = if closest.is_finite() {
             format!(" (the closest came to {closest:.2} m)")
         } else {
@@ -197,7 +207,7 @@ pub fn verdict(r: &Report, folder: &Path) -> Vec<String> {
 }
 
 /// The summary on stdout: the suite's figures, what it means and the next step, and the output folder.
-pub fn stdout_lines(r: &Report, folder: &Path) -> Vec<String> {
+pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
     let s = &r.suite;
     let three = if s.failing_with_three > 0 {
         format!(", {} with three obstacles", s.failing_with_three)
@@ -247,7 +257,7 @@ pub fn plural(n: usize, noun: &str) -> String {
 }
 
 /// The report's opening: title, verdict, how to reproduce it, the written tests and the suite's pictures.
-pub fn opening(md: &mut String, r: &Report, folder: &Path) {
+pub fn opening(md: &mut String, r: &View, folder: &Path) {
     let _ = writeln!(md, "# prgenuav campaign: {}\n", r.case);
     for line in verdict(r, folder) {
         let _ = writeln!(md, "{line}\n");
@@ -272,7 +282,7 @@ pub fn opening(md: &mut String, r: &Report, folder: &Path) {
 }
 
 /// The written tests with links to their files: the failing ones, then the unconfirmed.
-fn tests_section(md: &mut String, r: &Report) {
+fn tests_section(md: &mut String, r: &View) {
     let _ = writeln!(md, "## Failing tests\n");
     let confirmed: Vec<&TestVerdict> = r.tests.iter().filter(|t| t.confirmed).collect();
     if confirmed.is_empty() {

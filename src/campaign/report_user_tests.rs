@@ -2,7 +2,7 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 use crate::campaign::journal::{FlightRecord, test_record};
-use crate::campaign::report::{FlownTest, StageTimes};
+use crate::campaign::report::{FlownTest, Report, StageTimes};
 use crate::campaign::suite::summary;
 use crate::campaign::verdicts::verdicts;
 use crate::judge::Judge;
@@ -54,7 +54,7 @@ fn a_failure_the_budget_could_not_confirm_says_so_and_what_to_run_next() {
     // Flight 9 failed at 1.34 m and the budget ended before it flew again.
     let records: Vec<FlightRecord> = (0..9).map(|c| flight(c, 0, 3.0)).chain([flight(9, 0, 1.34)]).collect();
     let r = report(&records, 3, 10);
-    let v = verdict(&r, &r.folder).join("\n");
+    let v = verdict(&r.view(), &r.folder).join("\n");
     assert!(
         v.contains("No confirmed failing test in 10 flights, but 1 test failed at least once"),
         "{v}"
@@ -66,7 +66,7 @@ fn a_failure_the_budget_could_not_confirm_says_so_and_what_to_run_next() {
     );
     assert!(v.contains("out/2026-11-27T16-16-37/unconfirmed/test_0.yaml"), "{v}");
     let mut md = String::new();
-    opening(&mut md, &r, &r.folder);
+    opening(&mut md, &r.view(), &r.folder);
     assert!(
         md.contains("[unconfirmed/test_0.yaml](unconfirmed/test_0.yaml): 1.34 m"),
         "{md}"
@@ -87,7 +87,7 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
         flight(2, 2, 3.0),
     ];
     let r = report(&records, 3, 5);
-    let v = verdict(&r, Path::new("f"));
+    let v = verdict(&r.view(), Path::new("f"));
     assert_eq!(v.len(), 3, "{v:?}");
     assert!(
         v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"),
@@ -97,7 +97,7 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
     assert!(v[1].contains("1 failed once and did not hold"), "{v:?}");
     assert!(v[2].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");
     let mut md = String::new();
-    opening(&mut md, &r, &r.folder);
+    opening(&mut md, &r.view(), &r.folder);
     assert!(
         md.contains("| [test_0.yaml](test_0.yaml) | 0.50 m | 2 / 2 | [test_0.svg](test_0.svg) |"),
         "{md}"
@@ -126,7 +126,7 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
         reported_as: None,
         vehicle: "mock".into(),
     });
-    let v = verdict(&r, Path::new("f")).join("\n");
+    let v = verdict(&r.view(), Path::new("f")).join("\n");
     assert!(
         v.contains("No failure: the one flight stayed 1.5 m or farther") && v.contains("2.50 m"),
         "{v}"

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
+use serde_json::Map;
+
 use super::error::{ModelError, Result};
-use super::test_case::TestCase;
 
 /// The blocks and keys of a test YAML that name files, in either key spelling.
 const REFERENCES: [(&str, &str); 6] = [
@@ -64,33 +65,32 @@ pub(crate) fn resolve(base: &Path, name: &str) -> std::result::Result<PathBuf, S
     })
 }
 
-impl TestCase {
-    /// A copy whose file references are absolute paths, so the test YAML written from it loads from any
-    /// working folder, in prgenuav and in Aerialist alike.
-    pub fn with_absolute_references(&self) -> Result<Self> {
-        let base = self.path.parent().unwrap_or(Path::new("."));
-        let mut out = self.clone();
-        for (block, key) in REFERENCES {
-            let Some(Value::Object(map)) = out.document.get_mut(block) else {
-                continue;
-            };
-            let Some(Value::String(name)) = map.get(key) else {
-                continue;
-            };
-            let found = resolve(base, name).map_err(|m| ModelError::field(&self.path, format!("{block}.{key}"), m))?;
-            let found = found.display().to_string();
-            if key == "mission_file" {
-                out.mission_file = found.clone();
-            }
-            map.insert(key.to_string(), Value::String(found));
+/// Rewrites the file references of `document`, a YAML read from `yaml`, as absolute paths; returns the new
+/// `mission_file`, if it names one.
+pub(crate) fn make_absolute(document: &mut Map<String, Value>, yaml: &Path) -> Result<Option<String>> {
+    let base = yaml.parent().unwrap_or(Path::new("."));
+    let mut mission_file = None;
+    for (block, key) in REFERENCES {
+        let Some(Value::Object(map)) = document.get_mut(block) else {
+            continue;
+        };
+        let Some(Value::String(name)) = map.get(key) else {
+            continue;
+        };
+        let found = resolve(base, name).map_err(|m| ModelError::field(yaml, format!("{block}.{key}"), m))?;
+        let found = found.display().to_string();
+        if key == "mission_file" {
+            mission_file = Some(found.clone());
         }
-        Ok(out)
+        map.insert(key.to_string(), Value::String(found));
     }
+    Ok(mission_file)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::TestCase;
 
     fn repo() -> PathBuf {
         PathBuf::from(env!("CARGO_MANIFEST_DIR"))

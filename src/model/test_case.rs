@@ -206,6 +206,16 @@ impl TestCase {
         super::files::write_atomic(path, self.to_yaml(spelling).as_bytes())
     }
 
+    /// A copy whose file references are absolute paths, so the test YAML written from it loads from any
+    /// working folder, in prgenuav and in Aerialist alike.
+    pub fn with_absolute_references(&self) -> Result<Self> {
+        let mut out = self.clone();
+        if let Some(mission_file) = super::references::make_absolute(&mut out.document, &self.path)? {
+            out.mission_file = mission_file;
+        }
+        Ok(out)
+    }
+
     /// A copy with other obstacles.
     pub fn with_obstacles(&self, obstacles: Vec<Obstacle>) -> Self {
         Self {

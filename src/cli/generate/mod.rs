@@ -338,7 +338,7 @@ fn print_summary(report: &Report, plan: &Plan, json: bool) -> anyhow::Result<()>
         value["output_folder"] = serde_json::json!(folder.display().to_string());
         return super::print_json(&value);
     }
-    for line in report_user::stdout_lines(report, folder) {
+    for line in report_user::stdout_lines(&report.view(), folder) {
         println!("{line}");
     }
     Ok(())
