@@ -134,16 +134,16 @@ pub fn verdict(r: &View, folder: &Path) -> Vec<String> {
             .find(|t| t.confirmed)
             .map_or(f64::NAN, |t| t.best_min_distance);
         lines.push(format!(
-            "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; the closest, \
-             test_0, at {best:.2} m.",
+            "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; test_0, the \
+             surest, came to {best:.2} m.",
             plural(s.failing, "failing test"),
             s.distinct_failing,
             plural(s.flown, "flight")
         ));
         lines.push(if s.confirm > 1 {
             format!(
-                "How sure: each failed on more than half of up to {} flights of it; {} failed once and did not hold \
-                 or could not be confirmed ({UNCONFIRMED_DIR}/).",
+                "How sure: each failed on more than half of up to {} flights of it; {} more failed at least once but \
+                 not on most flights, or the budget ran out first ({UNCONFIRMED_DIR}/).",
                 s.confirm,
                 unconfirmed.len()
             )

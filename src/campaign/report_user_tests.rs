@@ -93,8 +93,11 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
         v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"),
         "{v:?}"
     );
-    assert!(v[0].contains("test_0, at 0.50 m"), "{v:?}");
-    assert!(v[1].contains("1 failed once and did not hold"), "{v:?}");
+    assert!(v[0].contains("test_0, the surest, came to 0.50 m"), "{v:?}");
+    assert!(
+        v[1].contains("1 more failed at least once but not on most flights"),
+        "{v:?}"
+    );
     assert!(v[2].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");
     let mut md = String::new();
     opening(&mut md, &r.view(), &r.folder);
