@@ -73,7 +73,7 @@ pub struct Args {
     judge: JudgeEdition,
     /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20; at
     /// most 100000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, hide = true, value_name = "N")]
     candidates: Option<usize>,
     /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in
     /// rounds, calibrating the simulator on every flight and adapting the generator towards failures.
