@@ -5,6 +5,8 @@
 
 use std::fmt::Write as _;
 
+pub mod suite;
+
 use crate::judge::ClosestApproach;
 use crate::model::{Arena, TestCase, Trajectory};
 

@@ -34,7 +34,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else if valid {
         println!("{}: valid ({} obstacles)", args.test.display(), test.obstacles.len());
     } else {
-        println!("{}: {} violation(s)", args.test.display(), violations.len());
+        println!(
+            "{}: {}",
+            args.test.display(),
+            prgenuav::campaign::report::user_report::plural(violations.len(), "violation")
+        );
         for v in &violations {
             println!("  {} = {}: {}", v.path, v.value, v.rule);
         }

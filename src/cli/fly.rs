@@ -22,6 +22,10 @@ use prgenuav::plot::{FlightPlot, PathStyle};
 use super::limits;
 use super::values::{JudgeEdition, Mode, Motion};
 
+/// The motion model of `fly`'s low-fidelity prediction: the campaign's screening default, so a flown test is
+/// compared with what chose it (`simulate` defaults to the paper's model; `--motion px4` gives this one).
+const PREDICTION_MOTION: Motion = Motion::Px4;
+
 /// Arguments of `fly`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -113,7 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let prediction = if args.no_predict {
         None
     } else {
-        predict(&test, Motion::Px4.model(), args.judge.into())
+        predict(&test, PREDICTION_MOTION.model(), args.judge.into())
             .inspect_err(|e| eprintln!("warning: no LFS prediction: {e}"))
             .ok()
     };
@@ -237,7 +241,8 @@ fn write_plot(
     if let Some(p) = prediction {
         plot.add_path(&p.trajectory, PathStyle::Simulated, "LFS prediction");
     }
-    plot.add_path(&report.trajectory, PathStyle::Flown, &format!("flown ({mode:?})"));
+    let mode = super::wording::words(&format!("{mode:?}"));
+    plot.add_path(&report.trajectory, PathStyle::Flown, &format!("flown ({mode})"));
     if let Some(c) = &report.closest_approach {
         plot.mark_closest(c);
     }
@@ -259,12 +264,17 @@ fn print_text(report: &FlightReport) {
     );
     if let (Some(src), Some([n, e])) = (report.frame_source, report.frame_origin_offset_m) {
         println!(
-            "frame             {} ({src:?}: EKF origin at N {n:.2} m, E {e:.2} m)",
-            report.frame
+            "frame             {} (from {}: EKF origin at N {n:.2} m, E {e:.2} m)",
+            report.frame,
+            super::wording::words(&format!("{src:?}"))
         );
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
-    println!("lfs_min_distance  {}", m(report.lfs_min_distance));
+    println!(
+        "lfs_min_distance  {} (the LFS prediction, {} motion model)",
+        m(report.lfs_min_distance),
+        PREDICTION_MOTION.model().name()
+    );
     for d in &report.per_obstacle {
         println!(
             "  obstacle {}: {:.3} m (raw {:.3} m)",
@@ -274,12 +284,16 @@ fn print_text(report: &FlightReport) {
     if let Some(c) = &report.closest_approach {
         println!(
             "closest approach  t = {:.2} s at x = {:.2}, y = {:.2}, z = {:.2} (obstacle {})",
-            c.t_s, c.x, c.y, c.z, c.obstacle
+            super::wording::non_negative(c.t_s),
+            c.x,
+            c.y,
+            c.z,
+            c.obstacle
         );
     }
     println!(
         "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
-        report.flight_time_s,
+        super::wording::non_negative(report.flight_time_s),
         report.samples,
         report.link.packets_received,
         report.link.retries,

@@ -8,6 +8,7 @@ mod fidelity;
 mod fly;
 mod generate;
 mod limits;
+mod out_folder;
 mod progress;
 mod render;
 mod sample;
@@ -16,6 +17,7 @@ mod settings;
 mod simulate;
 mod stop_signals;
 mod values;
+mod wording;
 
 use std::process::ExitCode;
 
@@ -38,12 +40,14 @@ pub struct Cli {
 enum Command {
     /// The main job: sample candidates, screen them with the LFS, fly the most severe within BUDGET flights,
     /// and write the failing tests best first with a report.
+    #[command(override_usage = "prgenuav generate [OPTIONS] CASE BUDGET\n       prgenuav generate --resume FOLDER")]
     Generate(Box<generate::Args>),
     /// Check a test against the competition's rules (exit 0 valid, 1 violations, 2 unreadable).
     Check(check::Args),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
     Distance(distance::Args),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
+    #[command(override_usage = "prgenuav sample [OPTIONS] CASE N")]
     Sample(sample::Args),
     /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
     Score(score::Args),
@@ -54,7 +58,8 @@ enum Command {
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
     Fidelity(fidelity::Args),
     /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
-    /// distance (exit 0 landed or collision, 1 timeout/link lost/aborted/rejected, 2 error).
+    /// distance (exit 0: landed or collision; 1: the flight did not complete (timeout, link lost, aborted,
+    /// refused by the vehicle); 2: an error, also a vehicle too far from the test's home).
     Fly(fly::Args),
 }
 
@@ -97,7 +102,11 @@ pub fn load_valid_test(path: &std::path::Path) -> anyhow::Result<Option<prgenuav
     if violations.is_empty() {
         return Ok(Some(test));
     }
-    eprintln!("{}: {} violation(s)", path.display(), violations.len());
+    eprintln!(
+        "{}: {}",
+        path.display(),
+        prgenuav::campaign::report::user_report::plural(violations.len(), "violation")
+    );
     for v in &violations {
         eprintln!("  {} = {}: {}", v.path, v.value, v.rule);
     }

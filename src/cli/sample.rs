@@ -1,9 +1,10 @@
-//! `prgenuav sample CASE.yaml --count N [--seed S] [--out DIR] [--json]`: tests without screening.
+//! `prgenuav sample CASE N [--seed S] [--out DIR] [--json]`: tests without screening.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
+use prgenuav::campaign::report::user_report::plural;
 use prgenuav::generator::{Generator, GeneratorConfig, Placement};
 use prgenuav::judge::diversity;
 use prgenuav::model::{Range, TestCase};
@@ -19,16 +20,24 @@ const MAX_COUNT: u64 = 5_000;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The case study YAML (mission, params, commands).
+    #[arg(value_name = "CASE")]
     case: PathBuf,
     /// How many tests to write: 1 to 5000.
-    #[arg(long)]
-    count: u64,
+    #[arg(value_name = "N", required_unless_present = "count", conflicts_with = "count")]
+    n: Option<u64>,
+    /// The same as N (kept for scripts).
+    #[arg(long, hide = true, value_name = "N")]
+    count: Option<u64>,
     /// Seed of every random draw: the same seed gives byte-identical tests.
-    #[arg(long, default_value_t = 0)]
+    #[arg(short, long, default_value_t = 0)]
     seed: u64,
-    /// Folder the tests are written to (test_0.yaml, test_1.yaml, ...).
-    #[arg(long, value_name = "DIR", default_value = "generated_tests/samples")]
+    /// Folder the tests are written to (test_0.yaml, test_1.yaml, ...); refused when it holds files, unless
+    /// --force.
+    #[arg(short, long, value_name = "DIR", default_value = "generated_tests/samples")]
     out: PathBuf,
+    /// Write into a folder that holds files, replacing its test_N.yaml files.
+    #[arg(long)]
+    force: bool,
     /// Print a JSON summary instead of text.
     #[arg(long)]
     json: bool,
@@ -86,14 +95,16 @@ struct Written<'a> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(1..=MAX_COUNT).contains(&args.count) {
-        bail!("--count {} is out of range: 1 to {MAX_COUNT} tests", args.count);
+    let count = args.n.or(args.count).unwrap_or_default();
+    if !(1..=MAX_COUNT).contains(&count) {
+        bail!("N {count} is out of range: 1 to {MAX_COUNT} tests");
     }
     super::check_outputs(&[("--out", Some(args.out.join("test_0.yaml").as_path()))])?;
     let (config, spelling) = args.generator.config()?;
-    let case = TestCase::load(&args.case)?;
+    let case = TestCase::load(&args.case)?.with_absolute_references()?;
     let generator = Generator::new(&case, config, args.seed)?;
-    let placements: Vec<Placement> = (0..args.count).map(|i| generator.sample(i)).collect::<Result<_, _>>()?;
+    let placements: Vec<Placement> = (0..count).map(|i| generator.sample(i)).collect::<Result<_, _>>()?;
+    super::out_folder::claim(&args.out, args.force)?;
     let mut files = Vec::new();
     for p in &placements {
         let path = args.out.join(format!("test_{}.yaml", p.index));
@@ -122,17 +133,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         let s = generator.soi();
         println!(
-            "segment of interest: mission segment {} from ({:.2}, {:.2}) to ({:.2}, {:.2}), A side {:?}",
+            "segment of interest: mission segment {} from ({:.2}, {:.2}) to ({:.2}, {:.2}), A side {}",
             s.segment,
             s.start.x,
             s.start.y,
             s.end.x,
             s.end.y,
-            generator.a_side()
+            format!("{:?}", generator.a_side()).to_lowercase()
         );
         println!(
-            "wrote {} tests (seed {}), diversity {}",
-            files.len(),
+            "wrote {} (seed {}), diversity {}",
+            plural(files.len(), "test"),
             args.seed,
             div.map_or("n/a".into(), |d| format!("{d:.3}"))
         );

@@ -190,8 +190,11 @@ fn print_text(report: &Report, result: &SimResult, motion: &str) {
         None => println!("min_distance      - (no obstacles)"),
     }
     println!(
-        "status            {:?} after {:.1} s simulated, {} cycles, {:.0} ms wall ({motion} motion)",
-        result.status, result.flight_time_s, result.cycles, report.wall_ms
+        "status            {} after {:.1} s simulated, {} cycles, {:.0} ms wall ({motion} motion model)",
+        super::wording::words(&format!("{:?}", result.status)),
+        super::wording::non_negative(result.flight_time_s),
+        result.cycles,
+        report.wall_ms
     );
     if let Some(e) = &report.ensemble {
         let mut v = e.member_min_distances.clone();

@@ -12,6 +12,7 @@ use super::files::read_text;
 use super::geo::{GeoPoint, SIM_HOME};
 use super::mission::Mission;
 use super::obstacle::{Obstacle, Position, Size};
+use super::references::resolve;
 use super::tables::{Command, Param, command_from, parse_commands_csv, parse_params_csv};
 
 /// Which key names a YAML uses: `drone`/`test` (Aerialist before 2025-09) or `robot`/`mission` (since).
@@ -89,7 +90,8 @@ impl TestCase {
         Self::parse(&text, path)
     }
 
-    /// Parses YAML text; relative file names resolve against `path`'s folder, then the working directory.
+    /// Parses YAML text; relative file names resolve as [`resolve`] says: the working folder, then `path`'s
+    /// folder and its parents.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let value: Value = serde_saphyr::from_str(text).map_err(|e| yaml_error(path, &e))?;
         let document = match value {
@@ -204,6 +206,16 @@ impl TestCase {
         super::files::write_atomic(path, self.to_yaml(spelling).as_bytes())
     }
 
+    /// A copy whose file references are absolute paths, so the test YAML written from it loads from any
+    /// working folder, in prgenuav and in Aerialist alike.
+    pub fn with_absolute_references(&self) -> Result<Self> {
+        let mut out = self.clone();
+        if let Some(mission_file) = super::references::make_absolute(&mut out.document, &self.path)? {
+            out.mission_file = mission_file;
+        }
+        Ok(out)
+    }
+
     /// A copy with other obstacles.
     pub fn with_obstacles(&self, obstacles: Vec<Obstacle>) -> Self {
         Self {
@@ -242,20 +254,6 @@ fn spelling_of(doc: &Map<String, Value>) -> FieldResult<Spelling> {
             "missing (a case study needs `drone:` or `robot:` with a mission_file)",
         ),
     }
-}
-
-/// Resolves a file named in the YAML: absolute, or relative to the YAML's folder, then the working directory.
-pub(crate) fn resolve(base: &Path, name: &str) -> std::result::Result<PathBuf, String> {
-    let given = Path::new(name);
-    let candidates: Vec<PathBuf> = if given.is_absolute() {
-        vec![given.to_path_buf()]
-    } else {
-        vec![base.join(given), given.to_path_buf()]
-    };
-    candidates.iter().find(|p| p.is_file()).cloned().ok_or_else(|| {
-        let tried: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
-        format!("file {name:?} not found (tried {})", tried.join(", "))
-    })
 }
 
 fn parse_home(sim: &Map<String, Value>) -> FieldResult<GeoPoint> {

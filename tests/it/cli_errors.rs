@@ -226,7 +226,7 @@ fn generate_help_shows_at_most_15_options() {
     let options: Vec<&str> = help
         .lines()
         .map(str::trim_start)
-        .filter(|l| l.starts_with("--") || l.starts_with("-h"))
+        .filter(|l| l.starts_with("--") || (l.starts_with('-') && l.chars().nth(1).is_some_and(char::is_alphabetic)))
         .collect();
     assert!(options.len() <= 15, "{} options: {options:?}", options.len());
     for flag in [
@@ -238,7 +238,7 @@ fn generate_help_shows_at_most_15_options() {
         "--config",
         "--json",
     ] {
-        assert!(options.iter().any(|o| o.starts_with(flag)), "{flag} not shown: {help}");
+        assert!(options.iter().any(|o| o.contains(flag)), "{flag} not shown: {help}");
     }
 }
 

@@ -1,13 +1,16 @@
 //! Integration tests: one binary, one module per area, shared helpers here.
 
+mod anywhere;
 mod bridge;
 mod campaign;
 mod campaign_folder;
 mod cli_errors;
+mod documented;
 mod frame;
 mod generator;
 mod geometry_props;
 mod hygiene;
+mod identify;
 mod journal;
 mod journal_edits;
 mod layering;

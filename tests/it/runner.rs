@@ -178,7 +178,7 @@ fn a_broken_runner_fails_its_flights_uncharged_and_the_campaign_ends() {
     ]);
     assert_eq!(code, 1, "every flight failed on its backend: not a clean run; {stderr}");
     assert!(stdout.contains("of 0 flights"), "{stdout}");
-    assert!(stderr.contains("2 flight(s) failed on their backend"), "{stderr}");
+    assert!(stderr.contains("2 flights failed on their backend"), "{stderr}");
     let folder = std::fs::read_dir(out.path()).unwrap().next().unwrap().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert!(
@@ -212,7 +212,12 @@ fn bad_runner_settings_are_refused_before_anything_runs() {
             "--jobs 0 is out of range: 1 to 1024",
         ),
         (vec!["--runner", "fly {test}", "--job-timeout=-1"], "--job-timeout"),
-        (vec!["--jobs", "2"], "go with --runner"),
+        (vec!["--job-timeout", "5"], "goes with --runner"),
+        (vec!["--jobs", "2", "--mock-vehicles", "3"], "disagree"),
+        (
+            vec!["--jobs", "2", "--connect", "udpin:0.0.0.0:14540"],
+            "each URL flies one flight",
+        ),
         (
             vec!["--runner", "fly {test}", "--connect", "udpin:0.0.0.0:14540"],
             "cannot be used with",

@@ -8,6 +8,7 @@ pub mod clock_watch;
 pub mod context;
 pub mod flight;
 pub mod gazebo;
+pub mod identify;
 pub mod placement;
 pub mod ready;
 pub mod recorder;

@@ -68,8 +68,15 @@ async fn connect<'a>(
     let mut rx = link.subscribe();
     // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
     let texts_rx = link.subscribe();
-    let target = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
+    let (target, heartbeat) = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
+    // Only a live listener (the `fly` CLI) is told: a campaign's flights do not spend the wait.
+    if let Some(sink) = &opts.notices {
+        // Its own receiver: the session's keeps every message the vehicle sends meanwhile.
+        let mut answers = link.subscribe();
+        let who = super::identify::describe(&link, &mut answers, target, &heartbeat, &cancel).await;
+        (sink.0)(&crate::bridge::wire::notices::Notice::Answered(who));
+    }
     let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
     let messages = crate::bridge::wire::notices::Messages::default();
     tasks.push(crate::bridge::wire::notices::spawn_collector(
@@ -162,13 +169,13 @@ async fn gcs_heartbeat(link: Arc<Link>) {
     }
 }
 
-/// Waits (bounded) for an autopilot's heartbeat: the vehicle to fly.
+/// Waits (bounded) for an autopilot's heartbeat: the vehicle to fly, and what its heartbeat says.
 async fn wait_heartbeat(
     link: &Link,
     rx: &mut broadcast::Receiver<Arc<Inbound>>,
     opts: &FlyOptions,
     cancel: &CancelToken,
-) -> Result<Target, BridgeError> {
+) -> Result<(Target, HEARTBEAT_DATA), BridgeError> {
     let deadline = link.clock().now() + secs(opts.heartbeat_wait_s);
     loop {
         let wait = link.clock().wall_until(deadline);
@@ -182,7 +189,7 @@ async fn wait_heartbeat(
                         && h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
                         && opts.target_system.is_none_or(|t| t == system)
                     {
-                        return Ok(Target { system, component: inb.header.component_id });
+                        return Ok((Target { system, component: inb.header.component_id }, h.clone()));
                     }
                 }
                 Err(broadcast::error::RecvError::Lagged(_)) => {}

@@ -38,6 +38,8 @@ pub enum Notice {
     },
     /// The vehicle's clock disagrees with the time scale.
     Clock(String),
+    /// The vehicle that answered and was locked onto, in words, before anything is uploaded.
+    Answered(String),
 }
 
 impl std::fmt::Display for Notice {
@@ -48,6 +50,7 @@ impl std::fmt::Display for Notice {
                 write!(f, "waiting for the vehicle ({waited_s:.0} s): {missing}")
             }
             Notice::Clock(w) => write!(f, "warning: {w}"),
+            Notice::Answered(who) => write!(f, "vehicle answered: {who}"),
         }
     }
 }

@@ -58,7 +58,7 @@ pub struct SuiteScore {
     pub failing: usize,
     /// Tests with at least one flight.
     pub evaluated: usize,
-    /// 1 - mean pairwise IoU of the tests' obstacle footprints.
+    /// 1 - mean pairwise IoU of the failing tests' obstacle footprints (`None` below two failing tests).
     pub diversity: Option<f64>,
 }
 
@@ -164,9 +164,19 @@ pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>], judge
         failure_score: counted().map(|t| t.score).sum::<f64>() + 0.0,
         failing: counted().filter(|t| t.failed).count(),
         evaluated: tests.iter().filter(|t| !t.runs.is_empty()).count(),
-        diversity: diversity(obstacles),
+        diversity: failing_diversity(&tests, obstacles),
         tests,
     }
+}
+
+/// The diversity of the tests that failed, as the competition defines it; rounding noise of identical layouts
+/// (1 - 1.0000000000000004) reads 0.
+fn failing_diversity(tests: &[TestScore], obstacles: &[Vec<Obstacle>]) -> Option<f64> {
+    let failing: Vec<Vec<Obstacle>> = (tests.iter().zip(obstacles))
+        .filter(|(t, _)| t.failed)
+        .map(|(_, o)| o.clone())
+        .collect();
+    diversity(&failing).map(|d| if d.abs() < 1e-9 { 0.0 } else { d })
 }
 
 /// Scores every `test_N.yaml` of a folder with its flights.

@@ -6,4 +6,5 @@ pub mod backends;
 pub mod folder_score;
 pub mod outputs;
 pub mod suite;
+pub mod user_report;
 pub mod verdicts;

@@ -13,6 +13,7 @@ use crate::campaign::learn::failure_counts::FAIL_BINS;
 use crate::campaign::report::backends::{self, BackendSummary};
 use crate::campaign::report::suite::summary;
 pub use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
+use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::journal_check::inside_bytes;
@@ -116,6 +117,35 @@ pub struct Report {
     pub learning: Option<Learnt>,
     /// Per backend (mock, px4, runner, MAVLink URL): flights, failed jobs, wall time per flight.
     pub backends: Vec<BackendSummary>,
+    /// The command line and version that made it.
+    pub invocation: Invocation,
+    /// The campaign folder (the next commands report.md suggests name it).
+    #[serde(skip)]
+    pub folder: std::path::PathBuf,
+}
+
+impl Report {
+    /// What the user's part of report.md reads.
+    pub fn view(&self) -> user_report::View<'_> {
+        user_report::View {
+            case: &self.case,
+            seed: self.seed,
+            budget: self.budget,
+            judge: self.judge,
+            suite: &self.suite,
+            tests: &self.tests,
+            flights: (self.flights.iter())
+                .filter_map(|f| {
+                    Some(crate::plot::suite::Point {
+                        predicted_m: f.predicted_min_distance,
+                        flown_m: f.min_distance?,
+                        highlighted: f.reported_as.is_some(),
+                    })
+                })
+                .collect(),
+            invocation: &self.invocation,
+        }
+    }
 }
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
@@ -133,7 +163,8 @@ pub fn write_outputs(
     let mut tests = verdicts(records, cfg.confirm);
     let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
-    let tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
+    let mut tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
+    user_report::write_unconfirmed(input, &mut tests, spelling(input))?;
     let mut suite = summary(records, &tests, cfg.screen);
     suite.confirm = cfg.confirm;
     suite.candidates_screened = candidates_screened;
@@ -158,7 +189,10 @@ pub fn write_outputs(
         backends: backends::summarise(
             &Journal::read_all(&input.folder.join("journal.jsonl")).unwrap_or_else(|_| records.to_vec()),
         ),
+        invocation: Invocation::current(),
+        folder: input.folder.to_path_buf(),
     };
+    user_report::write_pictures(input, &report.view())?;
     if cfg.confirm > 1 {
         let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
@@ -175,16 +209,13 @@ fn write_failing_tests(
     tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
 ) -> Result<Vec<(u64, String)>, ModelError> {
     let folder = input.folder;
-    let spelling = if input.cfg.old_spelling {
-        Spelling::Old
-    } else {
-        Spelling::New
-    };
+    let spelling = spelling(input);
+    let case = input.case.with_absolute_references()?;
     let mut reported: Vec<(u64, String)> = Vec::new();
     for (i, (verdict, flights)) in tests.iter_mut().filter(|(t, _)| t.confirmed).enumerate() {
         let name = format!("test_{i}");
         let r = flights[0];
-        let test = input.case.with_obstacles(r.obstacles.clone());
+        let test = case.with_obstacles(r.obstacles.clone());
         test.save(&folder.join(format!("{name}.yaml")), spelling)?;
         let flown = inside_bytes(folder, &r.trajectory)
             .and_then(|b| String::from_utf8(b).ok())
@@ -211,6 +242,15 @@ fn write_failing_tests(
         reported.push((r.candidate, format!("{name}.yaml")));
     }
     Ok(reported)
+}
+
+/// The key spelling the tests are written in.
+fn spelling(input: &CampaignInput) -> Spelling {
+    if input.cfg.old_spelling {
+        Spelling::Old
+    } else {
+        Spelling::New
+    }
 }
 
 /// One flight in the report; `reported` names the failing tests written.
@@ -255,17 +295,22 @@ fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, t
 }
 
 fn opt(v: Option<f64>) -> String {
-    v.map_or("-".into(), |v| format!("{v:.3}"))
+    v.map_or("n/a".into(), |v| format!("{v:.3}"))
 }
 
 /// The report as Markdown.
 pub fn markdown(r: &Report) -> String {
     let s = &r.suite;
-    let mut md = format!("# prgenuav campaign: {}\n\n", r.case);
+    let mut md = String::new();
+    user_report::opening(&mut md, &r.view(), &r.folder);
     let _ = writeln!(
         md,
-        "seed {}, budget {} flights, {} candidates screened; judge {}: {}\n",
-        r.seed, r.budget, s.candidates_screened, r.judge, r.judge_definition
+        "## Appendix: diagnostics\n\nFor judging the run itself: how well the low-fidelity simulator (LFS) predicted \
+         the flights, what the campaign learnt, and where the time went.\n\n{} candidates screened; judge {}: {}\n\n{}",
+        s.candidates_screened,
+        r.judge,
+        r.judge_definition,
+        user_report::DEFINITIONS
     );
     summary_table(&mut md, r);
     if s.confirm > 1 {

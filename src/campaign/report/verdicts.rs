@@ -40,7 +40,7 @@ pub struct TestVerdict {
     /// Its flights' trajectories (relative to the campaign folder), the best failing flight first, then the
     /// others in flight order.
     pub trajectories: Vec<PathBuf>,
-    /// `test_N.yaml` it is written as, when confirmed.
+    /// The file it is written as: `test_N.yaml` when confirmed, else `unconfirmed/test_K.yaml`.
     pub reported_as: Option<String>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
@@ -130,10 +130,11 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
     for t in tests {
-        let verdict = match (&t.reported_as, t.settled) {
-            (Some(name), _) => name.clone(),
-            (None, true) => "unconfirmed".into(),
-            (None, false) => "unconfirmed (budget spent before its confirmation)".into(),
+        let file = t.reported_as.as_deref().unwrap_or_default();
+        let verdict = match (t.confirmed, t.settled) {
+            (true, _) => file.to_string(),
+            (false, true) => format!("unconfirmed: {file}"),
+            (false, false) => format!("unconfirmed (budget spent before its confirmation): {file}"),
         };
         let _ = writeln!(
             md,

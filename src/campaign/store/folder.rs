@@ -25,7 +25,7 @@ const LOCK_POLL: Duration = Duration::from_millis(25);
 /// Suffixes tried after the timestamp itself (`-2`, `-3`, ...): far more campaigns than start in one second.
 const MAX_SUFFIX: u32 = 1000;
 
-/// Creates a new, empty campaign folder `DIR/<dd-mm-HH-MM-SS>` for `now`, or with `-2`, `-3`, ... when a
+/// Creates a new, empty campaign folder `DIR/<YYYY-MM-DDTHH-MM-SS>` for `now`, or with `-2`, `-3`, ... when a
 /// campaign started in the same second already has that name. Creation is the claim: two processes racing for
 /// one name cannot both create it.
 pub fn create_new(dir: &Path, now: SystemTime) -> Result<PathBuf, CampaignError> {
@@ -60,13 +60,14 @@ pub fn create_new(dir: &Path, now: SystemTime) -> Result<PathBuf, CampaignError>
     )))
 }
 
-/// `DIR/<dd-mm-HH-MM-SS>` (UTC), the competition's output folder naming.
+/// `DIR/<YYYY-MM-DDTHH-MM-SS>` (UTC): ISO 8601 with `-` for `:` (which some file systems refuse), so the
+/// folders sort by time.
 pub fn timestamped_folder(dir: &Path, now: SystemTime) -> PathBuf {
     let secs = now.duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
     let (days, rem) = (secs / 86_400, secs % 86_400);
-    let (_, month, day) = civil_from_days(days as i64);
+    let (year, month, day) = civil_from_days(days as i64);
     dir.join(format!(
-        "{day:02}-{month:02}-{:02}-{:02}-{:02}",
+        "{year:04}-{month:02}-{day:02}T{:02}-{:02}-{:02}",
         rem / 3600,
         rem % 3600 / 60,
         rem % 60
@@ -149,12 +150,12 @@ mod tests {
     use std::time::UNIX_EPOCH;
 
     #[test]
-    fn folder_name_is_day_month_time() {
+    fn folder_name_is_iso_8601_date_and_time() {
         // 2026-11-22 03:42:07 UTC
         let t = UNIX_EPOCH + Duration::from_secs(1_795_318_927);
         assert_eq!(
             timestamped_folder(Path::new("out"), t),
-            PathBuf::from("out/22-11-03-42-07")
+            PathBuf::from("out/2026-11-22T03-42-07")
         );
         assert_eq!(civil_from_days(0), (1970, 1, 1));
         assert_eq!(civil_from_days(19_782), (2024, 2, 29));

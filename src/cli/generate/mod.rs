@@ -1,7 +1,8 @@
-//! `prgenuav generate CASE.yaml BUDGET`: the competition's main job. `--help` shows the flags a campaign is
+//! `prgenuav generate CASE BUDGET`: the competition's main job. `--help` shows the flags a campaign is
 //! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
 //! in docs/cli.md.
 
+mod jobs;
 mod plan;
 mod px4;
 mod runner;
@@ -19,7 +20,8 @@ use prgenuav::campaign::fly::mock_mavlink::{LinkVehicle, MockVehicle};
 use prgenuav::campaign::fly::mock_profile::MockProfile;
 use prgenuav::campaign::fly::runner::RunnerVehicle;
 use prgenuav::campaign::fly::vehicle::Vehicle;
-use prgenuav::campaign::report::outputs::{DISTINCT_IOU, Report};
+use prgenuav::campaign::report::outputs::Report;
+use prgenuav::campaign::report::user_report;
 use prgenuav::campaign::run::{CampaignConfig, run_campaign};
 use prgenuav::campaign::screen::lfs_screener::LfsScreener;
 use prgenuav::campaign::screen::parallel::available_threads;
@@ -38,15 +40,15 @@ use plan::Plan;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The case study YAML (mission, params, commands).
-    #[arg(value_name = "CASE.yaml")]
+    #[arg(value_name = "CASE")]
     case: Option<PathBuf>,
     /// High-fidelity flights allowed (the competition's budget): 1 to 10000.
     budget: Option<usize>,
     /// Seed of the generator: the same seed draws the same candidates.
-    #[arg(long, default_value_t = 0)]
+    #[arg(short, long, default_value_t = 0)]
     seed: u64,
     /// Folder in which the campaign's timestamped output folder is created.
-    #[arg(long, value_name = "DIR", default_value = "generated_tests")]
+    #[arg(short, long, value_name = "DIR", default_value = "generated_tests")]
     out: PathBuf,
     /// The vehicles: `mock` (embedded mock autopilots) or MAVLink URLs separated by commas, one flight per
     /// vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).
@@ -57,8 +59,9 @@ pub struct Args {
     /// from what the job leaves there (docs/runners.md: Aerialist, Slurm, Kubernetes).
     #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
     runner: Option<String>,
-    /// Runner jobs at once (with --runner; docs/runners.md).
-    #[arg(long, hide = true, value_name = "N")]
+    /// Flights at once, whatever flies them: embedded mocks (default: one per core), --px4 instances (default:
+    /// what the cores carry) or --runner jobs (default 1).
+    #[arg(short, long, value_name = "N")]
     jobs: Option<usize>,
     /// Wall-time limit of one runner job, seconds (with --runner; default 1200).
     #[arg(long, hide = true, value_name = "S")]
@@ -71,7 +74,7 @@ pub struct Args {
     judge: JudgeEdition,
     /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20; at
     /// most 100000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, hide = true, value_name = "N")]
     candidates: Option<usize>,
     /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in
     /// rounds, calibrating the simulator on every flight and adapting the generator towards failures.
@@ -94,9 +97,9 @@ pub struct Args {
     #[arg(long, value_name = "FILE.toml")]
     config: Option<PathBuf>,
     /// No progress output.
-    #[arg(long)]
+    #[arg(short, long)]
     quiet: bool,
-    /// Print the report as JSON on stdout.
+    /// Print the report as JSON on stdout (and no progress output).
     #[arg(long)]
     json: bool,
     #[command(flatten)]
@@ -133,7 +136,7 @@ struct Expert {
     /// In lockstep, the companion plans on the pose this many vehicle milliseconds old (mock.latency_ms).
     #[arg(long, hide = true, value_name = "MS")]
     mock_latency: Option<f64>,
-    /// Embedded mock autopilots flying at once (mock.vehicles).
+    /// Embedded mock autopilots flying at once (mock.vehicles); --jobs says the same.
     #[arg(long, hide = true, value_name = "N")]
     mock_vehicles: Option<usize>,
     /// The embedded mocks' profile: `px4-sitl` or `competition` (mock.profile).
@@ -195,6 +198,11 @@ impl Expert {
 pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     let plan = plan::plan(&args, matches)?;
     let cfg = &plan.cfg;
+    if args.resume.is_some()
+        && let Some(note) = complete_note(&plan.folder, cfg.budget)
+    {
+        eprintln!("{note}");
+    }
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -228,7 +236,10 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     }
     let failed_jobs: usize = report.backends.iter().map(|b| b.failed_jobs).sum();
     if failed_jobs > 0 {
-        eprintln!("warning: {failed_jobs} flight(s) failed on their backend (not charged; see report.md)");
+        eprintln!(
+            "warning: {} failed on their backend (not charged; see report.md)",
+            user_report::plural(failed_jobs, "flight")
+        );
         if report.suite.flown == 0 {
             // Every flight failed on the backend: that is a broken setup, not a clean run with no failure.
             return Ok(ExitCode::from(super::EXIT_FAIL));
@@ -326,7 +337,7 @@ fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicl
         .collect())
 }
 
-/// The report on stdout: JSON, or a line of figures and the output folder.
+/// The report on stdout: JSON, or the figures, the verdict and next step, and the output folder.
 fn print_summary(report: &Report, plan: &Plan, json: bool) -> anyhow::Result<()> {
     let folder = &plan.folder;
     if json {
@@ -334,40 +345,23 @@ fn print_summary(report: &Report, plan: &Plan, json: bool) -> anyhow::Result<()>
         value["output_folder"] = serde_json::json!(folder.display().to_string());
         return super::print_json(&value);
     }
-    let s = &report.suite;
-    let three = if s.failing_with_three > 0 {
-        format!(", {} with three obstacles", s.failing_with_three)
-    } else {
-        String::new()
-    };
-    println!(
-        "{} failing tests ({} distinct at IoU {DISTINCT_IOU}{three}) of {} flights ({} candidates screened), \
-         failure score {:.2}, diversity {}",
-        s.failing,
-        s.distinct_failing,
-        s.flown,
-        s.candidates_screened,
-        s.failure_score,
-        s.diversity.map_or("n/a".into(), |d| format!("{d:.3}"))
-    );
-    if s.confirm > 1 {
-        println!(
-            "confirmed: {} of {} tests that failed at least once (up to {} flights each, {} flights again); over \
-             all {}: failure score {:.2}, diversity {}; {} of {} failed again when flown again; the others are \
-             in unconfirmed.json",
-            s.failing,
-            s.failed_once,
-            s.confirm,
-            s.reflights,
-            s.failed_once,
-            s.failure_score_failed_once,
-            s.diversity_failed_once.map_or("n/a".into(), |d| format!("{d:.3}")),
-            s.failed_again,
-            s.flown_again
-        );
+    for line in user_report::stdout_lines(&report.view(), folder) {
+        println!("{line}");
     }
-    println!("output folder: {}", folder.display());
     Ok(())
+}
+
+/// What `--resume` of a campaign that already flew its budget says: nothing is left to fly.
+fn complete_note(folder: &std::path::Path, budget: usize) -> Option<String> {
+    let records = prgenuav::campaign::store::journal::Journal::read(&folder.join("journal.jsonl")).ok()?;
+    let flown = prgenuav::campaign::store::journal::flights_charged(&records);
+    (flown >= budget).then(|| {
+        format!(
+            "the campaign in {} is complete: it flew its budget ({flown} of {budget} flights); nothing is left to \
+             fly, its report is written again",
+            folder.display()
+        )
+    })
 }
 
 /// The floor bounds an expectation: what to say when a learning campaign's failing tests still ended below it.

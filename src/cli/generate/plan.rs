@@ -138,12 +138,13 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     args.px4.check(&cfg)?;
     let s = &req.settings;
     let connect_timeout_s = limits::CONNECT_TIMEOUT.check(s.flight.connect_timeout_s.unwrap_or(CONNECT_TIMEOUT_S))?;
-    if let Some(n) = s.mock.vehicles {
+    let mut runner = super::runner::runner_settings(&cfg, args)?;
+    let at_once = super::jobs::split(&cfg, cfg.jobs, s.mock.vehicles, args.px4.instances)?;
+    if let Some(n) = at_once.mock_vehicles {
         let max = limits::max_mock_vehicles();
         let why = format!("{} per core of this machine", limits::MOCKS_PER_CORE);
-        limits::count("--mock-vehicles (mock.vehicles)", n, max, &why)?;
+        limits::count("--jobs (mock.vehicles) on the embedded mocks", n, max, &why)?;
     }
-    let mut runner = super::runner::runner_settings(&cfg, args)?;
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
         Some(folder) => folder.clone(),
@@ -153,13 +154,13 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
         r.campaign_folder = folder.clone();
     }
     Ok(Plan {
-        jobs: cfg.jobs,
         cfg,
         folder,
-        mock_vehicles: s.mock.vehicles,
+        mock_vehicles: at_once.mock_vehicles,
         connect_timeout_s,
         runner,
-        px4_instances: args.px4.instances,
+        jobs: at_once.runner_jobs,
+        px4_instances: at_once.px4_instances,
     })
 }
 

@@ -20,7 +20,8 @@ pub struct Px4Flags {
     /// BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder (docs/px4.md).
     #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
     pub px4: Option<PathBuf>,
-    /// PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, docs/px4.md).
+    /// PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, docs/px4.md);
+    /// --jobs says the same.
     #[arg(long, hide = true, value_name = "K")]
     pub instances: Option<usize>,
     /// PX4_SIM_SPEED_FACTOR of the --px4 instances [default: 5] (a flag only, stored in campaign.json).

@@ -14,8 +14,8 @@ use crate::cli::limits::{JOB_TIMEOUT, MAX_JOBS, count, seconds};
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
 pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
     let Some(text) = &cfg.runner else {
-        if args.jobs.is_some() || args.job_timeout.is_some() {
-            bail!("--jobs and --job-timeout go with --runner");
+        if args.job_timeout.is_some() {
+            bail!("--job-timeout goes with --runner");
         }
         return Ok(None);
     };

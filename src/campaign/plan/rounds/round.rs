@@ -12,6 +12,7 @@ use crate::campaign::plan::draw::{DrawPlan, draw};
 use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use crate::campaign::plan::rank::rank_unflown;
 use crate::campaign::report::outputs::StageTimes;
+use crate::campaign::report::user_report::plural;
 use crate::campaign::screen::stages::{
     ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all,
 };
@@ -191,17 +192,16 @@ impl Rounds<'_> {
 
     pub(super) fn note(&self, round: &Round, ranking: &Ranking) {
         self.input.progress.note(&format!(
-            "round {} of {ROUNDS}: {} candidates ({} near the {}), LFS bias {:+.2} m learnt from {} flights{}; \
-             flying {}",
+            "round {} of {ROUNDS}: {} ({} near the {}), LFS bias {:+.2} m learnt from {}{}; flying {}",
             round.index + 1,
-            round.drawn,
+            plural(round.drawn, "candidate"),
             round.children,
             match round.lineage {
                 Lineage::Failures => "failing flights",
                 Lineage::NearMisses => "closest flights, none failing yet",
             },
             ranking.bias_m,
-            self.journal.len(),
+            plural(self.journal.len(), "flight"),
             self.surrogate.map_or(String::new(), |k| format!(
                 ", flights' kernel h {:.2} (error {:.2} m vs LFS {:.2} m)",
                 k.bandwidth, k.loo_error_m, k.lfs_error_m

@@ -1,0 +1,147 @@
+use std::path::{Path, PathBuf};
+
+use super::*;
+use crate::campaign::report::outputs::{FlownTest, Report, StageTimes};
+use crate::campaign::report::suite::summary;
+use crate::campaign::report::verdicts::verdicts;
+use crate::campaign::store::journal::{FlightRecord, test_record};
+use crate::judge::Judge;
+
+fn flight(candidate: u64, attempt: u32, d: f64) -> FlightRecord {
+    FlightRecord {
+        attempt,
+        ..test_record(candidate, 1.0, Some(d))
+    }
+}
+
+/// A report over `records` as the campaign would name its tests.
+fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
+    let mut tests: Vec<TestVerdict> = verdicts(records, confirm).into_iter().map(|(t, _)| t).collect();
+    let (mut c, mut u) = (0, 0);
+    for t in &mut tests {
+        t.reported_as = Some(if t.confirmed {
+            c += 1;
+            format!("test_{}.yaml", c - 1)
+        } else {
+            u += 1;
+            format!("unconfirmed/test_{}.yaml", u - 1)
+        });
+    }
+    let mut suite = summary(records, &tests, true);
+    suite.confirm = confirm;
+    Report {
+        case: "missions/mission1.yaml".into(),
+        judge: Judge::default(),
+        judge_definition: Judge::default().description(),
+        seed: 0,
+        budget,
+        flights: Vec::new(),
+        tests,
+        suite,
+        stages: StageTimes::default(),
+        learning: None,
+        backends: Vec::new(),
+        invocation: Invocation {
+            command: "prgenuav generate missions/mission1.yaml 10".into(),
+            version: "9.9.9".into(),
+        },
+        folder: PathBuf::from("out/2026-11-27T16-16-37"),
+    }
+}
+
+#[test]
+fn a_failure_the_budget_could_not_confirm_says_so_and_what_to_run_next() {
+    // Flight 9 failed at 1.34 m and the budget ended before it flew again.
+    let records: Vec<FlightRecord> = (0..9).map(|c| flight(c, 0, 3.0)).chain([flight(9, 0, 1.34)]).collect();
+    let r = report(&records, 3, 10);
+    let v = verdict(&r.view(), &r.folder).join("\n");
+    assert!(
+        v.contains("No confirmed failing test in 10 flights, but 1 test failed at least once"),
+        "{v}"
+    );
+    assert!(v.contains("1.34 m") && v.contains("budget ran out"), "{v}");
+    assert!(
+        v.contains("prgenuav generate missions/mission1.yaml 20 --seed 0"),
+        "{v}"
+    );
+    assert!(v.contains("out/2026-11-27T16-16-37/unconfirmed/test_0.yaml"), "{v}");
+    let mut md = String::new();
+    opening(&mut md, &r.view(), &r.folder);
+    assert!(
+        md.contains("[unconfirmed/test_0.yaml](unconfirmed/test_0.yaml): 1.34 m"),
+        "{md}"
+    );
+    assert!(
+        md.contains("`prgenuav generate missions/mission1.yaml 10` (prgenuav 9.9.9"),
+        "{md}"
+    );
+}
+
+#[test]
+fn confirmed_failures_come_first_with_links_and_the_next_step() {
+    let records = [
+        flight(1, 0, 0.5),
+        flight(1, 1, 0.7),
+        flight(2, 0, 1.0),
+        flight(2, 1, 3.0),
+        flight(2, 2, 3.0),
+    ];
+    let r = report(&records, 3, 5);
+    let v = verdict(&r.view(), Path::new("f"));
+    assert_eq!(v.len(), 3, "{v:?}");
+    assert!(
+        v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"),
+        "{v:?}"
+    );
+    assert!(v[0].contains("test_0, the surest, came to 0.50 m"), "{v:?}");
+    assert!(
+        v[1].contains("1 more failed at least once but not on most flights"),
+        "{v:?}"
+    );
+    assert!(v[2].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");
+    let mut md = String::new();
+    opening(&mut md, &r.view(), &r.folder);
+    assert!(
+        md.contains("| [test_0.yaml](test_0.yaml) | 0.50 m | 2 / 2 | [test_0.svg](test_0.svg) |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("(did not hold)") && md.contains(SUITE_SVG) && md.contains(SCATTER_SVG),
+        "{md}"
+    );
+}
+
+#[test]
+fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
+    let mut r = report(&[flight(0, 0, 2.5)], 1, 1);
+    r.flights.push(FlownTest {
+        candidate: 0,
+        attempt: 0,
+        predicted_min_distance: 1.0,
+        predicted_p_fail: None,
+        min_distance: Some(2.5),
+        min_distance_raw: Some(2.5),
+        status: "landed".into(),
+        reason: None,
+        flight_time_s: 60.0,
+        points: 0,
+        test_score: 0.0,
+        reported_as: None,
+        vehicle: "mock".into(),
+    });
+    let v = verdict(&r.view(), Path::new("f")).join("\n");
+    assert!(
+        v.contains("No failure: the one flight stayed 1.5 m or farther") && v.contains("2.50 m"),
+        "{v}"
+    );
+    assert!(v.contains("prgenuav generate missions/mission1.yaml 2 --seed 1"), "{v}");
+}
+
+#[test]
+fn plurals_and_quoting() {
+    assert_eq!(plural(1, "test"), "1 test");
+    assert_eq!(plural(0, "test"), "0 tests");
+    assert_eq!(quote("missions/m 2.yaml"), "'missions/m 2.yaml'");
+    assert_eq!(quote("--seed=3"), "--seed=3");
+    assert_eq!(quote("it's"), r"'it'\''s'");
+}
