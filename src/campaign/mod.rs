@@ -6,6 +6,7 @@ pub mod config;
 pub mod confirm;
 pub mod diversity_guard;
 pub mod draw;
+pub mod evaluation;
 pub mod failure_counts;
 pub mod fleet;
 pub mod flights;

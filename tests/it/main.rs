@@ -22,6 +22,7 @@ mod ready;
 mod rules;
 mod runner;
 mod score;
+mod similarity_reference;
 mod slurm;
 mod ulog;
 
