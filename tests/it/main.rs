@@ -4,6 +4,7 @@ mod bridge;
 mod campaign;
 mod campaign_folder;
 mod cli_errors;
+mod evaluate;
 mod frame;
 mod generator;
 mod geometry_props;

@@ -2,8 +2,8 @@
 //! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
 //! in docs/cli.md.
 
-mod plan;
-mod px4;
+pub(super) mod plan;
+pub(super) mod px4;
 mod runner;
 
 use std::path::PathBuf;
@@ -244,7 +244,7 @@ const EXIT_INTERRUPTED: i32 = 130;
 /// First Ctrl-C: stop the campaign (vehicles in the air land; their flights are journaled `interrupted`, not
 /// charged, flown first on resume). A second Ctrl-C, or [`STOP_WITHIN`] without stopping, exits at once: the
 /// journal keeps every finished flight, and a flight cut mid-record is a torn line the next resume drops.
-async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
+pub(super) async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
     if tokio::signal::ctrl_c().await.is_err() {
         return;
     }
@@ -268,7 +268,7 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>) {
 }
 
 /// The vehicles that fly: embedded mocks, PX4 instance slots (`--px4`), or one per MAVLink URL.
-fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
+pub(super) fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
     let cfg: &CampaignConfig = &plan.cfg;
     if let Some(runner) = plan.runner.clone() {
         return RunnerVehicle::fleet(runner, plan.jobs.unwrap_or(1)).map_err(anyhow::Error::msg);
