@@ -31,8 +31,12 @@ fn similarity(c: &mut Criterion) {
     let b = average(&flights[1..]).expect("average");
     let mut group = c.benchmark_group("similarity");
     group.sample_size(10);
-    group.bench_function("average_of_5_flights", |bench| bench.iter(|| black_box(average(black_box(&flights)))));
-    group.bench_function("dtw_of_two_averages", |bench| bench.iter(|| black_box(path_distance(&a, &b))));
+    group.bench_function("average_of_5_flights", |bench| {
+        bench.iter(|| black_box(average(black_box(&flights))))
+    });
+    group.bench_function("dtw_of_two_averages", |bench| {
+        bench.iter(|| black_box(path_distance(&a, &b)))
+    });
     group.finish();
 }
 

@@ -67,6 +67,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     println!("tests: {}", halves.len());
+    for t in [50.0, 75.0, 100.0, 150.0, 200.0, 300.0] {
+        let below = |v: &[f64]| v.iter().filter(|d| **d < t).count();
+        println!(
+            "below {t} m: same test {} of {}, different tests {} of {}",
+            below(&same),
+            same.len(),
+            below(&different),
+            different.len()
+        );
+    }
     println!("same test, half against half (DTW m): {}", quantiles(same));
     println!("different tests (DTW m): {}", quantiles(different));
     Ok(())

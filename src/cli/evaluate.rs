@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use prgenuav::campaign::evaluation::flying::{EvaluateSetup, MAX_RUNS, evaluate_by_flying};
+use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, MAX_RUNS, evaluate_by_flying};
 use prgenuav::campaign::evaluation::report;
 use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
 use prgenuav::campaign::journal::FlightRecord;
@@ -156,7 +156,8 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
     }))
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+/// The numbers given, checked before any vehicle starts.
+fn check(args: &Args) -> anyhow::Result<()> {
     if !(1..=MAX_RUNS).contains(&args.runs) {
         bail!("--runs {}: expected 1 to {MAX_RUNS} flights per test", args.runs);
     }
@@ -169,6 +170,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.top == Some(0) {
         bail!("--top must be at least 1");
     }
+    Ok(())
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    check(&args)?;
     let cfg = config(&args)?;
     if cfg.runner.is_some() && cfg.px4.is_some() {
         bail!("--runner and --px4 are two ways to fly: give one");
@@ -211,28 +217,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         on_flight: &on_flight,
     };
     let done = evaluate_by_flying(&mut fleet, &setup)?;
-    let e = &done.evaluation;
-    if args.json {
-        println!("{}", report::json(e, done.missing)?);
-    } else {
-        println!(
-            "final score {:.3} = total {:.3} x sim_pen {:.3} ({} of {} tests similar below DTW {} m); 2025: {} failing, failure score {:.3}",
-            e.final_score,
-            e.total_score,
-            e.sim_pen,
-            e.similar_tests,
-            e.evaluated,
-            e.similar_below_m,
-            e.figures_2025.failing,
-            e.figures_2025.failure_score
-        );
-        println!(
-            "{} flights this run in {:.0} s; evaluation folder: {}",
-            done.outcome.flown,
-            started.elapsed().as_secs_f64(),
-            done.folder.display()
-        );
-    }
+    print_summary(&done, args.json, started)?;
     if done.missing > 0 || stop.load(Ordering::SeqCst) {
         eprintln!(
             "incomplete: {} flight(s) missing; run the same command again to fly them",
@@ -241,4 +226,31 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// report.json on stdout, or the figures in two lines.
+fn print_summary(done: &Evaluated, json: bool, started: Instant) -> anyhow::Result<()> {
+    let e = &done.evaluation;
+    if json {
+        println!("{}", report::json(e, done.missing)?);
+        return Ok(());
+    }
+    println!(
+        "final score {:.3} = total {:.3} x sim_pen {:.3} ({} of {} tests similar below DTW {} m); 2025: {} failing, failure score {:.3}",
+        e.final_score,
+        e.total_score,
+        e.sim_pen,
+        e.similar_tests,
+        e.evaluated,
+        e.similar_below_m,
+        e.figures_2025.failing,
+        e.figures_2025.failure_score
+    );
+    println!(
+        "{} flights this run in {:.0} s; evaluation folder: {}",
+        done.outcome.flown,
+        started.elapsed().as_secs_f64(),
+        done.folder.display()
+    );
+    Ok(())
 }

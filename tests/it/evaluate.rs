@@ -54,7 +54,10 @@ fn score_gives_the_2026_evaluation_beside_the_2025_figures() {
     assert_eq!(code, 0, "{err}");
     let j = json(&out);
     let e = &j["evaluation_2026"];
-    assert_eq!(j["failing"], 1, "the 2025 figures stay at the top level (test 1 duplicates test 0)");
+    assert_eq!(
+        j["failing"], 1,
+        "the 2025 figures stay at the top level (test 1 duplicates test 0)"
+    );
     assert_eq!(e["tests"][0]["runs"].as_array().unwrap().len(), 2);
     // 0.5 m - 0.125 m (2026 buffer) = 0.375 m: 2 points each run.
     assert_eq!(e["tests"][0]["runs"][0]["points"], 2);

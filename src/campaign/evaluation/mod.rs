@@ -15,4 +15,4 @@ pub const RUNS_2026: usize = 5;
 
 /// The default DTW distance below which two tests' average trajectories are too similar, metres summed
 /// over the alignment (how it was chosen: `docs/evaluate.md`).
-pub const SIMILAR_BELOW_M: f64 = 100.0;
+pub const SIMILAR_BELOW_M: f64 = 75.0;

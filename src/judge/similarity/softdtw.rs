@@ -53,9 +53,7 @@ pub fn soft_dtw_grad(z: &Series, x: &Series, gamma: f64, weight: f64, grad: &mut
     let dij = |i: usize, j: usize| d[i * (n + 1) + j];
     // Forward pass: r[i][j] is the soft alignment cost of z[..i] with x[..j].
     let mut r = vec![0.0; (m + 2) * w];
-    for j in 1..=n {
-        r[j] = f64::INFINITY;
-    }
+    r[1..=n].fill(f64::INFINITY);
     for i in 1..=m {
         r[i * w] = f64::INFINITY;
         for j in 1..=n {
@@ -149,7 +147,7 @@ mod tests {
             let (zs, xs) = (series(&z), series(&x));
             let mut g = vec![0.0; z.len()];
             soft_dtw_grad(&zs, &xs, gamma, 1.0, &mut g);
-            for k in 0..z.len() {
+            for (k, gk) in g.iter().enumerate() {
                 let h = 1e-5;
                 let mut plus = zs.clone();
                 plus.values[k] += h;
@@ -158,7 +156,7 @@ mod tests {
                 let mut scratch = vec![0.0; z.len()];
                 let fd = (soft_dtw_grad(&plus, &xs, gamma, 1.0, &mut scratch)
                     - soft_dtw_grad(&minus, &xs, gamma, 1.0, &mut scratch)) / (2.0 * h);
-                prop_assert!((fd - g[k]).abs() <= 1e-4 * (1.0 + fd.abs()), "k {k}: {fd} vs {}", g[k]);
+                prop_assert!((fd - gk).abs() <= 1e-4 * (1.0 + fd.abs()), "k {k}: {fd} vs {gk}");
             }
         }
     }
