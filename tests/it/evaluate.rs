@@ -106,6 +106,26 @@ fn score_and_evaluate_refuse_bad_input_with_a_clear_message() {
     assert!(!d.join("evaluation").exists(), "nothing written for a refused folder");
 }
 
+/// A complete evaluation of `tests` tests with `runs` flights each, every file it names on disk.
+fn assert_complete(j: &Value, tests: usize, runs: usize) {
+    assert_eq!(j["missing_flights"], 0);
+    let all = j["tests"].as_array().unwrap();
+    assert_eq!(all.len(), tests);
+    for t in all {
+        let flown = t["runs"].as_array().unwrap();
+        assert_eq!(flown.len(), runs);
+        for r in flown {
+            assert!(Path::new(r["trajectory"].as_str().unwrap()).is_file());
+            assert!(r["min_distance"].as_f64().is_some() && r["points"].as_u64().is_some());
+        }
+        assert!(Path::new(t["average_trajectory"].as_str().unwrap()).is_file());
+        assert!(t["mean_points"].as_f64().is_some() && t["score"].as_f64().is_some());
+    }
+    assert_eq!(j["pairs"].as_array().unwrap().len(), tests * (tests - 1) / 2);
+    assert!(j["pairs"][0]["dtw"].as_f64().unwrap() > 0.0);
+    assert!(j["sim_pen"].as_f64().is_some() && j["final_score"].as_f64().is_some());
+}
+
 #[test]
 fn evaluate_flies_each_test_n_times_on_the_mock_and_resumes_without_flying_again() {
     let dir = tempfile::tempdir().unwrap();
@@ -127,22 +147,7 @@ fn evaluate_flies_each_test_n_times_on_the_mock_and_resumes_without_flying_again
     let (code, out, err) = prgenuav(&args);
     assert_eq!(code, 0, "{err}");
     let j = json(&out);
-    assert_eq!(j["missing_flights"], 0);
-    let tests = j["tests"].as_array().unwrap();
-    assert_eq!(tests.len(), 2, "--top 2");
-    for t in tests {
-        let runs = t["runs"].as_array().unwrap();
-        assert_eq!(runs.len(), 2);
-        for r in runs {
-            assert!(Path::new(r["trajectory"].as_str().unwrap()).is_file());
-            assert!(r["min_distance"].as_f64().is_some() && r["points"].as_u64().is_some());
-        }
-        assert!(Path::new(t["average_trajectory"].as_str().unwrap()).is_file());
-        assert!(t["mean_points"].as_f64().is_some() && t["score"].as_f64().is_some());
-    }
-    assert_eq!(j["pairs"].as_array().unwrap().len(), 1);
-    assert!(j["pairs"][0]["dtw"].as_f64().unwrap() > 0.0);
-    assert!(j["sim_pen"].as_f64().is_some() && j["final_score"].as_f64().is_some());
+    assert_complete(&j, 2, 2);
     let folder = d.join("evaluation");
     for f in ["report.json", "report.md", "journal.jsonl"] {
         assert!(folder.join(f).is_file(), "{f}");

@@ -41,7 +41,7 @@ fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
 /// Soft-DTW of `z` against `x` with smoothing `gamma` (> 0); adds `weight` times its gradient with
 /// respect to `z`'s values into `grad` (same layout as `z.values`) and returns the value.
 pub fn soft_dtw_grad(z: &Series, x: &Series, gamma: f64, weight: f64, grad: &mut [f64]) -> f64 {
-    let (m, n, dim) = (z.len(), x.len(), z.dim);
+    let (m, n) = (z.len(), x.len());
     let w = n + 2;
     // Cost matrix padded with a zero row and column past the end, as the backward pass reads them.
     let mut d = vec![0.0; (m + 1) * (n + 1)];
@@ -84,7 +84,15 @@ pub fn soft_dtw_grad(z: &Series, x: &Series, gamma: f64, weight: f64, grad: &mut
             e[i * w + j] = e[(i + 1) * w + j] * a + e[i * w + j + 1] * b + e[(i + 1) * w + j + 1] * c;
         }
     }
-    // Chain rule through the squared Euclidean costs.
+    chain_rule(z, x, &e, weight, grad);
+    value
+}
+
+/// Adds `weight` times the gradient with respect to `z` of the squared Euclidean costs weighted by `e`
+/// (the backward pass's `(m + 2) x (n + 2)` matrix) into `grad`.
+fn chain_rule(z: &Series, x: &Series, e: &[f64], weight: f64, grad: &mut [f64]) {
+    let (m, n, dim) = (z.len(), x.len(), z.dim);
+    let w = n + 2;
     for i in 0..m {
         let zi = z.point(i);
         for j in 0..n {
@@ -98,7 +106,6 @@ pub fn soft_dtw_grad(z: &Series, x: &Series, gamma: f64, weight: f64, grad: &mut
             }
         }
     }
-    value
 }
 
 #[cfg(test)]
