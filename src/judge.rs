@@ -2,6 +2,7 @@
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
 pub mod edition;
+pub mod similarity;
 pub mod wilson;
 
 use serde::Serialize;

@@ -5,6 +5,7 @@
 
 pub mod candidate;
 pub mod config;
+pub mod evaluation;
 pub mod fly;
 pub mod learn;
 pub mod plan;

@@ -4,6 +4,7 @@ mod check;
 mod distance;
 #[cfg(test)]
 mod doc;
+mod evaluate;
 mod fidelity;
 mod fly;
 mod generate;
@@ -51,6 +52,9 @@ enum Command {
     Sample(sample::Args),
     /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
     Score(score::Args),
+    /// Fly every test of a suite several times (the 2026 competition's 5) and score it the 2026 way: mean
+    /// points, average trajectories, similarity penalty (docs/evaluate.md).
+    Evaluate(Box<evaluate::Args>),
     /// Render the depth image (and point cloud) the vehicle's camera sees at a pose.
     Render(render::Args),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
@@ -87,6 +91,7 @@ fn run(cli: Cli, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
         Command::Distance(a) => distance::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Score(a) => score::run(a),
+        Command::Evaluate(a) => evaluate::run(*a),
         Command::Render(a) => render::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Fidelity(a) => fidelity::run(a),

@@ -1,11 +1,15 @@
-//! `prgenuav score FOLDER [--json]`: the competition's metrics for a folder of tests with flights.
+//! `prgenuav score FOLDER [--json]`: the competition's metrics for a folder of tests with flights: the
+//! 2025 figures (any run below 1.5 m fails, footprint diversity) and the 2026 evaluation (mean points,
+//! average trajectories, `sim_pen`, final score).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::values::JudgeEdition;
 use anyhow::bail;
-use prgenuav::campaign::report::folder_score::score_folder;
+use prgenuav::campaign::evaluation::{Evaluation, SIMILAR_BELOW_M, evaluate_folder};
+use prgenuav::campaign::report::folder_score::{SuiteScore, score_folder};
+use serde::Serialize;
 
 /// Arguments of `score`.
 #[derive(Debug, clap::Args)]
@@ -18,17 +22,56 @@ pub struct Args {
     /// Judge edition of the distances and points.
     #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
     judge: JudgeEdition,
+    /// Two tests are too similar when the DTW distance of their average trajectories is below this (metres,
+    /// summed over the alignment; docs/evaluate.md).
+    #[arg(long, value_name = "METRES", default_value_t = SIMILAR_BELOW_M)]
+    similar_below: f64,
+    /// Write each test's average trajectory to DIR/test_N.csv (named in the JSON).
+    #[arg(long, value_name = "DIR")]
+    averages: Option<PathBuf>,
+}
+
+/// The JSON: the 2025 metrics as before, the 2026 evaluation beside them.
+#[derive(Serialize)]
+struct Both {
+    #[serde(flatten)]
+    suite: SuiteScore,
+    evaluation_2026: Evaluation,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if !(args.similar_below.is_finite() && args.similar_below >= 0.0) {
+        bail!(
+            "--similar-below {}: expected a distance of 0 metres or more",
+            args.similar_below
+        );
+    }
     let suite = score_folder(&args.folder, args.judge.into())?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());
     }
+    let evaluation = evaluate_folder(
+        &args.folder,
+        args.judge.into(),
+        args.similar_below,
+        args.averages.as_deref(),
+    )?;
+    for t in evaluation.tests.iter().filter(|t| t.runs.is_empty()) {
+        eprintln!("warning: {} has no flight: not evaluated", t.test.display());
+    }
     if args.json {
-        super::print_json(&suite)?;
+        super::print_json(&Both {
+            suite,
+            evaluation_2026: evaluation,
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
+    print_2025(&suite);
+    print_2026(&evaluation);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_2025(suite: &SuiteScore) {
     println!(
         "{:<14} {:>5} {:>10} {:>9} {:>8} {:>7}",
         "test", "runs", "min dist", "time s", "score", "fail"
@@ -63,5 +106,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         suite.failing, suite.evaluated, suite.failure_score
     );
     println!("judge {}: {}", suite.judge, suite.judge_definition);
-    Ok(ExitCode::SUCCESS)
+}
+
+fn print_2026(e: &Evaluation) {
+    let closest = e.pairs.iter().map(|p| p.dtw).fold(f64::INFINITY, f64::min);
+    let closest = if closest.is_finite() {
+        format!("{closest:.1}")
+    } else {
+        "n/a".into()
+    };
+    println!(
+        "2026: total score {:.3} x sim_pen {:.3} ({} of {} evaluated tests similar below DTW {} m; closest pair {closest} m) = final score {:.3}",
+        e.total_score, e.sim_pen, e.similar_tests, e.evaluated, e.similar_below_m, e.final_score
+    );
 }

@@ -3,8 +3,8 @@
 //! in docs/cli.md.
 
 mod jobs;
-mod plan;
-mod px4;
+pub(super) mod plan;
+pub(super) mod px4;
 mod runner;
 
 use std::path::PathBuf;
@@ -266,7 +266,7 @@ const EXIT_INTERRUPTED: i32 = 130;
 /// journaled `interrupted`, not charged, flown first on resume; runner jobs are stopped). A second one, or
 /// [`STOP_WITHIN`] without stopping, exits at once: the journal keeps every finished flight, and a flight cut
 /// mid-record is a torn line the next resume drops.
-async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
+pub(super) async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
     let first = signals.next().await;
     eprintln!(
         "{first}: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
@@ -286,7 +286,7 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
 }
 
 /// The vehicles that fly: embedded mocks, PX4 instance slots (`--px4`), or one per MAVLink URL.
-fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
+pub(super) fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
     let cfg: &CampaignConfig = &plan.cfg;
     if let Some(runner) = plan.runner.clone() {
         return RunnerVehicle::fleet(runner, plan.jobs.unwrap_or(1)).map_err(anyhow::Error::msg);

@@ -25,9 +25,9 @@ use crate::cli::values::{Mode, Motion, Spelling, name_of, parse_stored};
 /// Defaults of the settings neither a flag nor the file gives.
 const THRESHOLD_M: f64 = 3.0;
 const MAX_IOU: f64 = 0.5;
-const MOCK_SPEED: f64 = 100.0;
-const FLIGHT_TIMEOUT_S: f64 = 500.0;
-const CONNECT_TIMEOUT_S: f64 = 15.0;
+pub(crate) const MOCK_SPEED: f64 = 100.0;
+pub(crate) const FLIGHT_TIMEOUT_S: f64 = 500.0;
+pub(crate) const CONNECT_TIMEOUT_S: f64 = 15.0;
 const MIN_DIVERSITY: f64 = 0.8;
 const CHILD_MAX_IOU: f64 = 0.85;
 /// Ensemble members ranking the shortlist when the vehicles are MAVLink ones (an ensemble costs more CPU than

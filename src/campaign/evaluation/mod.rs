@@ -1,0 +1,18 @@
+//! The 2026 evaluation of a suite: every test flown several times, scored by its mean points, and the
+//! suite's total multiplied by the similarity penalty of the tests' average trajectories
+//! (`docs/evaluate.md`). `suite` computes it from flights; `folder` reads flights already on disk.
+
+pub mod flying;
+pub mod folder;
+pub mod report;
+pub mod suite;
+
+pub use folder::evaluate_folder;
+pub use suite::{Evaluation, FlownTest, evaluate_suite};
+
+/// The competition flies each test this many times.
+pub const RUNS_2026: usize = 5;
+
+/// The default DTW distance below which two tests' average trajectories are too similar, metres summed
+/// over the alignment (how it was chosen: `docs/evaluate.md`).
+pub const SIMILAR_BELOW_M: f64 = 75.0;

@@ -1,0 +1,95 @@
+//! The evaluation's `report.json` (the [`Evaluation`] with the flights still missing) and `report.md`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::suite::Evaluation;
+use crate::model::ModelError;
+
+/// `report.json`.
+#[derive(Serialize)]
+struct ReportJson<'a> {
+    /// Flights not yet made (0 when the evaluation is complete).
+    missing_flights: usize,
+    #[serde(flatten)]
+    evaluation: &'a Evaluation,
+}
+
+/// The JSON text of the report.
+pub fn json(evaluation: &Evaluation, missing: usize) -> Result<String, ModelError> {
+    serde_json::to_string_pretty(&ReportJson {
+        missing_flights: missing,
+        evaluation,
+    })
+    .map_err(|e| ModelError::Syntax {
+        path: "report.json".into(),
+        line: None,
+        column: None,
+        message: format!("cannot be written as JSON: {e}"),
+    })
+}
+
+/// Writes `report.json` and `report.md` into `folder` (each atomically).
+pub fn write(folder: &Path, evaluation: &Evaluation, missing: usize) -> Result<(), ModelError> {
+    crate::io::write_atomic(&folder.join("report.json"), json(evaluation, missing)?.as_bytes())?;
+    crate::io::write_atomic(&folder.join("report.md"), markdown(evaluation, missing).as_bytes())
+}
+
+fn name(p: &Path) -> String {
+    p.file_name()
+        .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The report for people: the figures, the tests, the closest pairs.
+pub fn markdown(e: &Evaluation, missing: usize) -> String {
+    let mut md = String::from("# 2026 evaluation\n\n");
+    if missing > 0 {
+        let _ = writeln!(
+            md,
+            "**Incomplete: {missing} flight(s) missing** (run `evaluate` again to fly them).\n"
+        );
+    }
+    let _ = writeln!(
+        md,
+        "| figure | value |\n|---|---|\n| final score | {:.3} |\n| total score | {:.3} |\n| sim_pen | {:.3} ({} of {} evaluated tests similar) |\n| similar below | DTW {} m |\n| 2025: failing tests | {} |\n| 2025: failure score | {:.3} |\n| 2025: diversity | {} |\n",
+        e.final_score,
+        e.total_score,
+        e.sim_pen,
+        e.similar_tests,
+        e.evaluated,
+        e.similar_below_m,
+        e.figures_2025.failing,
+        e.figures_2025.failure_score,
+        e.figures_2025.diversity.map_or("n/a".into(), |d| format!("{d:.3}")),
+    );
+    let _ = writeln!(md, "Judge {}: {}\n", e.judge, e.judge_definition);
+    md.push_str("| test | runs: distance m (points) | mean points | mean time s | score | similar to |\n|---|---|---|---|---|---|\n");
+    for t in &e.tests {
+        let runs: Vec<String> = t
+            .runs
+            .iter()
+            .map(|r| format!("{:.2} ({})", r.min_distance, r.points))
+            .collect();
+        let similar = t.similar_to.map_or(String::new(), |j| name(&e.tests[j].test));
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.2} | {:.1} | {:.3} | {similar} |",
+            name(&t.test),
+            runs.join(", "),
+            t.mean_points,
+            t.mean_flight_time_s,
+            t.score
+        );
+    }
+    let mut pairs: Vec<_> = e.pairs.iter().collect();
+    pairs.sort_by(|a, b| a.dtw.total_cmp(&b.dtw));
+    md.push_str(
+        "\nClosest pairs of average trajectories (DTW, metres):\n\n| a | b | DTW | similar |\n|---|---|---|---|\n",
+    );
+    for p in pairs.iter().take(10) {
+        let _ = writeln!(md, "| {} | {} | {:.1} | {} |", name(&p.a), name(&p.b), p.dtw, p.similar);
+    }
+    md
+}

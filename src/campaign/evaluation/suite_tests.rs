@@ -1,0 +1,102 @@
+use super::*;
+use crate::model::{Obstacle, Sample};
+
+fn mission2() -> TestCase {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml");
+    TestCase::load(&path).unwrap()
+}
+
+/// A flight from home (the origin) north along `y = east`, 10 m up, `secs` long, sampled every 0.1 s.
+fn flight(east: f64, secs: f64) -> Trajectory {
+    let n = (secs * 10.0) as usize;
+    let home = Sample {
+        t_s: 0.0,
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        r: Some(0.0),
+    };
+    let along = (1..=n).map(|i| {
+        let t = i as f64 / 10.0;
+        Sample {
+            t_s: t,
+            x: 50.0 * t / secs,
+            y: east,
+            z: 10.0,
+            r: Some(0.0),
+        }
+    });
+    Trajectory::new(std::iter::once(home).chain(along).collect())
+}
+
+fn flown(name: &str, boxes: Vec<Obstacle>, flights: Vec<Trajectory>) -> FlownTest {
+    FlownTest {
+        path: PathBuf::from(name),
+        test: mission2().with_obstacles(boxes),
+        flights: flights
+            .into_iter()
+            .enumerate()
+            .map(|(k, f)| (PathBuf::from(format!("{name}-{k}.csv")), f))
+            .collect(),
+    }
+}
+
+/// A box whose west face is at `y = 1`: a flight along `y = east` passes `1 - east` metres away (x 20-30).
+fn wall() -> Obstacle {
+    Obstacle::new(10.0, 2.0, 20.0, 25.0, 2.0, 0.0)
+}
+
+#[test]
+fn scores_mean_points_and_penalises_a_copied_trajectory() {
+    // Test a: runs 0.9 m (2 points) and 0.1 m (5 points) from the box, 60 s each.
+    let a = flown(
+        "a.yaml",
+        vec![wall()],
+        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
+    );
+    // Test b: the same flights again (a copy of a's trajectory).
+    let b = flown(
+        "b.yaml",
+        vec![wall()],
+        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
+    );
+    // Test c: far away (0 points), a different path.
+    let c = flown("c.yaml", vec![wall()], vec![flight(-30.0, 30.0), flight(-30.0, 30.0)]);
+    let (e, averages) = evaluate_suite(&[a, b, c], Judge::E2026, 50.0).unwrap();
+    assert_eq!(averages.iter().filter(|a| a.is_some()).count(), 3);
+    let t = &e.tests[0];
+    assert_eq!(t.runs.iter().map(|r| r.points).collect::<Vec<_>>(), vec![5, 2]);
+    assert!((t.mean_points - 3.5).abs() < 1e-12);
+    // 3.5 points x 10 / (1 obstacle x 1 minute).
+    assert!((t.score - 35.0).abs() < 1e-6, "{}", t.score);
+    assert_eq!(e.tests[1].similar_to, Some(0));
+    assert_eq!(e.tests[2].similar_to, None);
+    assert_eq!((e.similar_tests, e.evaluated), (1, 3));
+    assert!((e.sim_pen - 2.0 / 3.0).abs() < 1e-12);
+    assert!((e.final_score - e.total_score * 2.0 / 3.0).abs() < 1e-9);
+    assert_eq!(e.pairs.len(), 3);
+    assert!(e.pairs[0].dtw < 1e-9 && e.pairs[0].similar);
+    assert!(e.pairs[1].dtw > 50.0 && !e.pairs[1].similar);
+    // 2025: a and b failed, with the same footprints (diversity 0).
+    assert_eq!(e.figures_2025.failing, 2);
+    assert_eq!(e.figures_2025.diversity, Some(0.0));
+}
+
+#[test]
+fn a_test_without_flights_is_not_evaluated_and_has_no_average() {
+    let a = flown("a.yaml", vec![wall()], vec![flight(0.5, 60.0)]);
+    let none = flown("n.yaml", vec![wall()], vec![]);
+    let (e, averages) = evaluate_suite(&[a, none], Judge::E2026, 50.0).unwrap();
+    assert_eq!(e.evaluated, 1);
+    assert!(averages[1].is_none());
+    assert!(e.pairs.is_empty());
+    assert_eq!(e.tests[1].score, 0.0);
+    assert_eq!(e.sim_pen, 1.0);
+}
+
+#[test]
+fn a_test_without_obstacles_is_an_error_naming_it() {
+    let a = flown("bare.yaml", vec![], vec![flight(0.5, 60.0)]);
+    let err = evaluate_suite(&[a], Judge::E2026, 50.0).unwrap_err().to_string();
+    assert!(err.contains("bare.yaml") && err.contains("obstacles"), "{err}");
+}

@@ -1,0 +1,259 @@
+//! `prgenuav evaluate FOLDER [--runs 5] [--top N]`: flies every test of a suite several times on the same
+//! backends as `generate` and writes the 2026 evaluation into FOLDER/evaluation/ (docs/evaluate.md).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, MAX_RUNS, evaluate_by_flying};
+use prgenuav::campaign::evaluation::report;
+use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
+use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
+use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
+use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
+use prgenuav::campaign::store::journal::FlightRecord;
+use prgenuav::generator::GeneratorConfig;
+use prgenuav::model::Spelling;
+
+use super::generate::plan::{CONNECT_TIMEOUT_S, FLIGHT_TIMEOUT_S, MOCK_SPEED, Plan};
+use super::generate::px4::Px4Flags;
+use super::generate::{vehicles, watch_ctrl_c};
+use super::stop_signals::StopSignals;
+use super::values::{JudgeEdition, Mode, name_of};
+
+/// Arguments of `evaluate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The suite: a `generate` output folder or any folder of test_N.yaml files, best first.
+    folder: PathBuf,
+    /// Flights per test (1 to 20; the 2026 competition flies 5).
+    #[arg(long, default_value_t = RUNS_2026)]
+    runs: usize,
+    /// Only the first N tests.
+    #[arg(long, value_name = "N")]
+    top: Option<usize>,
+    /// Two tests are too similar when the DTW distance of their average trajectories is below this (metres,
+    /// summed over the alignment; docs/evaluate.md).
+    #[arg(long, value_name = "METRES", default_value_t = SIMILAR_BELOW_M)]
+    similar_below: f64,
+    /// The vehicles: `mock` (embedded mock autopilots, the suite's campaign settings if it has
+    /// campaign.json) or MAVLink URLs separated by commas.
+    #[arg(long, value_name = "mock|URL,...", default_value = "mock")]
+    connect: String,
+    /// Fly each test as a job of an existing engine (as `generate --runner`, docs/runners.md).
+    #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
+    runner: Option<String>,
+    /// Runner jobs at once (with --runner).
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
+    #[command(flatten)]
+    px4: Px4Flags,
+    /// How the vehicle avoids the boxes.
+    #[arg(long, hide = true, value_enum, default_value_t = Mode::Avoidance)]
+    mode: Mode,
+    /// Judge edition of the distances and points.
+    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
+    judge: JudgeEdition,
+    /// Seed of the mock's gusts (default: the suite's campaign seed, else 0).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Embedded mock autopilots at once (default: one per core).
+    #[arg(long, hide = true, value_name = "N")]
+    mock_vehicles: Option<usize>,
+    /// Print report.json on stdout.
+    #[arg(long)]
+    json: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// The vehicles' settings: the suite's campaign.json when it has one (the same mock it was generated on),
+/// else `generate`'s defaults; the flags given here override the backend.
+fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
+    let stored = args.folder.join("campaign.json");
+    let mut cfg = if stored.is_file() {
+        let text = std::fs::read_to_string(&stored).with_context(|| format!("reading {}", stored.display()))?;
+        serde_json::from_str::<CampaignConfig>(&text)
+            .with_context(|| format!("{}: not a campaign", stored.display()))?
+    } else {
+        defaults(args)
+    };
+    if args.runner.is_some() {
+        cfg.hfs = vec!["runner".into()];
+    } else if args.px4.px4.is_some() {
+        cfg.hfs = vec!["px4".into()];
+    } else if args.connect != "mock" || cfg.hfs != ["mock"] {
+        cfg.hfs = args
+            .connect
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect();
+    }
+    cfg.runner = args.runner.clone();
+    cfg.px4 = args.px4.backend();
+    cfg.judge = args.judge.into();
+    cfg.mode = name_of(&args.mode);
+    if let Some(seed) = args.seed {
+        cfg.seed = seed;
+    }
+    Ok(cfg)
+}
+
+fn defaults(args: &Args) -> CampaignConfig {
+    let gust = MockProfile::by_name(DEFAULT_PROFILE).map_or(0.0, |p| p.tuning.gust_acc_m_s2);
+    CampaignConfig {
+        case: args.folder.clone(),
+        seed: 0,
+        budget: 1,
+        candidates: 1,
+        threshold_m: 0.0,
+        max_iou: 1.0,
+        generator: GeneratorConfig::default(),
+        old_spelling: false,
+        hfs: vec!["mock".into()],
+        mode: name_of(&args.mode),
+        motion: "px4".into(),
+        mock_speed: MOCK_SPEED,
+        mock_lockstep: true,
+        mock_latency_ms: DEFAULT_MOCK_LATENCY_MS,
+        mock_profile: DEFAULT_PROFILE.into(),
+        mock_gust_acc_m_s2: gust,
+        screen: false,
+        judge: args.judge.into(),
+        anchor_at_vehicle_home: false,
+        hfs_time_scale: None,
+        flight_timeout_s: FLIGHT_TIMEOUT_S,
+        ensemble: 0,
+        jobs: args.jobs,
+        learn: false,
+        adapt: false,
+        prior: None,
+        min_diversity: 0.0,
+        child_max_iou: None,
+        confirm: 1,
+        overlap: false,
+        runner: None,
+        px4: None,
+    }
+}
+
+fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
+    let Some(text) = &cfg.runner else {
+        return Ok(None);
+    };
+    if args.jobs == Some(0) {
+        bail!("--jobs must be at least 1");
+    }
+    Ok(Some(RunnerSettings {
+        template: Template::parse(text).map_err(anyhow::Error::msg)?,
+        timeout: std::time::Duration::from_secs_f64(DEFAULT_JOB_TIMEOUT_S),
+        judge: cfg.judge,
+        spelling: if cfg.old_spelling { Spelling::Old } else { Spelling::New },
+        campaign_folder: args.folder.join(prgenuav::campaign::evaluation::flying::EVALUATION_DIR),
+    }))
+}
+
+/// The numbers given, checked before any vehicle starts.
+fn check(args: &Args) -> anyhow::Result<()> {
+    if !(1..=MAX_RUNS).contains(&args.runs) {
+        bail!("--runs {}: expected 1 to {MAX_RUNS} flights per test", args.runs);
+    }
+    if !(args.similar_below.is_finite() && args.similar_below >= 0.0) {
+        bail!(
+            "--similar-below {}: expected a distance of 0 metres or more",
+            args.similar_below
+        );
+    }
+    if args.top == Some(0) {
+        bail!("--top must be at least 1");
+    }
+    Ok(())
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    check(&args)?;
+    let cfg = config(&args)?;
+    if cfg.runner.is_some() && cfg.px4.is_some() {
+        bail!("--runner and --px4 are two ways to fly: give one");
+    }
+    let plan = Plan {
+        runner: runner(&cfg, &args)?,
+        cfg,
+        folder: args.folder.clone(),
+        mock_vehicles: args.mock_vehicles,
+        connect_timeout_s: CONNECT_TIMEOUT_S,
+        jobs: args.jobs,
+        px4_instances: args.px4.instances,
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
+    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
+    let mut fleet = vehicles(&plan, &runtime)?;
+    let quiet = args.quiet || args.json;
+    let on_flight = move |r: &FlightRecord| {
+        if !quiet {
+            let d = r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"));
+            eprintln!(
+                "flight candidate {}: {} {d} ({:.0} s)",
+                r.candidate, r.status, r.flight_time_s
+            );
+        }
+    };
+    let started = Instant::now();
+    let setup = EvaluateSetup {
+        suite: &args.folder,
+        runs: args.runs,
+        top: args.top,
+        judge: args.judge.into(),
+        similar_below_m: args.similar_below,
+        cancel: &stop,
+        on_flight: &on_flight,
+    };
+    let done = evaluate_by_flying(&mut fleet, &setup)?;
+    print_summary(&done, args.json, started)?;
+    if done.missing > 0 || stop.load(Ordering::SeqCst) {
+        eprintln!(
+            "incomplete: {} flight(s) missing; run the same command again to fly them",
+            done.missing
+        );
+        return Ok(ExitCode::from(super::EXIT_FAIL));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// report.json on stdout, or the figures in two lines.
+fn print_summary(done: &Evaluated, json: bool, started: Instant) -> anyhow::Result<()> {
+    let e = &done.evaluation;
+    if json {
+        println!("{}", report::json(e, done.missing)?);
+        return Ok(());
+    }
+    println!(
+        "final score {:.3} = total {:.3} x sim_pen {:.3} ({} of {} tests similar below DTW {} m); 2025: {} failing, failure score {:.3}",
+        e.final_score,
+        e.total_score,
+        e.sim_pen,
+        e.similar_tests,
+        e.evaluated,
+        e.similar_below_m,
+        e.figures_2025.failing,
+        e.figures_2025.failure_score
+    );
+    println!(
+        "{} flights this run in {:.0} s; evaluation folder: {}",
+        done.outcome.flown,
+        started.elapsed().as_secs_f64(),
+        done.folder.display()
+    );
+    Ok(())
+}
