@@ -90,7 +90,7 @@ impl TestCase {
         Self::parse(&text, path)
     }
 
-    /// Parses YAML text; relative file names resolve as [`resolve`] says: the working folder, then `path`'s
+    /// Parses YAML text; relative file names resolve as `resolve` says: the working folder, then `path`'s
     /// folder and its parents.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let value: Value = serde_saphyr::from_str(text).map_err(|e| yaml_error(path, &e))?;
