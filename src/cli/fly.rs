@@ -107,20 +107,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
-    if let Some(path) = &args.world {
-        write_atomic(path, world_sdf(&test.obstacles).as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-        if args.world_only {
-            return Ok(ExitCode::SUCCESS);
-        }
+    if write_world(&args, &test)? && args.world_only {
+        return Ok(ExitCode::SUCCESS);
     }
-    let prediction = if args.no_predict {
-        None
-    } else {
-        predict(&test, PREDICTION_MOTION.model(), args.judge.into())
-            .inspect_err(|e| eprintln!("warning: no LFS prediction: {e}"))
-            .ok()
-    };
+    let prediction = (!args.no_predict)
+        .then(|| predict(&test, PREDICTION_MOTION.model(), args.judge.into()))
+        .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok());
     let mut opts = options(&args, prediction.as_ref())?;
     // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
     let px4 = match &build {
@@ -145,17 +137,32 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some((px4, slot)) = px4 {
         if !report.status.completed() {
             eprintln!("PX4's console, last 20 lines:");
-            for line in px4.console_tail(20) {
-                eprintln!("  {line}");
-            }
+            px4.console_tail(20).iter().for_each(|l| eprintln!("  {l}"));
         }
-        // The instance is gone before its slot is freed.
-        drop(px4);
+        drop(px4); // the instance is gone before its slot is freed
         drop(slot);
     }
     if let Some(path) = &args.plot {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
+    print_anchoring(&report);
+    if args.json {
+        super::print_json(&report)?;
+    } else {
+        print_text(&report);
+    }
+    Ok(exit_code(&report))
+}
+
+/// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
+fn write_world(args: &Args, test: &TestCase) -> anyhow::Result<bool> {
+    let Some(path) = &args.world else { return Ok(false) };
+    write_atomic(path, world_sdf(&test.obstacles).as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+    Ok(true)
+}
+
+/// Where a re-anchored test's boxes went (`--anchor-at-vehicle-home`).
+fn print_anchoring(report: &FlightReport) {
     if let Some(p) = report.placement.as_ref().filter(|p| p.anchored) {
         eprintln!(
             "re-anchored at the vehicle's home {:.7}, {:.7} ({:.1} m AMSL), {:.0} m from the test's home",
@@ -165,19 +172,17 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             eprintln!("  box {i} centre now at {:.7}, {:.7}", c.lat_deg, c.lon_deg);
         }
     }
-    if args.json {
-        super::print_json(&report)?;
-    } else {
-        print_text(&report);
-    }
-    // 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete; 2: the vehicle
-    // stands too far from the test's home to fly it without --anchor-at-vehicle-home.
+}
+
+/// 0: flown to the end (landed or collided: a measurement); 1: the flight did not complete; 2: the vehicle
+/// stands too far from the test's home to fly it without --anchor-at-vehicle-home.
+fn exit_code(report: &FlightReport) -> ExitCode {
     let too_far = report.placement.as_ref().is_some_and(|p| p.too_far);
-    Ok(match report.status {
+    match report.status {
         Status::Landed | Status::Collision => ExitCode::SUCCESS,
         Status::Rejected if too_far => ExitCode::from(super::EXIT_ERROR),
         _ => ExitCode::from(super::EXIT_FAIL),
-    })
+    }
 }
 
 /// The bridge's options from the flags, checked before anything is contacted.
@@ -303,6 +308,11 @@ fn print_text(report: &FlightReport) {
             "not uploaded"
         }
     );
+    print_notes(report);
+}
+
+/// The flight's side notes: how long the vehicle took to be ready, the clock, the companion, warnings.
+fn print_notes(report: &FlightReport) {
     if let Some(w) = report.ready_wait_s {
         println!("ready after       {w:.1} s");
     }

@@ -78,28 +78,7 @@ pub fn layouts_svg(case: &TestCase, layouts: &[Layout], title: &str) -> String {
             );
         }
     }
-    let mut legend: Vec<(String, String)> = vec![
-        ("#333".into(), "mission path (dashed)".into()),
-        ("#d9b24a".into(), "obstacle area".into()),
-    ];
-    legend.extend(
-        (layouts.iter().enumerate().take(MAX_LEGEND))
-            .map(|(k, l)| (PALETTE[k % PALETTE.len()].into(), l.label.clone())),
-    );
-    if layouts.len() > MAX_LEGEND {
-        legend.push(("#999".into(), format!("and {} more", layouts.len() - MAX_LEGEND)));
-    }
-    for (k, (colour, text)) in legend.iter().enumerate() {
-        let y = SIZE_PX + 5.0 + 20.0 * k as f64;
-        let _ = writeln!(
-            s,
-            r#"<rect x="{MARGIN_PX}" y="{:.1}" width="20" height="10" fill="{colour}" fill-opacity="0.4" stroke="{colour}"/><text x="{:.1}" y="{:.1}">{}</text>"#,
-            y - 5.0,
-            MARGIN_PX + 30.0,
-            y + 4.0,
-            esc(text)
-        );
-    }
+    legend(&mut s, layouts);
     s.push_str("</svg>\n");
     s
 }
@@ -176,6 +155,40 @@ pub fn scatter_svg(points: &[Point], threshold_m: f64, title: &str) -> String {
             py(p.flown_m)
         );
     }
+    scatter_labels(&mut s, (x0, x1, y0, y1), top, threshold_m);
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The layouts' legend below the picture: the path, the obstacle area, then each layout (at most
+/// [`MAX_LEGEND`], the rest counted).
+fn legend(s: &mut String, layouts: &[Layout]) {
+    let mut legend: Vec<(String, String)> = vec![
+        ("#333".into(), "mission path (dashed)".into()),
+        ("#d9b24a".into(), "obstacle area".into()),
+    ];
+    legend.extend(
+        (layouts.iter().enumerate().take(MAX_LEGEND))
+            .map(|(k, l)| (PALETTE[k % PALETTE.len()].into(), l.label.clone())),
+    );
+    if layouts.len() > MAX_LEGEND {
+        legend.push(("#999".into(), format!("and {} more", layouts.len() - MAX_LEGEND)));
+    }
+    for (k, (colour, text)) in legend.iter().enumerate() {
+        let y = SIZE_PX + 5.0 + 20.0 * k as f64;
+        let _ = writeln!(
+            s,
+            r#"<rect x="{MARGIN_PX}" y="{:.1}" width="20" height="10" fill="{colour}" fill-opacity="0.4" stroke="{colour}"/><text x="{:.1}" y="{:.1}">{}</text>"#,
+            y - 5.0,
+            MARGIN_PX + 30.0,
+            y + 4.0,
+            esc(text)
+        );
+    }
+}
+
+/// The scatter's axis titles and key, around the plot area `(x0, x1, y0, y1)` in pixels.
+fn scatter_labels(s: &mut String, (x0, x1, y0, y1): (f64, f64, f64, f64), top: f64, threshold_m: f64) {
     let _ = writeln!(
         s,
         r##"<text x="{:.1}" y="{:.1}" text-anchor="middle">predicted minimum distance, m (beyond {top} m: at the edge)</text>"##,
@@ -193,8 +206,6 @@ pub fn scatter_svg(points: &[Point], threshold_m: f64, title: &str) -> String {
         r##"<text x="{MARGIN_PX}" y="{:.1}">filled: a written failing test's flight; shaded: flown below {threshold_m} m; grey line: prediction exact</text>"##,
         SIZE_PX + 30.0
     );
-    s.push_str("</svg>\n");
-    s
 }
 
 fn header(w: f64, h: f64, title: &str) -> String {

@@ -1,9 +1,11 @@
 //! What a campaign hands its user: each test's verdict over its flights ([`verdicts`]), the suite's numbers
-//! ([`suite`]), the per-backend figures ([`backends`]), the written tests and reports ([`outputs`]), and the
-//! competition's metrics for any folder of flown tests ([`folder_score`]).
+//! ([`suite`]), the per-backend figures ([`backends`]), the written tests and report.json ([`outputs`]), report.md
+//! ([`user_report`] opens it for people, [`markdown`] adds the appendix), and the competition's metrics for
+//! any folder of flown tests ([`folder_score`]).
 
 pub mod backends;
 pub mod folder_score;
+pub mod markdown;
 pub mod outputs;
 pub mod suite;
 pub mod user_report;

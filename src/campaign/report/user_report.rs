@@ -123,87 +123,104 @@ pub fn write_pictures(input: &CampaignInput, r: &View) -> Result<(), ModelError>
 /// The verdict in two or three plain sentences: what was found, how sure, and what to do next (with the
 /// command). `folder` is the campaign folder as the user named it.
 pub fn verdict(r: &View, folder: &Path) -> Vec<String> {
-    let s = &r.suite;
     let unconfirmed: Vec<&TestVerdict> = r.tests.iter().filter(|t| !t.confirmed).collect();
-    let unsettled = unconfirmed.iter().filter(|t| !t.settled).count();
     let mut lines = Vec::new();
-    if s.failing > 0 {
-        let best = r
-            .tests
-            .iter()
-            .find(|t| t.confirmed)
-            .map_or(f64::NAN, |t| t.best_min_distance);
-        lines.push(format!(
-            "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; test_0, the \
-             surest, came to {best:.2} m.",
-            plural(s.failing, "failing test"),
-            s.distinct_failing,
-            plural(s.flown, "flight")
-        ));
-        lines.push(if s.confirm > 1 {
-            format!(
-                "How sure: each failed on more than half of up to {} flights of it; {} more failed at least once but \
-                 not on most flights, or the budget ran out first ({UNCONFIRMED_DIR}/).",
-                s.confirm,
-                unconfirmed.len()
-            )
-        } else {
-            "How sure: each failed on one flight (--confirm 1); a flight does not repeat exactly, so fly a test \
-             again before relying on it."
-                .into()
-        });
-        lines.push(format!(
-            "Next: open test_0.svg, or fly it again: prgenuav fly {}",
-            folder.join("test_0.yaml").display()
-        ));
+    if r.suite.failing > 0 {
+        found(r, folder, &unconfirmed, &mut lines);
     } else if !unconfirmed.is_empty() {
-        lines.push(format!(
-            "No confirmed failing test in {}, but {} failed at least once (the closest at {:.2} m).",
-            plural(s.flown, "flight"),
-            plural(unconfirmed.len(), "test"),
-            unconfirmed
-                .iter()
-                .map(|t| t.best_min_distance)
-                .fold(f64::INFINITY, f64::min)
-        ));
-        lines.push(if unsettled > 0 {
-            format!(
-                "How sure: not yet; the budget ran out before {unsettled} of them could be flown again (a test \
-                 counts only when more than half of up to {} flights fail).",
-                s.confirm
-            )
-        } else {
-            "How sure: they failed once but not on most of their flights again.".into()
-        });
-        lines.push(format!(
-            "Next: fly one again (prgenuav fly {}), or run a larger budget: prgenuav generate {} {} --seed {}",
-            folder.join(UNCONFIRMED_DIR).join("test_0.yaml").display(),
-            r.case,
-            2 * r.budget,
-            r.seed
-        ));
+        only_unconfirmed(r, folder, &unconfirmed, &mut lines);
     } else {
-        let closest = (r.flights.iter()).map(|f| f.flown_m).fold(f64::INFINITY, f64::min);
-        let closest = if closest.is_finite() {
-            format!(" (the closest came to {closest:.2} m)")
-        } else {
-            String::new()
-        };
-        let which = match s.flown {
-            1 => "the one flight".to_string(),
-            n => format!("all {n} flights"),
-        };
-        lines.push(format!(
-            "No failure: {which} stayed {FAIL_M} m or farther from every obstacle{closest}."
-        ));
-        lines.push(format!(
-            "Next: a larger budget or another seed: prgenuav generate {} {} --seed {}",
-            r.case,
-            2 * r.budget,
-            r.seed + 1
-        ));
+        none_failed(r, &mut lines);
     }
     lines
+}
+
+/// The verdict when confirmed failing tests were found.
+fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<String>) {
+    let s = &r.suite;
+    let best = r
+        .tests
+        .iter()
+        .find(|t| t.confirmed)
+        .map_or(f64::NAN, |t| t.best_min_distance);
+    lines.push(format!(
+        "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; test_0, the \
+         surest, came to {best:.2} m.",
+        plural(s.failing, "failing test"),
+        s.distinct_failing,
+        plural(s.flown, "flight")
+    ));
+    lines.push(if s.confirm > 1 {
+        format!(
+            "How sure: each failed on more than half of up to {} flights of it; {} more failed at least once but \
+             not on most flights, or the budget ran out first ({UNCONFIRMED_DIR}/).",
+            s.confirm,
+            unconfirmed.len()
+        )
+    } else {
+        "How sure: each failed on one flight (--confirm 1); a flight does not repeat exactly, so fly a test \
+         again before relying on it."
+            .into()
+    });
+    lines.push(format!(
+        "Next: open test_0.svg, or fly it again: prgenuav fly {}",
+        folder.join("test_0.yaml").display()
+    ));
+}
+
+/// The verdict when tests failed but none was confirmed.
+fn only_unconfirmed(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<String>) {
+    let s = &r.suite;
+    let unsettled = unconfirmed.iter().filter(|t| !t.settled).count();
+    lines.push(format!(
+        "No confirmed failing test in {}, but {} failed at least once (the closest at {:.2} m).",
+        plural(s.flown, "flight"),
+        plural(unconfirmed.len(), "test"),
+        unconfirmed
+            .iter()
+            .map(|t| t.best_min_distance)
+            .fold(f64::INFINITY, f64::min)
+    ));
+    lines.push(if unsettled > 0 {
+        format!(
+            "How sure: not yet; the budget ran out before {unsettled} of them could be flown again (a test \
+             counts only when more than half of up to {} flights fail).",
+            s.confirm
+        )
+    } else {
+        "How sure: they failed once but not on most of their flights again.".into()
+    });
+    lines.push(format!(
+        "Next: fly one again (prgenuav fly {}), or run a larger budget: prgenuav generate {} {} --seed {}",
+        folder.join(UNCONFIRMED_DIR).join("test_0.yaml").display(),
+        r.case,
+        2 * r.budget,
+        r.seed
+    ));
+}
+
+/// The verdict when no flight failed.
+fn none_failed(r: &View, lines: &mut Vec<String>) {
+    let s = &r.suite;
+    let closest = (r.flights.iter()).map(|f| f.flown_m).fold(f64::INFINITY, f64::min);
+    let closest = if closest.is_finite() {
+        format!(" (the closest came to {closest:.2} m)")
+    } else {
+        String::new()
+    };
+    let which = match s.flown {
+        1 => "the one flight".to_string(),
+        n => format!("all {n} flights"),
+    };
+    lines.push(format!(
+        "No failure: {which} stayed {FAIL_M} m or farther from every obstacle{closest}."
+    ));
+    lines.push(format!(
+        "Next: a larger budget or another seed: prgenuav generate {} {} --seed {}",
+        r.case,
+        2 * r.budget,
+        r.seed + 1
+    ));
 }
 
 /// The summary on stdout: the suite's figures, what it means and the next step, and the output folder.
