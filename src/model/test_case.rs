@@ -93,24 +93,7 @@ impl TestCase {
     /// Parses YAML text; relative file names resolve as `resolve` says: the working folder, then `path`'s
     /// folder and its parents.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let value: Value = serde_saphyr::from_str(text).map_err(|e| yaml_error(path, &e))?;
-        let document = match value {
-            Value::Object(m) => m,
-            Value::Null => {
-                return Err(ModelError::field(
-                    path,
-                    "(document)",
-                    "empty; expected a case-study mapping",
-                ));
-            }
-            other => {
-                return Err(ModelError::field(
-                    path,
-                    "(document)",
-                    format!("expected a mapping, got {}", describe(&other)),
-                ));
-            }
-        };
+        let document = document_of(text, path)?;
         let field_err = |e: FieldError| ModelError::field(path, e.field, e.message);
         known_keys(&document, "", &TOP_KEYS).map_err(field_err)?;
         let spelling = spelling_of(&document).map_err(field_err)?;
@@ -119,22 +102,7 @@ impl TestCase {
         known_keys(vehicle, vkey, &VEHICLE_KEYS).map_err(field_err)?;
         let port = opt_string(vehicle, vkey, "port").map_err(field_err)?;
 
-        let sim_empty = Map::new();
-        let sim = match document.get("simulation") {
-            None | Some(Value::Null) => &sim_empty,
-            Some(v) => as_map(v, "simulation").map_err(field_err)?,
-        };
-        known_keys(sim, "simulation", &SIM_KEYS).map_err(field_err)?;
-        let home = parse_home(sim).map_err(field_err)?;
-        let obstacles = parse_obstacles(sim).map_err(field_err)?;
-        if let Some(speed) = opt_number(sim, "simulation", "speed").map_err(field_err)?
-            && speed <= 0.0
-        {
-            return Err(field_err(FieldError {
-                field: "simulation.speed".into(),
-                message: format!("{speed} is not positive"),
-            }));
-        }
+        let (home, obstacles) = parse_simulation(&document).map_err(field_err)?;
 
         let base = path.parent().unwrap_or(Path::new("."));
         let mission_file = opt_string(vehicle, vkey, "mission_file")
@@ -378,4 +346,43 @@ fn parse_commands(map: &Map<String, Value>, ckey: &str, base: &Path, path: &Path
             parse_commands_csv(&read_text(&file)?, &file)
         }
     }
+}
+
+/// The YAML document's top-level mapping, or an error naming what it is instead.
+fn document_of(text: &str, path: &Path) -> Result<Map<String, Value>> {
+    let value: Value = serde_saphyr::from_str(text).map_err(|e| yaml_error(path, &e))?;
+    match value {
+        Value::Object(m) => Ok(m),
+        Value::Null => Err(ModelError::field(
+            path,
+            "(document)",
+            "empty; expected a case-study mapping",
+        )),
+        other => Err(ModelError::field(
+            path,
+            "(document)",
+            format!("expected a mapping, got {}", describe(&other)),
+        )),
+    }
+}
+
+/// The `simulation` block (absent or null: the defaults): its home and obstacles, its speed checked.
+fn parse_simulation(document: &Map<String, Value>) -> std::result::Result<(GeoPoint, Vec<Obstacle>), FieldError> {
+    let sim_empty = Map::new();
+    let sim = match document.get("simulation") {
+        None | Some(Value::Null) => &sim_empty,
+        Some(v) => as_map(v, "simulation")?,
+    };
+    known_keys(sim, "simulation", &SIM_KEYS)?;
+    let home = parse_home(sim)?;
+    let obstacles = parse_obstacles(sim)?;
+    if let Some(speed) = opt_number(sim, "simulation", "speed")?
+        && speed <= 0.0
+    {
+        return Err(FieldError {
+            field: "simulation.speed".into(),
+            message: format!("{speed} is not positive"),
+        });
+    }
+    Ok((home, obstacles))
 }

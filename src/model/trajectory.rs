@@ -120,14 +120,10 @@ impl Trajectory {
             ));
         };
         let cols: Vec<String> = header.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
-        let find = |name: &str| cols.iter().position(|c| c == name);
-        let (Some(ti), Some(xi), Some(yi), Some(zi)) = (find("timestamp"), find("x"), find("y"), find("z")) else {
-            return Err(syntax(
-                1,
-                format!("expected the columns timestamp,x,y,z[,r], got {header:?}"),
-            ));
+        let Some(([ti, xi, yi, zi], ri)) = csv_columns(&cols) else {
+            let message = format!("expected the columns timestamp,x,y,z[,r], got {header:?}");
+            return Err(syntax(1, message));
         };
-        let ri = find("r");
         let mut samples = Vec::new();
         for (n, line) in lines {
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
@@ -231,6 +227,12 @@ fn mean(s: &[Sample]) -> Sample {
         z: avg(|p| p.z),
         r,
     }
+}
+
+/// The positions of `timestamp`, `x`, `y`, `z` and of the optional `r` among a CSV header's lower-cased columns.
+fn csv_columns(cols: &[String]) -> Option<([usize; 4], Option<usize>)> {
+    let find = |name: &str| cols.iter().position(|c| c == name);
+    Some(([find("timestamp")?, find("x")?, find("y")?, find("z")?], find("r")))
 }
 
 #[cfg(test)]

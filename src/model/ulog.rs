@@ -47,15 +47,7 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         .first()
         .copied()
         .ok_or_else(|| bad("vehicle_local_position has no samples".into()))?;
-    for i in 1..t.len() {
-        if let Err(why) = check_step(t[i - 1] / 1e6, t[i] / 1e6) {
-            return Err(bad(format!(
-                "vehicle_local_position sample {} (timestamp {} us) {why}",
-                i + 1,
-                t[i]
-            )));
-        }
-    }
+    check_timestamps(&t).map_err(bad)?;
     let samples = (0..t.len().min(x.len()).min(y.len()).min(z.len()))
         .filter(|&i| x[i].is_finite() && y[i].is_finite() && z[i].is_finite())
         .map(|i| Sample {
@@ -73,6 +65,20 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         return Err(bad("vehicle_local_position holds no finite position".into()));
     }
     Ok(Trajectory::new(samples))
+}
+
+/// Each `vehicle_local_position` timestamp (microseconds) a valid step from the one before.
+fn check_timestamps(t: &[f64]) -> std::result::Result<(), String> {
+    for i in 1..t.len() {
+        if let Err(why) = check_step(t[i - 1] / 1e6, t[i] / 1e6) {
+            return Err(format!(
+                "vehicle_local_position sample {} (timestamp {} us) {why}",
+                i + 1,
+                t[i]
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Reads a flight: a ULog (`.ulg`) or an Aerialist trajectory CSV (anything else).

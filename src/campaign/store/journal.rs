@@ -267,10 +267,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
         if line.trim_ascii().is_empty() {
             continue;
         }
-        let record = std::str::from_utf8(line)
-            .map_err(|e| e.to_string())
-            .and_then(|text| serde_json::from_str::<FlightRecord>(text).map_err(|e| e.to_string()));
-        let record = match record {
+        let record = match record_of(line) {
             Ok(r) => r,
             Err(_) if last => {
                 parsed.torn = Some(number);
@@ -289,23 +286,31 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
         if record.charged()
             && let Some(first) = lines_of.insert((record.candidate, record.attempt), number)
         {
-            let flight = match record.attempt {
-                0 => String::new(),
-                a => format!(" (flight {})", a + 1),
-            };
-            return Err(syntax(
-                number,
-                format!(
-                    "candidate {}{flight} is journaled twice (lines {first} and {number}); a flight is journaled \
-                     once: delete one of the two lines, then resume",
-                    record.candidate
-                ),
-            ));
+            return Err(syntax(number, journaled_twice(&record, first, number)));
         }
         parsed.records.push(record);
         parsed.lines.push(number);
     }
     Ok(parsed)
+}
+
+/// One line as a record, or why it is not one.
+fn record_of(line: &[u8]) -> Result<FlightRecord, String> {
+    let text = std::str::from_utf8(line).map_err(|e| e.to_string())?;
+    serde_json::from_str::<FlightRecord>(text).map_err(|e| e.to_string())
+}
+
+/// Why a flight journaled on line `first` and again on `again` is refused, and the fix.
+fn journaled_twice(record: &FlightRecord, first: usize, again: usize) -> String {
+    let flight = match record.attempt {
+        0 => String::new(),
+        a => format!(" (flight {})", a + 1),
+    };
+    format!(
+        "candidate {}{flight} is journaled twice (lines {first} and {again}); a flight is journaled once: delete \
+         one of the two lines, then resume",
+        record.candidate
+    )
 }
 
 /// A landed flight with no obstacles for tests: `raw` predicted, `flown` measured.
