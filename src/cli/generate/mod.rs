@@ -3,8 +3,10 @@
 //! in docs/cli.md.
 
 mod jobs;
+mod overlay;
 pub(super) mod plan;
 pub(super) mod px4;
+mod resume;
 mod runner;
 
 use std::path::PathBuf;

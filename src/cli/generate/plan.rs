@@ -8,18 +8,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::ArgMatches;
 use clap::parser::ValueSource;
-use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::fly::runner::RunnerSettings;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
-use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
-use serde_json::Value;
 
 use super::Args;
 use crate::cli::limits;
-use crate::cli::settings::{CampaignToml, Flight, Learning, Loaded, Mock, Output, Screening};
+use crate::cli::settings::{CampaignToml, Loaded};
 use crate::cli::values::{Mode, Motion, Spelling, name_of, parse_stored};
 
 /// Defaults of the settings neither a flag nor the file gives.
@@ -55,27 +52,27 @@ pub struct Plan {
 }
 
 /// A setting given explicitly, by a flag or by the TOML file.
-struct Given {
+pub(super) struct Given {
     /// `--seed`, or `screening.threshold_m`.
-    name: String,
+    pub(super) name: String,
     /// The TOML file that gave it (`None`: the command line).
-    file: Option<String>,
+    pub(super) file: Option<String>,
     /// A switch (`--no-learn`) is named without a value.
-    switch: bool,
+    pub(super) switch: bool,
     /// Its key in campaign.json (`seed`, `generator.gap_m`).
-    key: String,
+    pub(super) key: String,
 }
 
 /// What the command line and the TOML file ask for: the flags laid over the file.
-struct Requested {
-    settings: CampaignToml,
-    generator: GeneratorConfig,
-    given: Vec<Given>,
-    out_given: bool,
+pub(super) struct Requested {
+    pub(super) settings: CampaignToml,
+    pub(super) generator: GeneratorConfig,
+    pub(super) given: Vec<Given>,
+    pub(super) out_given: bool,
 }
 
 /// Records where each setting came from while the flags are laid over the file.
-struct Recorder<'a> {
+pub(super) struct Recorder<'a> {
     file: &'a Loaded,
     given: Vec<Given>,
 }
@@ -102,7 +99,7 @@ impl Recorder<'_> {
     }
 
     /// The flag's value if given, else the file's, recording which.
-    fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
+    pub(super) fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
         match (flag, file) {
             (Some(v), _) if !key.is_empty() => {
                 self.flag(name, key);
@@ -126,7 +123,7 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     let file = Loaded::read(args.config.as_deref())?;
     let req = request(args, matches, &file)?;
     let mut cfg = match &args.resume {
-        Some(folder) => resumed(folder, args, &req)?,
+        Some(folder) => super::resume::resumed(folder, args, &req)?,
         None => fresh(args, &req)?,
     };
     // A resumed campaign runs as many jobs as it began with, unless told otherwise.
@@ -190,7 +187,7 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
             r.flag(flag, key);
         }
     }
-    let settings = lay_over(args, &file.toml, &mut r);
+    let settings = super::overlay::lay_over(args, &file.toml, &mut r);
     let flags = args.expert.generator_flags();
     let by_flag = flags.given();
     for key in &file.generator_keys {
@@ -209,127 +206,8 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
     })
 }
 
-/// The flags laid over the file's sections (a flag wins).
-fn lay_over(args: &Args, f: &CampaignToml, r: &mut Recorder) -> CampaignToml {
-    let e = &args.expert;
-    let (sc, mo) = (&f.screening, &f.mock);
-    CampaignToml {
-        generator: None,
-        output: Output {
-            spelling: r.pick(
-                e.spelling,
-                f.output.spelling,
-                ("--spelling", "output.spelling", "old_spelling"),
-            ),
-        },
-        screening: Screening {
-            candidates: r.pick(
-                args.candidates,
-                sc.candidates,
-                ("--candidates", "screening.candidates", "candidates"),
-            ),
-            threshold_m: r.pick(
-                e.threshold,
-                sc.threshold_m,
-                ("--threshold", "screening.threshold_m", "threshold_m"),
-            ),
-            max_iou: r.pick(e.max_iou, sc.max_iou, ("--max-iou", "screening.max_iou", "max_iou")),
-            motion: r.pick(e.motion, sc.motion, ("--motion", "screening.motion", "motion")),
-            ensemble: r.pick(
-                e.ensemble,
-                sc.ensemble,
-                ("--ensemble", "screening.ensemble", "ensemble"),
-            ),
-            screen: r.pick(
-                e.no_screen.then_some(false),
-                sc.screen,
-                ("--no-screen", "screening.screen", "screen"),
-            ),
-        },
-        mock: Mock {
-            speed: r.pick(e.mock_speed, mo.speed, ("--mock-speed", "mock.speed", "mock_speed")),
-            lockstep: r.pick(
-                e.mock_free_running.then_some(false),
-                mo.lockstep,
-                ("--mock-free-running", "mock.lockstep", "mock_lockstep"),
-            ),
-            latency_ms: r.pick(
-                e.mock_latency,
-                mo.latency_ms,
-                ("--mock-latency", "mock.latency_ms", "mock_latency_ms"),
-            ),
-            vehicles: r.pick(e.mock_vehicles, mo.vehicles, ("--mock-vehicles", "mock.vehicles", "")),
-            profile: r.pick(
-                e.mock_profile.clone(),
-                mo.profile.clone(),
-                ("--mock-profile", "mock.profile", "mock_profile"),
-            ),
-        },
-        flight: flight(args, &f.flight, r),
-        learning: learning(args, &f.learning, r),
-    }
-}
-
-fn flight(args: &Args, fl: &Flight, r: &mut Recorder) -> Flight {
-    let e = &args.expert;
-    Flight {
-        timeout_s: r.pick(
-            e.timeout,
-            fl.timeout_s,
-            ("--timeout", "flight.timeout_s", "flight_timeout_s"),
-        ),
-        connect_timeout_s: r.pick(
-            e.connect_timeout,
-            fl.connect_timeout_s,
-            ("--connect-timeout", "flight.connect_timeout_s", ""),
-        ),
-        connect_time_scale: r.pick(
-            e.connect_time_scale,
-            fl.connect_time_scale,
-            ("--connect-time-scale", "flight.connect_time_scale", "hfs_time_scale"),
-        ),
-        anchor_at_vehicle_home: r.pick(
-            e.anchor_at_vehicle_home.then_some(true),
-            fl.anchor_at_vehicle_home,
-            (
-                "--anchor-at-vehicle-home",
-                "flight.anchor_at_vehicle_home",
-                "anchor_at_vehicle_home",
-            ),
-        ),
-        confirm: r.pick(args.confirm, fl.confirm, ("--confirm", "flight.confirm", "confirm")),
-        overlap: r.pick(None, fl.overlap, ("", "flight.overlap", "overlap")),
-    }
-}
-
-fn learning(args: &Args, le: &Learning, r: &mut Recorder) -> Learning {
-    let e = &args.expert;
-    Learning {
-        learn: r.pick(
-            args.no_learn.then_some(false),
-            le.learn,
-            ("--no-learn", "learning.learn", "learn"),
-        ),
-        adapt: r.pick(
-            e.no_adapt.then_some(false),
-            le.adapt,
-            ("--no-adapt", "learning.adapt", "adapt"),
-        ),
-        min_diversity: r.pick(
-            e.min_diversity,
-            le.min_diversity,
-            ("--min-diversity", "learning.min_diversity", "min_diversity"),
-        ),
-        child_max_iou: r.pick(
-            e.child_max_iou,
-            le.child_max_iou,
-            ("--child-max-iou", "learning.child_max_iou", "child_max_iou"),
-        ),
-    }
-}
-
 /// The campaign's settings: what was asked for, defaults for the rest.
-fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
+pub(super) fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
     let s = &req.settings;
     let px4 = args.px4.backend();
     let hfs: Vec<String> = if args.runner.is_some() {
@@ -416,129 +294,6 @@ fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
     Ok(cfg)
 }
 
-/// A resumed campaign: its stored settings, once every setting asked for agrees with them.
-fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
-    if req.out_given {
-        bail!(
-            "--out: a resumed campaign writes into {} (its own folder); drop --out",
-            folder.display()
-        );
-    }
-    let path = folder.join("campaign.json");
-    let bytes = read_capped_no_follow(&path, MAX_READ_BYTES)?;
-    let stored: CampaignConfig =
-        serde_json::from_slice(&bytes).with_context(|| format!("{}: not a campaign file", path.display()))?;
-    let case = match &args.case {
-        // The same file under another spelling (`./missions/m.yaml`, an absolute path) is no conflict.
-        Some(c) if same_file(c, &stored.case) => stored.case.clone(),
-        Some(c) => c.clone(),
-        None => stored.case.clone(),
-    };
-    let mut wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
-    if let (Some(p), Some(s)) = (&wanted.prior, &stored.prior)
-        && same_file(p, s)
-    {
-        wanted.prior = stored.prior.clone();
-    }
-    // Without --px4, a --speed-factor or --keep-ulog is compared with the stored instances' settings.
-    if let (None, Some(p)) = (&wanted.px4, &stored.px4) {
-        let f = &args.px4;
-        wanted.px4 = Some(Px4Backend {
-            speed_factor: f.speed_factor.unwrap_or(p.speed_factor),
-            keep_ulog: f.keep_ulog || p.keep_ulog,
-            build: p.build.clone(),
-        });
-    }
-    let conflicts = conflicts(&stored, &wanted, &req.given, &path)?;
-    if !conflicts.is_empty() {
-        bail!("{}", conflicts.join("\n"));
-    }
-    // What runs is what the file says now, whoever wrote it last: shown, even with --quiet.
-    eprintln!("{}", stored_summary(&stored, &path));
-    Ok(stored)
-}
-
-/// The stored settings that decide what runs and where: the case, the budget, the seed, the vehicles.
-fn stored_summary(cfg: &CampaignConfig, path: &Path) -> String {
-    let vehicles = match (&cfg.runner, &cfg.px4) {
-        (Some(t), _) => format!("runner `{t}`"),
-        (None, Some(p)) => format!("PX4 build {}", p.build.display()),
-        (None, None) => cfg.hfs.join(","),
-    };
-    format!(
-        "resuming as {} says: case {}, budget {}, seed {}, vehicles {vehicles}",
-        path.display(),
-        cfg.case.display(),
-        cfg.budget,
-        cfg.seed
-    )
-}
-
-/// `path` made absolute against the working folder (not resolved through links: the user's spelling stays).
-fn absolute(path: &Path) -> anyhow::Result<PathBuf> {
-    std::path::absolute(path).with_context(|| format!("{}: cannot make the path absolute", path.display()))
-}
-
-/// Whether `a` and `b` name one existing file (or, when either cannot be resolved, are spelled alike).
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    }
-}
-
-/// One line per setting asked for that differs from the stored one.
-fn conflicts(
-    stored: &CampaignConfig,
-    wanted: &CampaignConfig,
-    given: &[Given],
-    path: &Path,
-) -> anyhow::Result<Vec<String>> {
-    let (stored, wanted) = (serde_json::to_value(stored)?, serde_json::to_value(wanted)?);
-    let at = |v: &Value, key: &str| key.split('.').try_fold(v.clone(), |v, k| v.get(k).cloned());
-    let mut lines = Vec::new();
-    for g in given {
-        let (s, w) = (at(&stored, &g.key), at(&wanted, &g.key));
-        if s == w {
-            continue;
-        }
-        let value = w.as_ref().map_or("(none)".into(), |w| asked(&g.key, w));
-        let asked = match (&g.file, g.switch) {
-            (Some(file), _) => format!("{} = {value} in {file}", g.name),
-            (None, true) => g.name.clone(),
-            (None, false) => format!("{} {value}", g.name),
-        };
-        lines.push(format!(
-            "{asked} conflicts with {} {} stored in {}; drop it or start a new campaign",
-            g.key,
-            s.as_ref().map_or("(none)".into(), show),
-            path.display()
-        ));
-    }
-    Ok(lines)
-}
-
-/// The value asked for, as it was typed: campaign.json stores the spelling as `old_spelling`.
-fn asked(key: &str, v: &Value) -> String {
-    match (key, v) {
-        ("old_spelling", Value::Bool(old)) => name_of(if *old { &Spelling::Old } else { &Spelling::New }),
-        _ => show(v),
-    }
-}
-
-/// A stored value as a user would type it: strings bare, lists comma-separated, ranges `MIN,MAX`.
-fn show(v: &Value) -> String {
-    match v {
-        Value::String(s) => s.clone(),
-        Value::Null => "(none)".into(),
-        Value::Array(a) => a.iter().map(show).collect::<Vec<_>>().join(","),
-        Value::Object(o) if o.len() == 2 && o.contains_key("min") && o.contains_key("max") => {
-            format!("{},{}", show(&o["min"]), show(&o["max"]))
-        }
-        other => other.to_string(),
-    }
-}
-
 /// Checks a new or stored campaign's settings, naming the flag and the TOML key of each.
 fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
     parse_stored::<Motion>(&cfg.motion, "motion (--motion, screening.motion)")?;
@@ -572,6 +327,11 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
         prgenuav::bridge::LinkAddress::parse(url).map_err(|e| anyhow::anyhow!("--connect: {e}"))?;
     }
     Ok(())
+}
+
+/// `path` made absolute against the working folder (not resolved through links: the user's spelling stays).
+pub(super) fn absolute(path: &Path) -> anyhow::Result<PathBuf> {
+    std::path::absolute(path).with_context(|| format!("{}: cannot make the path absolute", path.display()))
 }
 
 #[cfg(test)]

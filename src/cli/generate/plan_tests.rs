@@ -2,7 +2,8 @@ use std::path::Path;
 
 use clap::FromArgMatches;
 
-use super::{Args, Requested, build, request, show};
+use super::{Args, Requested, build, request};
+use crate::cli::generate::resume::show;
 use crate::cli::settings::{Loaded, example_toml};
 
 fn requested(argv: &[&str], file: &Loaded) -> (Args, Requested) {
