@@ -14,6 +14,8 @@ mod progress;
 mod render;
 mod sample;
 mod score;
+#[cfg(test)]
+mod setting_keys;
 mod settings;
 mod simulate;
 mod stop_signals;
