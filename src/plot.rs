@@ -151,18 +151,7 @@ impl FlightPlot {
 
     /// The obstacle area and the obstacles, numbered.
     fn write_obstacles(&self, c: &Canvas, s: &mut String) {
-        let a = &self.arena;
-        let oda = [
-            (a.x.min, a.y.min),
-            (a.x.min, a.y.max),
-            (a.x.max, a.y.max),
-            (a.x.max, a.y.min),
-        ];
-        let _ = writeln!(
-            s,
-            r##"<polygon points="{}" fill="#fff8e0" stroke="#d9b24a" stroke-dasharray="6 4"/>"##,
-            c.poly(&oda)
-        );
+        obstacle_area(c, s, &self.arena);
         for (k, o) in self.obstacles.iter().enumerate() {
             let _ = writeln!(
                 s,
@@ -336,6 +325,21 @@ impl Canvas {
             g += 10.0;
         }
     }
+}
+
+/// The competition's obstacle area, dashed.
+fn obstacle_area(c: &Canvas, s: &mut String, a: &Arena) {
+    let oda = [
+        (a.x.min, a.y.min),
+        (a.x.min, a.y.max),
+        (a.x.max, a.y.max),
+        (a.x.max, a.y.min),
+    ];
+    let _ = writeln!(
+        s,
+        r##"<polygon points="{}" fill="#fff8e0" stroke="#d9b24a" stroke-dasharray="6 4"/>"##,
+        c.poly(&oda)
+    );
 }
 
 #[cfg(test)]

@@ -3,8 +3,7 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -20,8 +19,7 @@ use prgenuav::model::Spelling;
 
 use super::generate::plan::{CONNECT_TIMEOUT_S, FLIGHT_TIMEOUT_S, MOCK_SPEED, Plan};
 use super::generate::px4::Px4Flags;
-use super::generate::{vehicles, watch_ctrl_c};
-use super::stop_signals::StopSignals;
+use super::generate::vehicles;
 use super::values::{JudgeEdition, Mode, name_of};
 
 /// Arguments of `evaluate`.
@@ -190,14 +188,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         jobs: args.jobs,
         px4_instances: args.px4.instances,
     };
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting the async runtime")?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
-    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
+    let (runtime, stop) = super::generate::runtime_stopped_by_signals()?;
     let mut fleet = vehicles(&plan, &runtime)?;
     let quiet = args.quiet || args.json;
     let on_flight = move |r: &FlightRecord| {

@@ -42,17 +42,7 @@ pub fn layouts_svg(case: &TestCase, layouts: &[Layout], title: &str) -> String {
     let rows = layouts.len().min(MAX_LEGEND) + 2 + usize::from(layouts.len() > MAX_LEGEND);
     let mut s = header(SIZE_PX, SIZE_PX + 20.0 * rows as f64, title);
     c.grid(&mut s);
-    let oda = [
-        (arena.x.min, arena.y.min),
-        (arena.x.min, arena.y.max),
-        (arena.x.max, arena.y.max),
-        (arena.x.max, arena.y.min),
-    ];
-    let _ = writeln!(
-        s,
-        r##"<polygon points="{}" fill="#fff8e0" stroke="#d9b24a" stroke-dasharray="6 4"/>"##,
-        c.poly(&oda)
-    );
+    super::obstacle_area(&c, &mut s, &arena);
     let _ = writeln!(
         s,
         r##"<polyline points="{}" fill="none" stroke="#333" stroke-width="2" stroke-dasharray="2 4"/>"##,

@@ -205,14 +205,7 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     {
         eprintln!("{note}");
     }
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting the async runtime")?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
-    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
+    let (runtime, stop) = runtime_stopped_by_signals()?;
     let vehicles = vehicles(&plan, &runtime)?;
     let progress = Reporter::new(args.quiet || args.json);
     let screener = LfsScreener {
@@ -261,6 +254,19 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
 /// seconds and every stage checks the stop between candidates, so this is a backstop, not the usual path.
 const STOP_WITHIN: Duration = Duration::from_secs(20);
 
+/// The async runtime a campaign's vehicles use, and the flag Ctrl-C, SIGTERM or SIGHUP raises to stop it.
+pub(super) fn runtime_stopped_by_signals() -> anyhow::Result<(tokio::runtime::Runtime, Arc<AtomicBool>)> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
+    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
+    Ok((runtime, stop))
+}
+
 /// Exit code after a forced stop (128 + SIGINT, as a shell reports it).
 const EXIT_INTERRUPTED: i32 = 130;
 
@@ -268,7 +274,7 @@ const EXIT_INTERRUPTED: i32 = 130;
 /// journaled `interrupted`, not charged, flown first on resume; runner jobs are stopped). A second one, or
 /// [`STOP_WITHIN`] without stopping, exits at once: the journal keeps every finished flight, and a flight cut
 /// mid-record is a torn line the next resume drops.
-pub(super) async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
+async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
     let first = signals.next().await;
     eprintln!(
         "{first}: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
