@@ -28,6 +28,7 @@ mod rules;
 mod runner;
 mod score;
 mod similarity_reference;
+mod sizes;
 mod slurm;
 mod trust;
 mod ulog;
