@@ -390,13 +390,19 @@ async fn no_vehicle_is_a_clear_error_in_bounded_time() {
 async fn the_same_flight_over_a_serial_link() {
     let cable = super::pty::SerialCable::new().expect("pseudo-terminals");
     let test = generated(2);
+    // In lockstep, as over TCP below: at 57600 baud the answers of a companion starved of CPU (a loaded test
+    // machine) would otherwise arrive late enough to decide the flight.
     let m = MockAutopilot::builder()
         .link(LinkSpec::Address(format!("serial:{}:57600", cable.b)))
         .speed_factor(SpeedFactor::Times(PLANNED_SPEED))
+        .lockstep(Some(mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT))
         .spawn()
         .await
         .expect("mock on serial");
-    let o = opts(&format!("serial:{}:57600", cable.a), FlyMode::Avoidance, PLANNED_SPEED);
+    let o = FlyOptions {
+        lockstep: Some(Duration::ZERO),
+        ..opts(&format!("serial:{}:57600", cable.a), FlyMode::Avoidance, PLANNED_SPEED)
+    };
     let r = fly_bounded(&test, &o, CancelToken::new()).await;
     m.shutdown().await.expect("mock stops");
     assert_flown(&r, "serial");
