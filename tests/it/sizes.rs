@@ -26,11 +26,11 @@ fn code_lines(text: &str) -> Vec<&str> {
 /// Whether `line` opens a function: optional `pub(...)`, `async`, `const`, `unsafe`, then `fn name`.
 fn opens_fn(line: &str) -> Option<&str> {
     let mut rest = line.trim_start();
-    for prefix in ["pub(crate) ", "pub(super) ", "pub ", "async ", "const ", "unsafe "] {
-        rest = rest.strip_prefix(prefix).unwrap_or(rest);
-    }
     if let Some(r) = rest.strip_prefix("pub(in ") {
         rest = r.split_once(") ").map_or(r, |(_, after)| after);
+    }
+    for prefix in ["pub(crate) ", "pub(super) ", "pub ", "async ", "const ", "unsafe "] {
+        rest = rest.strip_prefix(prefix).unwrap_or(rest);
     }
     let name = rest.strip_prefix("fn ")?;
     Some(name.split(['(', '<']).next().unwrap_or(name))

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use crate::campaign::learn::calibration::Learnt;
 use crate::campaign::learn::failure_counts::FAIL_BINS;
 use crate::campaign::report::backends;
-use crate::campaign::report::outputs::Report;
+use crate::campaign::report::document::Report;
 use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
 use crate::campaign::report::user_report;
 use crate::generator::adaptive::DRAW_NAMES;

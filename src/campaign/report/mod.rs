@@ -1,9 +1,10 @@
 //! What a campaign hands its user: each test's verdict over its flights ([`verdicts`]), the suite's numbers
-//! ([`suite`]), the per-backend figures ([`backends`]), the written tests and report.json ([`outputs`]), report.md
+//! ([`suite`]), the per-backend figures ([`backends`]), the report as data ([`document`]), the written tests and report.json ([`outputs`]), report.md
 //! ([`user_report`] opens it for people, [`markdown`] adds the appendix), and the competition's metrics for
 //! any folder of flown tests ([`folder_score`]).
 
 pub mod backends;
+pub mod document;
 pub mod folder_score;
 pub mod markdown;
 pub mod outputs;

@@ -1,9 +1,77 @@
 //! The command line laid over the campaign TOML: each flag given replaces its key, and the recorder notes
 //! which were given, for a resumed campaign's comparison with what it stored.
 
+use prgenuav::generator::GeneratorConfig;
+
 use super::Args;
-use super::plan::Recorder;
-use crate::cli::settings::{CampaignToml, Flight, Learning, Mock, Output, Screening};
+use crate::cli::settings::{CampaignToml, Flight, Learning, Loaded, Mock, Output, Screening};
+
+/// A setting given explicitly, by a flag or by the TOML file.
+pub(super) struct Given {
+    /// `--seed`, or `screening.threshold_m`.
+    pub(super) name: String,
+    /// The TOML file that gave it (`None`: the command line).
+    pub(super) file: Option<String>,
+    /// A switch (`--no-learn`) is named without a value.
+    pub(super) switch: bool,
+    /// Its key in campaign.json (`seed`, `generator.gap_m`).
+    pub(super) key: String,
+}
+
+/// What the command line and the TOML file ask for: the flags laid over the file.
+pub(super) struct Requested {
+    pub(super) settings: CampaignToml,
+    pub(super) generator: GeneratorConfig,
+    pub(super) given: Vec<Given>,
+    pub(super) out_given: bool,
+}
+
+/// Records where each setting came from while the flags are laid over the file.
+pub(super) struct Recorder<'a> {
+    pub(super) file: &'a Loaded,
+    pub(super) given: Vec<Given>,
+}
+
+impl Recorder<'_> {
+    pub(super) fn flag(&mut self, flag: &str, key: &str) {
+        let switch = flag.starts_with("--no-")
+            || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
+        self.given.push(Given {
+            name: flag.to_string(),
+            file: None,
+            switch,
+            key: key.to_string(),
+        });
+    }
+
+    pub(super) fn file_key(&mut self, file_key: &str, key: &str) {
+        self.given.push(Given {
+            name: file_key.to_string(),
+            file: Some(self.file.name()),
+            switch: false,
+            key: key.to_string(),
+        });
+    }
+
+    /// The flag's value if given, else the file's, recording which.
+    pub(super) fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
+        match (flag, file) {
+            (Some(v), _) if !key.is_empty() => {
+                self.flag(name, key);
+                Some(v)
+            }
+            (None, Some(v)) if !key.is_empty() => {
+                self.file_key(file_key, key);
+                Some(v)
+            }
+            (flag, file) => flag.or(file),
+        }
+    }
+}
+
+/// A setting's flag, its key in the TOML file, and its key in campaign.json (empty: campaign.json does not
+/// store it, so a resumed campaign may change it).
+pub(super) type Names = (&'static str, &'static str, &'static str);
 
 /// The flags laid over the file's sections (a flag wins).
 pub(super) fn lay_over(args: &Args, f: &CampaignToml, r: &mut Recorder) -> CampaignToml {

@@ -11,12 +11,13 @@ use clap::parser::ValueSource;
 use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::fly::runner::RunnerSettings;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
-use prgenuav::generator::GeneratorConfig;
+
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
 
 use super::Args;
+use super::overlay::{Recorder, Requested};
 use crate::cli::limits;
-use crate::cli::settings::{CampaignToml, Loaded};
+use crate::cli::settings::Loaded;
 use crate::cli::values::{Mode, Motion, Spelling, name_of, parse_stored};
 
 /// Defaults of the settings neither a flag nor the file gives.
@@ -51,79 +52,12 @@ pub struct Plan {
     pub px4_instances: Option<usize>,
 }
 
-/// A setting given explicitly, by a flag or by the TOML file.
-pub(super) struct Given {
-    /// `--seed`, or `screening.threshold_m`.
-    pub(super) name: String,
-    /// The TOML file that gave it (`None`: the command line).
-    pub(super) file: Option<String>,
-    /// A switch (`--no-learn`) is named without a value.
-    pub(super) switch: bool,
-    /// Its key in campaign.json (`seed`, `generator.gap_m`).
-    pub(super) key: String,
-}
-
-/// What the command line and the TOML file ask for: the flags laid over the file.
-pub(super) struct Requested {
-    pub(super) settings: CampaignToml,
-    pub(super) generator: GeneratorConfig,
-    pub(super) given: Vec<Given>,
-    pub(super) out_given: bool,
-}
-
-/// Records where each setting came from while the flags are laid over the file.
-pub(super) struct Recorder<'a> {
-    file: &'a Loaded,
-    given: Vec<Given>,
-}
-
-impl Recorder<'_> {
-    fn flag(&mut self, flag: &str, key: &str) {
-        let switch = flag.starts_with("--no-")
-            || ["--mock-free-running", "--anchor-at-vehicle-home", "--keep-ulog"].contains(&flag);
-        self.given.push(Given {
-            name: flag.to_string(),
-            file: None,
-            switch,
-            key: key.to_string(),
-        });
-    }
-
-    fn file_key(&mut self, file_key: &str, key: &str) {
-        self.given.push(Given {
-            name: file_key.to_string(),
-            file: Some(self.file.name()),
-            switch: false,
-            key: key.to_string(),
-        });
-    }
-
-    /// The flag's value if given, else the file's, recording which.
-    pub(super) fn pick<T>(&mut self, flag: Option<T>, file: Option<T>, (name, file_key, key): Names) -> Option<T> {
-        match (flag, file) {
-            (Some(v), _) if !key.is_empty() => {
-                self.flag(name, key);
-                Some(v)
-            }
-            (None, Some(v)) if !key.is_empty() => {
-                self.file_key(file_key, key);
-                Some(v)
-            }
-            (flag, file) => flag.or(file),
-        }
-    }
-}
-
-/// A setting's flag, its key in the TOML file, and its key in campaign.json (empty: campaign.json does not
-/// store it, so a resumed campaign may change it).
-type Names = (&'static str, &'static str, &'static str);
-
 /// Reads the TOML file and lays the flags over it; `--resume` then compares, a new campaign builds.
 pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     let file = Loaded::read(args.config.as_deref())?;
     let req = request(args, matches, &file)?;
     let mut cfg = match &args.resume {
-        Some(folder) => super::resume::resumed(folder, args, &req)?,
+        Some(folder) => super::resume::resumed(folder, args, &req, &|case, budget| build(case, budget, args, &req))?,
         None => fresh(args, &req)?,
     };
     // A resumed campaign runs as many jobs as it began with, unless told otherwise.

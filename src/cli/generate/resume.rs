@@ -1,7 +1,7 @@
 //! A resumed campaign's settings: the stored `campaign.json`, compared with what the command line and TOML ask
 //! now; a flag that would change a stored setting is refused by name, and what runs is shown.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use prgenuav::campaign::config::Px4Backend;
@@ -10,11 +10,16 @@ use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 use serde_json::Value;
 
 use super::Args;
-use super::plan::{Given, Requested, build};
+use super::overlay::{Given, Requested};
 use crate::cli::values::{Spelling, name_of};
 
 /// A resumed campaign: its stored settings, once every setting asked for agrees with them.
-pub(super) fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
+pub(super) fn resumed(
+    folder: &Path,
+    args: &Args,
+    req: &Requested,
+    build: &dyn Fn(PathBuf, usize) -> CampaignConfig,
+) -> anyhow::Result<CampaignConfig> {
     if req.out_given {
         bail!(
             "--out: a resumed campaign writes into {} (its own folder); drop --out",
@@ -31,7 +36,7 @@ pub(super) fn resumed(folder: &Path, args: &Args, req: &Requested) -> anyhow::Re
         Some(c) => c.clone(),
         None => stored.case.clone(),
     };
-    let mut wanted = build(case, args.budget.unwrap_or(stored.budget), args, req);
+    let mut wanted = build(case, args.budget.unwrap_or(stored.budget));
     if let (Some(p), Some(s)) = (&wanted.prior, &stored.prior)
         && same_file(p, s)
     {
