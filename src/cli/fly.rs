@@ -20,6 +20,7 @@ use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
 use super::limits;
+use super::stop_signals::StopSignals;
 use super::values::{JudgeEdition, Mode, Motion};
 
 /// The motion model of `fly`'s low-fidelity prediction: the campaign's screening default, so a flown test is
@@ -120,14 +121,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
+    // Ctrl-C, a scheduler's SIGTERM (`scancel`, a Kubernetes Job's end) and SIGHUP all land the vehicle.
+    let mut signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
     let report = runtime.block_on(async {
         let cancel = CancelToken::new();
-        let on_ctrl_c = cancel.clone();
+        let on_stop = cancel.clone();
         tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                eprintln!("Ctrl-C: landing the vehicle, keeping the recording");
-                on_ctrl_c.cancel();
-            }
+            let which = signals.next().await;
+            eprintln!("{which}: landing the vehicle, keeping the recording");
+            on_stop.cancel();
         });
         if !args.json && !args.quiet {
             eprintln!("waiting for a vehicle on {} ...", opts.connect);

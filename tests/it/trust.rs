@@ -221,6 +221,42 @@ fn sigterm_lands_the_flights_journals_them_interrupted_and_exits_as_ctrl_c_does(
 }
 
 #[test]
+fn fly_stops_on_sigterm_as_on_ctrl_c() {
+    // No vehicle answers on this port: `fly` waits for one until a scheduler's SIGTERM comes.
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .and_then(|s| s.local_addr())
+        .unwrap()
+        .port();
+    let (_dir, test) = super::test_file(2, super::valid_pair());
+    let url = format!("udpin:127.0.0.1:{port}");
+    let mut child = binary()
+        .args(["fly", test.to_str().unwrap(), "--connect", &url, "--no-predict"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    while !seen.contains("waiting for a vehicle") {
+        let mut line = String::new();
+        assert!(
+            stderr.read_line(&mut line).unwrap() > 0,
+            "fly ended before waiting: {seen}"
+        );
+        seen.push_str(&line);
+    }
+    signal(&child, "TERM");
+    let (code, took) = wait_bounded(&mut child, Duration::from_secs(20));
+    let mut rest = String::new();
+    let _ = std::io::Read::read_to_string(&mut stderr, &mut rest);
+    assert!(
+        code.is_some_and(|c| c != 143),
+        "fly ends through its own stop, not the signal's default ({code:?} after {took:?}): {rest}"
+    );
+    assert!(rest.contains("SIGTERM: landing the vehicle"), "{rest}");
+}
+
+#[test]
 fn sigterm_stops_a_runner_job_and_the_grandchild_it_detached() {
     let out = tempfile::tempdir().unwrap();
     let pids = tempfile::tempdir().unwrap();

@@ -74,7 +74,12 @@ pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
     if let Some(n) = at_once.mock_vehicles {
         let max = limits::max_mock_vehicles();
         let why = format!("{} per core of this machine", limits::MOCKS_PER_CORE);
-        limits::count("--jobs (mock.vehicles) on the embedded mocks", n, max, &why)?;
+        let name = if s.mock.vehicles.is_some() {
+            "--mock-vehicles (mock.vehicles)"
+        } else {
+            "--jobs on the embedded mocks"
+        };
+        limits::count(name, n, max, &why)?;
     }
     // Last, once every setting is known good: a new campaign claims a folder of its own.
     let folder = match &args.resume {
