@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::Range;
+use crate::model::{Limit, Range};
 
 /// Which construction a generator draws from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -89,38 +89,65 @@ impl GeneratorConfig {
 
     /// Checks that the numbers make a construction possible, naming the first one that does not.
     pub fn validate(&self) -> Result<(), String> {
-        let range = |name: &str, r: Range, lo: f64, hi: f64| -> Result<(), String> {
-            if !(r.min.is_finite() && r.max.is_finite() && r.min <= r.max && r.min >= lo && r.max <= hi) {
+        let range = |name: &str, r: Range, limit: Limit| -> Result<(), String> {
+            if !(limit.holds(r.min) && limit.holds(r.max) && r.min <= r.max) {
                 return Err(format!(
-                    "{name}: [{}, {}] must be an ordered range within [{lo}, {hi}]",
-                    r.min, r.max
+                    "{name}: [{}, {}] must be an ordered range within {}",
+                    r.min,
+                    r.max,
+                    limit.range()
                 ));
             }
             Ok(())
         };
-        if !(self.width_m.is_finite() && self.width_m > 0.0) {
-            return Err(format!("width_m: {} must be positive", self.width_m));
+        let number = |name: &str, v: f64, limit: Limit| limit.check(name, v).map(drop);
+        number("width_m", self.width_m, limits::WIDTH_M)?;
+        range("diagonal_m", self.diagonal_m, limits::DIAGONAL_M)?;
+        if self.diagonal_m.min < self.width_m * 1.0001 {
+            return Err(format!(
+                "diagonal_m: {} must be longer than width_m {}",
+                self.diagonal_m.min, self.width_m
+            ));
         }
-        range("diagonal_m", self.diagonal_m, self.width_m * 1.0001, 1e3)?;
-        range("angle_deg", self.angle_deg, 1.0, 89.0)?;
-        range("gap_m", self.gap_m, 0.01, 100.0)?;
-        range("overhang", self.overhang, 0.0, 1.0)?;
-        range("adapted_split", self.adapted_split, 0.01, 0.49)?;
-        range("third_ahead_m", self.third_ahead_m, 0.5, 100.0)?;
-        if !(self.split > 0.0 && self.split < 0.5) {
-            return Err(format!("split: {} must be in (0, 0.5)", self.split));
-        }
-        if !(self.length_factor.is_finite() && self.length_factor >= 1.0) {
-            return Err(format!("length_factor: {} must be at least 1", self.length_factor));
-        }
-        if !(self.height_m.is_finite() && self.height_m > 0.0) {
-            return Err(format!("height_m: {} must be positive", self.height_m));
-        }
-        if self.max_attempts == 0 {
-            return Err("max_attempts: must be at least 1".into());
-        }
+        range("angle_deg", self.angle_deg, limits::ANGLE_DEG)?;
+        range("gap_m", self.gap_m, limits::GAP_M)?;
+        range("overhang", self.overhang, limits::OVERHANG)?;
+        range("adapted_split", self.adapted_split, limits::ADAPTED_SPLIT)?;
+        range("third_ahead_m", self.third_ahead_m, limits::THIRD_AHEAD_M)?;
+        number("split", self.split, limits::SPLIT)?;
+        number("length_factor", self.length_factor, limits::LENGTH_FACTOR)?;
+        number("height_m", self.height_m, limits::HEIGHT_M)?;
+        number("max_attempts", f64::from(self.max_attempts), limits::MAX_ATTEMPTS)?;
         Ok(())
     }
+}
+
+/// Each number's accepted values; a range's two ends both lie within its key's.
+pub mod limits {
+    use crate::model::Limit;
+
+    /// Diagonal of obstacle 1's base.
+    pub const DIAGONAL_M: Limit = Limit::above(0.0, 1e3, "m");
+    /// Width of both bases.
+    pub const WIDTH_M: Limit = Limit::above(0.0, 100.0, "m");
+    /// The A side is the shorter part of obstacle 1.
+    pub const SPLIT: Limit = Limit::between(0.0, 0.5, "");
+    /// At least 1: obstacle 2 is never shorter than obstacle 1.
+    pub const LENGTH_FACTOR: Limit = Limit::within(1.0, 100.0, "");
+    /// Height of both boxes.
+    pub const HEIGHT_M: Limit = Limit::above(0.0, 1e3, "m");
+    /// Angle of obstacle 1 to the direction of flight.
+    pub const ANGLE_DEG: Limit = Limit::within(1.0, 89.0, "deg");
+    /// Gap between the obstacles.
+    pub const GAP_M: Limit = Limit::within(0.01, 100.0, "m");
+    /// Obstacle 2's reach past obstacle 1, a share of its length.
+    pub const OVERHANG: Limit = Limit::within(0.0, 1.0, "");
+    /// The extended family's split.
+    pub const ADAPTED_SPLIT: Limit = Limit::within(0.01, 0.49, "");
+    /// The extended family's distance to the third obstacle.
+    pub const THIRD_AHEAD_M: Limit = Limit::within(0.5, 100.0, "m");
+    /// Draws per test.
+    pub const MAX_ATTEMPTS: Limit = Limit::count(1, 10_000_000, "draws");
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ mod placement;
 mod soi;
 
 pub use adaptive::{DrawDistribution, Neighbourhood, Proposal};
-pub use config::{Family, GeneratorConfig};
+pub use config::{Family, GeneratorConfig, limits};
 pub use placement::{Draw, Mirror, Side, canonical_mirror, left_of, room};
 pub use soi::{Soi, SoiKind, segment_of_interest};
 
