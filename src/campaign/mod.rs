@@ -13,4 +13,5 @@ pub mod report;
 pub mod run;
 pub mod screen;
 pub mod settings;
+pub mod setup;
 pub mod store;

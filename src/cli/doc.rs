@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use clap::{Arg, Command};
 
-use super::settings::{KEYS, SECTIONS};
+use prgenuav::campaign::settings::{Default, SECTIONS, all, example_toml};
 
 /// How to bring docs/cli.md up to date.
 const UPDATE: &str = "UPDATE_CLI_DOC=1 cargo test --workspace cli_doc";
@@ -150,18 +150,12 @@ fn campaign_toml(s: &mut String) {
     for section in SECTIONS {
         let _ = writeln!(s, "### [{section}]\n");
         let _ = writeln!(s, "| key | default | flag | meaning |\n|---|---|---|---|");
-        for k in KEYS.iter().filter(|k| k.section == section) {
-            let flag = if k.flag.is_empty() {
-                "-".to_string()
-            } else {
-                format!("`{}`", k.flag)
-            };
-            // A default that is a TOML value is shown as code; one that depends on the campaign, as prose.
-            let literal = toml::from_str::<toml::Table>(&format!("v = {}", k.default)).is_ok();
-            let default = if literal {
-                format!("`{}`", k.default)
-            } else {
-                k.default.to_string()
+        for k in all().filter(|k| k.section == section) {
+            let flag = k.flag.map_or_else(|| "-".to_string(), |f| format!("`{}`", f.long));
+            // A constant default is shown as code; one that depends on the campaign, as prose.
+            let default = match k.default {
+                Default::Value(_) => format!("`{}`", k.example()),
+                Default::Setup { doc, .. } => doc.to_string(),
             };
             let _ = writeln!(s, "| `{}` | {default} | {flag} | {} |", k.key, k.help);
         }
@@ -171,7 +165,7 @@ fn campaign_toml(s: &mut String) {
         s,
         "A file setting every key (the value shown where the default depends on the campaign is an example):\n"
     );
-    let _ = writeln!(s, "```toml\n{}```", super::settings::example_toml());
+    let _ = writeln!(s, "```toml\n{}```", example_toml());
 }
 
 #[cfg(test)]

@@ -10,14 +10,15 @@ use anyhow::{Context, bail};
 use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, MAX_RUNS, evaluate_by_flying};
 use prgenuav::campaign::evaluation::report;
 use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
-use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
-use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
+use prgenuav::campaign::run::CampaignConfig;
+use prgenuav::campaign::settings::{Flight, Requested};
+use prgenuav::campaign::setup::fleet::AtOnce;
+use prgenuav::campaign::setup::{self, Ask};
 use prgenuav::campaign::store::journal::FlightRecord;
-use prgenuav::generator::GeneratorConfig;
 use prgenuav::model::Spelling;
 
-use super::generate::plan::{CONNECT_TIMEOUT_S, FLIGHT_TIMEOUT_S, MOCK_SPEED, Plan};
+use super::generate::plan::Plan;
 use super::generate::px4::Px4Flags;
 use super::generate::vehicles;
 use super::values::{JudgeEdition, Mode, name_of};
@@ -103,41 +104,19 @@ fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
 }
 
 fn defaults(args: &Args) -> CampaignConfig {
-    let gust = MockProfile::by_name(DEFAULT_PROFILE).map_or(0.0, |p| p.tuning.gust_acc_m_s2);
-    CampaignConfig {
+    let ask = Ask {
         case: args.folder.clone(),
-        seed: 0,
         budget: 1,
-        candidates: 1,
-        threshold_m: 0.0,
-        max_iou: 1.0,
-        generator: GeneratorConfig::default(),
-        old_spelling: false,
-        hfs: vec!["mock".into()],
+        seed: 0,
+        connect: vec!["mock".into()],
         mode: name_of(&args.mode),
-        motion: "px4".into(),
-        mock_speed: MOCK_SPEED,
-        mock_lockstep: true,
-        mock_latency_ms: DEFAULT_MOCK_LATENCY_MS,
-        mock_profile: DEFAULT_PROFILE.into(),
-        mock_gust_acc_m_s2: gust,
-        screen: false,
         judge: args.judge.into(),
-        anchor_at_vehicle_home: false,
-        hfs_time_scale: None,
-        flight_timeout_s: FLIGHT_TIMEOUT_S,
-        ensemble: 0,
-        jobs: args.jobs,
-        learn: false,
-        adapt: false,
         prior: None,
-        min_diversity: 0.0,
-        child_max_iou: None,
-        confirm: 1,
-        overlap: false,
         runner: None,
+        jobs: args.jobs,
         px4: None,
-    }
+    };
+    setup::build(&ask, &Requested::default())
 }
 
 fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
@@ -183,10 +162,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         runner: runner(&cfg, &args)?,
         cfg,
         folder: args.folder.clone(),
-        mock_vehicles: args.mock_vehicles,
-        connect_timeout_s: CONNECT_TIMEOUT_S,
-        jobs: args.jobs,
-        px4_instances: args.px4.instances,
+        at_once: AtOnce {
+            mock_vehicles: args.mock_vehicles,
+            runner_jobs: args.jobs,
+            px4_instances: args.px4.instances,
+        },
+        connect_timeout_s: Flight::default().connect_timeout_s(),
     };
     let (runtime, stop) = super::generate::runtime_stopped_by_signals()?;
     let mut fleet = vehicles(&plan, &runtime)?;

@@ -14,9 +14,7 @@ mod progress;
 mod render;
 mod sample;
 mod score;
-#[cfg(test)]
-mod setting_keys;
-mod settings;
+mod setting_flags;
 mod simulate;
 mod stop_signals;
 mod values;

@@ -7,10 +7,12 @@ use anyhow::bail;
 use prgenuav::campaign::report::user_report::plural;
 use prgenuav::generator::{Generator, GeneratorConfig, Placement};
 use prgenuav::judge::diversity;
-use prgenuav::model::{Range, TestCase};
+use prgenuav::model::TestCase;
 
-use super::settings::{GeneratorFlags, Loaded, parse_range};
-use super::values::{Family, Spelling};
+use prgenuav::campaign::settings::{Loaded, lay_over};
+use prgenuav::model::Spelling;
+
+use super::setting_flags::GeneratorFlags;
 
 /// The most tests `sample` writes: the suite's diversity compares every pair, about 30 s at 5,000 (2.6 s at
 /// 1,000, 12.7 s at 3,000 on one core), and each test is a file.
@@ -45,45 +47,27 @@ pub struct Args {
     generator: GeneratorArgs,
 }
 
-/// Generator parameters: the campaign TOML's `[generator]` and `[output]`, and single overrides.
+/// Generator parameters: the campaign TOML's `[generator]` and `[output]`, and their flags.
 #[derive(Debug, clap::Args)]
 pub struct GeneratorArgs {
     /// Campaign TOML: its [generator] keys and [output] spelling apply (see docs/cli.md); flags override it.
     #[arg(long, value_name = "FILE.toml")]
     pub config: Option<PathBuf>,
-    /// Diagonal of obstacle 1's base, metres: MIN,MAX.
-    #[arg(long, value_name = "MIN,MAX", value_parser = parse_range)]
-    pub diagonal: Option<Range>,
-    /// Acute angle between obstacle 1's A part and the direction of flight, degrees: MIN,MAX.
-    #[arg(long, value_name = "MIN,MAX", value_parser = parse_range)]
-    pub angle: Option<Range>,
-    /// Gap between obstacle 1's A end and obstacle 2, metres: MIN,MAX.
-    #[arg(long, value_name = "MIN,MAX", value_parser = parse_range)]
-    pub gap: Option<Range>,
-    /// Box height, metres.
-    #[arg(long, value_name = "M")]
-    pub height: Option<f64>,
-    /// The obstacle construction.
-    #[arg(long, value_enum)]
-    pub family: Option<Family>,
-    /// Key spelling of the written YAML (default: new, or the file's [output] spelling).
-    #[arg(long, value_enum)]
-    pub spelling: Option<Spelling>,
+    #[command(flatten)]
+    flags: GeneratorFlags,
 }
 
 impl GeneratorArgs {
     /// The configuration (defaults, then the TOML file, then the flags) and the spelling to write.
     pub fn config(&self) -> anyhow::Result<(GeneratorConfig, Spelling)> {
-        let file = Loaded::read(self.config.as_deref())?;
-        let flags = GeneratorFlags {
-            diagonal: self.diagonal,
-            angle: self.angle,
-            gap: self.gap,
-            height: self.height,
-            family: self.family,
+        let file = Loaded::read(self.config.as_deref()).map_err(anyhow::Error::msg)?;
+        let req = lay_over(&file, &self.flags.given).map_err(anyhow::Error::msg)?;
+        let spelling = if req.settings.output.spelling() == "old" {
+            Spelling::Old
+        } else {
+            Spelling::New
         };
-        let spelling = self.spelling.or(file.toml.output.spelling).unwrap_or(Spelling::New);
-        Ok((flags.apply(&file)?, spelling))
+        Ok((req.generator, spelling))
     }
 }
 
@@ -108,7 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut files = Vec::new();
     for p in &placements {
         let path = args.out.join(format!("test_{}.yaml", p.index));
-        case.with_obstacles(p.obstacles.to_vec()).save(&path, spelling.into())?;
+        case.with_obstacles(p.obstacles.to_vec()).save(&path, spelling)?;
         files.push(path.display().to_string());
     }
     let suites: Vec<_> = placements.iter().map(|p| p.obstacles.to_vec()).collect();

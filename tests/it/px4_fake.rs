@@ -183,8 +183,11 @@ fn bad_px4_settings_are_refused_before_anything_runs() {
     let not_a_build = repo_root.to_str().unwrap();
     for (args, expected) in [
         (vec!["--px4", not_a_build], "bin/px4 is missing"),
-        (vec!["--px4", b, "--instances", "0"], "--instances must be at least 1"),
-        (vec!["--px4", b, "--instances", "11"], "at most 10"),
+        (vec!["--px4", b, "--instances", "0"], "--instances 0 is out of range"),
+        (
+            vec!["--px4", b, "--instances", "11"],
+            "--instances 11 is out of range: 1 to 10",
+        ),
         (vec!["--px4", b, "--speed-factor=0"], "--speed-factor 0"),
         (vec!["--instances", "2"], "need --px4"),
     ] {

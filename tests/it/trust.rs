@@ -333,6 +333,7 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
             generate(&["--runner", "true {test}", "--job-timeout", "1e19"]),
             "--job-timeout",
         ),
+        (generate(&["--instances", "100000"]), "--instances"),
         (fly(&["--time-scale", "1e300"]), "--time-scale"),
         (fly(&["--ready-timeout", "1e300"]), "--ready-timeout"),
         (fly(&["--timeout", "1e300"]), "--timeout"),
@@ -350,6 +351,42 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
         );
     }
     assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "no campaign folder");
+    every_declared_range_is_refused_in_the_campaign_toml(o);
+}
+
+/// A value beyond `s`'s declared range, as a TOML value (both ends of a range setting).
+fn beyond(s: &prgenuav::campaign::settings::Setting) -> Option<String> {
+    let l = s.range?;
+    let v = if l.whole {
+        format!("{}", (l.max_here() as u64).saturating_mul(2) + 1)
+    } else {
+        format!("{:?}", l.max * 1.01 + 1.0)
+    };
+    let is_range = matches!(s.default_value(), Some(toml::Value::Table(_)));
+    Some(if is_range {
+        format!("{{ min = {v}, max = {v} }}")
+    } else {
+        v
+    })
+}
+
+/// Every setting with a declared range, `generator.*` included, set beyond it in the campaign TOML.
+fn every_declared_range_is_refused_in_the_campaign_toml(out: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for s in prgenuav::campaign::settings::all() {
+        let Some(v) = beyond(s) else { continue };
+        let file = dir.path().join(format!("{}_{}.toml", s.section, s.key));
+        std::fs::write(&file, format!("[{}]\n{} = {v}\n", s.section, s.key)).unwrap();
+        let f = file.to_str().unwrap();
+        let args = ["generate", "missions/mission2.yaml", "3", "--out", out, "--config", f];
+        let (code, _, err) = prgenuav(&args);
+        assert_eq!(code, 2, "{}: {err}", s.toml_key());
+        assert!(err.contains(s.key) && err.contains("range"), "{}: {err}", s.toml_key());
+        checked += 1;
+    }
+    assert!(checked >= 20, "only {checked} ranges declared");
+    assert_eq!(std::fs::read_dir(out).unwrap().count(), 0, "no campaign folder");
 }
 
 #[test]

@@ -110,6 +110,19 @@ pub fn typed(raw: &toml::Table) -> Result<CampaignToml, String> {
     Ok(c)
 }
 
+/// Every declared key as a TOML file, each set to its example value (its default where that is a constant).
+pub fn example_toml() -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for section in SECTIONS {
+        let _ = writeln!(s, "[{section}]");
+        for k in super::all().filter(|k| k.section == section) {
+            let _ = writeln!(s, "{} = {}", k.key, k.example());
+        }
+    }
+    s
+}
+
 /// `--diagonal 6,11` and the like: a range as `MIN,MAX`.
 pub fn parse_range(s: &str) -> Result<Range, String> {
     let (a, b) = s.split_once(',').ok_or_else(|| format!("{s:?}: expected MIN,MAX"))?;

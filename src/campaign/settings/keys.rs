@@ -159,20 +159,6 @@ section! {
     }
 }
 
-/// Every setting, in file order.
-pub fn all() -> impl Iterator<Item = &'static Setting> {
-    [
-        GENERATOR,
-        OUTPUT,
-        super::keys_run::SCREENING,
-        super::keys_run::MOCK,
-        super::keys_run::FLIGHT,
-        super::keys_run::LEARNING,
-    ]
-    .into_iter()
-    .flatten()
-}
-
 pub(super) use section;
 
 /// Numbers only the command line gives.
@@ -187,6 +173,12 @@ pub mod flags {
     pub const JOB_TIMEOUT: Limit = Limit::above(0.0, 604_800.0, "s");
     /// `--speed-factor`.
     pub const PX4_SPEED_FACTOR: Limit = Limit::above(0.0, 100.0, "x wall time");
+    /// `--instances` with `--px4`.
+    pub const INSTANCES: Limit = Limit::count(
+        1,
+        crate::campaign::fly::px4::MAX_INSTANCES,
+        "PX4 instances (docs/px4.md)",
+    );
     /// BUDGET.
     pub const BUDGET: Limit = Limit::count(1, crate::campaign::config::MAX_BUDGET, "flights");
 }

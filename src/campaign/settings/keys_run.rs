@@ -48,7 +48,9 @@ section! {
                    about 1 s of CPU per candidate: more than a mock flight, far less than a PX4 or hardware flight.",
         },
         screen: bool = [value true] {
-            flag: Some(Flag::switch("--no-screen", false)),
+            flag: Some(Flag::switch("--no-screen", false).helped(
+                "Skip the simulator: fly candidates in the order drawn (screening.screen = false).",
+            )),
             stored: "screen",
             help: "`false` skips the simulator and flies candidates in the order drawn (the baseline that shows what \
                    screening buys); it also turns learning off.",
@@ -66,7 +68,9 @@ section! {
             help: "Clock speed of the embedded mock autopilots, times real time; in lockstep an upper bound.",
         },
         lockstep: bool = [value true] {
-            flag: Some(Flag::switch("--mock-free-running", false)),
+            flag: Some(Flag::switch("--mock-free-running", false).helped(
+                "Let the embedded mocks' clocks run free, no lockstep (mock.lockstep = false).",
+            )),
             stored: "mock_lockstep",
             help: "The mock holds its clock until each avoidance answer, so flights do not depend on the CPU. \
                    `false` lets the clocks run free, as on a real vehicle (use a low speed, e.g. 20, with it).",
@@ -115,7 +119,9 @@ section! {
             help: "Clock rate of the `--connect` vehicles (PX4_SIM_SPEED_FACTOR).",
         },
         anchor_at_vehicle_home: bool = [value false] {
-            flag: Some(Flag::switch("--anchor-at-vehicle-home", true)),
+            flag: Some(Flag::switch("--anchor-at-vehicle-home", true).helped(
+                "Re-anchor every test at each vehicle's home (flight.anchor_at_vehicle_home).",
+            )),
             stored: "anchor_at_vehicle_home",
             help: "Re-anchor every test (mission, obstacles, fence) at each vehicle's home instead of refusing a \
                    vehicle farther from the test's home than its MIS_DIST_1WP (bench drones anywhere).",
@@ -159,7 +165,12 @@ section! {
                    on every flight. `false`: screen once and fly the ranking (the static campaign).",
         },
         adapt: bool = [value true] {
-            flag: Some(Flag { conflicts_with: "no_learn", ..Flag::switch("--no-adapt", false) }),
+            flag: Some(Flag {
+                conflicts_with: "no-learn",
+                ..Flag::switch("--no-adapt", false).helped(
+                    "Learn the simulator's calibration but keep the paper's uniform draws (learning.adapt = false).",
+                )
+            }),
             stored: "adapt",
             help: "While learning, also adapt the generator towards failures (draws around failing flights, a draw \
                    distribution moved towards the best candidates). `false` keeps the paper's uniform draws.",

@@ -55,6 +55,7 @@ pub fn lay_over(file: &Loaded, flags: &[(&'static Setting, toml::Value)]) -> Res
             .and_then(toml::Value::as_table)
             .is_some_and(|t| t.contains_key(s.key));
         if let (Some((_, v)), Some(f)) = (flag, &s.flag) {
+            check_value(s, &serde_json::to_value(v).map_err(|e| e.to_string())?)?;
             let section = raw
                 .entry(s.section)
                 .or_insert_with(|| toml::Value::Table(toml::Table::new()));

@@ -10,8 +10,7 @@ mod keys_run;
 pub mod merge;
 
 pub use crate::model::Limit;
-pub use file::{CampaignToml, Flight, Learning, Loaded, Mock, Output, SECTIONS, Screening, parse_range};
-pub use keys::all;
+pub use file::{CampaignToml, Flight, Learning, Loaded, Mock, Output, SECTIONS, Screening, example_toml, parse_range};
 pub use merge::{Given, Requested, check_ranges, check_unstored, lay_over};
 
 /// One setting of the campaign TOML.
@@ -93,6 +92,11 @@ impl Flag {
         }
     }
 
+    /// The same flag with its own help.
+    pub const fn helped(self, help: &'static str) -> Self {
+        Self { help, ..self }
+    }
+
     /// The same flag, shown in `--help` with its own help.
     pub const fn shown(self, help: &'static str) -> Self {
         Self {
@@ -107,9 +111,9 @@ impl Flag {
         self.value_name.is_empty()
     }
 
-    /// The clap argument id (`--no-learn`: `no_learn`).
-    pub fn id(&self) -> String {
-        self.long.trim_start_matches('-').replace('-', "_")
+    /// The command-line argument's id: the flag without its dashes (`no-learn`).
+    pub fn id(&self) -> &'static str {
+        self.long.trim_start_matches('-')
     }
 }
 
@@ -147,15 +151,37 @@ impl Setting {
     pub fn flag_help(&self) -> String {
         match &self.flag {
             Some(f) if !f.help.is_empty() => f.help.to_string(),
-            Some(f) if f.is_switch() => format!("Sets {} = {} (see the campaign TOML).", self.toml_key(), f.sets),
+            Some(f) if f.is_switch() => format!("Sets {} = {}.", self.toml_key(), f.sets),
             _ => format!("{} ({}).", self.help.trim_end_matches('.'), self.toml_key()),
         }
     }
 }
 
+/// Every setting, in file order.
+pub fn all() -> impl Iterator<Item = &'static Setting> {
+    [
+        keys::GENERATOR,
+        keys::OUTPUT,
+        keys_run::SCREENING,
+        keys_run::MOCK,
+        keys_run::FLIGHT,
+        keys_run::LEARNING,
+    ]
+    .into_iter()
+    .flatten()
+}
+
+/// The setting `section.key`.
+pub fn find(section: &str, key: &str) -> Option<&'static Setting> {
+    all().find(|s| s.section == section && s.key == key)
+}
+
 /// A TOML value on one line, as a file would spell it (`{ min = 2.0, max = 4.0 }`).
 pub fn inline(v: &toml::Value) -> String {
     match v {
+        toml::Value::Table(t) if t.len() == 2 && t.contains_key("min") && t.contains_key("max") => {
+            format!("{{ min = {}, max = {} }}", t["min"], t["max"])
+        }
         toml::Value::Table(t) => {
             let parts: Vec<String> = t.iter().map(|(k, v)| format!("{k} = {}", inline(v))).collect();
             format!("{{ {} }}", parts.join(", "))
@@ -169,6 +195,9 @@ pub trait FlagText {
     /// The TOML value of `text`, or why it is none.
     fn parse(text: &str) -> Result<toml::Value, String>;
 }
+
+#[cfg(test)]
+mod tests;
 
 impl FlagText for f64 {
     fn parse(text: &str) -> Result<toml::Value, String> {

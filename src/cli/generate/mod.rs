@@ -2,8 +2,6 @@
 //! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
 //! in docs/cli.md.
 
-mod jobs;
-mod overlay;
 pub(super) mod plan;
 pub(super) mod px4;
 mod resume;
@@ -15,27 +13,22 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::ArgMatches;
-use prgenuav::bridge::FlyMode;
-use prgenuav::campaign::fly::mock_mavlink::{LinkVehicle, MockVehicle};
-use prgenuav::campaign::fly::mock_profile::MockProfile;
-use prgenuav::campaign::fly::runner::RunnerVehicle;
 use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::campaign::report::outputs::Report;
 use prgenuav::campaign::report::user_report;
-use prgenuav::campaign::run::{CampaignConfig, run_campaign};
+use prgenuav::campaign::run::run_campaign;
 use prgenuav::campaign::screen::lfs_screener::LfsScreener;
-use prgenuav::campaign::screen::parallel::available_threads;
+use prgenuav::campaign::setup::fleet;
 use prgenuav::lfs::ensemble::EnsembleParams;
 use prgenuav::lfs::sim::SimConfig;
-use prgenuav::model::Range;
 use tokio::runtime::Runtime;
 
 use super::progress::Reporter;
-use super::settings::{GeneratorFlags, parse_range};
+use super::setting_flags::CampaignFlags;
 use super::stop_signals::StopSignals;
-use super::values::{Family, JudgeEdition, Mode, Motion, Spelling, parse_stored};
+use super::values::{JudgeEdition, Mode, Motion, parse_stored};
 use plan::Plan;
 
 /// Arguments of `generate`.
@@ -74,21 +67,8 @@ pub struct Args {
     /// Judge edition of the distances (and of the low-fidelity prediction).
     #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
     judge: JudgeEdition,
-    /// Candidates to draw and screen with the low-fidelity simulator (default: 3 x BUDGET, at least 20; at
-    /// most 100000).
-    #[arg(long, hide = true, value_name = "N")]
-    candidates: Option<usize>,
-    /// Do not learn: screen once, fly the ranking (the static campaign). By default the campaign flies in
-    /// rounds, calibrating the simulator on every flight and adapting the generator towards failures.
-    #[arg(long)]
-    no_learn: bool,
-    /// Flights a failing test gets at most: it is flown again until the majority of K flights is settled, and
-    /// written as test_N.yaml only when more than half of its flights fail (default: 3; 1 on the embedded
-    /// mock's gust-free `competition` profile, whose flights repeat; 1 flies every test once).
-    #[arg(long, value_name = "K")]
-    confirm: Option<usize>,
     /// Start from what an earlier campaign learnt (its output folder's learnt.json).
-    #[arg(long, value_name = "FOLDER", conflicts_with = "no_learn")]
+    #[arg(long, value_name = "FOLDER", conflicts_with = "no-learn")]
     prior: Option<PathBuf>,
     /// Continue a killed campaign in FOLDER with the settings in its campaign.json (a flag asking for a
     /// different value is refused).
@@ -106,95 +86,9 @@ pub struct Args {
     json: bool,
     #[command(flatten)]
     px4: px4::Px4Flags,
+    /// The campaign settings' flags (the expert ones hidden; each sets its campaign TOML key).
     #[command(flatten)]
-    expert: Expert,
-}
-
-/// The expert knobs as flags: hidden from `--help` (each is a key of the campaign TOML, which docs/cli.md
-/// documents), still accepted so scripts can set one knob without a file.
-#[derive(Debug, clap::Args)]
-struct Expert {
-    /// Fly only candidates the simulator predicts closer than this, metres (screening.threshold_m).
-    #[arg(long, hide = true, value_name = "M")]
-    threshold: Option<f64>,
-    /// Skip a candidate overlapping an already chosen one by more than this IoU (screening.max_iou).
-    #[arg(long, hide = true, value_name = "IOU")]
-    max_iou: Option<f64>,
-    /// The simulator's motion model for screening (screening.motion).
-    #[arg(long, hide = true, value_enum)]
-    motion: Option<Motion>,
-    /// Skip the simulator: fly candidates in the order drawn (screening.screen = false).
-    #[arg(long, hide = true)]
-    no_screen: bool,
-    /// Ensemble members ranking the shortlist (screening.ensemble).
-    #[arg(long, hide = true, value_name = "N")]
-    ensemble: Option<usize>,
-    /// Clock speed of the embedded mock autopilots, times real time (mock.speed).
-    #[arg(long, hide = true, value_name = "K")]
-    mock_speed: Option<f64>,
-    /// Let the embedded mocks' clocks run free, no lockstep (mock.lockstep = false).
-    #[arg(long, hide = true)]
-    mock_free_running: bool,
-    /// In lockstep, the companion plans on the pose this many vehicle milliseconds old (mock.latency_ms).
-    #[arg(long, hide = true, value_name = "MS")]
-    mock_latency: Option<f64>,
-    /// Embedded mock autopilots flying at once (mock.vehicles); --jobs says the same.
-    #[arg(long, hide = true, value_name = "N")]
-    mock_vehicles: Option<usize>,
-    /// The embedded mocks' profile: `px4-sitl` or `competition` (mock.profile).
-    #[arg(long, hide = true, value_name = "NAME")]
-    mock_profile: Option<String>,
-    /// Clock rate of the --connect vehicles (flight.connect_time_scale).
-    #[arg(long, hide = true, alias = "hfs-time-scale", value_name = "K")]
-    connect_time_scale: Option<f64>,
-    /// Give a flight up (LAND) after this many vehicle seconds (flight.timeout_s).
-    #[arg(long, hide = true, value_name = "S")]
-    timeout: Option<f64>,
-    /// Seconds to wait for each MAVLink vehicle's first heartbeat (flight.connect_timeout_s).
-    #[arg(long, hide = true, value_name = "S")]
-    connect_timeout: Option<f64>,
-    /// Re-anchor every test at each vehicle's home (flight.anchor_at_vehicle_home).
-    #[arg(long, hide = true)]
-    anchor_at_vehicle_home: bool,
-    /// Learn the simulator's calibration but keep the paper's uniform draws (learning.adapt = false).
-    #[arg(long, hide = true, conflicts_with = "no_learn")]
-    no_adapt: bool,
-    /// Floor of the failing tests' diversity (learning.min_diversity).
-    #[arg(long, hide = true, value_name = "D")]
-    min_diversity: Option<f64>,
-    /// IoU up to which a child of a failing flight may overlap a flown test (learning.child_max_iou).
-    #[arg(long, hide = true, value_name = "IOU")]
-    child_max_iou: Option<f64>,
-    /// Diagonal of obstacle 1's base, metres (generator.diagonal_m).
-    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
-    diagonal: Option<Range>,
-    /// Acute angle between obstacle 1's A part and the direction of flight, degrees (generator.angle_deg).
-    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
-    angle: Option<Range>,
-    /// Gap between obstacle 1's A end and obstacle 2, metres (generator.gap_m).
-    #[arg(long, hide = true, value_name = "MIN,MAX", value_parser = parse_range)]
-    gap: Option<Range>,
-    /// Box height, metres (generator.height_m).
-    #[arg(long, hide = true, value_name = "M")]
-    height: Option<f64>,
-    /// The obstacle construction (generator.family).
-    #[arg(long, hide = true, value_enum)]
-    family: Option<Family>,
-    /// Key spelling of the written YAML (output.spelling).
-    #[arg(long, hide = true, value_enum)]
-    spelling: Option<Spelling>,
-}
-
-impl Expert {
-    fn generator_flags(&self) -> GeneratorFlags {
-        GeneratorFlags {
-            diagonal: self.diagonal,
-            angle: self.angle,
-            gap: self.gap,
-            height: self.height,
-            family: self.family,
-        }
-    }
+    settings: CampaignFlags,
 }
 
 pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
@@ -293,56 +187,16 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
     std::process::exit(EXIT_INTERRUPTED);
 }
 
-/// The vehicles that fly: embedded mocks, PX4 instance slots (`--px4`), or one per MAVLink URL.
+/// The vehicles that fly, as the library builds them for the campaign.
 pub(super) fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
-    let cfg: &CampaignConfig = &plan.cfg;
-    if let Some(runner) = plan.runner.clone() {
-        return RunnerVehicle::fleet(runner, plan.jobs.unwrap_or(1)).map_err(anyhow::Error::msg);
-    }
-    let mode: FlyMode = parse_stored::<Mode>(&cfg.mode, "mode")?.into();
-    if let Some(px4) = &cfg.px4 {
-        return px4::fleet(px4, cfg, mode, plan.px4_instances, runtime.handle());
-    }
-    if cfg.hfs == ["mock"] {
-        let count = plan.mock_vehicles.unwrap_or_else(available_threads);
-        if count == 0 {
-            bail!("--mock-vehicles (mock.vehicles) must be at least 1");
-        }
-        let lockstep = cfg
-            .mock_lockstep
-            .then(|| Duration::from_secs_f64(cfg.mock_latency_ms / 1000.0));
-        let mut profile = MockProfile::named(&cfg.mock_profile).map_err(|e| anyhow::anyhow!("mock.profile: {e}"))?;
-        // The gusts the campaign began with: a campaign begun before the mock had them resumes without.
-        profile.tuning.gust_acc_m_s2 = cfg.mock_gust_acc_m_s2;
-        return Ok((0..count)
-            .map(|i| {
-                Box::new(
-                    MockVehicle::new(runtime.handle().clone(), i, cfg.mock_speed, mode, lockstep)
-                        .judged(cfg.judge, cfg.anchor_at_vehicle_home)
-                        .with_timeout(cfg.flight_timeout_s)
-                        .with_profile(profile.clone())
-                        .seeded(cfg.seed),
-                ) as Box<dyn Vehicle>
-            })
-            .collect());
-    }
-    Ok(cfg
-        .hfs
-        .iter()
-        .map(|url| {
-            Box::new(
-                LinkVehicle::new(
-                    runtime.handle().clone(),
-                    url,
-                    mode,
-                    plan.connect_timeout_s,
-                    cfg.hfs_time_scale,
-                    cfg.flight_timeout_s,
-                )
-                .judged(cfg.judge, cfg.anchor_at_vehicle_home),
-            ) as Box<dyn Vehicle>
-        })
-        .collect())
+    let fleet = fleet::fleet(
+        &plan.cfg,
+        &plan.at_once,
+        plan.connect_timeout_s,
+        plan.runner.clone(),
+        runtime.handle(),
+    )?;
+    Ok(fleet)
 }
 
 /// The report on stdout: JSON, or the figures, the verdict and next step, and the output folder.

@@ -2,15 +2,16 @@ use std::path::Path;
 
 use clap::FromArgMatches;
 
-use super::{Args, Requested, build, request};
+use prgenuav::campaign::settings::{Loaded, Requested, example_toml};
+
+use super::{Args, build, request};
 use crate::cli::generate::resume::show;
-use crate::cli::settings::{Loaded, example_toml};
 
 fn requested(argv: &[&str], file: &Loaded) -> (Args, Requested) {
     let m = crate::cli::command().try_get_matches_from(argv).unwrap();
     let m = m.subcommand_matches("generate").unwrap();
     let args = Args::from_arg_matches(m).unwrap();
-    let req = request(&args, m, file).unwrap();
+    let req = request(&args, m, file).unwrap().req;
     (args, req)
 }
 
@@ -30,8 +31,14 @@ fn the_documented_defaults_are_the_defaults() {
     a["hfs_time_scale"] = serde_json::Value::Null;
     b["hfs_time_scale"] = serde_json::Value::Null;
     assert_eq!(a, b);
-    // Every key but the two campaign.json does not store, and CASE and BUDGET.
-    assert_eq!(all.given.len(), crate::cli::settings::KEYS.len() - 2 + 2);
+    // Every key campaign.json stores, and CASE and BUDGET.
+    assert_eq!(
+        all.given.len(),
+        prgenuav::campaign::settings::all()
+            .filter(|s| !s.stored.is_empty())
+            .count()
+            + 2
+    );
     assert!(none.given.iter().all(|g| g.key == "case" || g.key == "budget"));
 }
 

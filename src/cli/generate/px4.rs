@@ -4,14 +4,11 @@
 use std::path::PathBuf;
 
 use anyhow::bail;
-use prgenuav::bridge::FlyMode;
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::config::Px4Backend;
-use prgenuav::campaign::fly::px4::{DEFAULT_SPEED_FACTOR, Px4Settings, Px4Vehicle, default_instances, instance_slots};
-use prgenuav::campaign::fly::vehicle::Vehicle;
+use prgenuav::campaign::fly::px4::{DEFAULT_SPEED_FACTOR, instance_slots};
 use prgenuav::campaign::run::CampaignConfig;
-use prgenuav::campaign::screen::parallel::available_threads;
-use tokio::runtime::Handle;
+use prgenuav::campaign::settings::keys::flags;
 
 /// The `--px4` flags.
 #[derive(Debug, clap::Args)]
@@ -44,6 +41,16 @@ impl Px4Flags {
         })
     }
 
+    /// `--instances` within its range, checked before anything else.
+    pub fn check_instances(&self) -> anyhow::Result<()> {
+        if let Some(k) = self.instances {
+            flags::INSTANCES
+                .check("--instances", k as f64)
+                .map_err(anyhow::Error::msg)?;
+        }
+        Ok(())
+    }
+
     /// The campaign's PX4 settings are sound and its build folder is a build, before anything runs.
     pub fn check(&self, cfg: &CampaignConfig) -> anyhow::Result<()> {
         let Some(px4) = &cfg.px4 else {
@@ -53,31 +60,12 @@ impl Px4Flags {
             return Ok(());
         };
         Px4Build::open(&px4.build)?;
-        crate::cli::limits::PX4_SPEED_FACTOR.check(px4.speed_factor)?;
+        flags::PX4_SPEED_FACTOR
+            .check("--speed-factor", px4.speed_factor)
+            .map_err(anyhow::Error::msg)?;
         if let Some(k) = self.instances {
             instance_slots(k).map_err(anyhow::Error::msg)?;
         }
         Ok(())
     }
-}
-
-/// The campaign's PX4 vehicles: `--instances`, or what the machine carries.
-pub fn fleet(
-    px4: &Px4Backend,
-    cfg: &CampaignConfig,
-    mode: FlyMode,
-    instances: Option<usize>,
-    handle: &Handle,
-) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
-    let settings = Px4Settings {
-        keep_ulog: px4.keep_ulog,
-        mode,
-        judge: cfg.judge,
-        anchor: cfg.anchor_at_vehicle_home,
-        timeout_s: cfg.flight_timeout_s,
-        ..Px4Settings::new(Px4Build::open(&px4.build)?, px4.speed_factor)
-    };
-    let k = instances.unwrap_or_else(|| default_instances(available_threads(), px4.speed_factor));
-    let fleet = Px4Vehicle::fleet(handle, &settings, k).map_err(anyhow::Error::msg)?;
-    Ok(fleet.into_iter().map(|v| Box::new(v) as Box<dyn Vehicle>).collect())
 }

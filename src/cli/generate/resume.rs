@@ -6,21 +6,27 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::run::CampaignConfig;
+use prgenuav::campaign::settings::{Given, Requested};
 use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 use serde_json::Value;
 
 use super::Args;
-use super::overlay::{Given, Requested};
 use crate::cli::values::{Spelling, name_of};
+
+/// What the command line and the TOML file ask for, and whether `--out` was given.
+pub(super) struct Request {
+    pub(super) req: Requested,
+    pub(super) out_given: bool,
+}
 
 /// A resumed campaign: its stored settings, once every setting asked for agrees with them.
 pub(super) fn resumed(
     folder: &Path,
     args: &Args,
-    req: &Requested,
+    request: &Request,
     build: &dyn Fn(PathBuf, usize) -> CampaignConfig,
 ) -> anyhow::Result<CampaignConfig> {
-    if req.out_given {
+    if request.out_given {
         bail!(
             "--out: a resumed campaign writes into {} (its own folder); drop --out",
             folder.display()
@@ -51,7 +57,7 @@ pub(super) fn resumed(
             build: p.build.clone(),
         });
     }
-    let conflicts = conflicts(&stored, &wanted, &req.given, &path)?;
+    let conflicts = conflicts(&stored, &wanted, &request.req.given, &path)?;
     if !conflicts.is_empty() {
         bail!("{}", conflicts.join("\n"));
     }

@@ -9,7 +9,7 @@ use prgenuav::campaign::run::CampaignConfig;
 use prgenuav::model::Spelling as ModelSpelling;
 
 use super::Args;
-use crate::cli::limits::{JOB_TIMEOUT, MAX_JOBS, count, seconds};
+use prgenuav::campaign::settings::keys::flags::{JOB_TIMEOUT, JOBS};
 
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
 pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
@@ -21,9 +21,11 @@ pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Opti
     };
     let template = Template::parse(text).map_err(anyhow::Error::msg)?;
     if let Some(jobs) = cfg.jobs {
-        count("--jobs", jobs, MAX_JOBS, "each job is a thread and a local process")?;
+        JOBS.check("--jobs", jobs as f64).map_err(anyhow::Error::msg)?;
     }
-    let timeout = seconds(&JOB_TIMEOUT, args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S))?;
+    let timeout = JOB_TIMEOUT
+        .seconds("--job-timeout", args.job_timeout.unwrap_or(DEFAULT_JOB_TIMEOUT_S))
+        .map_err(anyhow::Error::msg)?;
     Ok(Some(RunnerSettings {
         template,
         timeout,
