@@ -37,8 +37,9 @@ pub struct CampaignConfig {
     /// LFS motion model used for screening (`px4`, `paper`).
     #[serde(default = "default_motion")]
     pub motion: String,
-    /// Clock speed of the embedded mock autopilots.
-    #[serde(default = "default_mock_speed")]
+    /// Clock speed of the embedded mock autopilots. 20 when the key is absent: the speed such campaigns flew at
+    /// (a new campaign's default is `mock.speed`'s, in [`super::settings`]).
+    #[serde(default = "mock_speed_before_key")]
     pub mock_speed: f64,
     /// The embedded mocks hold their clock for each avoidance answer (`mock_speed` is then an upper bound).
     /// Off when the key is absent: such campaign files' flights were free-running, and a resume must match.
@@ -168,7 +169,7 @@ fn profile_before_profiles() -> String {
     "competition".into()
 }
 
-fn default_mock_speed() -> f64 {
+fn mock_speed_before_key() -> f64 {
     20.0
 }
 

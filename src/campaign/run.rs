@@ -30,7 +30,7 @@ pub fn run_campaign(
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<Report, CampaignError> {
-    check_counts(cfg.budget, cfg.candidates)?;
+    super::setup::check_settings(cfg)?;
     check_paths_are_text(cfg)?;
     let case = TestCase::load(&cfg.case)?;
     let _writer = prepare_folder(cfg, folder)?;

@@ -101,9 +101,8 @@ pub fn build(ask: &Ask, req: &Requested) -> CampaignConfig {
     }
 }
 
-/// Checks a new campaign before anything is drawn: its counts, every setting, and its prior.
+/// Checks a new campaign before anything is drawn: its counts, every setting, its vehicles and its prior.
 pub fn check_new(cfg: &CampaignConfig) -> Result<(), CampaignError> {
-    check_counts(cfg.budget, cfg.candidates)?;
     check(cfg)?;
     if let Some(p) = &cfg.prior {
         if !cfg.learn {
@@ -117,30 +116,37 @@ pub fn check_new(cfg: &CampaignConfig) -> Result<(), CampaignError> {
     Ok(())
 }
 
-/// Checks a new or stored campaign's settings against their declarations, naming the flag and the TOML key of
-/// each, and the vehicles it names.
+/// Checks a new or stored campaign's settings and the vehicles it names.
 pub fn check(cfg: &CampaignConfig) -> Result<(), CampaignError> {
-    let stored = serde_json::to_value(cfg).map_err(|e| config(&e.to_string()))?;
-    check_ranges(&stored).map_err(|e| config(&e))?;
-    fly_mode(&cfg.mode)?;
-    if let Err(e) = MockProfile::named(&cfg.mock_profile) {
-        return Err(config(&format!("--mock-profile (mock.profile): {e}")));
-    }
+    check_settings(cfg)?;
     if cfg.hfs.is_empty() {
         return Err(config("--connect names no vehicle"));
     }
     if cfg.hfs.len() > 1 && cfg.hfs.iter().any(|u| u == "mock") {
         return Err(config("--connect takes either `mock` or MAVLink URLs, not both"));
     }
-    if cfg.runner.is_some() && cfg.px4.is_some() {
-        return Err(config(
-            "--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)",
-        ));
-    }
     // Before anything is screened or flown: a typo in the fifth URL must not cost the first four flights.
     let links = cfg.runner.is_none() && cfg.px4.is_none();
     for url in cfg.hfs.iter().filter(|u| links && *u != "mock") {
         crate::bridge::LinkAddress::parse(url).map_err(|e| config(&format!("--connect: {e}")))?;
+    }
+    Ok(())
+}
+
+/// Checks a campaign's counts and every setting against its declaration (range, choices), naming the flag and
+/// the TOML key of each; [`crate::campaign::run::run_campaign`] runs nothing else.
+pub fn check_settings(cfg: &CampaignConfig) -> Result<(), CampaignError> {
+    check_counts(cfg.budget, cfg.candidates)?;
+    let stored = serde_json::to_value(cfg).map_err(|e| config(&e.to_string()))?;
+    check_ranges(&stored).map_err(|e| config(&e))?;
+    fly_mode(&cfg.mode)?;
+    if let Err(e) = MockProfile::named(&cfg.mock_profile) {
+        return Err(config(&format!("--mock-profile (mock.profile): {e}")));
+    }
+    if cfg.runner.is_some() && cfg.px4.is_some() {
+        return Err(config(
+            "--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)",
+        ));
     }
     Ok(())
 }
