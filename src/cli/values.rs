@@ -169,6 +169,10 @@ impl From<Family> for prgenuav::generator::Family {
 mod tests {
     use super::*;
 
+    fn names<T: ValueEnum>() -> Vec<String> {
+        T::value_variants().iter().map(name_of).collect()
+    }
+
     /// The names match the library's own parsers, so campaign files and the library agree on them.
     #[test]
     fn names_match_the_library() {
@@ -188,6 +192,17 @@ mod tests {
             assert_eq!(name_of(j).parse::<Judge>(), Ok((*j).into()));
         }
         assert_eq!(parse_stored::<Mode>("offboard", "mode").ok(), Some(Mode::Offboard));
+        for m in Mode::value_variants() {
+            let mode = prgenuav::campaign::setup::fly_mode(&name_of(m)).ok();
+            assert_eq!(mode, Some((*m).into()));
+        }
+        let declared = |section, key| -> Vec<String> {
+            let s = prgenuav::campaign::settings::find(section, key).unwrap();
+            s.choices.iter().map(|(n, _)| n.to_string()).collect()
+        };
+        assert_eq!(declared("screening", "motion"), names::<Motion>());
+        assert_eq!(declared("output", "spelling"), names::<Spelling>());
+        assert_eq!(declared("generator", "family"), names::<Family>());
         let e = parse_stored::<Mode>("ofboard", "mode").unwrap_err().to_string();
         assert!(e.contains("avoidance, offboard, mission"), "{e}");
     }
