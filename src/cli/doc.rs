@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use clap::{Arg, Command};
 
-use prgenuav::campaign::settings::{Default, SECTIONS, all, example_toml};
+use prgenuav::campaign::settings::{DefaultValue, SECTIONS, all, example_toml};
 
 /// How to bring docs/cli.md up to date.
 const UPDATE: &str = "UPDATE_CLI_DOC=1 cargo test --workspace cli_doc";
@@ -154,8 +154,8 @@ fn campaign_toml(s: &mut String) {
             let flag = k.flag.map_or_else(|| "-".to_string(), |f| format!("`{}`", f.long));
             // A constant default is shown as code; one that depends on the campaign, as prose.
             let default = match k.default {
-                Default::Value(_) => format!("`{}`", k.example()),
-                Default::Setup { doc, .. } => doc.to_string(),
+                DefaultValue::Constant(_) => format!("`{}`", k.example()),
+                DefaultValue::Setup { doc, .. } => doc.to_string(),
             };
             let _ = writeln!(s, "| `{}` | {default} | {flag} | {} |", k.key, k.help);
         }

@@ -1,7 +1,7 @@
 //! The declaration of every campaign setting, section by section: the section types of the campaign TOML
 //! ([`super::file`]) are generated from it, with a getter for each constant default.
 
-use super::{Default, Flag, FlagText, Setting};
+use super::{DefaultValue, Flag, FlagText, Setting};
 use crate::generator::GeneratorConfig;
 use crate::generator::limits as bounds;
 use crate::model::Range;
@@ -17,7 +17,7 @@ pub(super) const BLANK: Setting = Setting {
     key: "",
     flag: None,
     stored: "",
-    default: Default::Setup { doc: "", example: "" },
+    default: DefaultValue::Setup { doc: "", example: "" },
     range: None,
     choices: &[],
     help: "",
@@ -56,8 +56,8 @@ macro_rules! section {
         pub fn $field(&self) -> $ty { self.$field.clone().unwrap_or_else(|| $d) }
     };
     (@get $field:ident $ty:ty [setup $doc:literal, $ex:literal]) => {};
-    (@default $ty:ty [value $d:expr]) => { Default::Value(|| toml::Value::try_from::<$ty>($d).ok()) };
-    (@default $ty:ty [setup $doc:literal, $ex:literal]) => { Default::Setup { doc: $doc, example: $ex } };
+    (@default $ty:ty [value $d:expr]) => { DefaultValue::Constant(|| toml::Value::try_from::<$ty>($d).ok()) };
+    (@default $ty:ty [setup $doc:literal, $ex:literal]) => { DefaultValue::Setup { doc: $doc, example: $ex } };
 }
 
 /// Declares the `[generator]` keys, whose type is the generator's own [`GeneratorConfig`].

@@ -1,7 +1,7 @@
 //! The declaration of the settings of a campaign's run: screening, the embedded mocks, every flight, learning.
 
 use super::keys::{MAX_TIME_SCALE, MOCKS_PER_CORE, section};
-use super::{Default, Flag, FlagText, Setting};
+use super::{DefaultValue, Flag, FlagText, Setting};
 use crate::campaign::config::MAX_CANDIDATES;
 use crate::campaign::fly::mock_profile::DEFAULT_PROFILE;
 use crate::lfs::eval::ensemble::MAX_MEMBERS;

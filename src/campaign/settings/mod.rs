@@ -25,7 +25,7 @@ pub struct Setting {
     /// Its key in campaign.json (dotted below the top level); empty: not stored, a resumed campaign may change it.
     pub stored: &'static str,
     /// Its default when neither the file nor a flag gives it.
-    pub default: Default,
+    pub default: DefaultValue,
     /// Its accepted numbers (a range of numbers: each end).
     pub range: Option<Limit>,
     /// Its accepted names and what each means (empty: any value of its type).
@@ -38,9 +38,9 @@ pub struct Setting {
 
 /// A setting's default.
 #[derive(Debug, Clone, Copy)]
-pub enum Default {
+pub enum DefaultValue {
     /// A constant, as the TOML value (`None` only if it cannot be written as TOML, which a test rules out).
-    Value(fn() -> Option<toml::Value>),
+    Constant(fn() -> Option<toml::Value>),
     /// Decided by the campaign's setup (the budget, the vehicles): said in words, with an example value.
     Setup {
         /// The rule, in words.
@@ -134,16 +134,16 @@ impl Setting {
     /// The default as a TOML value, when it is a constant.
     pub fn default_value(&self) -> Option<toml::Value> {
         match self.default {
-            Default::Value(f) => f(),
-            Default::Setup { .. } => None,
+            DefaultValue::Constant(f) => f(),
+            DefaultValue::Setup { .. } => None,
         }
     }
 
     /// A valid TOML value for it: the default where it is a constant.
     pub fn example(&self) -> String {
         match self.default {
-            Default::Value(f) => f().map_or_else(String::new, |v| inline(&v)),
-            Default::Setup { example, .. } => example.to_string(),
+            DefaultValue::Constant(f) => f().map_or_else(String::new, |v| inline(&v)),
+            DefaultValue::Setup { example, .. } => example.to_string(),
         }
     }
 

@@ -44,7 +44,7 @@ fn every_declared_key_parses_and_every_key_of_the_format_is_declared() {
 #[test]
 fn every_constant_default_is_a_value_and_every_example_a_flag_value() {
     for s in all() {
-        if let Default::Value(f) = s.default {
+        if let DefaultValue::Constant(f) = s.default {
             assert!(f().is_some(), "{}: its default is no TOML value", s.toml_key());
         }
         if let Some(f) = &s.flag

@@ -137,7 +137,12 @@ pub fn check(cfg: &CampaignConfig) -> Result<(), CampaignError> {
 /// the TOML key of each; [`crate::campaign::run::run_campaign`] runs nothing else.
 pub fn check_settings(cfg: &CampaignConfig) -> Result<(), CampaignError> {
     check_counts(cfg.budget, cfg.candidates)?;
-    let stored = serde_json::to_value(cfg).map_err(|e| config(&e.to_string()))?;
+    // Paths are no declared setting (and one that is not UTF-8 is refused by the run, naming it).
+    let mut declared = cfg.clone();
+    declared.case = PathBuf::new();
+    declared.prior = None;
+    declared.px4 = None;
+    let stored = serde_json::to_value(&declared).map_err(|e| config(&e.to_string()))?;
     check_ranges(&stored).map_err(|e| config(&e))?;
     fly_mode(&cfg.mode)?;
     if let Err(e) = MockProfile::named(&cfg.mock_profile) {
