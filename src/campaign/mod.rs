@@ -6,6 +6,7 @@
 pub mod candidate;
 pub mod config;
 pub mod evaluation;
+pub mod flight_status;
 pub mod fly;
 pub mod learn;
 pub mod plan;

@@ -1,6 +1,7 @@
 //! Confirmed failures (`--confirm`) through the whole campaign, static and learning, with a vehicle whose
 //! repeated flights differ: an even candidate that failed passes when flown again, an odd one fails again.
 
+use crate::campaign::flight_status::FlightStatus;
 use std::collections::BTreeMap;
 
 use super::*;
@@ -204,7 +205,7 @@ fn one_flight_per_test_writes_no_unconfirmed_list() {
 }
 
 /// Every flight of a campaign's journal, sorted: (candidate, flight, distance in mm, status).
-fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, String)> {
+fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, FlightStatus)> {
     let mut all: Vec<_> = Journal::read(&dir.join("journal.jsonl"))
         .unwrap()
         .into_iter()

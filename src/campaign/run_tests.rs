@@ -1,6 +1,7 @@
 //! Campaign pipeline tests with a scripted screener and scripted vehicles (the real LFS and the mock
 //! autopilot are exercised by the integration tests).
 
+use crate::campaign::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -50,7 +51,7 @@ impl Vehicle for ScriptedVehicle {
 /// A 40 s flight that landed `d` metres from the boxes.
 fn landed(d: f64) -> Flown {
     Flown {
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         min_distance: Some(d),
         min_distance_raw: Some(d),
         flight_time_s: 40.0,

@@ -156,7 +156,7 @@ mod tests {
     #[test]
     fn the_campaign_learns_each_test_once_at_its_flights_mean() {
         let mut interrupted = flight(2, 2, 0.1);
-        interrupted.status = "interrupted".into();
+        interrupted.status = crate::campaign::flight_status::FlightStatus::Interrupted;
         let records = vec![
             flight(1, 0, 1.3),
             flight(2, 0, 1.2),

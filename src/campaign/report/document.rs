@@ -63,7 +63,7 @@ pub struct FlownTest {
     /// Flown un-binned minimum distance, metres.
     pub min_distance_raw: Option<f64>,
     /// How the flight ended.
-    pub status: String,
+    pub status: crate::campaign::flight_status::FlightStatus,
     /// Why, in words, when it did not land.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,

@@ -134,7 +134,7 @@ fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
         predicted_p_fail: r.predicted_p_fail,
         min_distance: r.min_distance,
         min_distance_raw: r.min_distance_raw,
-        status: r.status.clone(),
+        status: r.status,
         reason: r.reason.clone(),
         flight_time_s: r.flight_time_s,
         points: points(d),

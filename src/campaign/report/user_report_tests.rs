@@ -1,6 +1,7 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::report::outputs::{FlownTest, Report, StageTimes};
 use crate::campaign::report::suite::summary;
 use crate::campaign::report::verdicts::verdicts;
@@ -121,7 +122,7 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
         predicted_p_fail: None,
         min_distance: Some(2.5),
         min_distance_raw: Some(2.5),
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         reason: None,
         flight_time_s: 60.0,
         points: 0,

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::campaign::flight_status::FlightStatus;
 use crate::io::write_atomic;
 use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
@@ -37,8 +38,8 @@ pub struct FlightRecord {
     pub min_distance: Option<f64>,
     /// The flown un-binned minimum distance, metres.
     pub min_distance_raw: Option<f64>,
-    /// How the flight ended (`landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...).
-    pub status: String,
+    /// How the flight ended.
+    pub status: FlightStatus,
     /// Flight time, seconds.
     pub flight_time_s: f64,
     /// Warnings of the flight side (e.g. the avoidance planner falling behind).
@@ -55,17 +56,6 @@ pub struct FlightRecord {
     pub wall_s: f64,
 }
 
-/// The status of a flight cut short by the user (Ctrl-C): journaled so the trajectory is kept, but not charged to
-/// the budget, not learnt from, and flown first on `--resume`.
-pub const INTERRUPTED: &str = "interrupted";
-
-/// The status of a flight whose backend failed around it (a PX4 that died or never booted, a runner job that
-/// exited non-zero or left no trajectory) after its one retry: the vehicle, not the test, is at fault.
-pub const BACKEND_FAILED: &str = "backend_failed";
-
-/// Statuses of flights that are journaled but not charged to the budget: nothing was learnt about the test.
-pub const UNCHARGED: &[&str] = &[INTERRUPTED, BACKEND_FAILED];
-
 impl FlightRecord {
     /// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
     pub fn queued(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
@@ -80,7 +70,7 @@ impl FlightRecord {
                 predicted_raw_min_distance: None,
                 min_distance: None,
                 min_distance_raw: None,
-                status: "queued".into(),
+                status: FlightStatus::Queued,
                 flight_time_s: 0.0,
                 warnings: Vec::new(),
                 reason: None,
@@ -93,7 +83,7 @@ impl FlightRecord {
 
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
-        !UNCHARGED.contains(&self.status.as_str())
+        self.status.charged()
     }
 }
 
@@ -157,7 +147,7 @@ impl Journal {
     }
 
     /// Reads the flights charged to the budget, the ones a campaign learns from and reports (not those
-    /// [`UNCHARGED`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
+    /// [`FlightStatus::charged`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
     /// [`Self::heal`] drops it; a damaged line elsewhere, or a flight (candidate and attempt) journaled twice,
     /// is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
@@ -180,7 +170,7 @@ impl Journal {
         let mut pending: Vec<FlightRecord> = Vec::new();
         for r in all
             .into_iter()
-            .filter(|r| r.status == INTERRUPTED && !charged.contains(&r.candidate))
+            .filter(|r| r.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
         {
             pending.retain(|p| p.candidate != r.candidate);
             pending.push(r);
@@ -326,7 +316,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         predicted_raw_min_distance: Some(raw),
         min_distance: flown,
         min_distance_raw: flown,
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         flight_time_s: 60.0,
         warnings: Vec::new(),
         reason: None,
@@ -352,7 +342,7 @@ mod tests {
             predicted_raw_min_distance: None,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             flight_time_s: 41.0,
             warnings: Vec::new(),
             reason: None,
@@ -386,7 +376,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("journal.jsonl");
         let stopped = FlightRecord {
-            status: "link_lost".into(),
+            status: FlightStatus::LinkLost,
             reason: Some("no MISSION_ACK within 1.0 s".into()),
             min_distance: None,
             ..record(2)

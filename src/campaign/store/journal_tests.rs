@@ -1,5 +1,6 @@
 //! A journal damaged by a crash: what resume drops, what it refuses, and that no byte string panics.
 
+use crate::campaign::flight_status::FlightStatus;
 use proptest::prelude::*;
 
 use super::tests::{line, record};
@@ -120,7 +121,7 @@ proptest! {
 
 fn interrupted_line(candidate: u64) -> String {
     let r = FlightRecord {
-        status: INTERRUPTED.into(),
+        status: FlightStatus::Interrupted,
         ..record(candidate)
     };
     serde_json::to_string(&r).unwrap() + "\n"

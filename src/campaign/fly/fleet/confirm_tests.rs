@@ -1,5 +1,6 @@
 //! Confirmation in the fleet: a failing test flown again before the next candidate, within the budget.
 
+use crate::campaign::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -30,7 +31,7 @@ impl Vehicle for Scripted {
         let script = &self.script[id as usize];
         let d = script[n.min(script.len() - 1)];
         Ok(Flown {
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             min_distance: Some(d),
             min_distance_raw: Some(d),
             flight_time_s: 40.0,

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::campaign::candidate::Screened;
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::*;
 use crate::campaign::store::journal::Journal;
 use crate::model::TestCase;
@@ -31,7 +32,7 @@ impl Vehicle for Fake {
                 d.store(true, Ordering::SeqCst);
             }
             return Ok(Flown {
-                status: "rejected".into(),
+                status: FlightStatus::Rejected,
                 min_distance: None,
                 min_distance_raw: None,
                 flight_time_s: 0.0,
@@ -61,7 +62,7 @@ impl Vehicle for Fake {
         let id = test.obstacles[0].position.x as u64;
         self.log.lock().unwrap().push((self.name.into(), id));
         Ok(Flown {
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
             flight_time_s: 40.0,
@@ -221,7 +222,7 @@ fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_els
     assert!(out.dropped[0].contains("rejected 2 flights in a row") && out.dropped[0].contains("Compass"));
     assert_eq!((fleet.len(), fleet[0].name()), (1, "ok".to_string()));
     // One rejection is journaled, the second's job is flown by "ok": the budget is spent on 4 flights.
-    let rejected: Vec<_> = records.iter().filter(|r| r.status == "rejected").collect();
+    let rejected: Vec<_> = records.iter().filter(|r| r.status == FlightStatus::Rejected).collect();
     assert_eq!((records.len(), rejected.len(), out.flown), (5, 1, 5));
     let mut ids: Vec<u64> = records.iter().map(|r| r.candidate).collect();
     ids.sort();
