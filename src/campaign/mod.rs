@@ -4,6 +4,7 @@
 //! [`run`] runs the stages in order; [`candidate`] is the record they pass along.
 
 pub mod candidate;
+pub mod candidate_id;
 pub mod config;
 pub mod evaluation;
 pub mod flight_status;

@@ -2,6 +2,7 @@
 //! consistent folder (every record believable, each flight once, the file ending on a whole line) or is
 //! refused with an error naming the journal.
 
+use prgenuav::campaign::candidate::CandidateId;
 use std::path::{Path, PathBuf};
 
 use prgenuav::campaign::flight_status::FlightStatus;
@@ -15,7 +16,7 @@ const SIZE_M: f64 = 120.0;
 
 fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
     FlightRecord {
-        candidate,
+        candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
         predicted_min_distance: 1.0,

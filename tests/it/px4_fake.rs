@@ -2,6 +2,7 @@
 //! never boots, to check the statuses, the retry on a fresh instance, the budget accounting and that no
 //! process outlives prgenuav, even killed with SIGKILL. Runs in normal CI.
 
+use prgenuav::campaign::candidate::CandidateId;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
@@ -119,7 +120,12 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
     let path = folder.path().join("journal.jsonl");
     let base = case(2).with_obstacles(valid_pair());
     let jobs: Vec<Job> = (0..3)
-        .map(|i| Job::new(Screened::point(i, 1.0, 40.0, "landed".into()), base.clone()))
+        .map(|i| {
+            Job::new(
+                Screened::point(CandidateId(i), 1.0, 40.0, "landed".into()),
+                base.clone(),
+            )
+        })
         .collect();
     let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(v)];
     let out = fly_all(
@@ -127,7 +133,7 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
         jobs,
         1,
         folder.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &AtomicBool::new(false),
         &|_| {},
     );

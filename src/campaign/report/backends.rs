@@ -82,10 +82,11 @@ pub fn markdown(md: &mut String, backends: &[BackendSummary]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::candidate::CandidateId;
 
     fn record(vehicle: &str, status: FlightStatus, wall_s: f64) -> FlightRecord {
         FlightRecord {
-            candidate: 0,
+            candidate: CandidateId(0),
             obstacles: Vec::new(),
             predicted_min_distance: 1.0,
             predicted_flight_time_s: 1.0,

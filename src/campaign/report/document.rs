@@ -49,8 +49,8 @@ impl StageTimes {
 /// One flight in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlownTest {
-    /// The candidate index.
-    pub candidate: u64,
+    /// The candidate flown.
+    pub candidate: crate::campaign::candidate::CandidateId,
     /// Which flight of the candidate, from 0 (left out when 0).
     #[serde(skip_serializing_if = "crate::campaign::store::journal::is_first")]
     pub attempt: u32,

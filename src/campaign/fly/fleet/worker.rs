@@ -156,8 +156,12 @@ impl Fleet<'_> {
             .map_err(|_| "journal lock poisoned".to_string())
             .and_then(|mut j| {
                 j.0.append(record).map_err(|e| e.to_string())?;
-                if record.charged() {
-                    j.1.push((round, Journal::read_back(record)));
+                // The journal keeps the record as the file reads it back.
+                if record.charged()
+                    && let Some(back) = j.0.records().last()
+                {
+                    let back = back.clone();
+                    j.1.push((round, back));
                 }
                 Ok(())
             });
