@@ -30,7 +30,7 @@ const BINS: [f64; 3] = [1.0, 1.25, 1.5];
 fn confirmations(records: &[FlightRecord]) -> Vec<(f64, bool, usize)> {
     let mut by_test: BTreeMap<u64, Vec<&FlightRecord>> = BTreeMap::new();
     for r in records {
-        by_test.entry(r.candidate).or_default().push(r);
+        by_test.entry(r.candidate.0).or_default().push(r);
     }
     by_test
         .values()

@@ -6,6 +6,8 @@ use serde::{Deserialize, Serialize};
 use crate::generator::adaptive::DIMS;
 use crate::model::Obstacle;
 
+pub use super::candidate_id::CandidateId;
+
 /// Where a round's children come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lineage {
@@ -50,20 +52,27 @@ impl Candidate {
 
 /// Whether candidate `c` of `candidates` is a child of `lineage` (flights of candidates this run did not draw
 /// are not).
-pub fn is_child(candidates: &[Candidate], c: u64, lineage: Lineage) -> bool {
-    candidates.get(c as usize).is_some_and(|x| x.is_child_of(lineage))
+pub fn is_child(candidates: &[Candidate], c: CandidateId, lineage: Lineage) -> bool {
+    candidates.get(c.index()).is_some_and(|x| x.is_child_of(lineage))
 }
 
 /// The draw of candidate `c`, if this run drew it.
-pub fn unit_of(candidates: &[Candidate], c: u64) -> Option<[f64; DIMS]> {
-    candidates.get(c as usize).map(|x| x.unit)
+pub fn unit_of(candidates: &[Candidate], c: CandidateId) -> Option<[f64; DIMS]> {
+    candidates.get(c.index()).map(|x| x.unit)
+}
+
+/// The screened candidates of `candidates` not among `flown` (flown, queued or set aside), in draw order.
+pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> impl Iterator<Item = &'a Screened> {
+    (candidates.iter())
+        .filter_map(|c| c.screened.as_ref())
+        .filter(|s| !flown.contains(&s.candidate))
 }
 
 /// What the low-fidelity simulator predicted for one candidate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Screened {
-    /// The candidate's generator index.
-    pub candidate: u64,
+    /// The candidate.
+    pub candidate: CandidateId,
     /// Predicted minimum distance (competition definition), metres.
     pub min_distance: f64,
     /// Predicted flight time, seconds.
@@ -83,7 +92,7 @@ pub struct Screened {
 
 impl Screened {
     /// A point prediction without an ensemble.
-    pub fn point(candidate: u64, min_distance: f64, flight_time_s: f64, status: String) -> Self {
+    pub fn point(candidate: CandidateId, min_distance: f64, flight_time_s: f64, status: String) -> Self {
         Screened {
             candidate,
             min_distance,
@@ -125,11 +134,11 @@ pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRec
 pub fn check_journaled_as_drawn(
     records: &[super::store::journal::FlightRecord],
     candidates: &[Candidate],
-    drawn: std::ops::Range<u64>,
+    drawn: std::ops::Range<CandidateId>,
     journal: &std::path::Path,
 ) -> Result<(), String> {
     for r in records.iter().filter(|r| drawn.contains(&r.candidate)) {
-        let Some(c) = candidates.get(r.candidate as usize) else {
+        let Some(c) = candidates.get(r.candidate.index()) else {
             return Err(format!(
                 "{}: candidate {} is journaled but this campaign never drew it (it drew {}): the record comes \
                  from another campaign; remove its line or restore the journal, then resume",

@@ -4,8 +4,10 @@
 //! [`run`] runs the stages in order; [`candidate`] is the record they pass along.
 
 pub mod candidate;
+pub mod candidate_id;
 pub mod config;
 pub mod evaluation;
+pub mod flight_status;
 pub mod fly;
 pub mod learn;
 pub mod plan;

@@ -16,8 +16,8 @@ pub use super::report::outputs::Report;
 use super::report::outputs::{StageTimes, write_outputs};
 pub use super::screen::screener::{Progress, Screener};
 use super::store::folder::FolderLock;
-use super::store::journal::{Journal, flights_charged};
-use super::store::journal_check::{arena_size_m, check_journal};
+use super::store::journal::{FlightRecord, Journal, flights_charged};
+use super::store::journal_check::{arena_size_m, check_loaded};
 use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
 
@@ -34,12 +34,13 @@ pub fn run_campaign(
     check_paths_are_text(cfg)?;
     let case = TestCase::load(&cfg.case)?;
     let _writer = prepare_folder(cfg, folder)?;
-    // Before anything reads or appends: a record must never follow a torn line.
-    if let Some(dropped) = Journal::heal(&folder.join("journal.jsonl"))? {
+    // Read once, and healed before anything appends: a record must never follow a torn line.
+    let (mut journal, dropped) = Journal::load(&folder.join("journal.jsonl"))?;
+    if let Some(dropped) = dropped {
         progress.warn(&dropped);
     }
-    check_journal(&folder.join("journal.jsonl"), arena_size_m(&case))?;
-    if let Some(orphans) = unjournaled_trajectories(folder)? {
+    check_loaded(&journal, arena_size_m(&case))?;
+    if let Some(orphans) = unjournaled_trajectories(folder, journal.records()) {
         progress.warn(&orphans);
     }
     let input = CampaignInput {
@@ -51,7 +52,7 @@ pub fn run_campaign(
         cancel,
     };
     let mut stages = StageTimes::default();
-    let done = Journal::read(&folder.join("journal.jsonl"))?;
+    let done = journal.charged();
     let charged = flights_charged(&done);
     let first = FlightStage {
         case: &case,
@@ -65,38 +66,43 @@ pub fn run_campaign(
     };
     if cfg.learn && cfg.screen {
         // The replayed rounds fly the interrupted flights again where their plan has them.
-        return match run_rounds(&input, &mut vehicles, &mut stages) {
-            Ok((learnt, drawn)) => finish(&input, drawn, stages, Some(&learnt)),
-            Err(e) => report_if_stopped(e, &input, stages),
+        return match run_rounds(&input, &mut vehicles, &mut journal, &mut stages) {
+            Ok((learnt, drawn)) => finish(&input, &journal, drawn, stages, Some(&learnt)),
+            Err(e) => report_if_stopped(e, &input, &journal, stages),
         };
     }
-    let flown = fly_interrupted(&first, &mut vehicles, cfg.budget.saturating_sub(charged))
-        .and_then(|_| run_static(&input, &mut vehicles, &mut stages));
+    let flown = fly_interrupted(&first, &mut vehicles, &mut journal, cfg.budget.saturating_sub(charged))
+        .and_then(|_| run_static(&input, &mut vehicles, &mut journal, &mut stages));
     match flown {
-        Ok(drawn) => finish(&input, drawn, stages, None),
-        Err(e) => report_if_stopped(e, &input, stages),
+        Ok(drawn) => finish(&input, &journal, drawn, stages, None),
+        Err(e) => report_if_stopped(e, &input, &journal, stages),
     }
 }
 
 /// A campaign stopped (Ctrl-C, SIGTERM, SIGHUP) in a stage that cannot end early with a result, screening
 /// say, still reports the flights journaled so far: the stop is the user's, not an error.
-fn report_if_stopped(e: CampaignError, input: &CampaignInput, stages: StageTimes) -> Result<Report, CampaignError> {
+fn report_if_stopped(
+    e: CampaignError,
+    input: &CampaignInput,
+    journal: &Journal,
+    stages: StageTimes,
+) -> Result<Report, CampaignError> {
     if !input.cancel.load(std::sync::atomic::Ordering::SeqCst) {
         return Err(e);
     }
     input
         .progress
         .warn(&format!("stopped ({e}); reporting the flights journaled so far"));
-    finish(input, 0, stages, None)
+    finish(input, journal, 0, stages, None)
 }
 
 /// Says so when `flights/` holds trajectories the journal has no record of (a journal deleted or emptied, or a
 /// flight in the air when the campaign was killed): those flights are flown again, and the user should know.
-fn unjournaled_trajectories(folder: &Path) -> Result<Option<String>, CampaignError> {
+fn unjournaled_trajectories(folder: &Path, records: &[FlightRecord]) -> Option<String> {
     let journal = folder.join("journal.jsonl");
-    let known: HashSet<PathBuf> = Journal::read_all(&journal)?.into_iter().map(|r| r.trajectory).collect();
+    let known: HashSet<&PathBuf> = records.iter().map(|r| &r.trajectory).collect();
     let Ok(entries) = std::fs::read_dir(folder.join("flights")) else {
-        return Ok(None);
+        return None;
     };
     let mut orphans: Vec<String> = entries
         .filter_map(Result::ok)
@@ -105,11 +111,11 @@ fn unjournaled_trajectories(folder: &Path) -> Result<Option<String>, CampaignErr
         .map(|p| p.display().to_string())
         .collect();
     if orphans.is_empty() {
-        return Ok(None);
+        return None;
     }
     orphans.sort();
     let shown = orphans.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
-    Ok(Some(format!(
+    Some(format!(
         "{}: {} trajectory file(s) in flights/ have no journal record ({shown}{}): flights not journaled (the \
          campaign was killed mid-flight, or the journal was emptied or removed); they are not part of the \
          campaign's results; a candidate among them that the campaign flies again gets a new file in its place, \
@@ -117,7 +123,7 @@ fn unjournaled_trajectories(folder: &Path) -> Result<Option<String>, CampaignErr
         journal.display(),
         orphans.len(),
         if orphans.len() > 5 { ", ..." } else { "" }
-    )))
+    ))
 }
 
 /// `campaign.json` keeps its paths as JSON text, so a path that is not UTF-8 could never be resumed.
@@ -162,12 +168,12 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, Cam
 /// Both campaigns end the same way: the journal's flights written out as tests and reports.
 fn finish(
     input: &CampaignInput,
+    journal: &Journal,
     drawn: usize,
     stages: StageTimes,
     learning: Option<&Learnt>,
 ) -> Result<Report, CampaignError> {
-    let records = Journal::read(&input.folder.join("journal.jsonl"))?;
-    Ok(write_outputs(input, drawn, &records, stages, learning)?)
+    Ok(write_outputs(input, drawn, journal, stages, learning)?)
 }
 
 #[cfg(test)]

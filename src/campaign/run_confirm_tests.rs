@@ -1,6 +1,7 @@
 //! Confirmed failures (`--confirm`) through the whole campaign, static and learning, with a vehicle whose
 //! repeated flights differ: an even candidate that failed passes when flown again, an odd one fails again.
 
+use crate::campaign::flight_status::FlightStatus;
 use std::collections::BTreeMap;
 
 use super::*;
@@ -53,9 +54,9 @@ fn per_test(journal: &[FlightRecord]) -> Vec<(u64, usize, usize)> {
     let mut out: Vec<(u64, usize, usize)> = Vec::new();
     for r in journal {
         let fail = usize::from(r.min_distance.unwrap() < 1.5);
-        match out.iter_mut().find(|t| t.0 == r.candidate) {
+        match out.iter_mut().find(|t| t.0 == r.candidate.0) {
             Some(t) => (t.1, t.2) = (t.1 + 1, t.2 + fail),
-            None => out.push((r.candidate, 1, fail)),
+            None => out.push((r.candidate.0, 1, fail)),
         }
     }
     out.sort();
@@ -82,7 +83,7 @@ fn check_confirmed(dir: &Path, r: &crate::campaign::run::Report, budget: usize) 
         };
         // Only the last tests flown may have been cut by the budget.
         assert!(
-            flights == expected || journal.iter().rev().take(3).any(|x| x.candidate == c),
+            flights == expected || journal.iter().rev().take(3).any(|x| x.candidate.0 == c),
             "{c}"
         );
     }
@@ -143,7 +144,7 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
             let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
             let mut means: BTreeMap<u64, (f64, f64)> = BTreeMap::new();
             for rec in &journal {
-                let e = means.entry(rec.candidate).or_default();
+                let e = means.entry(rec.candidate.0).or_default();
                 *e = (e.0 + rec.min_distance.unwrap(), e.1 + 1.0);
             }
             let failing = means.values().filter(|(sum, n)| sum / n < 1.5).count();
@@ -188,7 +189,7 @@ fn a_resumed_campaign_flies_the_pending_confirmation_first() {
         let before = flown.lock().unwrap().len();
         let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         let flown = flown.lock().unwrap().clone();
-        assert_eq!(flown[before], (last.candidate, 1), "learn {learn}: {flown:?}");
+        assert_eq!(flown[before], (last.candidate.0, 1), "learn {learn}: {flown:?}");
         check_confirmed(dir.path(), &r, 12);
     }
 }
@@ -204,13 +205,13 @@ fn one_flight_per_test_writes_no_unconfirmed_list() {
 }
 
 /// Every flight of a campaign's journal, sorted: (candidate, flight, distance in mm, status).
-fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, String)> {
+fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, FlightStatus)> {
     let mut all: Vec<_> = Journal::read(&dir.join("journal.jsonl"))
         .unwrap()
         .into_iter()
         .map(|r| {
             let mm = (r.min_distance.unwrap() * 1000.0).round() as i64;
-            (r.candidate, r.attempt, mm, r.status)
+            (r.candidate.0, r.attempt, mm, r.status)
         })
         .collect();
     all.sort();
@@ -304,7 +305,7 @@ fn a_resume_whose_rounds_come_out_otherwise_keeps_the_journaled_flights_and_flie
     let all = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
     assert_eq!((all.len(), r.suite.flown), (16, 16));
     assert_eq!(flown.lock().unwrap().len(), 16 - kept);
-    let mut ids: Vec<(u64, u32)> = all.iter().map(|f| (f.candidate, f.attempt)).collect();
+    let mut ids: Vec<(u64, u32)> = all.iter().map(|f| (f.candidate.0, f.attempt)).collect();
     ids.sort_unstable();
     ids.dedup();
     assert_eq!(ids.len(), 16, "a flight journaled twice");

@@ -77,7 +77,7 @@ fn with_overlap_the_next_round_is_screened_while_a_round_flies_and_the_budget_is
     );
     assert_eq!(r.suite.flown, 16);
     let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
-    let mut seen: Vec<u64> = journal.iter().map(|j| j.candidate).collect();
+    let mut seen: Vec<u64> = journal.iter().map(|j| j.candidate.0).collect();
     seen.sort_unstable();
     seen.dedup();
     assert_eq!(seen.len(), 16, "no candidate flown twice");

@@ -1,6 +1,7 @@
 //! Campaign pipeline tests with a scripted screener and scripted vehicles (the real LFS and the mock
 //! autopilot are exercised by the integration tests).
 
+use crate::campaign::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -50,7 +51,7 @@ impl Vehicle for ScriptedVehicle {
 /// A 40 s flight that landed `d` metres from the boxes.
 fn landed(d: f64) -> Flown {
     Flown {
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         min_distance: Some(d),
         min_distance_raw: Some(d),
         flight_time_s: 40.0,
@@ -400,3 +401,22 @@ mod confirm;
 
 #[path = "run_overlap_tests.rs"]
 mod overlap;
+
+/// A run reads its journal file once, new or resumed, learning or not: every stage asks the journal in memory.
+#[test]
+fn a_run_reads_the_journal_file_once() {
+    use crate::campaign::store::journal::READS;
+    for cfg in [config(6), adapted(6)] {
+        let dir = tempfile::tempdir().unwrap();
+        let flown = Arc::new(Mutex::new(Vec::new()));
+        let reads_of = |vehicles, cancel: &AtomicBool| {
+            READS.with(|n| n.set(0));
+            run_campaign(&cfg, dir.path(), &ScriptedLfs, vehicles, &Quiet, cancel).unwrap();
+            READS.with(|n| n.get())
+        };
+        let killed = reads_of(vehicle(&flown, Some(3)), &AtomicBool::new(false));
+        let resumed = reads_of(vehicle(&flown, None), &AtomicBool::new(false));
+        assert_eq!((killed, resumed), (1, 1), "learn {}", cfg.learn);
+        assert_eq!(flown.lock().unwrap().len(), 6, "learn {}", cfg.learn);
+    }
+}

@@ -2,8 +2,10 @@
 //! consistent folder (every record believable, each flight once, the file ending on a whole line) or is
 //! refused with an error naming the journal.
 
+use prgenuav::campaign::candidate::CandidateId;
 use std::path::{Path, PathBuf};
 
+use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::campaign::store::journal_check::{check_journal, check_record, is_inside};
 use proptest::prelude::*;
@@ -12,9 +14,9 @@ use serde_json::Value;
 /// The arena size the checks use here, metres.
 const SIZE_M: f64 = 120.0;
 
-fn record(candidate: u64, status: &str) -> FlightRecord {
+fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
     FlightRecord {
-        candidate,
+        candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
         predicted_min_distance: 1.0,
@@ -23,7 +25,7 @@ fn record(candidate: u64, status: &str) -> FlightRecord {
         predicted_raw_min_distance: None,
         min_distance: Some(0.8 + candidate as f64),
         min_distance_raw: Some(0.7 + candidate as f64),
-        status: status.into(),
+        status,
         flight_time_s: 61.0,
         warnings: Vec::new(),
         reason: None,
@@ -35,10 +37,10 @@ fn record(candidate: u64, status: &str) -> FlightRecord {
 
 fn journal_text() -> String {
     [
-        record(0, "landed"),
-        record(3, "collision"),
-        record(5, "interrupted"),
-        record(7, "landed"),
+        record(0, FlightStatus::Landed),
+        record(3, FlightStatus::Collision),
+        record(5, FlightStatus::Interrupted),
+        record(7, FlightStatus::Landed),
     ]
     .iter()
     .map(|r| serde_json::to_string(r).unwrap() + "\n")

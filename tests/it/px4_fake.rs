@@ -2,6 +2,7 @@
 //! never boots, to check the statuses, the retry on a fresh instance, the budget accounting and that no
 //! process outlives prgenuav, even killed with SIGKILL. Runs in normal CI.
 
+use prgenuav::campaign::candidate::CandidateId;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
@@ -9,10 +10,11 @@ use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::candidate::Screened;
+use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::fleet::fly_all;
 use prgenuav::campaign::fly::px4::{Px4Settings, Px4Vehicle};
 use prgenuav::campaign::fly::vehicle::{Job, Vehicle, VehicleError};
-use prgenuav::campaign::store::journal::{BACKEND_FAILED, Journal};
+use prgenuav::campaign::store::journal::Journal;
 
 use super::{case, repo, test_file, valid_pair};
 
@@ -59,7 +61,7 @@ fn a_px4_dying_at_boot_is_retried_once_then_journaled_backend_failed_and_the_veh
     let flown = v
         .fly(&test, &csv, &AtomicBool::new(false))
         .expect("journaled, not dropped");
-    assert_eq!(flown.status, BACKEND_FAILED);
+    assert_eq!(flown.status, FlightStatus::BackendFailed);
     let reason = flown.reason.unwrap_or_default();
     assert!(
         reason.contains("two fresh instances")
@@ -92,7 +94,7 @@ fn a_px4_that_never_boots_is_retried_on_a_fresh_instance_and_stopped_each_time()
     let csv = tmp.path().join("flights/candidate_3.csv");
     let t0 = Instant::now();
     let flown = v.fly(&case(2), &csv, &AtomicBool::new(false)).expect("journaled");
-    assert_eq!(flown.status, BACKEND_FAILED);
+    assert_eq!(flown.status, FlightStatus::BackendFailed);
     let reason = flown.reason.unwrap_or_default();
     assert!(
         reason.contains("within 1 s") && reason.contains("fake px4 starting"),
@@ -118,7 +120,12 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
     let path = folder.path().join("journal.jsonl");
     let base = case(2).with_obstacles(valid_pair());
     let jobs: Vec<Job> = (0..3)
-        .map(|i| Job::new(Screened::point(i, 1.0, 40.0, "landed".into()), base.clone()))
+        .map(|i| {
+            Job::new(
+                Screened::point(CandidateId(i), 1.0, 40.0, "landed".into()),
+                base.clone(),
+            )
+        })
         .collect();
     let mut fleet: Vec<Box<dyn Vehicle>> = vec![Box::new(v)];
     let out = fly_all(
@@ -126,14 +133,14 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
         jobs,
         1,
         folder.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &AtomicBool::new(false),
         &|_| {},
     );
     let all = Journal::read_all(&path).unwrap();
-    let statuses: Vec<&str> = all.iter().map(|r| r.status.as_str()).collect();
+    let statuses: Vec<FlightStatus> = all.iter().map(|r| r.status).collect();
     // Budget 1: the backend failure leaves it unspent, so the next job is tried, and drops the vehicle.
-    assert_eq!(statuses, vec![BACKEND_FAILED]);
+    assert_eq!(statuses, vec![FlightStatus::BackendFailed]);
     assert_eq!((out.flown, out.records.len()), (0, 0), "nothing charged");
     assert!(Journal::read(&path).unwrap().is_empty());
     assert_eq!((out.dropped.len(), fleet.len()), (1, 0), "{:?}", out.dropped);
@@ -165,7 +172,7 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert_eq!(all.len(), 1);
     // The lowest instance slot free on this machine (another PX4 may hold slot 0).
-    assert_eq!(all[0].status.as_str(), BACKEND_FAILED);
+    assert_eq!(all[0].status, FlightStatus::BackendFailed);
     assert!(all[0].vehicle.starts_with("px4-sih#"), "{}", all[0].vehicle);
     assert!(folder.join("flights/candidate_0.px4.log").is_file());
     let stored: serde_json::Value =

@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use prgenuav::bridge::FlyMode;
+use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::mock_mavlink::MockVehicle;
 use prgenuav::campaign::fly::vehicle::Vehicle;
-use prgenuav::campaign::store::journal::{BACKEND_FAILED, Journal};
+use prgenuav::campaign::store::journal::Journal;
 use prgenuav::model::{Trajectory, load_ulog_trajectory};
 
 use super::ulog::ULogWriter;
@@ -36,7 +37,7 @@ fn record_the_standin_ulog() {
         Some(std::time::Duration::ZERO),
     );
     let flown = mock.fly(&test, &csv, &AtomicBool::new(false)).unwrap();
-    assert_eq!(flown.status, "landed", "{flown:?}");
+    assert_eq!(flown.status, FlightStatus::Landed, "{flown:?}");
     let t = Trajectory::load_csv(&csv).unwrap();
     let mut w = ULogWriter::new().local_position_format();
     for s in &t.samples {
@@ -150,7 +151,7 @@ fn the_kubernetes_agent_needs_a_path_and_leaves_its_logs_in_tmp() {
     let (_, stdout, _) = run(&bare);
     let folder = output_folder(&stdout);
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
-    assert_eq!(all[0].status, BACKEND_FAILED, "{all:?}");
+    assert_eq!(all[0].status, FlightStatus::BackendFailed, "{all:?}");
     let reason = all[0].reason.as_deref().unwrap();
     assert!(
         reason.contains("exited with code 1") && reason.contains("endswith"),
@@ -187,7 +188,7 @@ fn a_broken_runner_is_dropped_after_two_failed_flights_and_nothing_is_charged() 
     let folder = std::fs::read_dir(out.path()).unwrap().next().unwrap().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert!(
-        all.len() == 1 && all[0].status == BACKEND_FAILED,
+        all.len() == 1 && all[0].status == FlightStatus::BackendFailed,
         "the first failed flight is journaled, the second given back with the runner: {all:?}"
     );
     assert!(

@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 
 use super::folder::{load_tests, write_averages};
 use super::suite::{Evaluation, FlownTest, evaluate_suite};
-use crate::campaign::candidate::Screened;
+use crate::campaign::candidate::{CandidateId, Screened};
 use crate::campaign::config::CampaignError;
 use crate::campaign::fly::fleet::fly_all;
 use crate::campaign::fly::vehicle::{Job, PoolOutcome, Vehicle};
@@ -79,19 +79,24 @@ pub fn evaluate_by_flying(
     })?;
     let _lock = FolderLock::acquire(&folder)?;
     let journal_path = folder.join("journal.jsonl");
-    if journal_path.is_file() {
-        Journal::heal(&journal_path)?;
-    }
-    let journal = Journal::open(&journal_path)?;
-    let done = Journal::read(&journal_path)?;
+    let (mut journal, _) = Journal::load(&journal_path)?;
+    let done = journal.charged();
     check_same_tests(&done, &tests, &journal_path)?;
     let jobs = missing_jobs(&tests, &done, setup.runs);
     let budget = jobs.len();
-    let outcome = fly_all(vehicles, jobs, budget, &folder, journal, setup.cancel, setup.on_flight);
+    let outcome = fly_all(
+        vehicles,
+        jobs,
+        budget,
+        &folder,
+        &mut journal,
+        setup.cancel,
+        setup.on_flight,
+    );
     if let Some(e) = outcome.errors.first() {
         return Err(CampaignError::Config(e.clone()));
     }
-    let done = Journal::read(&journal_path)?;
+    let done = journal.charged();
     let flown = flown_tests(&tests, &done, &folder, setup.runs)?;
     let missing = tests.len() * setup.runs - flown.iter().map(|t| t.flights.len()).sum::<usize>();
     let (mut evaluation, averages) = evaluate_suite(&flown, setup.judge, setup.similar_below_m)?;
@@ -107,8 +112,8 @@ pub fn evaluate_by_flying(
 
 fn run_of(record: &FlightRecord) -> (usize, usize) {
     (
-        (record.candidate / RUN_STRIDE) as usize,
-        (record.candidate % RUN_STRIDE) as usize,
+        (record.candidate.0 / RUN_STRIDE) as usize,
+        (record.candidate.0 % RUN_STRIDE) as usize,
     )
 }
 
@@ -135,7 +140,7 @@ fn missing_jobs(tests: &[(PathBuf, TestCase)], done: &[FlightRecord], runs: usiz
     let mut jobs = Vec::new();
     for (i, (_, test)) in tests.iter().enumerate() {
         for k in 0..runs {
-            let candidate = i as u64 * RUN_STRIDE + k as u64;
+            let candidate = CandidateId(i as u64 * RUN_STRIDE + k as u64);
             if done.iter().any(|r| r.candidate == candidate) {
                 continue;
             }

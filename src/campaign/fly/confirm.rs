@@ -5,6 +5,7 @@
 //! A test stops being flown once the majority of K is settled (K = 3: two failures, or two passes). Only a
 //! test that failed at least once is flown again; K = 1 is one flight per test, as without confirmation.
 
+use crate::campaign::candidate::CandidateId;
 use std::collections::BTreeMap;
 
 use crate::campaign::store::journal::FlightRecord;
@@ -55,8 +56,8 @@ impl Tally {
 }
 
 /// Each flown test's tally and its first flight, by candidate.
-pub fn tallies(records: &[FlightRecord]) -> BTreeMap<u64, (Tally, &FlightRecord)> {
-    let mut out: BTreeMap<u64, (Tally, &FlightRecord)> = BTreeMap::new();
+pub fn tallies(records: &[FlightRecord]) -> BTreeMap<CandidateId, (Tally, &FlightRecord)> {
+    let mut out: BTreeMap<CandidateId, (Tally, &FlightRecord)> = BTreeMap::new();
     // An interrupted flight or a failed backend says nothing about the test.
     for r in records.iter().filter(|r| r.charged()) {
         let entry = out.entry(r.candidate).or_insert((Tally::default(), r));
@@ -72,7 +73,7 @@ pub fn tallies(records: &[FlightRecord]) -> BTreeMap<u64, (Tally, &FlightRecord)
 /// waiting first), each with its tally and first flight.
 pub fn pending(records: &[FlightRecord], k: usize) -> Vec<(Tally, &FlightRecord)> {
     let all = tallies(records);
-    let mut last: Vec<(usize, u64)> = Vec::new();
+    let mut last: Vec<(usize, CandidateId)> = Vec::new();
     for (i, r) in records.iter().enumerate() {
         last.retain(|(_, c)| *c != r.candidate);
         last.push((i, r.candidate));
@@ -96,7 +97,7 @@ pub fn first_flights(records: &[FlightRecord]) -> Vec<FlightRecord> {
 /// records instead, repeats would weigh the failing tests twice and, as copies, pull the failing tests'
 /// diversity down. With one flight per test this is the journal itself.
 pub fn as_learnt(records: &[FlightRecord]) -> Vec<FlightRecord> {
-    let mut sums: BTreeMap<u64, (f64, f64, usize)> = BTreeMap::new();
+    let mut sums: BTreeMap<CandidateId, (f64, f64, usize)> = BTreeMap::new();
     for r in records.iter().filter(|r| r.charged()) {
         if let Some(d) = r.min_distance {
             let e = sums.entry(r.candidate).or_default();
@@ -118,7 +119,7 @@ pub fn as_learnt(records: &[FlightRecord]) -> Vec<FlightRecord> {
 /// Of the tests flown again after failing their first flight, how many failed their second flight too, and
 /// how many there are: the confirmation rate's numerator and denominator.
 pub fn failed_again(records: &[FlightRecord]) -> (usize, usize) {
-    let first_failed: BTreeMap<u64, bool> = records
+    let first_failed: BTreeMap<CandidateId, bool> = records
         .iter()
         .filter(|r| r.attempt == 0)
         .map(|r| (r.candidate, failed(r.min_distance)))
@@ -133,7 +134,7 @@ pub fn failed_again(records: &[FlightRecord]) -> (usize, usize) {
 
 /// The trajectory of a test's flight, relative to the campaign folder: `flights/candidate_N.csv` for its
 /// first, `candidate_N_2.csv` for its second, and so on.
-pub fn trajectory_name(candidate: u64, attempt: u32) -> std::path::PathBuf {
+pub fn trajectory_name(candidate: CandidateId, attempt: u32) -> std::path::PathBuf {
     let name = match attempt {
         0 => format!("candidate_{candidate}.csv"),
         a => format!("candidate_{candidate}_{}.csv", a + 1),
@@ -156,7 +157,7 @@ mod tests {
     #[test]
     fn the_campaign_learns_each_test_once_at_its_flights_mean() {
         let mut interrupted = flight(2, 2, 0.1);
-        interrupted.status = "interrupted".into();
+        interrupted.status = crate::campaign::flight_status::FlightStatus::Interrupted;
         let records = vec![
             flight(1, 0, 1.3),
             flight(2, 0, 1.2),
@@ -169,7 +170,7 @@ mod tests {
         let learnt = as_learnt(&records);
         let got: Vec<(u64, f64)> = learnt
             .iter()
-            .map(|r| (r.candidate, r.min_distance.unwrap_or(-1.0)))
+            .map(|r| (r.candidate.0, r.min_distance.unwrap_or(-1.0)))
             .collect();
         // Test 1 confirmed (mean 1.35 m); test 2 refuted (1.2, 1.7, 1.8: 1.567 m, the interrupted flight not
         // counted); test 3 flown once, unchanged.
@@ -236,7 +237,7 @@ mod tests {
         let p = pending(&records, 3);
         let got: Vec<(u64, u32, usize)> = p
             .iter()
-            .map(|(t, first)| (first.candidate, t.next_attempt, t.failures))
+            .map(|(t, first)| (first.candidate.0, t.next_attempt, t.failures))
             .collect();
         // 8 passed, 10 is confirmed (2 of 3); 9 waits longer than 7.
         assert_eq!(got, [(9, 1, 1), (7, 2, 1)]);
@@ -247,9 +248,12 @@ mod tests {
 
     #[test]
     fn re_flights_have_their_own_trajectory() {
-        assert_eq!(trajectory_name(12, 0), std::path::Path::new("flights/candidate_12.csv"));
         assert_eq!(
-            trajectory_name(12, 1),
+            trajectory_name(CandidateId(12), 0),
+            std::path::Path::new("flights/candidate_12.csv")
+        );
+        assert_eq!(
+            trajectory_name(CandidateId(12), 1),
             std::path::Path::new("flights/candidate_12_2.csv")
         );
     }

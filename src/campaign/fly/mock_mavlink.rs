@@ -43,7 +43,7 @@ pub(in crate::campaign) fn fly_blocking(
 
 pub(in crate::campaign) fn flown(report: FlightReport) -> Flown {
     Flown {
-        status: report.status.as_str().to_string(),
+        status: report.status.into(),
         min_distance: report.min_distance,
         min_distance_raw: report.min_distance_raw,
         flight_time_s: report.flight_time_s,

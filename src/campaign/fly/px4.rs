@@ -3,8 +3,9 @@
 //! "Preflight Fail: horizontal velocity unstable"), in the instance slot its vehicle owns.
 //!
 //! A PX4 that never boots, dies or cannot be flown is the backend's fault, not the test's: the flight is
-//! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::store::journal::BACKEND_FAILED`] (not charged).
+//! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::flight_status::FlightStatus::BackendFailed`] (not charged).
 
+use crate::campaign::flight_status::FlightStatus;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -188,7 +189,7 @@ impl Px4Vehicle {
 /// the machine's (a starved instance that is late with its home position), not on the test's: the flight is
 /// retried on a fresh instance like a failed boot, and never charged to the budget.
 fn never_ready(f: Flown, instance: u8) -> Attempt {
-    if f.status == "rejected" {
+    if f.status == FlightStatus::Rejected {
         Attempt::Failed(format!(
             "PX4 instance {instance} was never ready to fly: {}",
             f.reason.as_deref().unwrap_or("no reason given")
@@ -263,7 +264,7 @@ fn console_note(written: &Result<String, String>) -> String {
 
 /// A flight that did not run to its end names PX4's console in its reason.
 fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown {
-    if !matches!(f.status.as_str(), "landed" | "collision") {
+    if !f.status.completed() {
         let note = console_note(written);
         f.reason = Some(match f.reason {
             Some(r) => format!("{r}; {note}"),
@@ -276,7 +277,7 @@ fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown 
 /// The campaign's stop came before the flight took off: `aborted`, which the fleet journals as interrupted.
 fn stopped_before_flying(written: &Result<String, String>) -> Flown {
     Flown::unflown(
-        "aborted",
+        FlightStatus::Aborted,
         format!("stopped before PX4 was flying; {}", console_note(written)),
     )
 }
@@ -314,19 +315,19 @@ mod tests {
 
     #[test]
     fn a_fresh_instance_that_never_arms_is_a_backend_failure_and_a_flown_one_is_not() {
-        let f = |status: &str| Flown {
-            status: status.into(),
+        let f = |status: FlightStatus| Flown {
+            status,
             min_distance: None,
             min_distance_raw: None,
             flight_time_s: 0.0,
             warnings: Vec::new(),
             reason: Some("not ready to arm within 60 s (missing: home position)".into()),
         };
-        match never_ready(f("rejected"), 3) {
+        match never_ready(f(FlightStatus::Rejected), 3) {
             Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
             _ => panic!("a rejected flight on a fresh instance must be retried, not journaled as flown"),
         }
-        for status in ["landed", "collision", "timeout"] {
+        for status in [FlightStatus::Landed, FlightStatus::Collision, FlightStatus::Timeout] {
             assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");
         }
     }
@@ -355,7 +356,7 @@ mod tests {
         let p = Path::new("/x/campaign/flights/candidate_4.px4.log");
         assert_eq!(shown(p), PathBuf::from("flights/candidate_4.px4.log"));
         let f = Flown {
-            status: "timeout".into(),
+            status: FlightStatus::Timeout,
             min_distance: None,
             min_distance_raw: None,
             flight_time_s: 1.0,

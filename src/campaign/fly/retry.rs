@@ -8,7 +8,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::path::Path;
 
 use super::vehicle::{Flown, Vehicle, VehicleError};
-use crate::campaign::store::journal::{BACKEND_FAILED, FlightRecord};
+use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::store::journal::FlightRecord;
 use crate::model::TestCase;
 
 /// Tries of one flight: the first and one retry.
@@ -75,7 +76,7 @@ impl Retry {
                 ),
             });
         }
-        Ok(Flown::unflown(BACKEND_FAILED, reason))
+        Ok(Flown::unflown(FlightStatus::BackendFailed, reason))
     }
 }
 
@@ -90,7 +91,7 @@ pub(in crate::campaign) fn rejected_in_a_row(history: &[FlightRecord], vehicle: 
         .iter()
         .rev()
         .filter(|r| r.vehicle == vehicle)
-        .take_while(|r| r.status == "rejected")
+        .take_while(|r| r.status == FlightStatus::Rejected)
         .count()
 }
 
@@ -104,7 +105,7 @@ pub(in crate::campaign) fn fly_counting_rejections(
     rejected_in_a_row: &mut usize,
 ) -> Result<Flown, VehicleError> {
     match vehicle.fly(test, csv, cancel) {
-        Ok(flown) if flown.status == "rejected" => {
+        Ok(flown) if flown.status == FlightStatus::Rejected => {
             *rejected_in_a_row += 1;
             if *rejected_in_a_row >= REJECTED_IN_A_ROW_TO_DROP {
                 Err(VehicleError::Unreachable {
@@ -131,7 +132,7 @@ mod tests {
 
     fn flown() -> Flown {
         Flown {
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             min_distance: Some(2.0),
             min_distance_raw: Some(2.0),
             flight_time_s: 60.0,
@@ -151,7 +152,7 @@ mod tests {
         };
         assert_eq!((n, why), (ATTEMPTS, vec!["boot 1".to_string(), "boot 2".into()]));
         let f = retry.failed("px4#0".into(), "boot".into()).unwrap();
-        assert_eq!(f.status, BACKEND_FAILED);
+        assert_eq!(f.status, FlightStatus::BackendFailed);
     }
 
     #[test]

@@ -4,13 +4,13 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::campaign::candidate::{Candidate, Screened};
-use crate::campaign::config::CampaignError;
+use crate::campaign::candidate::{Candidate, CandidateId, Screened};
+use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::pending;
 use crate::campaign::fly::fleet::{FleetSetup, run_fleet};
 use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle};
 use crate::campaign::screen::screener::Progress;
-use crate::campaign::store::journal::{FlightRecord, Journal};
+use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
 use crate::campaign::store::replay::Replay;
 use crate::model::TestCase;
 
@@ -45,31 +45,70 @@ pub fn fly_ranked(
     ctx: &FlightStage,
     ranked: Vec<Screened>,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
+    journal: &mut Journal,
     remaining: usize,
 ) -> Result<(Vec<FlightRecord>, FleetUse), CampaignError> {
     let jobs = stage_jobs(ctx, ranked, &[]);
     if jobs.is_empty() || remaining == 0 {
         return Ok((Vec::new(), FleetUse::default()));
     }
-    let no_vehicle_left = |why: String| {
-        CampaignError::NoVehicle(format!(
-            "{why}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
-            ctx.folder.display()
-        ))
-    };
     if vehicles.is_empty() {
-        return Err(no_vehicle_left("every vehicle was dropped in an earlier round".into()));
+        return Err(no_vehicle_left(ctx.folder, &[]));
     }
-    let outcome = fly_stage(ctx, "fly", jobs, vehicles, remaining)?;
+    let outcome = fly_stage(ctx, "fly", jobs, vehicles, journal, remaining)?;
     if vehicles.is_empty() {
-        return Err(no_vehicle_left(outcome.dropped.join("; ")));
+        return Err(no_vehicle_left(ctx.folder, &outcome.dropped));
     }
     Ok((outcome.records, outcome.fleet))
 }
 
+/// A fleet with no vehicle left stops the campaign in `folder`, keeping the flights journaled so far for
+/// `--resume`: a campaign that lost every vehicle must not end as a clean run that found no failing test.
+/// `dropped`: why each vehicle was dropped in this stage (none: in an earlier one).
+pub fn no_vehicle_left(folder: &Path, dropped: &[String]) -> CampaignError {
+    CampaignError::NoVehicle(format!(
+        "{}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
+        if dropped.is_empty() {
+            "every vehicle was dropped in an earlier stage".to_string()
+        } else {
+            dropped.join("; ")
+        },
+        folder.display()
+    ))
+}
+
+/// Tells the user that the campaign resumes from the charged flights `done` of its `budget`, and `how` it
+/// goes on with them.
+pub fn note_resuming(progress: &dyn Progress, done: &[FlightRecord], budget: usize, how: &str) {
+    if done.is_empty() {
+        return;
+    }
+    let charged = flights_charged(done);
+    progress.note(&format!(
+        "resuming: {charged} flights already journaled, {} left in the budget{how}",
+        budget.saturating_sub(charged)
+    ));
+}
+
+impl<'a> FlightStage<'a> {
+    /// The flight stage of the campaign `input` over `candidates`, after the journaled flights `done`.
+    pub fn new(input: &CampaignInput<'a>, candidates: &'a [Candidate], done: &'a [FlightRecord]) -> Self {
+        Self {
+            case: input.case,
+            candidates,
+            folder: input.folder,
+            progress: input.progress,
+            cancel: input.cancel,
+            done,
+            confirm: input.cfg.confirm,
+            waves: input.cfg.repeatable_vehicles(),
+        }
+    }
+}
+
 /// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
 /// or in the air already, left out), then `ranked` in order.
-pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec<Job> {
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[CandidateId]) -> Vec<Job> {
     let again = pending(ctx.done, ctx.confirm)
         .into_iter()
         .filter(|(_, first)| !busy.contains(&first.candidate))
@@ -82,7 +121,7 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec
             )
         });
     let fresh = ranked.into_iter().map(|s| {
-        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate as usize].obstacles.clone());
+        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate.index()].obstacles.clone());
         Job {
             confirm: ctx.confirm,
             ..Job::new(s, test)
@@ -96,10 +135,10 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[u64]) -> Vec
 pub fn fly_interrupted(
     ctx: &FlightStage,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
+    journal: &mut Journal,
     budget_left: usize,
 ) -> Result<usize, CampaignError> {
-    let journal_path = ctx.folder.join("journal.jsonl");
-    let pending = Journal::interrupted(&journal_path)?;
+    let pending = journal.pending_interrupted();
     if pending.is_empty() || budget_left == 0 || vehicles.is_empty() {
         return Ok(0);
     }
@@ -119,7 +158,7 @@ pub fn fly_interrupted(
             ..Job::new(screened_as_flown(&r), ctx.case.with_obstacles(r.obstacles.clone()))
         })
         .collect();
-    Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, budget_left)?.flown)
+    Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, journal, budget_left)?.flown)
 }
 
 /// Flies `jobs` within `budget` on the fleet, announcing each flight under stage `name` and the vehicles
@@ -129,6 +168,7 @@ fn fly_stage(
     name: &str,
     jobs: Vec<Job>,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
+    journal: &mut Journal,
     budget: usize,
 ) -> Result<PoolOutcome, CampaignError> {
     let progress = ctx.progress;
@@ -137,7 +177,7 @@ fn fly_stage(
     let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, true);
     let setup = FleetSetup {
         folder: ctx.folder,
-        journal: Journal::open(&ctx.folder.join("journal.jsonl"))?,
+        journal,
         cancel: ctx.cancel,
         on_flight: &on_flight,
         waves: ctx.waves,

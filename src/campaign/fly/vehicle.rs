@@ -5,15 +5,16 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::campaign::candidate::Screened;
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::confirm::Tally;
-use crate::campaign::store::journal::{FlightRecord, INTERRUPTED};
+use crate::campaign::store::journal::FlightRecord;
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flown {
-    /// `landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...
-    pub status: String,
+    /// How it ended.
+    pub status: FlightStatus,
     /// The competition's minimum distance, metres, if anything was recorded.
     pub min_distance: Option<f64>,
     /// The un-binned minimum distance, metres.
@@ -28,9 +29,9 @@ pub struct Flown {
 
 impl Flown {
     /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
-    pub fn unflown(status: &str, reason: String) -> Self {
+    pub fn unflown(status: FlightStatus, reason: String) -> Self {
         Flown {
-            status: status.into(),
+            status,
             min_distance: None,
             min_distance_raw: None,
             flight_time_s: 0.0,
@@ -126,8 +127,8 @@ pub struct FleetUse {
 /// A flight the user's stop cut short (`aborted` after the campaign's cancel) is `interrupted`: not charged,
 /// flown again first on resume. A flight that ended on its own while the stop came keeps its status.
 pub(in crate::campaign) fn interrupted_if_cancelled(mut flown: Flown, cancel: &AtomicBool) -> Flown {
-    if flown.status == "aborted" && cancel.load(Ordering::Relaxed) {
-        flown.status = INTERRUPTED.to_string();
+    if flown.status == FlightStatus::Aborted && cancel.load(Ordering::Relaxed) {
+        flown.status = FlightStatus::Interrupted;
         flown.reason = Some(format!(
             "stopped by the user ({}); not charged to the budget, flown again first on --resume",
             flown.reason.as_deref().unwrap_or("cancelled")

@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::candidate::{Candidate, unit_of};
+use crate::campaign::candidate::{Candidate, CandidateId, unit_of};
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, bin_of};
 use crate::model::competition::FAIL_BELOW_M;
@@ -63,7 +63,7 @@ impl FailureCounts {
 
 /// Flights and failures of the candidates `is_arm` picks and of the others (flights of candidates this run did
 /// not draw count as others).
-pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(u64) -> bool) -> (BinCount, BinCount) {
+pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(CandidateId) -> bool) -> (BinCount, BinCount) {
     let (mut near, mut other) = (BinCount::default(), BinCount::default());
     for r in done {
         if let Some(d) = r.min_distance {

@@ -149,6 +149,7 @@ pub fn elites(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::candidate::CandidateId;
 
     fn record(candidate: u64, raw: f64, flown: f64) -> FlightRecord {
         crate::campaign::store::journal::test_record(candidate, raw, Some(flown))
@@ -161,7 +162,7 @@ mod tests {
         // (0 + 1.0 + 0.2) / (1 + 2)
         assert!((c.bias_m() - 0.4).abs() < 1e-12);
         let screened: Vec<Screened> = (0..10)
-            .map(|i| Screened::point(i, i as f64, 60.0, "landed".into()))
+            .map(|i| Screened::point(CandidateId(i), i as f64, 60.0, "landed".into()))
             .collect();
         let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
         let candidates: Vec<Candidate> = units.iter().map(|u| Candidate::drawn(Vec::new(), *u)).collect();

@@ -7,7 +7,7 @@
 //! close to a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]);
 //! the near-duplicate filter would drop most of them before flight otherwise.
 
-use crate::campaign::candidate::{Candidate, Lineage, Screened};
+use crate::campaign::candidate::{Candidate, CandidateId, Lineage, Screened};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::learn::failure_counts::BinCount;
 pub use crate::campaign::plan::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
@@ -49,10 +49,10 @@ pub const NEAR_MISS_FLIGHT_SHARE: f64 = LOCAL_FLIGHT_SHARE.0;
 /// [`NEAR_MISS_M`], at most [`NEAR_MISS_PARENTS`]). Flights of candidates this run did not draw are skipped.
 pub fn parents(
     done: &[FlightRecord],
-    unit_of: impl Fn(u64) -> Option<[f64; DIMS]>,
+    unit_of: impl Fn(CandidateId) -> Option<[f64; DIMS]>,
     fail_m: f64,
 ) -> (Vec<Neighbourhood>, Lineage) {
-    let mut flown: Vec<(f64, u64, [f64; DIMS])> = done
+    let mut flown: Vec<(f64, CandidateId, [f64; DIMS])> = done
         .iter()
         .filter_map(|r| Some((r.min_distance?, r.candidate, unit_of(r.candidate)?)))
         .filter(|(d, _, _)| *d < fail_m + NEAR_MISS_M)
@@ -101,7 +101,7 @@ pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
 /// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(
     fresh: &[Screened],
-    is_local: impl Fn(u64) -> bool,
+    is_local: impl Fn(CandidateId) -> bool,
     share: f64,
     (done, candidates): (&[FlightRecord], &[Candidate]),
     cfg: &CampaignConfig,
@@ -114,7 +114,7 @@ pub fn rank_split(
     let mut chosen: Vec<Screened> = Vec::new();
     let mut later = Vec::new();
     for s in near {
-        if chosen.len() < quota && guard.admit(&candidates[s.candidate as usize].obstacles, near_rate) {
+        if chosen.len() < quota && guard.admit(&candidates[s.candidate.index()].obstacles, near_rate) {
             chosen.push(s);
         } else {
             later.push(s);
@@ -130,7 +130,7 @@ pub fn rank_split(
             break;
         }
         if chosen.iter().all(|c| c.candidate != s.candidate)
-            && guard.admit(&candidates[s.candidate as usize].obstacles, rate)
+            && guard.admit(&candidates[s.candidate.index()].obstacles, rate)
         {
             chosen.push(s);
         }
@@ -146,8 +146,8 @@ mod tests {
         crate::campaign::store::journal::test_record(candidate, 1.0, flown)
     }
 
-    fn at(units: &[[f64; DIMS]]) -> impl Fn(u64) -> Option<[f64; DIMS]> + '_ {
-        |c| units.get(c as usize).copied()
+    fn at(units: &[[f64; DIMS]]) -> impl Fn(CandidateId) -> Option<[f64; DIMS]> + '_ {
+        |c| units.get(c.index()).copied()
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
 //! tests skipped.
 
-use crate::campaign::candidate::Candidate;
 pub use crate::campaign::candidate::Screened;
+use crate::campaign::candidate::{Candidate, CandidateId};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
@@ -19,7 +19,7 @@ pub fn rank(
     threshold_m: f64,
     max_iou: f64,
     limit: usize,
-    footprints: impl Fn(u64) -> Vec<Footprint>,
+    footprints: impl Fn(CandidateId) -> Vec<Footprint>,
 ) -> Vec<Screened> {
     let mut order: Vec<&Screened> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
     order.sort_by(|a, b| {
@@ -72,8 +72,8 @@ pub fn rank_unflown_within(
     remaining: usize,
     flown_max_iou: f64,
 ) -> Vec<Screened> {
-    let footprints = |c: u64| {
-        candidates[c as usize]
+    let footprints = |c: CandidateId| {
+        candidates[c.index()]
             .obstacles
             .iter()
             .map(Obstacle::footprint)
@@ -83,7 +83,7 @@ pub fn rank_unflown_within(
     ranked.retain(|s| {
         !done
             .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate as usize].obstacles, flown_max_iou))
+            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate.index()].obstacles, flown_max_iou))
     });
     ranked.truncate(remaining);
     ranked
@@ -94,7 +94,7 @@ mod tests {
     use super::*;
 
     fn s(candidate: u64, d: f64, t: f64) -> Screened {
-        Screened::point(candidate, d, t, "landed".into())
+        Screened::point(CandidateId(candidate), d, t, "landed".into())
     }
 
     fn with_points(candidate: u64, d: f64, t: f64, points: f64) -> Screened {
@@ -115,9 +115,9 @@ mod tests {
             // Above the threshold: never flown, however promising its ensemble.
             with_points(3, 3.5, 30.0, 5.0),
         ];
-        let fp = |c: u64| vec![Footprint::from_aerialist(c as f64 * 20.0, 20.0, 4.0, 2.0, 0.0)];
+        let fp = |c: CandidateId| vec![Footprint::from_aerialist(c.0 as f64 * 20.0, 20.0, 4.0, 2.0, 0.0)];
         let r = rank(&screened, 3.0, 0.5, 10, fp);
-        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![1, 2, 0]);
+        assert_eq!(r.iter().map(|s| s.candidate.0).collect::<Vec<_>>(), vec![1, 2, 0]);
         assert_eq!(with_points(1, 1.4, 30.0, 1.0).points_per_minute(), Some(2.0));
     }
 
@@ -131,15 +131,15 @@ mod tests {
             s(4, 0.1, 60.0),
         ];
         // Candidates 2 and 4 have identical footprints; 4 is more severe, so 2 is skipped.
-        let fp = |c: u64| {
-            let x = if c == 2 { 40.0 } else { c as f64 * 10.0 };
+        let fp = |c: CandidateId| {
+            let x = if c.0 == 2 { 40.0 } else { c.0 as f64 * 10.0 };
             vec![Footprint::from_aerialist(x, 20.0, 4.0, 2.0, 0.0)]
         };
         let r = rank(&screened, 3.0, 0.5, 10, fp);
-        assert_eq!(r.iter().map(|s| s.candidate).collect::<Vec<_>>(), vec![4, 1, 0]);
+        assert_eq!(r.iter().map(|s| s.candidate.0).collect::<Vec<_>>(), vec![4, 1, 0]);
         let r = rank(&screened, 3.0, 1.0, 2, fp);
         assert_eq!(
-            r.iter().map(|s| s.candidate).collect::<Vec<_>>(),
+            r.iter().map(|s| s.candidate.0).collect::<Vec<_>>(),
             vec![4, 2],
             "ties broken by flight time"
         );

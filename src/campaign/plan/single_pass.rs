@@ -6,15 +6,13 @@
 
 use std::time::Instant;
 
-use crate::campaign::candidate::{Candidate, Screened, check_journaled_as_drawn};
+use crate::campaign::candidate::{Candidate, CandidateId, Screened, check_journaled_as_drawn, unflown};
 use crate::campaign::config::{CampaignError, CampaignInput};
-use crate::campaign::fly::stage::{FlightStage, fly_ranked};
+use crate::campaign::fly::stage::{FlightStage, fly_ranked, note_resuming};
 use crate::campaign::fly::vehicle::Vehicle;
 use crate::campaign::plan::rank::rank_unflown;
 use crate::campaign::report::outputs::StageTimes;
-use crate::campaign::screen::stages::{
-    ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all,
-};
+use crate::campaign::screen::stages::{Stage, run_ensemble, screen_all};
 use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
 use crate::generator::{DrawDistribution, Generator};
 
@@ -22,31 +20,22 @@ use crate::generator::{DrawDistribution, Generator};
 pub fn run_static(
     input: &CampaignInput,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
+    journal: &mut Journal,
     stages: &mut StageTimes,
 ) -> Result<usize, CampaignError> {
     let t = Instant::now();
     let mut candidates = draw_all(input)?;
-    let journal = input.folder.join("journal.jsonl");
-    check_journaled_as_drawn(&Journal::read_all(&journal)?, &candidates, 0..u64::MAX, &journal)
-        .map_err(CampaignError::Config)?;
+    let all = CandidateId(0)..CandidateId(u64::MAX);
+    check_journaled_as_drawn(journal.records(), &candidates, all, journal.path()).map_err(CampaignError::Config)?;
     stages.sample_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     screen(input, &mut candidates)?;
     stages.screen_s = t.elapsed().as_secs_f64();
-    let done = Journal::read(&input.folder.join("journal.jsonl"))?;
+    let done = journal.charged();
     let (ranked, remaining) = rank(input, &candidates, &done, stages)?;
     let t = Instant::now();
-    let flight = FlightStage {
-        case: input.case,
-        candidates: &candidates,
-        folder: input.folder,
-        progress: input.progress,
-        cancel: input.cancel,
-        done: &done,
-        confirm: input.cfg.confirm,
-        waves: input.cfg.repeatable_vehicles(),
-    };
-    let (_, fleet) = fly_ranked(&flight, ranked, vehicles, remaining)?;
+    let flight = FlightStage::new(input, &candidates, &done);
+    let (_, fleet) = fly_ranked(&flight, ranked, vehicles, journal, remaining)?;
     stages.fly_s = t.elapsed().as_secs_f64();
     stages.add_fleet(fleet);
     Ok(input.cfg.candidates)
@@ -88,7 +77,7 @@ fn screen(input: &CampaignInput, candidates: &mut [Candidate]) -> Result<(), Cam
         screen_all(&stage(input, candidates), 0..n, "screening.json", &uniform, &[])?
     } else {
         (0..n)
-            .map(|candidate| Screened::point(candidate, 0.0, 0.0, "unscreened".into()))
+            .map(|i| Screened::point(CandidateId(i), 0.0, 0.0, "unscreened".into()))
             .collect()
     };
     for (c, s) in candidates.iter_mut().zip(screened) {
@@ -107,26 +96,13 @@ fn rank(
 ) -> Result<(Vec<Screened>, usize), CampaignError> {
     let cfg = input.cfg;
     let remaining = cfg.budget.saturating_sub(flights_charged(done));
-    let flown: Vec<u64> = done.iter().map(|r| r.candidate).collect();
-    let mut fresh: Vec<Screened> = (candidates.iter())
-        .filter_map(|c| c.screened.clone())
-        .filter(|s| !flown.contains(&s.candidate))
-        .collect();
-    if cfg.screen && cfg.ensemble > 0 {
-        let t = Instant::now();
-        let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
-        let members = ensemble_shortlist(&stage(input, candidates), &fresh, cfg, shortlist)?;
-        apply_ensemble(&mut fresh, &members, &input.screener.ensemble_params());
-        stages.ensemble_s = t.elapsed().as_secs_f64();
+    let flown: Vec<CandidateId> = done.iter().map(|r| r.candidate).collect();
+    let mut fresh: Vec<Screened> = unflown(candidates, &flown).cloned().collect();
+    if cfg.screen {
+        stages.ensemble_s += run_ensemble(&stage(input, candidates), &mut fresh, cfg, remaining)?;
     }
     let ranked = rank_unflown(&fresh, done, candidates, cfg, remaining);
-    if !done.is_empty() {
-        input.progress.note(&format!(
-            "resuming: {} flights already journaled, {} left in the budget",
-            flights_charged(done),
-            remaining
-        ));
-    }
+    note_resuming(input.progress, done, cfg.budget, "");
     let below = fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count();
     input.progress.note(&format!(
         "{below} of {} candidates predicted below {} m; flying {}",

@@ -5,7 +5,8 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::campaign::store::journal::{BACKEND_FAILED, FlightRecord};
+use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::store::journal::FlightRecord;
 
 /// One backend's flights.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -46,7 +47,7 @@ pub fn summarise(records: &[FlightRecord]) -> Vec<BackendSummary> {
             BackendSummary {
                 backend: name.to_string(),
                 flights: walls.len(),
-                failed_jobs: mine.iter().filter(|r| r.status == BACKEND_FAILED).count(),
+                failed_jobs: mine.iter().filter(|r| r.status == FlightStatus::BackendFailed).count(),
                 median_wall_s: median(&walls),
             }
         })
@@ -81,10 +82,11 @@ pub fn markdown(md: &mut String, backends: &[BackendSummary]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::campaign::candidate::CandidateId;
 
-    fn record(vehicle: &str, status: &str, wall_s: f64) -> FlightRecord {
+    fn record(vehicle: &str, status: FlightStatus, wall_s: f64) -> FlightRecord {
         FlightRecord {
-            candidate: 0,
+            candidate: CandidateId(0),
             obstacles: Vec::new(),
             predicted_min_distance: 1.0,
             predicted_flight_time_s: 1.0,
@@ -92,7 +94,7 @@ mod tests {
             predicted_raw_min_distance: None,
             min_distance: None,
             min_distance_raw: None,
-            status: status.into(),
+            status,
             flight_time_s: 1.0,
             warnings: Vec::new(),
             reason: None,
@@ -110,11 +112,11 @@ mod tests {
         assert_eq!(backend_of("udpin:0.0.0.0:14540"), "udpin:0.0.0.0:14540");
         assert_eq!(backend_of("a#b"), "a#b");
         let s = summarise(&[
-            record("runner#0", "landed", 3.0),
-            record("mock#1", "landed", 0.5),
-            record("runner#1", BACKEND_FAILED, 99.0),
-            record("runner#1", "collision", 5.0),
-            record("runner#0", "interrupted", 1.0),
+            record("runner#0", FlightStatus::Landed, 3.0),
+            record("mock#1", FlightStatus::Landed, 0.5),
+            record("runner#1", FlightStatus::BackendFailed, 99.0),
+            record("runner#1", FlightStatus::Collision, 5.0),
+            record("runner#0", FlightStatus::Interrupted, 1.0),
         ]);
         assert_eq!(s.len(), 2);
         assert_eq!(

@@ -49,8 +49,8 @@ impl StageTimes {
 /// One flight in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlownTest {
-    /// The candidate index.
-    pub candidate: u64,
+    /// The candidate flown.
+    pub candidate: crate::campaign::candidate::CandidateId,
     /// Which flight of the candidate, from 0 (left out when 0).
     #[serde(skip_serializing_if = "crate::campaign::store::journal::is_first")]
     pub attempt: u32,
@@ -63,7 +63,7 @@ pub struct FlownTest {
     /// Flown un-binned minimum distance, metres.
     pub min_distance_raw: Option<f64>,
     /// How the flight ended.
-    pub status: String,
+    pub status: crate::campaign::flight_status::FlightStatus,
     /// Why, in words, when it did not land.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,

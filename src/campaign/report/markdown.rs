@@ -229,7 +229,7 @@ fn flights_table(md: &mut String, r: &Report) {
             opt(f.predicted_p_fail),
             opt(f.min_distance),
             opt(f.min_distance_raw),
-            f.reason.as_deref().map_or(f.status.clone(), |why| format!(
+            f.reason.as_deref().map_or(f.status.to_string(), |why| format!(
                 "{} ({})",
                 f.status,
                 why.replace('|', "/")

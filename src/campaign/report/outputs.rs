@@ -2,6 +2,7 @@
 //! `--confirm` K > 1 only the confirmed tests are written as `test_N`; the others that failed are listed in
 //! `unconfirmed.json` and the report.
 
+use crate::campaign::candidate::CandidateId;
 use crate::campaign::config::CampaignInput;
 use crate::campaign::learn::calibration::Learnt;
 use crate::campaign::report::backends;
@@ -21,16 +22,18 @@ pub use crate::campaign::report::document::{FlownTest, Report, StageTimes};
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
 /// report.json and report.md (and with `--confirm` above 1, `unconfirmed.json`), for the campaign `input` that
-/// drew `candidates_screened` candidates and flew `records`. Returns the report.
+/// drew `candidates_screened` candidates and flew the charged flights of `journal`. Returns the report.
 pub fn write_outputs(
     input: &CampaignInput,
     candidates_screened: usize,
-    records: &[FlightRecord],
+    journal: &Journal,
     mut stages: StageTimes,
     learning: Option<&Learnt>,
 ) -> Result<Report, ModelError> {
     let t0 = std::time::Instant::now();
     let cfg = input.cfg;
+    let charged = journal.charged();
+    let records = charged.as_slice();
     let mut tests = verdicts(records, cfg.confirm);
     let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
@@ -57,9 +60,7 @@ pub fn write_outputs(
         stages,
         learning: learning.cloned(),
         // The whole journal: the flights backends failed around are not in `records`.
-        backends: backends::summarise(
-            &Journal::read_all(&input.folder.join("journal.jsonl")).unwrap_or_else(|_| records.to_vec()),
-        ),
+        backends: backends::summarise(journal.records()),
         invocation: Invocation::current(),
         folder: input.folder.to_path_buf(),
     };
@@ -78,11 +79,11 @@ pub fn write_outputs(
 fn write_failing_tests(
     input: &CampaignInput,
     tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
-) -> Result<Vec<(u64, String)>, ModelError> {
+) -> Result<Vec<(CandidateId, String)>, ModelError> {
     let folder = input.folder;
     let spelling = spelling(input);
     let case = input.case.with_absolute_references()?;
-    let mut reported: Vec<(u64, String)> = Vec::new();
+    let mut reported: Vec<(CandidateId, String)> = Vec::new();
     for (i, (verdict, flights)) in tests.iter_mut().filter(|(t, _)| t.confirmed).enumerate() {
         let name = format!("test_{i}");
         let r = flights[0];
@@ -125,7 +126,7 @@ fn spelling(input: &CampaignInput) -> Spelling {
 }
 
 /// One flight in the report; `reported` names the failing tests written.
-fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
+fn flown_test(r: &FlightRecord, reported: &[(CandidateId, String)]) -> FlownTest {
     let d = r.min_distance.unwrap_or(f64::INFINITY);
     FlownTest {
         candidate: r.candidate,
@@ -134,7 +135,7 @@ fn flown_test(r: &FlightRecord, reported: &[(u64, String)]) -> FlownTest {
         predicted_p_fail: r.predicted_p_fail,
         min_distance: r.min_distance,
         min_distance_raw: r.min_distance_raw,
-        status: r.status.clone(),
+        status: r.status,
         reason: r.reason.clone(),
         flight_time_s: r.flight_time_s,
         points: points(d),

@@ -1,6 +1,8 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
+use crate::campaign::candidate::CandidateId;
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::report::outputs::{FlownTest, Report, StageTimes};
 use crate::campaign::report::suite::summary;
 use crate::campaign::report::verdicts::verdicts;
@@ -115,13 +117,13 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
 fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
     let mut r = report(&[flight(0, 0, 2.5)], 1, 1);
     r.flights.push(FlownTest {
-        candidate: 0,
+        candidate: CandidateId(0),
         attempt: 0,
         predicted_min_distance: 1.0,
         predicted_p_fail: None,
         min_distance: Some(2.5),
         min_distance_raw: Some(2.5),
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         reason: None,
         flight_time_s: 60.0,
         points: 0,

@@ -2,6 +2,7 @@
 //! failure rate, whether it is confirmed, and its ranking, best first. With one flight per test every failing
 //! test is confirmed and the ranking is the flights' (smallest distance, then shorter flight).
 
+use crate::campaign::candidate::CandidateId;
 use std::cmp::Ordering;
 use std::path::PathBuf;
 
@@ -16,7 +17,7 @@ use crate::model::Obstacle;
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TestVerdict {
     /// The candidate index.
-    pub candidate: u64,
+    pub candidate: CandidateId,
     /// Its obstacles.
     pub obstacles: Vec<Obstacle>,
     /// Its flights.
@@ -181,7 +182,7 @@ mod tests {
         let v = verdicts(&records, 3);
         let order: Vec<(u64, usize, usize, bool)> = v
             .iter()
-            .map(|(t, _)| (t.candidate, t.failures, t.flights, t.confirmed))
+            .map(|(t, _)| (t.candidate.0, t.failures, t.flights, t.confirmed))
             .collect();
         // 2 and 4 failed 2 of 2 (2's best flight is closer), 1 failed 2 of 3; 3 never failed.
         assert_eq!(order, [(2, 2, 2, true), (4, 2, 2, true), (1, 2, 3, true)]);
@@ -218,7 +219,7 @@ mod tests {
             flight(3, 0, 0.8, 40.0),
         ];
         let v = verdicts(&records, 1);
-        assert_eq!(v.iter().map(|(t, _)| t.candidate).collect::<Vec<_>>(), [3, 2, 1]);
+        assert_eq!(v.iter().map(|(t, _)| t.candidate.0).collect::<Vec<_>>(), [3, 2, 1]);
         let single = test_score(&[0.8], &[40.0], 0);
         assert_eq!(v[0].0.test_score, single);
         assert_eq!(score_sum(v.iter().map(|(t, _)| t)), 0.0, "no obstacles, no score");

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::candidate::{Candidate, Screened};
+use crate::campaign::candidate::{Candidate, CandidateId, Screened};
 use crate::campaign::config::{CampaignConfig, CampaignError};
 use crate::campaign::screen::parallel::{available_threads, parallel_map};
 use crate::campaign::screen::screener::{Progress, Screener};
@@ -70,7 +70,7 @@ pub fn screen_all(
             });
         if let Some(cached) = cached
             && cached.len() == want
-            && cached.first().is_none_or(|s| s.candidate == range.start)
+            && cached.first().is_none_or(|s| s.candidate.0 == range.start)
         {
             ctx.progress
                 .note(&format!("screening: reusing {} cached predictions", cached.len()));
@@ -87,7 +87,7 @@ pub fn screen_all(
         |&i| {
             let test = ctx.case.with_obstacles(ctx.candidates[i as usize].obstacles.clone());
             let (min_distance, flight_time_s, status) = ctx.screener.screen(&test);
-            Screened::point(i, min_distance, flight_time_s, status)
+            Screened::point(CandidateId(i), min_distance, flight_time_s, status)
         },
     );
     let screened: Vec<Screened> = results.into_iter().flatten().collect();
@@ -126,7 +126,7 @@ pub fn ensemble_shortlist(
     order.truncate(shortlist);
     let todo: Vec<u64> = order
         .iter()
-        .map(|s| s.candidate)
+        .map(|s| s.candidate.0)
         .filter(|c| !cache.contains_key(c))
         .collect();
     if !todo.is_empty() {
@@ -157,12 +157,31 @@ pub fn ensemble_shortlist(
     Ok(cache)
 }
 
+/// With `--ensemble`, runs the ensembles of the best [`ENSEMBLE_SHORTLIST_PER_FLIGHT`] candidates of `fresh`
+/// per flight of the `remaining` ones, and sets their `p_fail` and expected points ([`apply_ensemble`]);
+/// returns the seconds it took.
+pub fn run_ensemble(
+    ctx: &Stage,
+    fresh: &mut [Screened],
+    cfg: &CampaignConfig,
+    remaining: usize,
+) -> Result<f64, CampaignError> {
+    if cfg.ensemble == 0 || remaining == 0 {
+        return Ok(0.0);
+    }
+    let t = std::time::Instant::now();
+    let shortlist = remaining.saturating_mul(ENSEMBLE_SHORTLIST_PER_FLIGHT);
+    let members = ensemble_shortlist(ctx, fresh, cfg, shortlist)?;
+    apply_ensemble(fresh, &members, &ctx.screener.ensemble_params());
+    Ok(t.elapsed().as_secs_f64())
+}
+
 /// Sets `p_fail` and expected points of every candidate with members, each member moved as far as the
 /// candidate's prediction was moved from the LFS's own (`min_distance - raw_min_distance`: the online
 /// calibration and the flights' surrogate; 0 without learning).
 pub fn apply_ensemble(fresh: &mut [Screened], members: &BTreeMap<u64, Vec<f64>>, params: &EnsembleParams) {
     for s in fresh.iter_mut() {
-        if let Some(m) = members.get(&s.candidate) {
+        if let Some(m) = members.get(&s.candidate.0) {
             let shift = s.raw_min_distance.map_or(0.0, |raw| s.min_distance - raw);
             let e = Ensemble {
                 member_min_distances: m.iter().map(|d| (d + shift).max(0.0)).collect(),

@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::campaign::candidate_id::CandidateId;
+use crate::campaign::flight_status::FlightStatus;
 use crate::io::write_atomic;
 use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
@@ -15,8 +17,8 @@ use crate::model::{ModelError, Obstacle};
 /// One finished flight.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FlightRecord {
-    /// The candidate's index (its generator index for the campaign's seed).
-    pub candidate: u64,
+    /// The candidate flown.
+    pub candidate: CandidateId,
     /// Which flight of the candidate this is, from 0: a failing test is flown again to confirm it
     /// (`--confirm`). Left out when 0, so journals without re-flights read and write as before.
     #[serde(default, skip_serializing_if = "is_first")]
@@ -37,8 +39,8 @@ pub struct FlightRecord {
     pub min_distance: Option<f64>,
     /// The flown un-binned minimum distance, metres.
     pub min_distance_raw: Option<f64>,
-    /// How the flight ended (`landed`, `collision`, `timeout`, `link_lost`, `aborted`, `rejected`, ...).
-    pub status: String,
+    /// How the flight ended.
+    pub status: FlightStatus,
     /// Flight time, seconds.
     pub flight_time_s: f64,
     /// Warnings of the flight side (e.g. the avoidance planner falling behind).
@@ -55,20 +57,9 @@ pub struct FlightRecord {
     pub wall_s: f64,
 }
 
-/// The status of a flight cut short by the user (Ctrl-C): journaled so the trajectory is kept, but not charged to
-/// the budget, not learnt from, and flown first on `--resume`.
-pub const INTERRUPTED: &str = "interrupted";
-
-/// The status of a flight whose backend failed around it (a PX4 that died or never booted, a runner job that
-/// exited non-zero or left no trajectory) after its one retry: the vehicle, not the test, is at fault.
-pub const BACKEND_FAILED: &str = "backend_failed";
-
-/// Statuses of flights that are journaled but not charged to the budget: nothing was learnt about the test.
-pub const UNCHARGED: &[&str] = &[INTERRUPTED, BACKEND_FAILED];
-
 impl FlightRecord {
     /// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
-    pub fn queued(busy: &[(u64, Vec<Obstacle>)]) -> Vec<FlightRecord> {
+    pub fn queued(busy: &[(CandidateId, Vec<Obstacle>)]) -> Vec<FlightRecord> {
         busy.iter()
             .map(|(candidate, obstacles)| FlightRecord {
                 candidate: *candidate,
@@ -80,7 +71,7 @@ impl FlightRecord {
                 predicted_raw_min_distance: None,
                 min_distance: None,
                 min_distance_raw: None,
-                status: "queued".into(),
+                status: FlightStatus::Queued,
                 flight_time_s: 0.0,
                 warnings: Vec::new(),
                 reason: None,
@@ -93,7 +84,7 @@ impl FlightRecord {
 
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
-        !UNCHARGED.contains(&self.status.as_str())
+        self.status.charged()
     }
 }
 
@@ -112,6 +103,10 @@ pub fn flights_charged(records: &[FlightRecord]) -> usize {
 pub struct Journal {
     path: PathBuf,
     file: File,
+    /// Every record, as read when loaded ([`Self::load`]) and appended since.
+    pub(super) records: Vec<FlightRecord>,
+    /// The line numbers of the records read when loaded.
+    pub(super) lines: Vec<usize>,
 }
 
 impl Journal {
@@ -126,6 +121,8 @@ impl Journal {
         Ok(Self {
             path: path.to_path_buf(),
             file,
+            records: Vec::new(),
+            lines: Vec::new(),
         })
     }
 
@@ -134,7 +131,8 @@ impl Journal {
         &self.path
     }
 
-    /// Appends one record and syncs it to disk before returning.
+    /// Appends one record and syncs it to disk before returning; the records in memory get it as the file
+    /// reads it back.
     pub fn append(&mut self, record: &FlightRecord) -> Result<(), ModelError> {
         let io = |source| ModelError::Io {
             path: self.path.clone(),
@@ -144,7 +142,9 @@ impl Journal {
         let mut line = serde_json::to_string(record).map_err(|e| io(std::io::Error::other(e)))?;
         line.push('\n');
         self.file.write_all(line.as_bytes()).map_err(io)?;
-        self.file.sync_data().map_err(io)
+        self.file.sync_data().map_err(io)?;
+        self.records.push(Self::read_back(record));
+        Ok(())
     }
 
     /// `record` as [`Self::read`] gives it back (a non-finite optional distance is stored as `null`), so a
@@ -157,7 +157,7 @@ impl Journal {
     }
 
     /// Reads the flights charged to the budget, the ones a campaign learns from and reports (not those
-    /// [`UNCHARGED`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
+    /// [`FlightStatus::charged`]). A torn last line (no newline, not a record: the process died mid-write) is left out, as
     /// [`Self::heal`] drops it; a damaged line elsewhere, or a flight (candidate and attempt) journaled twice,
     /// is an error.
     pub fn read(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
@@ -176,11 +176,11 @@ impl Journal {
     /// flight, in journal order.
     pub fn interrupted(path: &Path) -> Result<Vec<FlightRecord>, ModelError> {
         let all = Self::read_all(path)?;
-        let charged: HashSet<u64> = all.iter().filter(|r| r.charged()).map(|r| r.candidate).collect();
+        let charged: HashSet<CandidateId> = all.iter().filter(|r| r.charged()).map(|r| r.candidate).collect();
         let mut pending: Vec<FlightRecord> = Vec::new();
         for r in all
             .into_iter()
-            .filter(|r| r.status == INTERRUPTED && !charged.contains(&r.candidate))
+            .filter(|r| r.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
         {
             pending.retain(|p| p.candidate != r.candidate);
             pending.push(r);
@@ -204,45 +204,59 @@ impl Journal {
         let Some(tail) = parsed.unterminated else {
             return Ok(None);
         };
-        let (kept, message) = match parsed.torn {
-            Some(line) => {
-                let dropped = String::from_utf8_lossy(&bytes[tail..]);
-                let preview: String = dropped.chars().take(60).collect();
-                let message = format!(
-                    "{}:{line}: dropped a torn last line ({} bytes, {preview:?}...): the flight being written \
-                     when the campaign stopped; it is flown again",
-                    path.display(),
-                    bytes.len() - tail
-                );
-                (bytes[..tail].to_vec(), Some(message))
-            }
-            None => ([bytes.as_slice(), b"\n"].concat(), None),
-        };
+        let (kept, message) = healed(&bytes, tail, parsed.torn, path);
         write_atomic(path, &kept)?;
         Ok(message)
     }
 }
 
+/// The journal `bytes` whose last line starts at `tail` and has no newline, healed: that line dropped when it is
+/// `torn` (its number), else ended; and what was dropped, for the user.
+pub(super) fn healed(bytes: &[u8], tail: usize, torn: Option<usize>, path: &Path) -> (Vec<u8>, Option<String>) {
+    match torn {
+        Some(line) => {
+            let dropped = String::from_utf8_lossy(&bytes[tail..]);
+            let preview: String = dropped.chars().take(60).collect();
+            let message = format!(
+                "{}:{line}: dropped a torn last line ({} bytes, {preview:?}...): the flight being written when \
+                 the campaign stopped; it is flown again",
+                path.display(),
+                bytes.len() - tail
+            );
+            (bytes[..tail].to_vec(), Some(message))
+        }
+        None => ([bytes, b"\n"].concat(), None),
+    }
+}
+
 /// The journal's bytes; none when there is no journal yet.
-fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
+pub(super) fn read_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
+    #[cfg(test)]
+    READS.with(|n| n.set(n.get() + 1));
     match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Vec::new()),
         _ => read_capped(path, MAX_READ_BYTES),
     }
 }
 
-/// A journal's records, checked line by line.
-struct Parsed {
-    records: Vec<FlightRecord>,
-    /// Each record's line number.
-    lines: Vec<usize>,
-    /// Where the last line starts when it has no newline.
-    unterminated: Option<usize>,
-    /// That line's number when it is not a record (a torn write).
-    torn: Option<usize>,
+#[cfg(test)]
+thread_local! {
+    /// How many times this thread read a journal file: a run reads it once.
+    pub(in crate::campaign) static READS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
-fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
+/// A journal's records, checked line by line.
+pub(super) struct Parsed {
+    pub(super) records: Vec<FlightRecord>,
+    /// Each record's line number.
+    pub(super) lines: Vec<usize>,
+    /// Where the last line starts when it has no newline.
+    pub(super) unterminated: Option<usize>,
+    /// That line's number when it is not a record (a torn write).
+    pub(super) torn: Option<usize>,
+}
+
+pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
     let syntax = |line: usize, message: String| ModelError::Syntax {
         path: path.to_path_buf(),
         line: Some(line),
@@ -255,7 +269,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Parsed, ModelError> {
         unterminated: None,
         torn: None,
     };
-    let mut lines_of: HashMap<(u64, u32), usize> = HashMap::new();
+    let mut lines_of: HashMap<(CandidateId, u32), usize> = HashMap::new();
     let mut offset = 0;
     for (i, line) in bytes.split(|b| *b == b'\n').enumerate() {
         let (number, start) = (i + 1, offset);
@@ -317,7 +331,7 @@ fn journaled_twice(record: &FlightRecord, first: usize, again: usize) -> String 
 #[cfg(test)]
 pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> FlightRecord {
     FlightRecord {
-        candidate,
+        candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
         predicted_min_distance: raw,
@@ -326,7 +340,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         predicted_raw_min_distance: Some(raw),
         min_distance: flown,
         min_distance_raw: flown,
-        status: "landed".into(),
+        status: FlightStatus::Landed,
         flight_time_s: 60.0,
         warnings: Vec::new(),
         reason: None,
@@ -343,7 +357,7 @@ mod tests {
 
     pub(in crate::campaign) fn record(candidate: u64) -> FlightRecord {
         FlightRecord {
-            candidate,
+            candidate: CandidateId(candidate),
             attempt: 0,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
             predicted_min_distance: 0.5,
@@ -352,7 +366,7 @@ mod tests {
             predicted_raw_min_distance: None,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             flight_time_s: 41.0,
             warnings: Vec::new(),
             reason: None,
@@ -386,7 +400,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("journal.jsonl");
         let stopped = FlightRecord {
-            status: "link_lost".into(),
+            status: FlightStatus::LinkLost,
             reason: Some("no MISSION_ACK within 1.0 s".into()),
             min_distance: None,
             ..record(2)

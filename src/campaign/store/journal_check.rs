@@ -29,8 +29,22 @@ pub fn arena_size_m(case: &TestCase) -> f64 {
 /// Checks every record of the journal at `path` ([`check_record`]; `size_m` is the arena's size): the first
 /// line that cannot be believed is an error naming it, and what to do. Errors as [`Journal::read`] too.
 pub fn check_journal(path: &Path, size_m: f64) -> Result<(), ModelError> {
-    for (line, record) in Journal::read_numbered(path)? {
-        check_record(&record, size_m).map_err(|why| ModelError::Syntax {
+    let numbered = Journal::read_numbered(path)?;
+    check_lines(numbered.iter().map(|(line, r)| (*line, r)), path, size_m)
+}
+
+/// Checks the records `journal` read when it was loaded, as [`check_journal`] does.
+pub fn check_loaded(journal: &Journal, size_m: f64) -> Result<(), ModelError> {
+    check_lines(journal.numbered(), journal.path(), size_m)
+}
+
+fn check_lines<'a>(
+    numbered: impl Iterator<Item = (usize, &'a FlightRecord)>,
+    path: &Path,
+    size_m: f64,
+) -> Result<(), ModelError> {
+    for (line, record) in numbered {
+        check_record(record, size_m).map_err(|why| ModelError::Syntax {
             path: path.to_path_buf(),
             line: Some(line),
             column: None,

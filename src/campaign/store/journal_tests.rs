@@ -1,5 +1,6 @@
 //! A journal damaged by a crash: what resume drops, what it refuses, and that no byte string panics.
 
+use crate::campaign::flight_status::FlightStatus;
 use proptest::prelude::*;
 
 use super::tests::{line, record};
@@ -80,7 +81,7 @@ fn re_flights_of_a_candidate_are_distinct_and_the_same_flight_twice_is_refused()
     let (_d, path) = journal([line(4), text(&again(1)), line(5), text(&again(2))].concat().as_bytes());
     let back = Journal::read(&path).unwrap();
     assert_eq!(
-        back.iter().map(|r| (r.candidate, r.attempt)).collect::<Vec<_>>(),
+        back.iter().map(|r| (r.candidate.0, r.attempt)).collect::<Vec<_>>(),
         [(4, 0), (4, 1), (5, 0), (4, 2)]
     );
     let (_d, path) = journal([line(4), text(&again(1)), text(&again(1))].concat().as_bytes());
@@ -120,7 +121,7 @@ proptest! {
 
 fn interrupted_line(candidate: u64) -> String {
     let r = FlightRecord {
-        status: INTERRUPTED.into(),
+        status: FlightStatus::Interrupted,
         ..record(candidate)
     };
     serde_json::to_string(&r).unwrap() + "\n"
@@ -133,13 +134,13 @@ fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
             .concat()
             .as_bytes(),
     );
-    let charged: Vec<u64> = Journal::read(&path).unwrap().iter().map(|r| r.candidate).collect();
+    let charged: Vec<u64> = Journal::read(&path).unwrap().iter().map(|r| r.candidate.0).collect();
     assert_eq!(charged, vec![1], "only the finished flight counts against the budget");
     assert_eq!(Journal::read_all(&path).unwrap().len(), 4);
     let pending: Vec<u64> = Journal::interrupted(&path)
         .unwrap()
         .iter()
-        .map(|r| r.candidate)
+        .map(|r| r.candidate.0)
         .collect();
     assert_eq!(pending, vec![3, 2], "one per candidate, the last interruption's place");
     // Flying candidate 2 again settles it, and is not a duplicate.
@@ -148,7 +149,7 @@ fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
     let pending: Vec<u64> = Journal::interrupted(&path)
         .unwrap()
         .iter()
-        .map(|r| r.candidate)
+        .map(|r| r.candidate.0)
         .collect();
     assert_eq!(pending, vec![3]);
     assert_eq!(Journal::read(&path).unwrap().len(), 2);

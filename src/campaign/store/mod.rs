@@ -4,4 +4,5 @@
 pub mod folder;
 pub mod journal;
 pub mod journal_check;
+mod journal_memory;
 pub mod replay;

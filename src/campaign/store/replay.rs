@@ -3,6 +3,7 @@
 //! uninterrupted campaign saw when it planned that round, so on repeatable vehicles (the lockstep mock) the
 //! resumed campaign ends as the uninterrupted one would have, bit for bit.
 
+use crate::campaign::candidate_id::CandidateId;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 use crate::campaign::fly::vehicle::Job;
@@ -12,12 +13,12 @@ use crate::campaign::store::journal::FlightRecord;
 #[derive(Debug)]
 pub struct Replay {
     /// By (candidate, attempt): the record's position in the journal, and the record.
-    records: BTreeMap<(u64, u32), (usize, FlightRecord)>,
+    records: BTreeMap<(CandidateId, u32), (usize, FlightRecord)>,
     /// The campaign's budget: a new flight takes off only while it and the journaled flights not yet taken stay
     /// within it, so a journaled flight the replayed plan never asks for still counts.
     budget: usize,
     /// Candidates whose journaled flights are not served: the replayed draw gave them other obstacles.
-    aside: BTreeSet<u64>,
+    aside: BTreeSet<CandidateId>,
 }
 
 impl Replay {
@@ -43,9 +44,26 @@ impl Replay {
         }
     }
 
-    /// Stops serving `candidates`' flights (they stay pending: counted in the budget, and left over).
-    pub fn set_aside(&mut self, candidates: &[u64]) {
-        self.aside.extend(candidates);
+    /// Stops serving the journaled flights of the candidates in `range` that `as_drawn` says were drawn with
+    /// other obstacles this time (they stay pending: counted in the budget, and left over); returns those
+    /// candidates, sorted.
+    pub fn set_aside_diverged(
+        &mut self,
+        range: std::ops::Range<u64>,
+        as_drawn: impl Fn(&FlightRecord) -> bool,
+    ) -> Vec<CandidateId> {
+        let mut diverged: Vec<CandidateId> = (self.records.values())
+            .filter(|(_, r)| range.contains(&r.candidate.0) && !as_drawn(r))
+            .map(|(_, r)| r.candidate)
+            .collect();
+        diverged.dedup();
+        self.aside.extend(&diverged);
+        diverged
+    }
+
+    /// The candidates whose journaled flights are set aside: never flown again under their identity.
+    pub fn aside(&self) -> Vec<CandidateId> {
+        self.aside.iter().copied().collect()
     }
 
     /// The journaled flight a job would be served, if any.
@@ -91,7 +109,7 @@ impl Replay {
     }
 }
 
-fn key(job: &Job) -> (u64, u32) {
+fn key(job: &Job) -> (CandidateId, u32) {
     (job.screened.candidate, job.tally.next_attempt)
 }
 
@@ -112,7 +130,7 @@ mod tests {
 
     fn job(candidate: u64) -> Job {
         let case = TestCase::load(std::path::Path::new("missions/mission2.yaml")).unwrap();
-        Job::new(Screened::point(candidate, 1.0, 1.0, "landed".into()), case)
+        Job::new(Screened::point(CandidateId(candidate), 1.0, 1.0, "landed".into()), case)
     }
 
     #[test]
@@ -126,9 +144,9 @@ mod tests {
         assert_eq!(replay.pending(), 2);
         let mut queue: VecDeque<Job> = [3, 5, 7].into_iter().map(job).collect();
         let (first, r) = replay.take_next(&mut queue).unwrap();
-        assert_eq!((first.screened.candidate, r.candidate), (7, 7));
+        assert_eq!((first.screened.candidate.0, r.candidate.0), (7, 7));
         let (second, _) = replay.take_next(&mut queue).unwrap();
-        assert_eq!(second.screened.candidate, 5);
+        assert_eq!(second.screened.candidate.0, 5);
         assert!(
             replay.take_next(&mut queue).is_none(),
             "the interrupted flight is flown, not replayed"
@@ -146,7 +164,7 @@ mod tests {
         // 1 taken, 2 left unasked: with 2 charged, one more new flight fits in 5, not two.
         assert!(replay.allows_new(2));
         assert!(!replay.allows_new(3));
-        let left: Vec<u64> = replay.into_left().iter().map(|r| r.candidate).collect();
+        let left: Vec<u64> = replay.into_left().iter().map(|r| r.candidate.0).collect();
         assert_eq!(left, [1, 4]);
         assert!(Replay::none().allows_new(1_000_000));
     }

@@ -1,5 +1,6 @@
 //! Confirmation in the fleet: a failing test flown again before the next candidate, within the budget.
 
+use crate::campaign::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -30,7 +31,7 @@ impl Vehicle for Scripted {
         let script = &self.script[id as usize];
         let d = script[n.min(script.len() - 1)];
         Ok(Flown {
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             min_distance: Some(d),
             min_distance_raw: Some(d),
             flight_time_s: 40.0,
@@ -61,14 +62,14 @@ fn confirm_run(script: Vec<Vec<f64>>, k: usize, budget: usize) -> Run {
         jobs,
         budget,
         dir.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &AtomicBool::new(false),
         &|_| {},
     );
     let records = Journal::read(&path).unwrap();
     assert_eq!(out.records, records);
     let got = (records.iter())
-        .map(|r| (r.candidate, r.attempt, r.min_distance.unwrap() < 1.5))
+        .map(|r| (r.candidate.0, r.attempt, r.min_distance.unwrap() < 1.5))
         .collect();
     let flown = flown.lock().unwrap().clone();
     (got, flown)
@@ -150,7 +151,7 @@ fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, 
         .collect();
     let setup = crate::campaign::fly::fleet::FleetSetup {
         folder: dir.path(),
-        journal: Journal::open(&dir.path().join("journal.jsonl")).unwrap(),
+        journal: &mut Journal::load(&dir.path().join("journal.jsonl")).unwrap().0,
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: true,
@@ -161,7 +162,7 @@ fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, 
         fleet.wait_round(0)
     });
     (records.iter())
-        .map(|r| (r.candidate, r.attempt, r.min_distance.unwrap()))
+        .map(|r| (r.candidate.0, r.attempt, r.min_distance.unwrap()))
         .collect()
 }
 

@@ -1,6 +1,7 @@
 //! What the fleet's workers and its campaign share under one lock: the queue, the flights in the air, the
 //! budget, the waves and the replayed flights.
 
+use crate::campaign::candidate::CandidateId;
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
 
@@ -13,7 +14,7 @@ use crate::model::Obstacle;
 pub(super) struct Ledger {
     pub(super) queue: VecDeque<Job>,
     /// Flights taken and not yet journaled: candidate and obstacles.
-    pub(super) airborne: Vec<(u64, Vec<Obstacle>)>,
+    pub(super) airborne: Vec<(CandidateId, Vec<Obstacle>)>,
     /// Charged flights journaled.
     pub(super) finished: usize,
     /// Charged flights the fleet may make in all, raised as rounds are pushed.

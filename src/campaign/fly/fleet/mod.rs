@@ -4,6 +4,7 @@
 //! for a round's flights only when it needs them to learn. A resumed campaign's journaled flights are taken
 //! from its [`Replay`] as their jobs come up, in place of flying them.
 
+use crate::campaign::candidate::CandidateId;
 use std::collections::{BTreeMap, VecDeque};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -29,7 +30,7 @@ pub struct Fleet<'a> {
     ledger: Mutex<Ledger>,
     changed: Condvar,
     /// The journal, and the charged flights appended to it and not yet collected, with their round, in its order.
-    journal: Mutex<(Journal, Vec<(usize, FlightRecord)>)>,
+    journal: Mutex<(&'a mut Journal, Vec<(usize, FlightRecord)>)>,
     outcome: Mutex<PoolOutcome>,
     stop: AtomicBool,
     /// Indices of the vehicles dropped.
@@ -43,8 +44,8 @@ pub struct Fleet<'a> {
 pub struct FleetSetup<'a> {
     /// The campaign folder: trajectories go under `flights/`.
     pub folder: &'a Path,
-    /// The campaign's journal, each flight appended as it lands.
-    pub journal: Journal,
+    /// The campaign's journal, each flight appended as it lands (and kept in its memory).
+    pub journal: &'a mut Journal,
     /// The campaign's stop: vehicles in the air land, none takes off.
     pub cancel: &'a AtomicBool,
     /// Told of each journaled flight.
@@ -68,19 +69,7 @@ pub fn run_fleet<R>(
     body: impl FnOnce(&Fleet) -> R,
 ) -> (R, PoolOutcome) {
     // Rejections count across calls (a campaign's stages) and resumes: the journal holds them.
-    let history = match Journal::read(setup.journal.path()) {
-        Ok(h) => h,
-        Err(e) => {
-            let fleet = Fleet::new(setup, 0);
-            fleet.stop.store(true, Ordering::Relaxed);
-            let result = body(&fleet);
-            let outcome = PoolOutcome {
-                errors: vec![e.to_string()],
-                ..PoolOutcome::default()
-            };
-            return (result, outcome);
-        }
-    };
+    let history = setup.journal.charged();
     let fleet = Fleet::new(setup, vehicles.len());
     let result = std::thread::scope(|scope| {
         for (index, vehicle) in vehicles.iter_mut().enumerate() {
@@ -126,7 +115,7 @@ pub fn fly_all(
     jobs: Vec<Job>,
     budget: usize,
     folder: &Path,
-    journal: Journal,
+    journal: &mut Journal,
     cancel: &AtomicBool,
     on_flight: &(dyn Fn(&FlightRecord) + Sync),
 ) -> PoolOutcome {
@@ -243,9 +232,9 @@ impl<'a> Fleet<'a> {
     }
 
     /// The candidates queued, in the air, or flown and not yet collected by [`Self::wait_round`].
-    pub fn busy(&self) -> Vec<(u64, Vec<Obstacle>)> {
+    pub fn busy(&self) -> Vec<(CandidateId, Vec<Obstacle>)> {
         let l = self.lock();
-        let mut busy: Vec<(u64, Vec<Obstacle>)> = (l.queue.iter())
+        let mut busy: Vec<(CandidateId, Vec<Obstacle>)> = (l.queue.iter())
             .map(|j| (j.screened.candidate, j.test.obstacles.clone()))
             .chain(l.airborne.iter().cloned())
             .chain(l.replayed.iter().map(|(_, r)| (r.candidate, r.obstacles.clone())))
@@ -276,9 +265,19 @@ impl<'a> Fleet<'a> {
             .cloned()
     }
 
-    /// Stops serving the journaled flights of `candidates` (see [`Replay::set_aside`]).
-    pub fn set_aside(&self, candidates: &[u64]) {
-        self.lock().replay.set_aside(candidates);
+    /// Stops serving the journaled flights of `range`'s candidates drawn otherwise (see
+    /// [`Replay::set_aside_diverged`]); returns those candidates.
+    pub fn set_aside_diverged(
+        &self,
+        range: std::ops::Range<u64>,
+        as_drawn: impl Fn(&FlightRecord) -> bool,
+    ) -> Vec<CandidateId> {
+        self.lock().replay.set_aside_diverged(range, as_drawn)
+    }
+
+    /// The candidates set aside so far (see [`Replay::aside`]).
+    pub fn set_aside(&self) -> Vec<CandidateId> {
+        self.lock().replay.aside()
     }
 
     /// The journaled flights the replayed plan has not asked for; they are no longer served.

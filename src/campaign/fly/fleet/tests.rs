@@ -1,7 +1,8 @@
 //! The fleet: budgets, dropped vehicles, rejections and re-flights, on scripted vehicles.
 
 use super::*;
-use crate::campaign::candidate::Screened;
+use crate::campaign::candidate::{CandidateId, Screened};
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::*;
 use crate::campaign::store::journal::Journal;
 use crate::model::TestCase;
@@ -31,7 +32,7 @@ impl Vehicle for Fake {
                 d.store(true, Ordering::SeqCst);
             }
             return Ok(Flown {
-                status: "rejected".into(),
+                status: FlightStatus::Rejected,
                 min_distance: None,
                 min_distance_raw: None,
                 flight_time_s: 0.0,
@@ -61,7 +62,7 @@ impl Vehicle for Fake {
         let id = test.obstacles[0].position.x as u64;
         self.log.lock().unwrap().push((self.name.into(), id));
         Ok(Flown {
-            status: "landed".into(),
+            status: FlightStatus::Landed,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
             flight_time_s: 40.0,
@@ -110,7 +111,7 @@ pub(in crate::campaign) fn jobs(n: u64) -> Vec<Job> {
     (0..n)
         .map(|i| {
             Job::new(
-                Screened::point(i, 0.5, 40.0, "landed".into()),
+                Screened::point(CandidateId(i), 0.5, 40.0, "landed".into()),
                 base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
             )
         })
@@ -135,13 +136,13 @@ fn run_with(
         .into_iter()
         .map(|(name, reachable)| fake(name, reachable, &log, &dead_tried))
         .collect();
-    let journal = Journal::open(&dir.path().join("journal.jsonl")).unwrap();
+    let mut journal = Journal::load(&dir.path().join("journal.jsonl")).unwrap().0;
     let out = fly_all(
         &mut v,
         jobs(n),
         budget,
         dir.path(),
-        journal,
+        &mut journal,
         &AtomicBool::new(false),
         &|_| {},
     );
@@ -181,12 +182,12 @@ fn unreachable_vehicles_leave_the_fleet_and_the_others_fly_the_next_round() {
         fake("dead", false, &log, &dead_tried),
         fake("ok", true, &log, &dead_tried),
     ];
-    let journal = || Journal::open(&dir.path().join("journal.jsonl")).unwrap();
+    let journal = || Journal::load(&dir.path().join("journal.jsonl")).unwrap().0;
     let no_stop = AtomicBool::new(false);
-    let first = fly_all(&mut fleet, jobs(2), 2, dir.path(), journal(), &no_stop, &|_| {});
+    let first = fly_all(&mut fleet, jobs(2), 2, dir.path(), &mut journal(), &no_stop, &|_| {});
     assert_eq!((first.flown, fleet.len()), (2, 1));
     assert_eq!(fleet[0].name(), "ok");
-    let second = fly_all(&mut fleet, jobs(1), 1, dir.path(), journal(), &no_stop, &|_| {});
+    let second = fly_all(&mut fleet, jobs(1), 1, dir.path(), &mut journal(), &no_stop, &|_| {});
     assert_eq!((second.flown, second.dropped.len()), (1, 0));
 }
 
@@ -212,7 +213,7 @@ fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_els
         jobs(5),
         5,
         dir.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &AtomicBool::new(false),
         &|_| {},
     );
@@ -221,9 +222,9 @@ fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_els
     assert!(out.dropped[0].contains("rejected 2 flights in a row") && out.dropped[0].contains("Compass"));
     assert_eq!((fleet.len(), fleet[0].name()), (1, "ok".to_string()));
     // One rejection is journaled, the second's job is flown by "ok": the budget is spent on 4 flights.
-    let rejected: Vec<_> = records.iter().filter(|r| r.status == "rejected").collect();
+    let rejected: Vec<_> = records.iter().filter(|r| r.status == FlightStatus::Rejected).collect();
     assert_eq!((records.len(), rejected.len(), out.flown), (5, 1, 5));
-    let mut ids: Vec<u64> = records.iter().map(|r| r.candidate).collect();
+    let mut ids: Vec<u64> = records.iter().map(|r| r.candidate.0).collect();
     ids.sort();
     assert_eq!(ids, vec![0, 1, 2, 3, 4], "every job once");
     assert_eq!(log.lock().unwrap().len(), 4);
@@ -243,7 +244,7 @@ fn rejections_in_a_row_count_across_rounds() {
         jobs(1),
         1,
         dir.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &no_stop,
         &|_| {},
     );
@@ -257,7 +258,7 @@ fn rejections_in_a_row_count_across_rounds() {
         next,
         2,
         dir.path(),
-        Journal::open(&path).unwrap(),
+        &mut Journal::load(&path).unwrap().0,
         &no_stop,
         &|_| {},
     );
@@ -288,7 +289,7 @@ fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) ->
         .collect();
     let setup = FleetSetup {
         folder: dir.path(),
-        journal: Journal::open(&dir.path().join("journal.jsonl")).unwrap(),
+        journal: &mut Journal::load(&dir.path().join("journal.jsonl")).unwrap().0,
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: false,
@@ -298,7 +299,7 @@ fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) ->
 }
 
 fn candidates(records: &[FlightRecord]) -> Vec<u64> {
-    let mut c: Vec<u64> = records.iter().map(|r| r.candidate).collect();
+    let mut c: Vec<u64> = records.iter().map(|r| r.candidate.0).collect();
     c.sort_unstable();
     c
 }

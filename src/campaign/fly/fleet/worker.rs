@@ -5,10 +5,11 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::confirm::trajectory_name;
 use crate::campaign::fly::retry::fly_counting_rejections;
 use crate::campaign::fly::vehicle::{Job, Vehicle, interrupted_if_cancelled};
-use crate::campaign::store::journal::{FlightRecord, INTERRUPTED, Journal};
+use crate::campaign::store::journal::{FlightRecord, Journal};
 
 use super::{Fleet, POLL};
 
@@ -25,7 +26,7 @@ impl Fleet<'_> {
             let go_on = match result {
                 Ok(flown) => {
                     let flown = interrupted_if_cancelled(flown, self.cancel);
-                    let rel = if flown.status == INTERRUPTED {
+                    let rel = if flown.status == FlightStatus::Interrupted {
                         self.keep_interrupted(rel)
                     } else {
                         rel
@@ -155,8 +156,12 @@ impl Fleet<'_> {
             .map_err(|_| "journal lock poisoned".to_string())
             .and_then(|mut j| {
                 j.0.append(record).map_err(|e| e.to_string())?;
-                if record.charged() {
-                    j.1.push((round, Journal::read_back(record)));
+                // The journal keeps the record as the file reads it back.
+                if record.charged()
+                    && let Some(back) = j.0.records().last()
+                {
+                    let back = back.clone();
+                    j.1.push((round, back));
                 }
                 Ok(())
             });

@@ -160,7 +160,10 @@ impl Vehicle for RunnerVehicle {
 
 /// A flight the campaign's stop ended (`aborted`: the fleet journals it `interrupted`).
 fn stopped() -> Flown {
-    Flown::unflown("aborted", "the job was stopped".into())
+    Flown::unflown(
+        crate::campaign::flight_status::FlightStatus::Aborted,
+        "the job was stopped".into(),
+    )
 }
 
 /// `{id}`: unique per campaign, flight and attempt, and a valid Slurm job name and Kubernetes object name

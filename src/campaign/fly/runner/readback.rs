@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::Flown;
 use crate::judge::{Judge, judge_flight};
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
@@ -22,13 +23,10 @@ const MAX_JSON_BYTES: u64 = 4 << 20;
 /// A flight said to have ended whose trajectory ends higher than this above its lowest point did not land.
 const ENDS_IN_THE_AIR_M: f64 = 1.0;
 
-/// The statuses of `prgenuav fly --json`.
-const FLY_STATUSES: [&str; 6] = ["landed", "collision", "timeout", "link_lost", "aborted", "rejected"];
-
 /// The part of a `prgenuav fly --json` report the campaign uses (the distances are judged again here).
 #[derive(Debug, Clone, Deserialize)]
 struct FlyReport {
-    status: String,
+    status: FlightStatus,
     #[serde(default)]
     reason: Option<String>,
     #[serde(default)]
@@ -73,28 +71,26 @@ pub fn read_back(
     let trajectory = trajectory(&found, &mut problems);
     match (trajectory, report) {
         (Some((path, t)), report) => {
-            let claimed = report.as_ref().map_or("landed", |r| r.status.as_str());
+            let claimed = report.as_ref().map_or(FlightStatus::Landed, |r| r.status);
             if let Some(why) = not_a_whole_flight(&t, claimed) {
                 return Err(format!("{}: {why}", path.display()));
             }
             Ok(judged(t, path, report, obstacles, judge))
         }
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
-        (None, Some(r)) if !matches!(r.status.as_str(), "landed" | "collision") && problems.is_empty() => {
-            Ok(Readback {
-                flown: Flown {
-                    status: r.status,
-                    min_distance: None,
-                    min_distance_raw: None,
-                    flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
-                    warnings: r.warnings,
-                    reason: r.reason,
-                },
-                trajectory: None,
-                source: None,
-                reported: true,
-            })
-        }
+        (None, Some(r)) if !r.status.completed() && problems.is_empty() => Ok(Readback {
+            flown: Flown {
+                status: r.status,
+                min_distance: None,
+                min_distance_raw: None,
+                flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
+                warnings: r.warnings,
+                reason: r.reason,
+            },
+            trajectory: None,
+            source: None,
+            reported: true,
+        }),
         (None, report) => {
             let said = report.map_or(String::new(), |r| {
                 format!(
@@ -148,7 +144,7 @@ fn trajectory(found: &Found, problems: &mut Vec<String>) -> Option<(PathBuf, Tra
 
 /// Why `t` cannot be the flight it is `claimed` to be (`landed`, or `collision`: a flight that ended), if it
 /// cannot: no time span at all, or an end in the air (a log cut short, which would be judged on half a flight).
-fn not_a_whole_flight(t: &Trajectory, claimed: &str) -> Option<String> {
+fn not_a_whole_flight(t: &Trajectory, claimed: FlightStatus) -> Option<String> {
     let (first, last) = (t.samples.first()?, t.samples.last()?);
     let span = last.t_s - first.t_s;
     if !(span.is_finite() && span > 0.0) {
@@ -161,7 +157,7 @@ fn not_a_whole_flight(t: &Trajectory, claimed: &str) -> Option<String> {
     }
     let lowest = t.samples.iter().map(|s| s.z).fold(f64::INFINITY, f64::min);
     let height = last.z - lowest;
-    if matches!(claimed, "landed" | "collision") && height > ENDS_IN_THE_AIR_M {
+    if claimed.completed() && height > ENDS_IN_THE_AIR_M {
         return Some(format!(
             "the trajectory ends {height:.1} m above its lowest point, at t = {span:.1} s: the flight was cut short \
              (a truncated log), it did not land"
@@ -183,12 +179,12 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
     let reported = report.is_some();
     let (mut status, mut reason, warnings, time) = match report {
         Some(r) => (r.status, r.reason, r.warnings, r.flight_time_s),
-        None => ("landed".to_string(), None, Vec::new(), None),
+        None => (FlightStatus::Landed, None, Vec::new(), None),
     };
     if let Some(v) = verdict.as_ref().filter(|v| v.collision)
-        && matches!(status.as_str(), "landed" | "timeout")
+        && matches!(status, FlightStatus::Landed | FlightStatus::Timeout)
     {
-        status = "collision".into();
+        status = FlightStatus::Collision;
         let c = v.closest;
         reason = Some(format!(
             "entered obstacle {} at t = {:.1} s, ({:.2}, {:.2}, {:.2}) m",
@@ -229,7 +225,7 @@ fn json_file(path: &Path) -> Option<FlyReport> {
 }
 
 fn known(r: &FlyReport) -> bool {
-    FLY_STATUSES.contains(&r.status.as_str())
+    r.status.from_vehicle()
 }
 
 /// Every `.ulg`, `.csv` and `.json` under `dir` but `skip`, bounded in depth and count; ULogs newest first,

@@ -1,5 +1,5 @@
 use super::*;
-use crate::campaign::store::journal::BACKEND_FAILED;
+use crate::campaign::flight_status::FlightStatus;
 use crate::model::Obstacle;
 
 fn settings(template: &str, folder: &Path, timeout_ms: u64) -> RunnerSettings {
@@ -34,7 +34,7 @@ fn a_job_leaving_a_trajectory_is_a_judged_flight() {
         10_000,
     );
     let f = r.unwrap();
-    assert_eq!(f.status, "landed", "{f:?}");
+    assert_eq!(f.status, FlightStatus::Landed, "{f:?}");
     assert!(f.min_distance.is_some());
     assert_eq!(v.name(), "runner#0");
     let csv = std::fs::read_to_string(tmp.path().join("flights/candidate_7.csv")).unwrap();
@@ -50,7 +50,7 @@ fn a_failing_job_is_retried_once_then_backend_failed_with_its_stderr() {
         10_000,
     );
     let f = r.unwrap();
-    assert_eq!(f.status, BACKEND_FAILED);
+    assert_eq!(f.status, FlightStatus::BackendFailed);
     let reason = f.reason.unwrap();
     assert!(
         reason.contains("attempt 1: exited with code 7") && reason.contains("attempt 2"),
@@ -84,7 +84,7 @@ fn a_broken_runner_is_dropped_after_failing_flights_in_a_row() {
         let csv = tmp.path().join(format!("flights/candidate_{n}.csv"));
         let r = v.fly(&test_case(), &csv, &no);
         if n + 1 < crate::campaign::fly::retry::IN_A_ROW_TO_DROP {
-            assert_eq!(r.unwrap().status, BACKEND_FAILED);
+            assert_eq!(r.unwrap().status, FlightStatus::BackendFailed);
         } else {
             let e = r.unwrap_err().to_string();
             assert!(e.contains("runner#1") && e.contains("in a row"), "{e}");
@@ -97,7 +97,7 @@ fn a_stopped_campaign_stops_the_job() {
     let tmp = tempfile::tempdir().unwrap();
     let mut v = RunnerVehicle::new(0, Arc::new(settings("sleep 30; : {test}", tmp.path(), 60_000)));
     let r = v.fly(&test_case(), &tmp.path().join("c.csv"), &AtomicBool::new(true));
-    assert_eq!(r.unwrap().status, "aborted");
+    assert_eq!(r.unwrap().status, FlightStatus::Aborted);
 }
 
 #[test]

@@ -28,11 +28,11 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use crate::campaign::candidate::{Candidate, Lineage, Screened, is_child};
+use crate::campaign::candidate::{Candidate, CandidateId, Lineage, Screened, is_child};
 use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::as_learnt;
 use crate::campaign::fly::fleet::{Fleet, FleetSetup, run_fleet};
-use crate::campaign::fly::stage::{FlightCount, FlightStage, announce, stage_jobs};
+use crate::campaign::fly::stage::{FlightCount, FlightStage, announce, no_vehicle_left, note_resuming, stage_jobs};
 use crate::campaign::fly::vehicle::Vehicle;
 use crate::campaign::learn::calibration::{Calibration, Learnt, RoundLog};
 use crate::campaign::learn::failure_counts::{arm_counts, counted_failures};
@@ -74,17 +74,19 @@ pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
 pub fn run_rounds(
     input: &CampaignInput,
     vehicles: &mut Vec<Box<dyn Vehicle>>,
+    journal: &mut Journal,
     stages: &mut StageTimes,
 ) -> Result<(Learnt, usize), CampaignError> {
     let count = FlightCount::default();
-    let mut campaign = Rounds::start(input, &count)?;
-    let replay = Replay::new(&campaign.resumed, input.cfg.budget);
+    let resumed = journal.charged();
+    let mut campaign = Rounds::start(input, &count, &resumed)?;
+    let replay = Replay::new(&resumed, input.cfg.budget);
     let progress = input.progress;
     let tick = !input.cfg.overlap;
     let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, tick);
     let setup = FleetSetup {
         folder: input.folder,
-        journal: Journal::open(&input.folder.join("journal.jsonl"))?,
+        journal,
         cancel: input.cancel,
         on_flight: &on_flight,
         waves: input.cfg.repeatable_vehicles(),
@@ -114,10 +116,12 @@ struct Rounds<'a> {
     start_calibration: Calibration,
     /// The draw distribution of the next round.
     distribution: DrawDistribution,
-    /// Each test once, in journal order, at its flights' mean distance: what the rounds learn from.
-    journal: Vec<FlightRecord>,
-    /// Every journaled flight (later flights of a test too), in journal order: what the budget counts.
+    /// Every flight the rounds have taken back from the fleet (later flights of a test too), in journal order:
+    /// what the budget counts. The one list of flights the rounds keep.
     flights: Vec<FlightRecord>,
+    /// `flights` as the rounds learn from them: each test once, at its flights' mean distance
+    /// ([`as_learnt`]); set only from `flights`, when they change.
+    journal: Vec<FlightRecord>,
     /// Every candidate drawn, by generator index.
     candidates: Vec<Candidate>,
     log: Vec<RoundLog>,
@@ -125,10 +129,6 @@ struct Rounds<'a> {
     surrogate: Option<Surrogate>,
     /// The last round's learning, reused while no flight has landed since.
     carried: Option<(usize, Learning)>,
-    /// The journal as the campaign was resumed from (empty for a new one): what the replayed plan takes.
-    resumed: Vec<FlightRecord>,
-    /// Journaled candidates the replayed draw gave other obstacles: never flown again under their index.
-    set_aside: Vec<u64>,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
     in_air: VecDeque<Pushed>,
     /// The flights' numbering in the progress lines.
@@ -172,7 +172,12 @@ struct Ranking {
 
 impl<'a> Rounds<'a> {
     /// Loads the prior and the journal.
-    fn start(input: &'a CampaignInput<'a>, flight_count: &'a FlightCount) -> Result<Self, CampaignError> {
+    /// `resumed`: the journal's charged flights (the replay serves them).
+    fn start(
+        input: &'a CampaignInput<'a>,
+        flight_count: &'a FlightCount,
+        resumed: &[FlightRecord],
+    ) -> Result<Self, CampaignError> {
         let cfg = input.cfg;
         let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
         let start_calibration = prior
@@ -182,15 +187,8 @@ impl<'a> Rounds<'a> {
             Some(p) if cfg.adapt => p.distribution.clone(),
             _ => DrawDistribution::uniform(),
         };
-        let resumed = Journal::read(&input.folder.join("journal.jsonl"))?;
-        if !resumed.is_empty() {
-            input.progress.note(&format!(
-                "resuming: {} flights already journaled, {} left in the budget; the rounds are planned again \
-                 and take the journaled flights rather than flying them",
-                flights_charged(&resumed),
-                cfg.budget.saturating_sub(flights_charged(&resumed))
-            ));
-        }
+        let how = "; the rounds are planned again and take the journaled flights rather than flying them";
+        note_resuming(input.progress, resumed, cfg.budget, how);
         Ok(Self {
             input,
             base: Generator::new(input.case, cfg.generator.clone(), cfg.seed)?,
@@ -199,8 +197,6 @@ impl<'a> Rounds<'a> {
             distribution,
             journal: Vec::new(),
             flights: Vec::new(),
-            resumed,
-            set_aside: Vec::new(),
             candidates: Vec::new(),
             log: Vec::new(),
             surrogate: None,
@@ -240,27 +236,18 @@ impl<'a> Rounds<'a> {
         let round = self.draw(index, stages)?;
         self.set_aside_diverged(&round, fleet);
         self.screen(&round, stages)?;
-        let busy = fleet.busy();
-        let ranking = self.rank(&round, &busy, self.promised(), stages)?;
+        let (busy, aside) = (fleet.busy(), fleet.set_aside());
+        let ranking = self.rank(&round, (&busy, &aside), self.promised(), stages)?;
         self.note(&round, &ranking);
-        let flight = FlightStage {
-            case: self.input.case,
-            candidates: &self.candidates,
-            folder: self.input.folder,
-            progress: self.input.progress,
-            cancel: self.input.cancel,
-            done: &self.flights,
-            confirm: self.input.cfg.confirm,
-            waves: self.input.cfg.repeatable_vehicles(),
-        };
-        let busy: Vec<u64> = busy.iter().map(|(c, _)| *c).collect();
+        let flight = FlightStage::new(self.input, &self.candidates, &self.flights);
+        let busy: Vec<CandidateId> = busy.iter().map(|(c, _)| *c).collect();
         let jobs = stage_jobs(&flight, ranking.ranked, &busy);
         if !self.input.cfg.overlap {
             self.flight_count.new_stage();
             self.input.progress.stage("fly", jobs.len().min(ranking.remaining));
         }
         if !jobs.is_empty() && ranking.remaining > 0 && fleet.alive() == 0 {
-            return Err(self.no_vehicle_left(fleet));
+            return Err(no_vehicle_left(self.input.folder, &fleet.dropped()));
         }
         let promised = jobs.len().min(ranking.remaining);
         fleet.push(index, jobs, round.planned);
@@ -290,7 +277,7 @@ impl<'a> Rounds<'a> {
         let flown = fleet.wait_round(pushed.round.index);
         stages.fly_s += t.elapsed().as_secs_f64();
         if fleet.alive() == 0 && !self.input.cancel.load(Ordering::Relaxed) && fleet.journal_error().is_none() {
-            return Err(self.no_vehicle_left(fleet));
+            return Err(no_vehicle_left(self.input.folder, &fleet.dropped()));
         }
         let flights = flights_charged(&flown);
         self.flights.extend(flown);
@@ -300,27 +287,12 @@ impl<'a> Rounds<'a> {
         Ok(())
     }
 
-    /// A fleet with no vehicle left stops the campaign, keeping the flights journaled so far for `--resume`: a
-    /// campaign that lost every vehicle must not end as a clean run that found no failing test.
-    fn no_vehicle_left(&self, fleet: &Fleet) -> CampaignError {
-        let dropped = fleet.dropped();
-        CampaignError::NoVehicle(format!(
-            "{}; the flights so far are journaled: resume with  prgenuav generate --resume {}",
-            if dropped.is_empty() {
-                "every vehicle was dropped in an earlier stage".to_string()
-            } else {
-                dropped.join("; ")
-            },
-            self.input.folder.display()
-        ))
-    }
-
     /// What the campaign learnt, also written to `learnt.json` (a later campaign's `--prior`).
     fn finish(self) -> Result<(Learnt, usize), CampaignError> {
         let (done, drawn) = (&self.journal, &self.candidates);
         let child_of = |lineage| move |c| is_child(drawn, c, lineage);
-        let any_child = |c: u64| drawn.get(c as usize).is_some_and(|x| x.parents.is_some());
-        let close = |c: u64| drawn.get(c as usize).is_some_and(|x| x.close);
+        let any_child = |c: CandidateId| drawn.get(c.index()).is_some_and(|x| x.parents.is_some());
+        let close = |c: CandidateId| drawn.get(c.index()).is_some_and(|x| x.close);
         let learnt = Learnt {
             calibration: self.calibration,
             surrogate: self.surrogate,

@@ -5,7 +5,7 @@ use std::sync::atomic::Ordering;
 
 use super::Round;
 use super::Rounds;
-use crate::campaign::candidate::drawn_as;
+use crate::campaign::candidate::{CandidateId, drawn_as};
 use crate::campaign::fly::confirm::as_learnt;
 use crate::campaign::fly::fleet::Fleet;
 
@@ -13,20 +13,12 @@ impl Rounds<'_> {
     /// A resumed campaign's journaled flights of `round`'s candidates drawn with other obstacles this time (the
     /// rounds before came out otherwise, or the record is another campaign's) are not served to the plan; they
     /// are kept, and their candidate indices never flown again.
-    pub(in crate::campaign) fn set_aside_diverged(&mut self, round: &Round, fleet: &Fleet) {
+    pub(in crate::campaign) fn set_aside_diverged(&self, round: &Round, fleet: &Fleet) {
         let range = round.first..round.first + round.drawn as u64;
-        let mut diverged: Vec<u64> = (self.resumed.iter())
-            .filter(|r| range.contains(&r.candidate))
-            .filter(|r| {
-                !self
-                    .candidates
-                    .get(r.candidate as usize)
-                    .is_some_and(|c| drawn_as(c, r))
-            })
-            .map(|r| r.candidate)
-            .collect();
-        diverged.sort_unstable();
-        diverged.dedup();
+        let drawn = &self.candidates;
+        let diverged = fleet.set_aside_diverged(range, |r| {
+            drawn.get(r.candidate.index()).is_some_and(|c| drawn_as(c, r))
+        });
         if diverged.is_empty() {
             return;
         }
@@ -35,10 +27,12 @@ impl Rounds<'_> {
              them (the rounds before came out otherwise, or the lines come from another campaign); they are kept \
              and counted, and those candidates are not flown again",
             self.input.folder.join("journal.jsonl").display(),
-            diverged.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
+            diverged
+                .iter()
+                .map(CandidateId::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
-        fleet.set_aside(&diverged);
-        self.set_aside.extend(diverged);
     }
 
     /// Journaled flights the replayed plan never asked for (the campaign flew on vehicles that do not repeat,

@@ -2,7 +2,7 @@
 //! campaign learnt so far and choose the flights, then learn from the flights that landed.
 
 use super::{ROUNDS, Ranking, Round, Rounds};
-use crate::campaign::candidate::{Lineage, Screened, is_child};
+use crate::campaign::candidate::{CandidateId, Lineage, Screened, is_child, unflown};
 use crate::campaign::config::CampaignError;
 use crate::campaign::learn::calibration::RoundLog;
 use crate::campaign::learn::failure_counts::arm_counts;
@@ -13,9 +13,7 @@ use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flig
 use crate::campaign::plan::rank::rank_unflown;
 use crate::campaign::report::outputs::StageTimes;
 use crate::campaign::report::user_report::plural;
-use crate::campaign::screen::stages::{
-    ENSEMBLE_SHORTLIST_PER_FLIGHT, Stage, apply_ensemble, ensemble_shortlist, screen_all,
-};
+use crate::campaign::screen::stages::{Stage, run_ensemble, screen_all};
 use crate::campaign::store::journal::FlightRecord;
 use crate::model::Obstacle;
 use crate::model::competition::FAIL_BELOW_M;
@@ -37,7 +35,7 @@ impl Rounds<'_> {
         let (around, lineage) = if cfg.adapt {
             neighbours::parents(
                 &self.journal,
-                |c| self.candidates.get(c as usize).map(|x| x.unit),
+                |c| self.candidates.get(c.index()).map(|x| x.unit),
                 FAIL_BELOW_M,
             )
         } else {
@@ -109,11 +107,12 @@ impl Rounds<'_> {
 
     /// Learns from every flight so far, then ranks the unflown candidates with the calibrated LFS moved towards
     /// the flights near them (and the ensembles), within the round's share of the budget.
-    /// `busy` are the candidates queued or in the air, `committed` the flights promised ([`Self::promised`]).
+    /// `busy` are the candidates queued or in the air, `aside` those never flown again (the replay set them
+    /// aside), `committed` the flights promised ([`Self::promised`]).
     pub(super) fn rank(
         &mut self,
         round: &Round,
-        busy: &[(u64, Vec<Obstacle>)],
+        (busy, aside): (&[(CandidateId, Vec<Obstacle>)], &[CandidateId]),
         committed: usize,
         stages: &mut StageTimes,
     ) -> Result<Ranking, CampaignError> {
@@ -125,13 +124,11 @@ impl Rounds<'_> {
         };
         self.calibration = taught.calibration.clone();
         self.surrogate = taught.kernel;
-        let flown: Vec<u64> = (self.journal.iter().map(|r| r.candidate))
+        let flown: Vec<CandidateId> = (self.journal.iter().map(|r| r.candidate))
             .chain(busy.iter().map(|(c, _)| *c))
-            .chain(self.set_aside.iter().copied())
+            .chain(aside.iter().copied())
             .collect();
-        let mut fresh: Vec<Screened> = (self.candidates.iter())
-            .filter_map(|c| c.screened.as_ref())
-            .filter(|s| !flown.contains(&s.candidate))
+        let mut fresh: Vec<Screened> = unflown(&self.candidates, &flown)
             .map(|s| Screened {
                 min_distance: taught.predict(s, &self.candidates),
                 raw_min_distance: Some(s.min_distance),
@@ -140,13 +137,7 @@ impl Rounds<'_> {
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
         let remaining = round.planned.saturating_sub(committed);
-        if cfg.ensemble > 0 && remaining > 0 {
-            let t = Instant::now();
-            let shortlist = remaining * ENSEMBLE_SHORTLIST_PER_FLIGHT;
-            let members = ensemble_shortlist(&self.stage(), &fresh, cfg, shortlist)?;
-            apply_ensemble(&mut fresh, &members, &self.input.screener.ensemble_params());
-            stages.ensemble_s += t.elapsed().as_secs_f64();
-        }
+        stages.ensemble_s += run_ensemble(&self.stage(), &mut fresh, cfg, remaining)?;
         let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
         Ok(Ranking {
             ranked,

@@ -1,0 +1,123 @@
+//! How a campaign's flight ended, one type from the vehicle's report to the journal and back. The serde names
+//! are the journal's strings, so journals written before read as they were.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::bridge::session::report::Status;
+
+/// How a flight ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlightStatus {
+    /// Flown to the end, landed and disarmed.
+    Landed,
+    /// The vehicle entered an obstacle.
+    Collision,
+    /// Still flying at the timeout.
+    Timeout,
+    /// The vehicle went silent or rebooted.
+    LinkLost,
+    /// Cancelled mid-flight by the vehicle's side.
+    Aborted,
+    /// The vehicle refused the mission, a parameter, a mode or arming.
+    Rejected,
+    /// Cut short by the user's stop: journaled so the trajectory is kept, not charged, flown again on resume.
+    Interrupted,
+    /// The backend failed around the flight after its retry: the vehicle, not the test, is at fault.
+    BackendFailed,
+    /// A stand-in for a flight queued or in the air (no outcome yet); never journaled.
+    #[serde(skip)]
+    Queued,
+}
+
+impl FlightStatus {
+    /// The journal's spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Landed => "landed",
+            Self::Collision => "collision",
+            Self::Timeout => "timeout",
+            Self::LinkLost => "link_lost",
+            Self::Aborted => "aborted",
+            Self::Rejected => "rejected",
+            Self::Interrupted => "interrupted",
+            Self::BackendFailed => "backend_failed",
+            Self::Queued => "queued",
+        }
+    }
+
+    /// Whether the flight counts against the budget: an interrupted flight or a failed backend says nothing
+    /// about the test.
+    pub fn charged(self) -> bool {
+        !matches!(self, Self::Interrupted | Self::BackendFailed)
+    }
+
+    /// Whether the flight ran to its end (a measurement exists).
+    pub fn completed(self) -> bool {
+        matches!(self, Self::Landed | Self::Collision)
+    }
+
+    /// Whether a vehicle's own report can say it (`prgenuav fly`'s statuses); the others are the campaign's.
+    pub fn from_vehicle(self) -> bool {
+        !matches!(self, Self::Interrupted | Self::BackendFailed | Self::Queued)
+    }
+}
+
+impl fmt::Display for FlightStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl From<Status> for FlightStatus {
+    fn from(s: Status) -> Self {
+        match s {
+            Status::Landed => Self::Landed,
+            Status::Collision => Self::Collision,
+            Status::Timeout => Self::Timeout,
+            Status::LinkLost => Self::LinkLost,
+            Status::Aborted => Self::Aborted,
+            Status::Rejected => Self::Rejected,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: [FlightStatus; 8] = [
+        FlightStatus::Landed,
+        FlightStatus::Collision,
+        FlightStatus::Timeout,
+        FlightStatus::LinkLost,
+        FlightStatus::Aborted,
+        FlightStatus::Rejected,
+        FlightStatus::Interrupted,
+        FlightStatus::BackendFailed,
+    ];
+
+    #[test]
+    fn the_journal_strings_read_and_write_as_before() {
+        for s in ALL {
+            let json = serde_json::to_string(&s).unwrap();
+            assert_eq!(json, format!("\"{}\"", s.as_str()));
+            assert_eq!(serde_json::from_str::<FlightStatus>(&json).unwrap(), s);
+        }
+        for bridge in [Status::Landed, Status::LinkLost, Status::Rejected] {
+            assert_eq!(FlightStatus::from(bridge).as_str(), bridge.as_str());
+        }
+        assert!(serde_json::from_str::<FlightStatus>("\"queued\"").is_err());
+        assert!(serde_json::to_string(&FlightStatus::Queued).is_err());
+        assert!(serde_json::from_str::<FlightStatus>("\"crashed\"").is_err());
+    }
+
+    #[test]
+    fn only_the_campaigns_own_endings_go_uncharged() {
+        let uncharged: Vec<_> = ALL.into_iter().filter(|s| !s.charged()).collect();
+        assert_eq!(uncharged, [FlightStatus::Interrupted, FlightStatus::BackendFailed]);
+        assert!(ALL.iter().filter(|s| s.from_vehicle()).all(|s| s.charged()));
+    }
+}
