@@ -105,6 +105,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ("--world", args.world.as_deref()),
     ])?;
     let build = args.px4.as_deref().map(Px4Build::open).transpose()?;
+    if let Some(b) = &build {
+        b.check_mode(args.mode.into())?;
+    }
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -222,10 +225,11 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
 fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<(Px4Sitl, Slot)> {
     let speed = opts.time_scale;
     let slot = slot::claim(0)?;
-    let spec = SitlSpec::new(build.bin(), slot.instance(), speed).at(test.home);
+    let spec = SitlSpec::for_build(build, slot.instance(), speed).at(test.home);
     if !quiet {
         eprintln!(
-            "starting PX4 SIH instance {} at the test's home, speed factor {speed} ...",
+            "starting PX4 {} SIH instance {} at the test's home, speed factor {speed} ...",
+            build.version,
             slot.instance()
         );
     }

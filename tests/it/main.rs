@@ -23,6 +23,7 @@ mod px4_campaign;
 mod px4_fake;
 mod px4_reference;
 mod px4_sitl;
+mod px4_versions;
 mod ready;
 mod rules;
 mod runner;
