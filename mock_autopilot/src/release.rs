@@ -30,10 +30,17 @@ impl Px4Release {
     /// Reads `1.16.2` or `v1.16.2`.
     pub fn parse(text: &str) -> Result<Px4Release, String> {
         let t = text.trim();
-        let numbers: Vec<Option<u8>> = t.strip_prefix('v').unwrap_or(t).split('.').map(|p| p.parse().ok()).collect();
+        let numbers: Vec<Option<u8>> = t
+            .strip_prefix('v')
+            .unwrap_or(t)
+            .split('.')
+            .map(|p| p.parse().ok())
+            .collect();
         match numbers[..] {
             [Some(major), Some(minor), Some(patch)] if major > 0 => Ok(Px4Release { major, minor, patch }),
-            _ => Err(format!("{text:?}: expected a PX4 release MAJOR.MINOR.PATCH, e.g. 1.16.2")),
+            _ => Err(format!(
+                "{text:?}: expected a PX4 release MAJOR.MINOR.PATCH, e.g. 1.16.2"
+            )),
         }
     }
 

@@ -36,8 +36,8 @@ pub struct Args {
     #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
     /// Start a fresh PX4 SIH instance for the flight (at the test's home, on the first free instance slot of
-    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder
-    /// (docs/px4.md).
+    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot (v1.14 to v1.17)
+    /// `build/px4_sitl_default` folder (docs/px4.md).
     #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
     px4: Option<PathBuf>,
     /// How the flight avoids the virtual obstacles.

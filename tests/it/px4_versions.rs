@@ -109,10 +109,13 @@ async fn fly_on_mock(url: &str, mode: FlyMode, speed: f64) -> FlightReport {
         heartbeat_wait_s: 20.0,
         ..FlyOptions::default()
     };
-    tokio::time::timeout(Duration::from_secs(90), fly(&with_avoidance_param(), &opts, CancelToken::new()))
-        .await
-        .expect("bounded")
-        .expect("flight runs")
+    tokio::time::timeout(
+        Duration::from_secs(90),
+        fly(&with_avoidance_param(), &opts, CancelToken::new()),
+    )
+    .await
+    .expect("bounded")
+    .expect("flight runs")
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -128,7 +131,11 @@ async fn avoidance_on_a_vehicle_reporting_v1_16_is_refused_before_anything_is_up
             && reason.contains("modes that work on PX4 1.16: offboard, mission"),
         "{reason}"
     );
-    assert_eq!((state.mission_items, state.armed, r.samples > 0), (0, false, false), "{state:?}");
+    assert_eq!(
+        (state.mission_items, state.armed, r.samples > 0),
+        (0, false, false),
+        "{state:?}"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -139,9 +146,8 @@ async fn mission_mode_on_a_vehicle_reporting_v1_16_lands_and_skips_com_obs_avoid
     assert!(r.status.completed(), "{:?} {:?}", r.status, r.reason);
     assert!(r.min_distance.is_some());
     assert!(
-        r.warnings.iter().any(|w| w.contains(
-            "case-study parameter COM_OBS_AVOID not set: PX4 1.16.2 has no obstacle-avoidance interface"
-        )),
+        r.warnings.iter().any(|w| w
+            .contains("case-study parameter COM_OBS_AVOID not set: PX4 1.16.2 has no obstacle-avoidance interface")),
         "{:?}",
         r.warnings
     );
@@ -168,5 +174,9 @@ async fn a_vehicle_reporting_v1_14_keeps_its_avoidance_parameter() {
     let r = fly_on_mock(&url, FlyMode::Mission, 20.0).await;
     mock.shutdown().await.expect("mock stops");
     assert!(r.status.completed(), "{:?} {:?}", r.status, r.reason);
-    assert!(!r.warnings.iter().any(|w| w.contains("COM_OBS_AVOID")), "{:?}", r.warnings);
+    assert!(
+        !r.warnings.iter().any(|w| w.contains("COM_OBS_AVOID")),
+        "{:?}",
+        r.warnings
+    );
 }
