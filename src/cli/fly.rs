@@ -104,10 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ("--trajectory", args.trajectory.as_deref()),
         ("--world", args.world.as_deref()),
     ])?;
-    let build = args.px4.as_deref().map(Px4Build::open).transpose()?;
-    if let Some(b) = &build {
-        b.check_mode(args.mode.into())?;
-    }
+    let build = open_build(&args)?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -157,6 +154,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         print_text(&report);
     }
     Ok(exit_code(&report))
+}
+
+/// `--px4`: the checked build folder, refused when its release cannot fly `--mode`.
+fn open_build(args: &Args) -> anyhow::Result<Option<Px4Build>> {
+    let Some(dir) = args.px4.as_deref() else {
+        return Ok(None);
+    };
+    let build = Px4Build::open(dir)?;
+    build.check_mode(args.mode.into())?;
+    Ok(Some(build))
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
