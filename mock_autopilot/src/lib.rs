@@ -34,6 +34,7 @@ pub mod obstacles;
 pub mod offboard;
 pub mod params;
 pub mod preflight;
+pub mod release;
 pub mod safety;
 pub mod scenarios;
 pub mod server;

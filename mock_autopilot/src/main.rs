@@ -9,6 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Parser;
 use mavlink::dialects::common::MavMissionResult;
 use mock_autopilot::obstacles::ObstacleWorld;
+use mock_autopilot::release::Px4Release;
 use mock_autopilot::{Faults, LinkSpec, MockAutopilot, SpeedFactor};
 
 /// A PX4-like MAVLink vehicle (quadrotor, sysid 1) for tests without hardware.
@@ -79,6 +80,10 @@ struct Args {
     /// Boot here (home and EKF origin): LAT,LON,ALT (degrees, degrees, metres AMSL); default PX4 SITL's.
     #[arg(long, value_parser = parse_home, allow_hyphen_values = true)]
     home: Option<mock_autopilot::geo::GeoPoint>,
+    /// Act as this PX4 release MAJOR.MINOR.PATCH: what AUTOPILOT_VERSION reports; from 1.16 there is no
+    /// COM_OBS_AVOID (no avoidance interface).
+    #[arg(long, default_value = "1.14.0", value_parser = Px4Release::parse)]
+    px4_version: Px4Release,
 }
 
 fn parse_home(s: &str) -> Result<mock_autopilot::geo::GeoPoint, String> {
@@ -192,6 +197,7 @@ async fn run(args: Args) -> Result<()> {
         .faults(faults)
         .reject_mission(reject)
         .fail_arm(args.fail_arm)
+        .px4_release(args.px4_version)
         .estimator_settle(secs("estimator-settle", args.estimator_settle, 600.0)?)
         .lockstep(
             args.lockstep

@@ -231,8 +231,8 @@ impl Vehicle {
                 | C::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
                 | C::MAV_PROTOCOL_CAPABILITY_MISSION_RALLY,
             uid: 0x4D4F_434B_5058_3401,
-            flight_sw_version: FLIGHT_SW_VERSION,
-            middleware_sw_version: FLIGHT_SW_VERSION,
+            flight_sw_version: self.flight_sw_version,
+            middleware_sw_version: self.flight_sw_version,
             os_sw_version: 0,
             board_version: 0,
             vendor_id: 0,

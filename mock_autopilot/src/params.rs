@@ -149,6 +149,15 @@ impl ParamTable {
         true
     }
 
+    /// Removes `name` (a parameter this PX4 release does not have); whether it was there.
+    pub fn remove(&mut self, name: &str) -> bool {
+        let Some(i) = self.index_of(name) else {
+            return false;
+        };
+        self.entries.remove(i);
+        true
+    }
+
     fn index_of(&self, name: &str) -> Option<usize> {
         self.entries.iter().position(|(n, _)| *n == name)
     }

@@ -156,6 +156,12 @@ impl Builder {
         self
     }
 
+    /// Act as this PX4 release (AUTOPILOT_VERSION; no `COM_OBS_AVOID` from v1.16).
+    pub fn px4_release(mut self, release: crate::release::Px4Release) -> Self {
+        self.vehicle.release = release;
+        self
+    }
+
     /// Crash (disarm, STATUSTEXT, on ground) when entering an obstacle.
     pub fn collision(mut self, world: Box<dyn CollisionWorld>) -> Self {
         self.vehicle.collision = Some(world);

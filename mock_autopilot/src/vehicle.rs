@@ -21,6 +21,7 @@ use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
 use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
 use crate::params::{ParamReply, ParamTable, ParamValue};
+use crate::release::Px4Release;
 use crate::telemetry::Streams;
 
 /// Our MAVLink system id.
@@ -56,6 +57,8 @@ pub struct VehicleConfig {
     /// Seed of the gusts (`tuning.gust_acc_m_s2`): flight k since the vehicle started flies the gusts of
     /// [`crate::gusts::flight_seed`]`(seed, k)`.
     pub seed: u64,
+    /// The PX4 release it acts as (AUTOPILOT_VERSION; no `COM_OBS_AVOID` from v1.16).
+    pub release: Px4Release,
 }
 
 impl Default for VehicleConfig {
@@ -69,6 +72,7 @@ impl Default for VehicleConfig {
             estimator_settle: Duration::ZERO,
             tuning: Tuning::default(),
             seed: 0,
+            release: Px4Release::default(),
         }
     }
 }
@@ -83,6 +87,7 @@ impl std::fmt::Debug for VehicleConfig {
             .field("estimator_settle", &self.estimator_settle)
             .field("tuning", &self.tuning)
             .field("seed", &self.seed)
+            .field("release", &self.release)
             .finish()
     }
 }
@@ -147,6 +152,7 @@ pub struct Vehicle {
     pub(crate) estimator_settle: Duration,
     pub(crate) feasibility_pending: bool,
     seed: u64,
+    pub(crate) flight_sw_version: u32,
     flights: u64,
     gusts: Gusts,
 }
@@ -155,6 +161,9 @@ impl Vehicle {
     /// A vehicle on the ground at `cfg.home`, disarmed, in AUTO.LOITER.
     pub fn new(cfg: VehicleConfig) -> Self {
         let mut params = ParamTable::default();
+        if !cfg.release.has_avoidance_interface() {
+            params.remove("COM_OBS_AVOID");
+        }
         for (name, v) in &cfg.params {
             params.set(name, *v);
         }
@@ -193,6 +202,7 @@ impl Vehicle {
             estimator_settle: cfg.estimator_settle,
             feasibility_pending: false,
             seed: cfg.seed,
+            flight_sw_version: cfg.release.flight_sw_version(),
             flights: 0,
             gusts: Gusts::calm(),
         }

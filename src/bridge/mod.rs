@@ -27,6 +27,7 @@
 pub mod companion;
 pub mod fly;
 pub mod options;
+pub mod px4_version;
 pub mod session;
 pub mod sitl;
 pub mod wire;

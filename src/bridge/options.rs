@@ -10,7 +10,7 @@ use super::wire::url::{DEFAULT_URL, LinkAddress, UrlError};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FlyMode {
-    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; the bridge is the avoidance companion.
+    /// PX4 <= 1.15 flies the mission with COM_OBS_AVOID = 1; the bridge is the avoidance companion.
     #[default]
     Avoidance,
     /// The bridge flies the mission's waypoints in OFFBOARD mode with setpoints from the planner (any PX4).

@@ -36,8 +36,8 @@ pub struct Args {
     #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
     /// Start a fresh PX4 SIH instance for the flight (at the test's home, on the first free instance slot of
-    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder
-    /// (docs/px4.md).
+    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot (v1.14 to v1.17)
+    /// `build/px4_sitl_default` folder (docs/px4.md).
     #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
     px4: Option<PathBuf>,
     /// How the flight avoids the virtual obstacles.
@@ -104,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ("--trajectory", args.trajectory.as_deref()),
         ("--world", args.world.as_deref()),
     ])?;
-    let build = args.px4.as_deref().map(Px4Build::open).transpose()?;
+    let build = open_build(&args)?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -154,6 +154,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         print_text(&report);
     }
     Ok(exit_code(&report))
+}
+
+/// `--px4`: the checked build folder, refused when its release cannot fly `--mode`.
+fn open_build(args: &Args) -> anyhow::Result<Option<Px4Build>> {
+    let Some(dir) = args.px4.as_deref() else {
+        return Ok(None);
+    };
+    let build = Px4Build::open(dir)?;
+    build.check_mode(args.mode.into())?;
+    Ok(Some(build))
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
@@ -222,10 +232,11 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
 fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<(Px4Sitl, Slot)> {
     let speed = opts.time_scale;
     let slot = slot::claim(0)?;
-    let spec = SitlSpec::new(build.bin(), slot.instance(), speed).at(test.home);
+    let spec = SitlSpec::for_build(build, slot.instance(), speed).at(test.home);
     if !quiet {
         eprintln!(
-            "starting PX4 SIH instance {} at the test's home, speed factor {speed} ...",
+            "starting PX4 {} SIH instance {} at the test's home, speed factor {speed} ...",
+            build.version,
             slot.instance()
         );
     }

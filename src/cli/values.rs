@@ -68,7 +68,7 @@ impl Motion {
 /// How a flight avoids the virtual obstacles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Mode {
-    /// PX4 <= 1.14 flies the mission with COM_OBS_AVOID = 1; prgenuav is its avoidance companion.
+    /// PX4 <= 1.15 flies the mission with COM_OBS_AVOID = 1; prgenuav is its avoidance companion.
     Avoidance,
     /// prgenuav flies the waypoints in OFFBOARD mode with the planner's setpoints (any PX4).
     Offboard,

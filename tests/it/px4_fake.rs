@@ -18,14 +18,22 @@ use prgenuav::campaign::store::journal::Journal;
 
 use super::{case, repo, test_file, valid_pair};
 
-/// A build folder whose `bin/px4` runs `script` (PX4's arguments: `-d -i N -w DIR ETC`).
+/// A PX4 v1.14 build folder whose `bin/px4` runs `script` (PX4's arguments: `-d -i N -w DIR ETC`).
 pub fn fake_build(script: &str) -> tempfile::TempDir {
+    fake_build_tagged(script, "v1.14.0")
+}
+
+/// [`fake_build`] of the PX4 release whose git tag is `tag`.
+pub fn fake_build_tagged(script: &str, tag: &str) -> tempfile::TempDir {
     use std::os::unix::fs::PermissionsExt;
     let dir = tempfile::tempdir().expect("temp dir");
     let root = dir.path();
     std::fs::create_dir_all(root.join("bin")).expect("bin");
     std::fs::create_dir_all(root.join("etc/init.d-posix")).expect("etc");
     std::fs::write(root.join("etc/init.d-posix/rcS"), "").expect("rcS");
+    let header = root.join(prgenuav::bridge::sitl::VERSION_HEADER);
+    std::fs::create_dir_all(header.parent().expect("a folder")).expect("version folder");
+    std::fs::write(header, format!("#define PX4_GIT_TAG_STR \"{tag}\"\n")).expect("version header");
     std::fs::write(root.join("bin/px4"), format!("#!/bin/sh\n{script}\n")).expect("px4");
     std::fs::set_permissions(root.join("bin/px4"), std::fs::Permissions::from_mode(0o755)).expect("chmod");
     dir

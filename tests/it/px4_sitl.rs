@@ -1,8 +1,11 @@
-//! Conformance against real PX4 (ignored by default; CI does not run it). Needs a PX4 v1.14 SITL binary the
-//! user built:
+//! Conformance against real PX4 (ignored by default; CI does not run it). Needs a PX4 SITL binary the user
+//! built (v1.14 to v1.17; `px4_v116.rs` flies the same on a v1.16.x one in `PX4_SITL_BIN_V116`):
 //!
 //! `PX4_SITL_BIN=/path/to/build/px4_sitl_default/bin/px4 cargo test --release -- --ignored px4_sitl --nocapture
 //! --test-threads=1` (one instance at a time on a 2-core machine)
+//!
+//! Every mode the build's release supports must land and be judged right; a mode it lacks (avoidance from
+//! v1.16) must be refused before anything is uploaded or armed.
 //!
 //! Each test starts its own headless SIH instance (rootfs in a temp dir, the competition's home, speed factor
 //! 5, a distinct instance number so the tests can run in parallel), flies generated tests through the bridge
@@ -12,7 +15,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use prgenuav::bridge::sitl::{Px4Sitl, SitlSpec};
+use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::generator::{Generator, GeneratorConfig};
 use prgenuav::model::TestCase;
@@ -22,9 +25,16 @@ use super::{case, px4_sitl_bin};
 /// PX4_SIM_SPEED_FACTOR of every instance.
 const SPEED: f64 = 5.0;
 
+/// The checked build folder of `BUILD/bin/px4`.
+pub(super) fn build_of(bin: &Path) -> Px4Build {
+    let root = bin.parent().and_then(Path::parent).expect("BUILD/bin/px4");
+    Px4Build::open(root).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// Starts instance `instance` (its API link sends to UDP 14540 + instance), stopped when dropped.
 fn start(bin: &Path, instance: u8) -> Px4Sitl {
-    Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED)).expect("PX4 SITL starts")
+    let spec = SitlSpec::for_build(&build_of(bin), instance, SPEED);
+    Px4Sitl::start(&spec).expect("PX4 SITL starts")
 }
 
 /// Mission `n` with generated obstacles (seed 1, test `k`).
@@ -117,14 +127,19 @@ fn landed_at_the_land_point(r: &FlightReport, test: &TestCase, mode: FlyMode) ->
     Ok(())
 }
 
-async fn all_modes(instance: u8, mission: u32) {
-    let bin = px4_sitl_bin();
+/// Every mode on mission `mission`, each on a fresh instance: the release's modes land, the others are refused.
+pub(super) async fn all_modes(bin: &Path, instance: u8, mission: u32) {
+    let build = build_of(bin);
     let test = generated(mission, 0);
     for mode in [FlyMode::Mission, FlyMode::Avoidance, FlyMode::Offboard] {
         // A fresh instance per mode: every flight starts at home.
-        let px4 = start(&bin, instance);
-        let what = format!("mission {mission}");
+        let px4 = start(bin, instance);
+        let what = format!("PX4 {} mission {mission}", build.version);
         let r = fly_on(&px4, &test, mode, &what).await;
+        if !build.release.supports(mode) {
+            assert_refused_before_arming(&r, &format!("{what} {mode:?}"));
+            continue;
+        }
         assert_landed_at_the_land_point(&px4, &r, &test, mode, &format!("{what} {mode:?}"));
         let start = r.trajectory.samples.first().copied().expect("samples");
         assert!(
@@ -134,28 +149,39 @@ async fn all_modes(instance: u8, mission: u32) {
     }
 }
 
+/// Refused on the vehicle's reported release, before the mission was uploaded or the vehicle armed.
+fn assert_refused_before_arming(r: &FlightReport, what: &str) {
+    let reason = r.reason.clone().unwrap_or_default();
+    assert_eq!(r.status, Status::Rejected, "{what}: {reason}");
+    assert!(
+        reason.contains("has no obstacle-avoidance interface") && reason.contains("modes that work on PX4"),
+        "{what}: {reason}"
+    );
+    assert_eq!((r.samples, r.flight_time_s), (0, 0.0), "{what}: nothing flown");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
+#[ignore = "needs PX4_SITL_BIN (PX4 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_mission_1_all_modes() {
-    all_modes(1, 1).await;
+    all_modes(&px4_sitl_bin(), 1, 1).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
+#[ignore = "needs PX4_SITL_BIN (PX4 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_mission_2_all_modes() {
-    all_modes(2, 2).await;
+    all_modes(&px4_sitl_bin(), 2, 2).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
+#[ignore = "needs PX4_SITL_BIN (PX4 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_mission_3_all_modes() {
-    all_modes(3, 3).await;
+    all_modes(&px4_sitl_bin(), 3, 3).await;
 }
 
 /// Two flights in a row on one instance: the second starts where the first landed, far from the EKF origin,
 /// and must still be judged (and steered) in the test's frame.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "needs PX4_SITL_BIN (PX4 v1.14 SITL); run with --ignored px4_sitl"]
+#[ignore = "needs PX4_SITL_BIN (PX4 SITL); run with --ignored px4_sitl"]
 async fn px4_sitl_two_flights_in_a_row() {
     let bin = px4_sitl_bin();
     let px4 = start(&bin, 4);

@@ -1,4 +1,4 @@
-//! The obstacle-avoidance companion of PX4 <= 1.14 (COM_OBS_AVOID = 1): heartbeats as component 196 with the
+//! The obstacle-avoidance companion of PX4 <= 1.15 (COM_OBS_AVOID = 1): heartbeats as component 196 with the
 //! vehicle's system id (MAV_TYPE_ONBOARD_CONTROLLER, MAV_STATE_ACTIVE), reads PX4's desired trajectory
 //! (TRAJECTORY_REPRESENTATION_WAYPOINTS: point 0 PX4's setpoint with its type in `command[0]`, 1 the current
 //! item, 2 the next) and answers at 10 Hz with point 0 = the planner's setpoint, or PX4's own setpoint

@@ -15,6 +15,7 @@ use super::tasks::Tasks;
 use crate::bridge::companion::avoidance::CompanionStats;
 use crate::bridge::companion::frame::TestFrame;
 use crate::bridge::options::FlyOptions;
+use crate::bridge::px4_version::Px4Version;
 use crate::bridge::wire::cancel::CancelToken;
 use crate::bridge::wire::command::Command;
 use crate::bridge::wire::exchange::{ProtocolError, Retry, Target};
@@ -89,6 +90,8 @@ pub struct Session<'a> {
     pub mpc_xy_cruise_m_s: Option<f64>,
     /// Readiness timing and the arming budget.
     pub ready: Readiness,
+    /// The PX4 release the vehicle reported in AUTOPILOT_VERSION (None: another autopilot, or no answer).
+    pub px4_version: Option<Px4Version>,
 }
 
 /// Readiness as timed for the report and the arming budget.

@@ -6,9 +6,10 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use mavlink::dialects::common::{COMMAND_LONG_DATA, HEARTBEAT_DATA, MavCmd, MavMessage};
+use mavlink::dialects::common::{COMMAND_LONG_DATA, HEARTBEAT_DATA, MavAutopilot, MavCmd, MavMessage};
 use tokio::sync::broadcast;
 
+use crate::bridge::px4_version::Px4Version;
 use crate::bridge::wire::cancel::CancelToken;
 use crate::bridge::wire::exchange::Target;
 use crate::bridge::wire::link::{Inbound, Link, Sender};
@@ -16,33 +17,36 @@ use crate::bridge::wire::link::{Inbound, Link, Sender};
 /// How long the vehicle gets to say its version (vehicle time); without an answer the version is left out.
 const VERSION_WAIT: Duration = Duration::from_millis(1500);
 
-/// The vehicle in words, e.g. `system 1, component 1: PX4 quadrotor, flight software 1.14.0`.
-pub async fn describe(
-    link: &Link,
-    rx: &mut broadcast::Receiver<Arc<Inbound>>,
-    target: Target,
-    heartbeat: &HEARTBEAT_DATA,
-    cancel: &CancelToken,
-) -> String {
+/// The vehicle in words, e.g. `system 1, component 1: PX4 quadrotor, flight software 1.14.0`, given its
+/// AUTOPILOT_VERSION.flight_sw_version (from [`flight_sw_version`]).
+pub fn describe(target: Target, heartbeat: &HEARTBEAT_DATA, flight_sw: Option<u32>) -> String {
     let autopilot = words(&format!("{:?}", heartbeat.autopilot), "MAV_AUTOPILOT_");
     let kind = words(&format!("{:?}", heartbeat.mavtype), "MAV_TYPE_");
     let mut text = format!(
         "system {}, component {}: {autopilot} {kind}",
         target.system, target.component
     );
-    if let Some(v) = version(link, rx, target, cancel).await {
-        text.push_str(&format!(", flight software {v}"));
+    if let Some(v) = flight_sw {
+        text.push_str(&format!(", flight software {}", software_version(v)));
     }
     text
 }
 
-/// Asks for AUTOPILOT_VERSION and waits a bounded while for it.
-async fn version(
+/// The PX4 release a PX4 vehicle reports (None for another autopilot or no usable answer).
+pub fn px4_version(heartbeat: &HEARTBEAT_DATA, flight_sw: Option<u32>) -> Option<Px4Version> {
+    if heartbeat.autopilot != MavAutopilot::MAV_AUTOPILOT_PX4 {
+        return None;
+    }
+    Px4Version::from_flight_sw(flight_sw?)
+}
+
+/// Asks for AUTOPILOT_VERSION and waits a bounded while for its flight_sw_version.
+pub async fn flight_sw_version(
     link: &Link,
     rx: &mut broadcast::Receiver<Arc<Inbound>>,
     target: Target,
     cancel: &CancelToken,
-) -> Option<String> {
+) -> Option<u32> {
     let ask = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
         param1: 1.0,
         param2: 0.0,
@@ -66,7 +70,7 @@ async fn version(
             r = rx.recv() => match r {
                 Ok(inb) if inb.header.system_id == u32::from(target.system) => {
                     if let MavMessage::AUTOPILOT_VERSION(v) = &inb.msg {
-                        return Some(software_version(v.flight_sw_version));
+                        return Some(v.flight_sw_version);
                     }
                 }
                 Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}

@@ -4,6 +4,7 @@
 //! landing on faults), then the [`report`].
 
 pub mod anchor;
+pub mod capability;
 pub mod clock_watch;
 pub mod context;
 pub mod flight;

@@ -70,11 +70,12 @@ async fn connect<'a>(
     let texts_rx = link.subscribe();
     let (target, heartbeat) = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
-    // Only a live listener (the `fly` CLI) is told: a campaign's flights do not spend the wait.
+    // Its own receiver: the session's keeps every message the vehicle sends meanwhile. The release decides
+    // which modes and parameters this vehicle has (see `capability`).
+    let mut answers = link.subscribe();
+    let flight_sw = super::identify::flight_sw_version(&link, &mut answers, target, &cancel).await;
     if let Some(sink) = &opts.notices {
-        // Its own receiver: the session's keeps every message the vehicle sends meanwhile.
-        let mut answers = link.subscribe();
-        let who = super::identify::describe(&link, &mut answers, target, &heartbeat, &cancel).await;
+        let who = super::identify::describe(target, &heartbeat, flight_sw);
         (sink.0)(&crate::bridge::wire::notices::Notice::Answered(who));
     }
     let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
@@ -103,6 +104,7 @@ async fn connect<'a>(
         messages,
         mpc_xy_cruise_m_s: None,
         ready: Readiness::default(),
+        px4_version: super::identify::px4_version(&heartbeat, flight_sw),
     };
     Ok((s, clock_report))
 }

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MavCmd, MavMissionType};
 
+use super::capability::{self, AVOIDANCE_SWITCH};
 use super::context::{Session, Stop, stop_for};
 use super::flight;
 use super::ready;
@@ -59,21 +60,29 @@ impl Session<'_> {
     }
 
     async fn set_params(&mut self) -> Result<(), Stop> {
-        let avoid = if self.opts.mode == FlyMode::Avoidance { 1.0 } else { 0.0 };
-        let mut wanted: Vec<(String, f64)> = self
-            .test
-            .params
-            .iter()
-            .filter(|p| p.name != "COM_OBS_AVOID")
-            .map(|p| (p.name.clone(), p.value))
-            .collect();
-        wanted.push(("COM_OBS_AVOID".into(), avoid));
-        let p = ParamSet::new(self.target, wanted, Retry::PARAM);
-        self.link
-            .exchange(p, &self.cancel)
-            .await
-            .map(|_| ())
-            .map_err(|e| stop_for("setting the case-study parameters", e))
+        let release = self.check_release()?;
+        let case: Vec<(String, f64)> = self.test.params.iter().map(|p| (p.name.clone(), p.value)).collect();
+        let mut interface = release.map(|r| r.avoidance_interface);
+        loop {
+            let (wanted, skipped) = capability::wanted_params(&case, self.opts.mode, interface);
+            if !skipped.is_empty() {
+                let version = self.px4_version.as_ref().map(|v| v.text.clone());
+                self.warnings
+                    .push(capability::skipped_warning(&skipped, version.as_deref()));
+            }
+            let p = ParamSet::new(self.target, wanted, Retry::PARAM);
+            match self.link.exchange(p, &self.cancel).await {
+                Ok(_) => return Ok(()),
+                // A vehicle of unknown release that turns out to lack the avoidance interface.
+                Err(ProtocolError::UnknownParam { name }) if name == AVOIDANCE_SWITCH && interface.is_none() => {
+                    if self.opts.mode == FlyMode::Avoidance {
+                        return Err(self.no_avoidance_interface());
+                    }
+                    interface = Some(false);
+                }
+                Err(e) => return Err(stop_for("setting the case-study parameters", e)),
+            }
+        }
     }
 
     async fn upload_mission(&mut self) -> Result<(), Stop> {

@@ -1,24 +1,35 @@
 //! The user's PX4 SITL build folder (`px4_sitl_default`), checked before anything is started: a folder that is
 //! not such a build is refused naming what is missing, so a campaign does not screen for minutes and then fail
-//! on its first flight.
+//! on its first flight. The build's PX4 version is read from the version header its build generated, and a
+//! release prgenuav has not checked is refused by name.
 
 use std::path::{Path, PathBuf};
 
+use crate::bridge::options::FlyMode;
+use crate::bridge::px4_version::{Px4Version, Release, mode_refusal};
+
 /// The startup script PX4's POSIX main runs, relative to the build folder.
 const RCS: &str = "etc/init.d-posix/rcS";
+
+/// The header PX4's build generates from `git describe`, relative to the build folder.
+pub const VERSION_HEADER: &str = "src/lib/version/build_git_version.h";
 
 /// A checked `px4_sitl_default` build folder.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Px4Build {
     /// The folder as given.
     pub root: PathBuf,
+    /// Its PX4 version (from [`VERSION_HEADER`]).
+    pub version: Px4Version,
+    /// What that release can do.
+    pub release: &'static Release,
 }
 
 /// Why a folder is not a PX4 SITL build.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "{root}: not a PX4 SITL build folder (build/px4_sitl_default of PX4-Autopilot v1.14, built with \
-     `make px4_sitl_default`): {missing}"
+    "{root}: not a PX4 SITL build folder prgenuav can fly (build/px4_sitl_default of PX4-Autopilot v1.14 to \
+     v1.17, built with `make px4_sitl_default`): {missing}"
 )]
 pub struct NotABuild {
     /// The folder given.
@@ -28,7 +39,8 @@ pub struct NotABuild {
 }
 
 impl Px4Build {
-    /// Checks `root`: a folder with an executable `bin/px4` and `etc/init.d-posix/rcS`.
+    /// Checks `root`: a folder with an executable `bin/px4`, `etc/init.d-posix/rcS` and the version header of
+    /// a release in the capability table.
     pub fn open(root: &Path) -> Result<Px4Build, NotABuild> {
         let refuse = |missing: String| NotABuild {
             root: root.display().to_string(),
@@ -52,8 +64,11 @@ impl Px4Build {
         if !rcs.is_file() {
             return Err(refuse(format!("{} (PX4's startup script) is missing", rcs.display())));
         }
+        let (version, release) = read_version(root).map_err(refuse)?;
         Ok(Px4Build {
             root: root.to_path_buf(),
+            version,
+            release,
         })
     }
 
@@ -61,6 +76,55 @@ impl Px4Build {
     pub fn bin(&self) -> PathBuf {
         self.root.join("bin/px4")
     }
+
+    /// Whether `mode` flies on this build's release; if not, the refusal naming the version and the modes
+    /// that do.
+    pub fn check_mode(&self, mode: FlyMode) -> Result<(), ModeUnsupported> {
+        if self.release.supports(mode) {
+            return Ok(());
+        }
+        Err(ModeUnsupported(format!(
+            "{}: {}",
+            self.root.display(),
+            mode_refusal(&self.version, self.release, mode)
+        )))
+    }
+}
+
+/// A mode the build's release cannot fly, in words.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ModeUnsupported(pub String);
+
+/// The build's version and its row of the capability table, or what was read instead.
+fn read_version(root: &Path) -> Result<(Px4Version, &'static Release), String> {
+    let header = root.join(VERSION_HEADER);
+    let text = std::fs::read_to_string(&header).map_err(|e| {
+        format!(
+            "{} (the version PX4's build generates) is not readable: {e}",
+            header.display()
+        )
+    })?;
+    let tag = tag_in_header(&text).ok_or_else(|| format!("{} has no PX4_GIT_TAG_STR line", header.display()))?;
+    let version = Px4Version::parse(tag).ok_or_else(|| {
+        format!(
+            "{} says PX4_GIT_TAG_STR \"{tag}\", not a version vMAJOR.MINOR.PATCH (build from a release tag)",
+            header.display()
+        )
+    })?;
+    let release = version
+        .release()
+        .map_err(|e| format!("{e} (read from {})", header.display()))?;
+    Ok((version, release))
+}
+
+/// The quoted value of `#define PX4_GIT_TAG_STR "..."`.
+fn tag_in_header(text: &str) -> Option<&str> {
+    text.lines().find_map(|line| {
+        let rest = line.trim().strip_prefix("#define")?.trim_start();
+        let value = rest.strip_prefix("PX4_GIT_TAG_STR")?.trim();
+        value.strip_prefix('"')?.split('"').next()
+    })
 }
 
 #[cfg(unix)]
@@ -78,7 +142,15 @@ fn is_executable(_path: &Path) -> bool {
 mod tests {
     use super::*;
 
-    /// A build folder with the parts named in `parts` (`bin`, `exec`, `etc`, `rcs`).
+    /// A version header as PX4's build writes it, with `tag`.
+    fn header(tag: &str) -> String {
+        format!(
+            "/* Auto Magically Generated file */\n#pragma once\n\n#define PX4_GIT_VERSION_STR \"54f0455f\"\n\
+             #define PX4_GIT_TAG_STR \"{tag}\"\n#define PX4_GIT_TAG_OR_BRANCH_NAME \"main\"\n"
+        )
+    }
+
+    /// A build folder with the parts named in `parts` (`bin`, `exec`, `etc`, `rcs`, `ver`: a v1.14 header).
     fn folder(parts: &[&str]) -> tempfile::TempDir {
         let dir = tempfile::tempdir().unwrap();
         let root = dir.path();
@@ -97,8 +169,18 @@ mod tests {
         if parts.contains(&"rcs") {
             std::fs::write(root.join(RCS), "").unwrap();
         }
+        if parts.contains(&"ver") {
+            write_header(root, &header("v1.14.0-beta2-325-g1555f2bd22"));
+        }
         dir
     }
+
+    fn write_header(root: &Path, text: &str) {
+        std::fs::create_dir_all(root.join("src/lib/version")).unwrap();
+        std::fs::write(root.join(VERSION_HEADER), text).unwrap();
+    }
+
+    const ALL: [&str; 5] = ["bin", "exec", "etc", "rcs", "ver"];
 
     fn refusal(parts: &[&str]) -> String {
         let dir = folder(parts);
@@ -107,9 +189,11 @@ mod tests {
 
     #[test]
     fn a_complete_build_is_accepted() {
-        let dir = folder(&["bin", "exec", "etc", "rcs"]);
+        let dir = folder(&ALL);
         let build = Px4Build::open(dir.path()).unwrap();
         assert_eq!(build.bin(), dir.path().join("bin/px4"));
+        assert_eq!(build.version.to_string(), "v1.14.0-beta2-325-g1555f2bd22");
+        assert!(build.release.avoidance_interface);
     }
 
     #[test]
@@ -119,6 +203,11 @@ mod tests {
         assert!(refusal(&["bin", "etc", "rcs"]).contains("bin/px4 is not executable"));
         assert!(refusal(&["bin", "exec"]).contains("/etc is missing"));
         assert!(refusal(&["bin", "exec", "etc"]).contains("init.d-posix/rcS (PX4's startup script) is missing"));
+        let no_header = refusal(&["bin", "exec", "etc", "rcs"]);
+        assert!(
+            no_header.contains("build_git_version.h (the version PX4's build generates) is not readable"),
+            "{no_header}"
+        );
         let missing = Px4Build::open(Path::new("/nonexistent/px4_sitl_default")).unwrap_err();
         assert_eq!(missing.missing, "no such folder");
         assert!(
@@ -126,6 +215,45 @@ mod tests {
                 .to_string()
                 .contains("/nonexistent/px4_sitl_default: not a PX4 SITL build folder")
         );
+    }
+
+    #[test]
+    fn the_version_header_decides_the_release_and_an_unknown_one_is_refused_naming_what_was_read() {
+        let dir = folder(&ALL);
+        let open = |text: &str| {
+            write_header(dir.path(), text);
+            Px4Build::open(dir.path())
+        };
+        let v116 = open(&header("v1.16.2")).unwrap();
+        assert_eq!((v116.release.minor, v116.release.avoidance_interface), (16, false));
+        let refused = v116.check_mode(FlyMode::Avoidance).unwrap_err().to_string();
+        assert!(
+            refused.contains("--mode avoidance: PX4 v1.16.2 has no obstacle-avoidance interface"),
+            "{refused}"
+        );
+        assert!(
+            refused.ends_with("modes that work on PX4 1.16: offboard, mission"),
+            "{refused}"
+        );
+        assert_eq!(v116.check_mode(FlyMode::Offboard), Ok(()));
+        let newer = open(&header("v1.18.0-beta1")).unwrap_err().to_string();
+        assert!(
+            newer.contains("PX4 v1.18.0-beta1 (read as 1.18) has not been checked"),
+            "{newer}"
+        );
+        assert!(newer.contains("build_git_version.h"), "{newer}");
+        let branch = open(&header("my-branch")).unwrap_err().to_string();
+        assert!(
+            branch.contains("says PX4_GIT_TAG_STR \"my-branch\", not a version"),
+            "{branch}"
+        );
+        let garbled = open("#define PX4_GIT_VERSION_STR \"abc\"\n").unwrap_err().to_string();
+        assert!(garbled.contains("has no PX4_GIT_TAG_STR line"), "{garbled}");
+        assert_eq!(
+            tag_in_header("  #define   PX4_GIT_TAG_STR   \"v1.15.4\"  "),
+            Some("v1.15.4")
+        );
+        assert_eq!(tag_in_header("#define PX4_GIT_TAG_STR_X \"v1\""), None);
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! Starting a PX4 SITL binary the user built (PX4 v1.14, SIH quadrotor, headless) for tests and reference
+//! Starting a PX4 SITL binary the user built (PX4 v1.14 to v1.17, SIH quadrotor, headless) for tests and reference
 //! runs. Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
 //! `make px4_sitl sihsim_quadx` target does, in a private working directory, and stops it when dropped
 //! (`spawn`: also when prgenuav is killed). `build` checks the user's build folder.
@@ -14,10 +14,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-pub use build::{NotABuild, Px4Build};
+pub use build::{ModeUnsupported, NotABuild, Px4Build, VERSION_HEADER};
 use console::{CONSOLE_LINES, Console};
 
-use crate::model::GeoPoint;
+use crate::bridge::px4_version::HomeUnits;
+use crate::model::{GeoPoint, SIM_HOME};
 
 /// How long the startup script may take before [`Px4Sitl::start`] gives up (a loaded machine boots PX4 in
 /// 5-15 s).
@@ -35,34 +36,60 @@ pub struct SitlSpec {
     pub instance: u8,
     /// `PX4_SIM_SPEED_FACTOR` (SIH's lockstep speed-up).
     pub speed_factor: f64,
-    /// Home (latitude, longitude) in 1e-7 degrees.
-    pub home_e7: (i64, i64),
+    /// Home (WGS-84 degrees, metres AMSL).
+    pub home: GeoPoint,
+    /// How this build's SIH reads its home from the environment.
+    pub home_units: HomeUnits,
     /// How long the startup script may take.
     pub boot_timeout: Duration,
 }
 
 impl SitlSpec {
-    /// The competition's home at `speed_factor`.
+    /// The competition's home at `speed_factor`, written the way PX4 v1.14 reads it.
     pub fn new(bin: impl Into<PathBuf>, instance: u8, speed_factor: f64) -> Self {
         SitlSpec {
             bin: bin.into(),
             instance,
             speed_factor,
-            home_e7: COMPETITION_HOME_E7,
+            home: SIM_HOME,
+            home_units: HomeUnits::IntE7,
             boot_timeout: BOOT_TIMEOUT,
+        }
+    }
+
+    /// [`Self::new`] for a checked build: its `bin/px4`, its release's home units.
+    pub fn for_build(build: &Px4Build, instance: u8, speed_factor: f64) -> Self {
+        SitlSpec {
+            home_units: build.release.home,
+            ..Self::new(build.bin(), instance, speed_factor)
         }
     }
 
     /// The same at `home` (a test's home, so the test's frame and PX4's local origin coincide).
     pub fn at(mut self, home: GeoPoint) -> Self {
-        self.home_e7 = home_e7(home);
+        self.home = home;
         self
+    }
+
+    /// `PX4_HOME_*` as this build's SIH start-up script reads them.
+    pub fn home_env(&self) -> Vec<(&'static str, String)> {
+        match self.home_units {
+            HomeUnits::IntE7 => {
+                let (lat, lon) = home_e7(self.home);
+                vec![("PX4_HOME_LAT", lat.to_string()), ("PX4_HOME_LON", lon.to_string())]
+            }
+            HomeUnits::FloatDegrees => vec![
+                ("PX4_HOME_LAT", format!("{:.7}", self.home.lat_deg)),
+                ("PX4_HOME_LON", format!("{:.7}", self.home.lon_deg)),
+                ("PX4_HOME_ALT", format!("{:.2}", self.home.alt_m)),
+            ],
+        }
     }
 }
 
-/// `home`'s latitude and longitude in the integer 1e-7 degrees PX4 1.14's SIH reads from `PX4_HOME_LAT` and
-/// `PX4_HOME_LON` (it ignores `PX4_HOME_ALT`: SIH's ground is its `SIH_LOC_H0`; heights are judged above the
-/// ground, so the altitude does not matter).
+/// `home`'s latitude and longitude in the integer 1e-7 degrees PX4 1.14 and 1.15's SIH read from
+/// `PX4_HOME_LAT` and `PX4_HOME_LON` (they ignore `PX4_HOME_ALT`: SIH's ground is its `SIH_LOC_H0`; heights
+/// are judged above the ground, so the altitude does not matter).
 pub fn home_e7(home: GeoPoint) -> (i64, i64) {
     ((home.lat_deg * 1e7).round() as i64, (home.lon_deg * 1e7).round() as i64)
 }
@@ -321,6 +348,35 @@ mod tests {
             alt_m: 0.0,
         };
         assert_eq!(home_e7(south_west), (-338_688_200, -1_512_092_956));
+    }
+
+    #[test]
+    fn v1_16_reads_its_home_in_float_degrees_with_the_altitude() {
+        let home = GeoPoint {
+            lat_deg: -33.868_820_04,
+            lon_deg: 151.209_295_55,
+            alt_m: 58.25,
+        };
+        let old = SitlSpec::new("/b/bin/px4", 0, 5.0).at(home);
+        assert_eq!(
+            old.home_env(),
+            [
+                ("PX4_HOME_LAT", "-338688200".to_string()),
+                ("PX4_HOME_LON", "1512092956".to_string())
+            ]
+        );
+        let new = SitlSpec {
+            home_units: HomeUnits::FloatDegrees,
+            ..old
+        };
+        assert_eq!(
+            new.home_env(),
+            [
+                ("PX4_HOME_LAT", "-33.8688200".to_string()),
+                ("PX4_HOME_LON", "151.2092956".to_string()),
+                ("PX4_HOME_ALT", "58.25".to_string())
+            ]
+        );
     }
 
     /// A fake `BUILD/bin/px4` running `script`, with `BUILD/etc`.

@@ -17,8 +17,7 @@ pub(super) fn command(spec: &SitlSpec, etc: &Path, dir: &Path) -> Command {
         .env("PX4_SIM_MODEL", "sihsim_quadx")
         .env("PX4_SIMULATOR", "sihsim")
         .env("PX4_SIM_SPEED_FACTOR", spec.speed_factor.to_string())
-        .env("PX4_HOME_LAT", spec.home_e7.0.to_string())
-        .env("PX4_HOME_LON", spec.home_e7.1.to_string())
+        .envs(spec.home_env())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::null());
@@ -78,10 +77,7 @@ mod tests {
 
     #[test]
     fn px4_gets_its_instance_folder_and_sih_environment() {
-        let spec = SitlSpec {
-            home_e7: (473_977_420, 85_455_940),
-            ..SitlSpec::new("/b/bin/px4", 3, 5.0)
-        };
+        let spec = SitlSpec::new("/b/bin/px4", 3, 5.0);
         let cmd = command(&spec, Path::new("/b/etc"), Path::new("/tmp/w"));
         assert_eq!(cmd.get_program(), OsStr::new("/b/bin/px4"));
         let args: Vec<&OsStr> = cmd.get_args().collect();

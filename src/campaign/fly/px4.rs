@@ -139,7 +139,7 @@ impl Px4Vehicle {
         let s = &self.settings;
         let spec = SitlSpec {
             boot_timeout: s.boot_timeout,
-            ..SitlSpec::new(s.build.bin(), self.instance, s.speed_factor).at(test.home)
+            ..SitlSpec::for_build(&s.build, self.instance, s.speed_factor).at(test.home)
         };
         let mut px4 = match Px4Sitl::start_until(&spec, stop) {
             Ok(px4) => px4,

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::bail;
+use prgenuav::bridge::FlyMode;
 use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::campaign::config::Px4Backend;
 use prgenuav::campaign::fly::px4::{DEFAULT_SPEED_FACTOR, instance_slots};
@@ -14,7 +15,7 @@ use prgenuav::campaign::settings::keys::flags;
 #[derive(Debug, clap::Args)]
 pub struct Px4Flags {
     /// Fly on PX4 SITL instances started here, every flight on a fresh SIH instance at the test's home:
-    /// BUILD_DIR is your PX4-Autopilot v1.14 `build/px4_sitl_default` folder (docs/px4.md).
+    /// BUILD_DIR is your PX4-Autopilot (v1.14 to v1.17) `build/px4_sitl_default` folder (docs/px4.md).
     #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
     pub px4: Option<PathBuf>,
     /// PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, docs/px4.md);
@@ -59,7 +60,9 @@ impl Px4Flags {
             }
             return Ok(());
         };
-        Px4Build::open(&px4.build)?;
+        let build = Px4Build::open(&px4.build)?;
+        let mode: FlyMode = crate::cli::values::parse_stored::<crate::cli::values::Mode>(&cfg.mode, "mode")?.into();
+        build.check_mode(mode)?;
         flags::PX4_SPEED_FACTOR
             .check("--speed-factor", px4.speed_factor)
             .map_err(anyhow::Error::msg)?;
