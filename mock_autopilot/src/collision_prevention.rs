@@ -276,7 +276,11 @@ impl CollisionPrevention {
             }
         }
         // PX4 multiplies an infinite "no constraint" by a zero direction here (NaN); the mock adds nothing.
-        if comp.is_finite() { (comp, comp_dir) } else { (0.0, Xy::zeros()) }
+        if comp.is_finite() {
+            (comp, comp_dir)
+        } else {
+            (0.0, Xy::zeros())
+        }
     }
 }
 

@@ -98,7 +98,7 @@ impl Vehicle {
     /// Switching to Position mode while armed needs a position and sticks, as PX4's mode requirements.
     pub(crate) fn posctl_refusal(&self) -> Option<&'static str> {
         (!self.estimator_settled() || self.fresh_sticks().is_none())
-            .then_some("Switching to mode 'Position' is currently not possible")
+            .then_some("Switching to Position is currently not possible")
     }
 
     /// The manual-control-loss failsafe (see the module documentation).
@@ -127,7 +127,10 @@ impl Vehicle {
             Some(_) => {}
             None if !fresh && self.manual.had_sticks && !self.manual_loss_excepted(mode) => {
                 self.failsafe = true;
-                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, "Failsafe: manual control lost, Hold");
+                self.text(
+                    MavSeverity::MAV_SEVERITY_CRITICAL,
+                    "Failsafe: manual control lost, Hold",
+                );
                 let l = Loss {
                     since: self.now,
                     acted: None,
@@ -173,3 +176,7 @@ impl Vehicle {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "posctl_tests.rs"]
+mod tests;

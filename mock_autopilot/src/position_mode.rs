@@ -155,7 +155,12 @@ impl PositionMode {
         if self.cp.active(cpp, now) {
             acc = self.cp.modify(acc, self.vel_sp, body.yaw_rad, now, inbox, cpp, events);
         }
-        let mut drag = self.drag(acc_scale / mp.vel_manual, dt, stick.norm_squared() < f64::from(f32::EPSILON), mp);
+        let mut drag = self.drag(
+            acc_scale / mp.vel_manual,
+            dt,
+            stick.norm_squared() < f64::from(f32::EPSILON),
+            mp,
+        );
         let crossing = acc.norm_squared() < f64::from(f32::EPSILON)
             || sign(self.acc_sp.x) != sign(acc.x)
             || sign(self.acc_sp.y) != sign(acc.y);
@@ -166,7 +171,11 @@ impl PositionMode {
         acc -= drag;
         // Jerk limit per axis, in proportion to the change so both axes arrive together.
         let change = acc - self.acc_sp;
-        let dir = if change.norm() > 0.0 { change / change.norm() } else { Xy::zeros() };
+        let dir = if change.norm() > 0.0 {
+            change / change.norm()
+        } else {
+            Xy::zeros()
+        };
         for k in 0..2 {
             let max = dir[k].abs() * mp.jerk_max * dt;
             acc[k] = self.acc_sp[k] + change[k].clamp(-max, max);
