@@ -133,8 +133,7 @@ impl CollisionPrevention {
         acc: Xy,
         vel_sp: Xy,
         yaw: f64,
-        now: Duration,
-        inbox: &RangeInbox,
+        (inbox, now): (&RangeInbox, Duration),
         p: &CpParams,
         events: &mut Vec<CpEvent>,
     ) -> Xy {

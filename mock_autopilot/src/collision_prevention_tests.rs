@@ -44,7 +44,7 @@ fn inbox(ahead_cm: u16, half_deg: f64, blind: &[usize]) -> RangeInbox {
 fn run(cp: &mut CollisionPrevention, acc: Xy, vel: Xy, b: &RangeInbox, p: &CpParams) -> (Xy, Vec<CpEvent>) {
     let mut ev = Vec::new();
     assert!(cp.active(p, T));
-    let out = cp.modify(acc, vel, 0.0, T, b, p, &mut ev);
+    let out = cp.modify(acc, vel, 0.0, (b, T), p, &mut ev);
     (out, ev)
 }
 
@@ -170,7 +170,7 @@ fn without_data_nothing_moves_and_hold_follows() {
     let mut t = T;
     while t < T + Duration::from_secs(6) {
         assert_eq!(
-            cp.modify(Xy::new(6.0, 0.0), Xy::zeros(), 0.0, t, &empty, &p, &mut ev),
+            cp.modify(Xy::new(6.0, 0.0), Xy::zeros(), 0.0, (&empty, t), &p, &mut ev),
             Xy::zeros()
         );
         if ev.contains(&CpEvent::Hold) {

@@ -160,7 +160,7 @@ impl ObstacleMap {
         let range = (100.0 * range_m + 0.5) as u16;
         let (cur, cur_range) = (self.distances[i], self.max_ranges[i]);
         if reading_m < range_m {
-            (cur < cur_range && range <= cur_range) || cur >= cur_range
+            range <= cur_range || cur >= cur_range
         } else {
             (cur >= cur_range && range >= cur_range) || (cur < cur_range && range == cur_range)
         }

@@ -64,11 +64,11 @@ fn run(v: &mut Vehicle, secs: f64, stick: Option<(i16, i16)>, sensor: bool, seen
     let mut k = 0u64;
     while v.now() < end {
         if let Some((x, y)) = stick
-            && k % 10 == 0
+            && k.is_multiple_of(10)
         {
             v.handle(&GCS, &sticks(x, y));
         }
-        if sensor && k % 25 == 0 {
+        if sensor && k.is_multiple_of(25) {
             let scan = s.scan(&[wall()], &v.body.pos_ned, v.body.yaw_rad, 0);
             v.handle(&GCS, &MavMessage::OBSTACLE_DISTANCE(scan));
         }

@@ -153,7 +153,9 @@ impl PositionMode {
         let acc_scale = 2.0 * mp.acc_hor; // twice: against the drag the mean acceleration is half
         let mut acc = stick_ned * acc_scale;
         if self.cp.active(cpp, now) {
-            acc = self.cp.modify(acc, self.vel_sp, body.yaw_rad, now, inbox, cpp, events);
+            acc = self
+                .cp
+                .modify(acc, self.vel_sp, body.yaw_rad, (inbox, now), cpp, events);
         }
         let mut drag = self.drag(
             acc_scale / mp.vel_manual,

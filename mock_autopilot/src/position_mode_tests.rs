@@ -57,7 +57,7 @@ fn fly(t: &ParamTable, s: Sticks, mut body: Body, secs: f64, wall_x: Option<f64>
     for k in 0..steps {
         let now = Duration::from_secs(10) + Duration::from_secs_f64(k as f64 * DT);
         if let Some(x) = wall_x
-            && k % 25 == 0
+            && k.is_multiple_of(25)
         {
             inbox.put(&wall_reading(&body, x), now);
         }
