@@ -171,19 +171,8 @@ impl PositionMode {
             self.vel_sp = Xy::zeros();
         }
         acc -= drag;
-        // Jerk limit per axis, in proportion to the change so both axes arrive together.
-        let change = acc - self.acc_sp;
-        let dir = if change.norm() > 0.0 {
-            change / change.norm()
-        } else {
-            Xy::zeros()
-        };
-        for k in 0..2 {
-            let max = dir[k].abs() * mp.jerk_max * dt;
-            acc[k] = self.acc_sp[k] + change[k].clamp(-max, max);
-        }
-        self.acc_sp = acc;
-        self.vel_sp += acc * dt;
+        self.acc_sp = self.jerk_limited(acc, mp.jerk_max, dt);
+        self.vel_sp += self.acc_sp * dt;
         let moving = self.vel_sp.norm_squared() > f64::from(f32::EPSILON);
         match self.pos_lock {
             None if !moving => self.pos_lock = Some(body.pos_ned.xy()),
@@ -199,6 +188,22 @@ impl PositionMode {
         };
         self.last_vel_cmd = vel_cmd;
         (vel_cmd, self.acc_sp)
+    }
+
+    /// `acc` within MPC_JERK_MAX of the last acceleration, per axis in proportion to the change so both axes
+    /// arrive together.
+    fn jerk_limited(&self, mut acc: Xy, jerk_max: f64, dt: f64) -> Xy {
+        let change = acc - self.acc_sp;
+        let dir = if change.norm() > 0.0 {
+            change / change.norm()
+        } else {
+            Xy::zeros()
+        };
+        for k in 0..2 {
+            let max = dir[k].abs() * jerk_max * dt;
+            acc[k] = self.acc_sp[k] + change[k].clamp(-max, max);
+        }
+        acc
     }
 
     /// The drag that limits the speed to MPC_VEL_MANUAL, boosted (over 0.8 s) while the stick is released so
