@@ -17,8 +17,9 @@ use crate::position_mode::{ManualCommand, ManualParams, PositionMode};
 use crate::sticks::{StickInput, Sticks};
 use crate::vehicle::{SYSTEM_ID, Vehicle};
 
-/// PX4 streams its fused obstacle map at 1 Hz on a normal (GCS) link.
-const ECHO_PERIOD: Duration = Duration::from_secs(1);
+/// PX4 streams its fused obstacle map at 10 Hz on the onboard link of ports 14580/14540, which the mock's
+/// ports imitate (1 Hz on a normal GCS link).
+const ECHO_PERIOD: Duration = Duration::from_millis(100);
 
 /// Stick and range-sensor input, Position mode's state and the manual-control-loss failsafe.
 #[derive(Debug, Clone, Default)]

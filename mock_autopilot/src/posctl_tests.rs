@@ -160,7 +160,11 @@ fn collision_prevention_stops_before_the_wall_and_echoes_its_map() {
     );
     assert!(!v.state().crashed);
     assert!(v.body.vel_ned.xy().norm() < 0.3, "stopped: {:?}", v.body.vel_ned);
-    assert!((18..=24).contains(&seen.echoes), "1 Hz echo: {}", seen.echoes);
+    assert!(
+        (200..=215).contains(&seen.echoes),
+        "10 Hz echo over 21.2 s: {}",
+        seen.echoes
+    );
 }
 
 #[test]

@@ -133,7 +133,7 @@ async fn sticks_towards_a_box_stop_near_cp_dist() {
     let gap = 15.0 - f.max_x;
     assert!(gap > 2.0 && gap < 3.5, "closest {gap:.2} m from the box with CP_DIST 3");
     assert!(!m.state().crashed);
-    assert!(f.echoes >= 5, "the fused map comes back at 1 Hz: {}", f.echoes);
+    assert!(f.echoes >= 50, "the fused map comes back at 10 Hz: {}", f.echoes);
     m.shutdown().await.expect("shutdown");
 }
 
