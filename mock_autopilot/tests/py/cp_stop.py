@@ -28,11 +28,12 @@ ap.add_argument("--wall", type=float, default=25.0)
 ap.add_argument("--push", type=float, default=30.0, help="vehicle seconds of stick towards the wall")
 ap.add_argument("--time-scale", type=float, default=1.0)
 ap.add_argument("--expect", type=float, nargs=2)
+ap.add_argument("--trace", help="write vehicle time, distance to the wall and vx (CSV) here")
 a = ap.parse_args()
 K = a.time_scale
 
 m = mavutil.mavlink_connection(a.url, source_system=255, source_component=190)
-st = {"x": 0.0, "vx": 0.0, "yaw": 0.0, "mode": None, "armed": False, "texts": []}
+st = {"sys": 1, "x": 0.0, "vx": 0.0, "yaw": 0.0, "mode": None, "armed": False, "texts": []}
 wall_x = None
 
 
@@ -51,7 +52,7 @@ def pump():
             st.update(x=msg.x, vx=msg.vx)
         elif t == "ATTITUDE":
             st["yaw"] = msg.yaw
-        elif t == "HEARTBEAT" and msg.get_srcSystem() == 1 and msg.get_srcComponent() == 1:
+        elif t == "HEARTBEAT" and msg.get_srcSystem() == st["sys"] and msg.get_srcComponent() == 1:
             st["mode"] = ((msg.custom_mode >> 16) & 0xFF, (msg.custom_mode >> 24) & 0xFF)
             st["armed"] = bool(msg.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
         elif t == "STATUSTEXT":
@@ -78,7 +79,7 @@ def fly(vehicle_secs, x, each=None):
     while time.time() < end:
         pump()
         if time.time() >= nxt:
-            m.mav.manual_control_send(1, x, 0, 500, 0, 0)
+            m.mav.manual_control_send(st["sys"], x, 0, 500, 0, 0)
             scan()
             nxt = time.time() + 0.05 / K
         if each:
@@ -88,7 +89,7 @@ def fly(vehicle_secs, x, each=None):
 
 def set_param(name, value):
     for _ in range(20):
-        m.mav.param_set_send(1, 1, name.encode(), value, M.MAV_PARAM_TYPE_REAL32)
+        m.mav.param_set_send(st["sys"], 1, name.encode(), value, M.MAV_PARAM_TYPE_REAL32)
         end = time.time() + 0.5
         while time.time() < end:
             p = m.recv_match(type="PARAM_VALUE", blocking=True, timeout=0.1)
@@ -99,12 +100,14 @@ def set_param(name, value):
 
 def command(cmd, *p):
     p = list(p) + [0.0] * (7 - len(p))
-    m.mav.command_long_send(1, 1, cmd, 0, *p)
+    m.mav.command_long_send(st["sys"], 1, cmd, 0, *p)
 
 
 for _ in range(100):
     m.mav.heartbeat_send(M.MAV_TYPE_GCS, M.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-    if m.recv_match(type="HEARTBEAT", blocking=True, timeout=0.3):
+    hb = m.recv_match(type="HEARTBEAT", blocking=True, timeout=0.3)
+    if hb and hb.get_srcComponent() == 1:
+        st["sys"] = hb.get_srcSystem()  # PX4 SITL instance i is system 1 + i
         break
 else:
     fail("no heartbeat")
@@ -125,16 +128,21 @@ if st["mode"] != (3, 0):
     fail(f"not in Position mode: {st['mode']}")
 wall_x = st["x"] + a.wall
 res = {"closest": math.inf, "peak": 0.0}
+t0, trace = time.time(), []
 
 
 def track():
     res["closest"] = min(res["closest"], wall_x - st["x"])
     res["peak"] = max(res["peak"], st["vx"])
+    trace.append(((time.time() - t0) * K, wall_x - st["x"], st["vx"]))
 
 
 fly(a.push, a.stick, track)
 print(f"stick {a.stick} CP_DIST {a.cp_dist}: peak {res['peak']:.2f} m/s, closest {res['closest']:.2f} m, "
       f"end {wall_x - st['x']:.2f} m, mode {st['mode']}")
+if a.trace:
+    with open(a.trace, "w") as f:
+        f.write("t_s,gap_m,vx_m_s\n" + "".join(f"{t:.3f},{g:.3f},{v:.3f}\n" for t, g, v in trace[::10]))
 command(M.MAV_CMD_NAV_LAND)
 fly(1, 0)
 if a.expect and not (a.expect[0] <= res["closest"] <= a.expect[1]):
