@@ -25,6 +25,7 @@ pub mod geo;
 pub mod gusts;
 pub mod land_detector;
 pub mod link;
+pub mod manual;
 pub mod messages;
 pub mod mission_items;
 pub mod mission_server;

@@ -11,35 +11,16 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MANUAL_CONTROL_DATA, MavMessage, MavSeverity, OBSTACLE_DISTANCE_DATA};
 
-use crate::collision_prevention::{CpEvent, CpParams, RangeInbox};
+use crate::collision_prevention::{CpEvent, CpParams};
+use crate::manual::{Loss, ManualState};
 use crate::modes::FlightMode;
 use crate::position_mode::{ManualCommand, ManualParams, PositionMode};
-use crate::sticks::{StickInput, Sticks};
+use crate::sticks::Sticks;
 use crate::vehicle::{SYSTEM_ID, Vehicle};
 
 /// PX4 streams its fused obstacle map at 10 Hz on the onboard link of ports 14580/14540, which the mock's
 /// ports imitate (1 Hz on a normal GCS link).
 const ECHO_PERIOD: Duration = Duration::from_millis(100);
-
-/// Stick and range-sensor input, Position mode's state and the manual-control-loss failsafe.
-#[derive(Debug, Clone, Default)]
-pub struct ManualState {
-    sticks: StickInput,
-    ranges: RangeInbox,
-    mode: Option<PositionMode>,
-    had_sticks: bool,
-    loss: Option<Loss>,
-    next_echo: Duration,
-}
-
-/// A manual-control-loss failsafe under way.
-#[derive(Debug, Clone, Copy)]
-struct Loss {
-    since: Duration,
-    /// The mode the failsafe put the vehicle in; None while holding before the action.
-    acted: Option<FlightMode>,
-    before: FlightMode,
-}
 
 impl Vehicle {
     pub(crate) fn on_manual_control(&mut self, m: &MANUAL_CONTROL_DATA) {
@@ -116,6 +97,7 @@ impl Vehicle {
             Some(l) if l.acted.is_some_and(|a| a != mode) => self.manual.loss = None,
             Some(l) if l.acted.is_none() && fresh => {
                 self.manual.loss = None;
+                self.failsafe = false;
                 self.text(MavSeverity::MAV_SEVERITY_INFO, "Manual control regained");
                 self.set_mode(l.before, self.nav_params.takeoff_alt_m);
             }

@@ -221,8 +221,13 @@ fn lost_sticks_hold_then_return() {
     let mut v = vehicle(&[]);
     let mut seen = airborne_in_posctl(&mut v, false);
     run(&mut v, 1.0, None, false, &mut seen);
+    assert_eq!(
+        v.system_status(),
+        mavlink::dialects::common::MavState::MAV_STATE_CRITICAL
+    );
     run(&mut v, 0.5, Some((0, 0)), false, &mut seen);
     assert_eq!(v.state().mode, FlightMode::Posctl);
+    assert_eq!(v.system_status(), mavlink::dialects::common::MavState::MAV_STATE_ACTIVE);
 }
 
 #[test]

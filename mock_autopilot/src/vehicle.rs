@@ -17,11 +17,11 @@ use crate::fence::Fence;
 use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
 use crate::gusts::{Gusts, flight_seed};
 use crate::land_detector::{LandDetector, LandInputs, LandParams};
+use crate::manual::ManualState;
 use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
 use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
 use crate::params::{ParamReply, ParamTable, ParamValue};
-use crate::posctl::ManualState;
 use crate::telemetry::Streams;
 
 /// Our MAVLink system id.
