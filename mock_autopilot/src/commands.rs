@@ -180,6 +180,11 @@ impl Vehicle {
                 );
                 return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
             }
+            FlightMode::Posctl if self.armed && self.posctl_refusal().is_some() => {
+                let text = self.posctl_refusal().unwrap_or_default();
+                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, text);
+                return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+            }
             FlightMode::Offboard if self.offboard.is_none() => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_CRITICAL,

@@ -14,7 +14,7 @@ pub const MAIN_OFFBOARD: u8 = 6;
 /// The flight modes the mock flies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FlightMode {
-    /// POSCTL: without RC it holds position like Hold.
+    /// POSCTL: flown by MANUAL_CONTROL sticks, with Collision Prevention ([`crate::posctl`]).
     Posctl,
     /// AUTO.TAKEOFF.
     Takeoff,
