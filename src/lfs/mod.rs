@@ -21,6 +21,7 @@ pub mod eval;
 pub mod frames;
 pub mod mission;
 pub mod motion;
+pub mod range_sensor;
 pub mod render;
 pub mod render_fast;
 pub mod sim;
