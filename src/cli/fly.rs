@@ -277,6 +277,19 @@ fn print_text(report: &FlightReport) {
         );
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
+    if let Some(cp) = &report.collision_prevention {
+        let points = report.min_distance.map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
+        let inside = match cp.inside_cp_dist {
+            Some(true) => "came inside CP_DIST",
+            Some(false) => "kept CP_DIST",
+            None => "not measured",
+        };
+        println!(
+            "collision_prev.   {inside} {:.2} m (closest centre {}); points {points}",
+            cp.cp_dist_m,
+            m(cp.closest_centre_m)
+        );
+    }
     println!(
         "lfs_min_distance  {} (the LFS prediction, {} motion model)",
         m(report.lfs_min_distance),

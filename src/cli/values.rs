@@ -74,6 +74,8 @@ pub enum Mode {
     Offboard,
     /// PX4 flies the plain mission, no avoidance (the baseline).
     Mission,
+    /// PX4's Collision Prevention is tested: prgenuav flies Position mode as a pilot and feeds a virtual lidar.
+    CollisionPrevention,
 }
 
 impl From<Mode> for FlyMode {
@@ -82,6 +84,7 @@ impl From<Mode> for FlyMode {
             Mode::Avoidance => FlyMode::Avoidance,
             Mode::Offboard => FlyMode::Offboard,
             Mode::Mission => FlyMode::Mission,
+            Mode::CollisionPrevention => FlyMode::CollisionPrevention,
         }
     }
 }

@@ -15,6 +15,8 @@
 
 pub mod attitude;
 pub mod camera;
+pub mod cp_params;
+pub mod cp_pilot;
 mod column_slopes;
 pub mod delay;
 pub mod eval;

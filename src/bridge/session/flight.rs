@@ -114,19 +114,31 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
     } else {
         None
     };
+    let mut cp = (s.opts.mode == FlyMode::CollisionPrevention).then(|| s.start_cp_feed());
     let mut landing_sent = false;
     loop {
         let now = clock.now();
         while plan.front().is_some_and(|(at, _)| start + *at <= now) {
             let Some((_, action)) = plan.pop_front() else { break };
-            if let Err(stop) = execute(s, action, progress.as_mut()).await {
+            let done = match (&action, cp.as_mut()) {
+                (Action::Start, Some(cp)) => s.start_position_mode(cp).await,
+                _ => execute(s, action, progress.as_mut()).await,
+            };
+            if let Err(stop) = done {
                 return end(s, stop).await;
             }
         }
         if let Some(stop) = ends.check(s, rec, &clock, now).await {
             return stop;
         }
-        if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
+        if let Some(why) = cp.as_ref().and_then(|c| c.borrow().stuck.clone()) {
+            let stop = end(s, Stop::new(Status::Timeout, why)).await;
+            see_it_land(s, rec).await;
+            return stop;
+        }
+        let finished = progress.as_ref().is_some_and(|p| p.borrow().finished)
+            || cp.as_ref().is_some_and(|c| c.borrow().finished);
+        if !landing_sent && finished {
             landing_sent = true;
             if let Err(e) = s
                 .command(

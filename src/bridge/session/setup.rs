@@ -30,7 +30,11 @@ pub const POSITION_RATE_HZ: f64 = 50.0;
 impl Session<'_> {
     /// Everything before the first command of the flight.
     pub async fn prepare(&mut self) -> Result<(), Stop> {
-        self.set_params().await?;
+        let cp = match self.opts.mode {
+            FlyMode::CollisionPrevention => Some(self.check_collision_prevention().await?),
+            _ => None,
+        };
+        self.set_params(cp).await?;
         if self.opts.mode != FlyMode::Mission {
             // PX4-Avoidance plans with the vehicle's cruise speed (its waypoint speed and line-pull distance);
             // read after the case's parameters are set, since they may change it.
@@ -58,16 +62,20 @@ impl Session<'_> {
         ready::wait_ready(self, &mut st).await
     }
 
-    async fn set_params(&mut self) -> Result<(), Stop> {
+    async fn set_params(&mut self, cp: Option<crate::lfs::cp_params::CpParams>) -> Result<(), Stop> {
         let avoid = if self.opts.mode == FlyMode::Avoidance { 1.0 } else { 0.0 };
         let mut wanted: Vec<(String, f64)> = self
             .test
             .params
             .iter()
-            .filter(|p| p.name != "COM_OBS_AVOID")
+            .filter(|p| p.name != "COM_OBS_AVOID" && !cp.is_some_and(|c| c.to_params().iter().any(|(n, _)| *n == p.name)))
             .map(|p| (p.name.clone(), p.value))
             .collect();
-        wanted.push(("COM_OBS_AVOID".into(), avoid));
+        match cp {
+            // Collision Prevention's own parameters instead: PX4 1.16+ has no COM_OBS_AVOID.
+            Some(cp) => wanted.extend(cp.to_params()),
+            None => wanted.push(("COM_OBS_AVOID".into(), avoid)),
+        }
         let p = ParamSet::new(self.target, wanted, Retry::PARAM);
         self.link
             .exchange(p, &self.cancel)
