@@ -166,6 +166,10 @@ impl Vehicle {
             );
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
         }
+        if self.nav.mode() == FlightMode::Posctl && self.fresh_sticks().is_none() {
+            self.text(MavSeverity::MAV_SEVERITY_CRITICAL, "Arming denied: no manual control input");
+            return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+        }
         self.arm();
         MavResult::MAV_RESULT_ACCEPTED
     }
@@ -178,6 +182,11 @@ impl Vehicle {
                     MavSeverity::MAV_SEVERITY_CRITICAL,
                     "Switching to Mission is currently not possible",
                 );
+                return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+            }
+            FlightMode::Posctl if self.armed && self.posctl_refusal().is_some() => {
+                let text = self.posctl_refusal().unwrap_or_default();
+                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, text);
                 return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
             }
             FlightMode::Offboard if self.offboard.is_none() => {

@@ -17,6 +17,7 @@
 
 pub mod avoidance;
 pub mod clock;
+pub mod collision_prevention;
 pub mod commands;
 pub mod dynamics;
 pub mod fence;
@@ -30,13 +31,17 @@ pub mod mission_server;
 pub mod modes;
 pub mod nav_items;
 pub mod navigator;
+pub mod obstacle_map;
 pub mod obstacles;
 pub mod offboard;
 pub mod params;
+pub mod position_mode;
+pub mod posctl;
 pub mod preflight;
 pub mod safety;
 pub mod scenarios;
 pub mod server;
+pub mod sticks;
 pub mod telemetry;
 pub mod transport;
 pub mod vehicle;

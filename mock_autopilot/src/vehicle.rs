@@ -21,6 +21,7 @@ use crate::mission_server::{MissionAction, MissionServer};
 use crate::modes::FlightMode;
 use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
 use crate::params::{ParamReply, ParamTable, ParamValue};
+use crate::posctl::ManualState;
 use crate::telemetry::Streams;
 
 /// Our MAVLink system id.
@@ -136,6 +137,7 @@ pub struct Vehicle {
     pub(crate) fence_breached: bool,
     pub(crate) avoidance: Avoidance,
     pub(crate) offboard: Option<(Setpoint, Duration)>,
+    pub(crate) manual: ManualState,
     pub(crate) streams: Streams,
     reached: Option<(u16, u8, Duration)>,
     pub(crate) outbox: Vec<MavMessage>,
@@ -182,6 +184,7 @@ impl Vehicle {
             fence_breached: false,
             avoidance: Avoidance::default(),
             offboard: None,
+            manual: ManualState::default(),
             streams: Streams::default(),
             reached: None,
             outbox: Vec::new(),
@@ -246,6 +249,7 @@ impl Vehicle {
         self.crashed = false;
         self.failsafe = false;
         self.offboard = None;
+        self.reset_manual();
         self.reached = None;
         self.avoidance = Avoidance::default();
         self.streams = Streams::default();
@@ -315,6 +319,8 @@ impl Vehicle {
                 self.on_command(from, c.command, p, true);
             }
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(s) => self.on_offboard_setpoint(s),
+            MavMessage::MANUAL_CONTROL(m) => self.on_manual_control(m),
+            MavMessage::OBSTACLE_DISTANCE(m) => self.on_obstacle_distance(m),
             MavMessage::MISSION_SET_CURRENT(s) => {
                 if self.nav.set_current(usize::from(s.seq)) {
                     self.send_mission_current();
@@ -428,9 +434,14 @@ impl Vehicle {
         self.apply_mission_actions(actions);
         self.preflight_step();
         self.offboard_failsafe();
+        self.manual_loss_step();
         let sp = self.navigate();
+        let manual = self.manual_step(dt.as_secs_f64());
         // What the controller tracks this step: PX4's trajectory setpoint, which the land detector watches.
-        let vel_sp_ned = self.body.velocity_setpoint(&sp, &self.limits).map(|(v, _)| v);
+        let vel_sp_ned = match &manual {
+            Some((c, _)) => Some(c.vel_ned),
+            None => self.body.velocity_setpoint(&sp, &self.limits).map(|(v, _)| v),
+        };
         if !self.crashed {
             // Gusts blow while armed and act only in the air.
             let gust = if self.armed {
@@ -439,7 +450,10 @@ impl Vehicle {
                 Ned::zeros()
             };
             let gust = if self.body.on_ground() { Ned::zeros() } else { gust };
-            self.body.step_disturbed(&sp, &self.limits, dt.as_secs_f64(), gust);
+            match &manual {
+                Some((c, mp)) => self.body.track_manual(c, mp, dt.as_secs_f64(), gust),
+                None => self.body.step_disturbed(&sp, &self.limits, dt.as_secs_f64(), gust),
+            }
         }
         let inputs = LandInputs::of(self.armed, &self.body, vel_sp_ned.filter(|_| !self.crashed));
         self.land_detector
