@@ -278,7 +278,9 @@ fn print_text(report: &FlightReport) {
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
     if let Some(cp) = &report.collision_prevention {
-        let points = report.min_distance.map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
+        let points = report
+            .min_distance
+            .map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
         let inside = match cp.inside_cp_dist {
             Some(true) => "came inside CP_DIST",
             Some(false) => "kept CP_DIST",

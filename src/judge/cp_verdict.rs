@@ -53,9 +53,18 @@ mod tests {
                 .collect(),
         };
         let v = cp_verdict(&pass(2.5), &o, 2.0);
-        assert!((v.closest_centre_m.unwrap() - 1.5).abs() < 1e-5 && v.inside_cp_dist == Some(true), "{v:?}");
+        assert!(
+            (v.closest_centre_m.unwrap() - 1.5).abs() < 1e-5 && v.inside_cp_dist == Some(true),
+            "{v:?}"
+        );
         let v = cp_verdict(&pass(1.5), &o, 2.0);
-        assert!((v.closest_centre_m.unwrap() - 2.5).abs() < 1e-5 && v.inside_cp_dist == Some(false), "{v:?}");
-        assert_eq!(cp_verdict(&Trajectory { samples: vec![] }, &o, 2.0).inside_cp_dist, None);
+        assert!(
+            (v.closest_centre_m.unwrap() - 2.5).abs() < 1e-5 && v.inside_cp_dist == Some(false),
+            "{v:?}"
+        );
+        assert_eq!(
+            cp_verdict(&Trajectory { samples: vec![] }, &o, 2.0).inside_cp_dist,
+            None
+        );
     }
 }

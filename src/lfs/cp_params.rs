@@ -47,7 +47,11 @@ impl CpParams {
         };
         let bad = |name: &str, v: f64, rule: &str| Err(format!("parameter {name} = {v}: {rule}"));
         if !(out.dist_m.is_finite() && out.dist_m > 0.0 && out.dist_m <= 15.0) {
-            return bad("CP_DIST", out.dist_m, "must be above 0 (Collision Prevention on) and at most 15 m");
+            return bad(
+                "CP_DIST",
+                out.dist_m,
+                "must be above 0 (Collision Prevention on) and at most 15 m",
+            );
         }
         if !(0.0..=1.0).contains(&out.delay_s) {
             return bad("CP_DELAY", out.delay_s, "must be 0-1 s");
@@ -88,6 +92,10 @@ mod tests {
         assert_eq!(c.to_params()[3], ("CP_GO_NO_DATA".to_string(), 1.0));
         let e = CpParams::from_params(&[p("CP_DIST", -1.0)]).unwrap_err();
         assert!(e.contains("CP_DIST") && e.contains("above 0"), "{e}");
-        assert!(CpParams::from_params(&[p("CP_DELAY", 2.0)]).unwrap_err().contains("CP_DELAY"));
+        assert!(
+            CpParams::from_params(&[p("CP_DELAY", 2.0)])
+                .unwrap_err()
+                .contains("CP_DELAY")
+        );
     }
 }

@@ -5,7 +5,7 @@
 //! them), throttle 0..1 (0.5 holds the altitude) and no yaw. The horizontal stick points at the waypoint,
 //! its length `gain x distance` capped at `max_stick`; the throttle leaves 0.5 by `climb_gain x altitude
 //! error` (capped) only when the altitude is off by more than `alt_band_m`. A waypoint counts as reached
-//! within `acceptance_m` (3-D); a pilot that does not reach it within its bound (the leg's length at
+//! within `acceptance_m` horizontally and `alt_acceptance_m` vertically; a pilot that does not reach it within its bound (the leg's length at
 //! `min_speed_m_s`, plus `grace_s`) gives up with the reason, so a vehicle held back by Collision Prevention
 //! ends as a timeout, never a hang. Pure and deterministic: the bridge and the LFS fly the same pilot.
 
@@ -16,8 +16,10 @@ pub struct PilotParams {
     pub gain_per_m: f64,
     /// Largest horizontal stick (0.7 is about 4.9 m/s at PX4's defaults MPC_VEL_MANUAL 10, MPC_XY_MAN_EXPO 0.6).
     pub max_stick: f64,
-    /// Waypoint acceptance radius, metres (3-D).
+    /// Waypoint acceptance radius, metres (horizontal).
     pub acceptance_m: f64,
+    /// Waypoint acceptance in altitude, metres.
+    pub alt_acceptance_m: f64,
     /// Throttle per metre of altitude error.
     pub climb_gain_per_m: f64,
     /// Largest throttle offset from 0.5.
@@ -36,6 +38,7 @@ impl Default for PilotParams {
             gain_per_m: 0.2,
             max_stick: 0.7,
             acceptance_m: 1.0,
+            alt_acceptance_m: 1.0,
             climb_gain_per_m: 0.15,
             max_climb: 0.4,
             alt_band_m: 0.3,
@@ -111,7 +114,8 @@ impl CpPilot {
     /// The sticks at time `now_s` (seconds, any origin) from `pos_ned` with heading `yaw_rad`.
     pub fn step(&mut self, now_s: f64, pos_ned: [f64; 3], yaw_rad: f64) -> PilotStep {
         while let Some(g) = self.goal() {
-            if dist3(g, pos_ned) > self.params.acceptance_m {
+            let horizontal = (g[0] - pos_ned[0]).hypot(g[1] - pos_ned[1]);
+            if horizontal > self.params.acceptance_m || (g[2] - pos_ned[2]).abs() > self.params.alt_acceptance_m {
                 break;
             }
             self.index += 1;
@@ -169,7 +173,10 @@ mod tests {
         let p = PilotParams::default();
         // Goal 10 m north, nose north: full forward stick, no roll, altitude held.
         let s = sticks_toward(&p, [0.0, 0.0, -5.0], 0.0, [10.0, 0.0, -5.0]);
-        assert!((s.pitch - 0.7).abs() < 1e-9 && s.roll.abs() < 1e-9 && s.throttle == 0.5, "{s:?}");
+        assert!(
+            (s.pitch - 0.7).abs() < 1e-9 && s.roll.abs() < 1e-9 && s.throttle == 0.5,
+            "{s:?}"
+        );
         // Nose east: the northern goal is to the left.
         let s = sticks_toward(&p, [0.0, 0.0, -5.0], std::f64::consts::FRAC_PI_2, [10.0, 0.0, -5.0]);
         assert!(s.pitch.abs() < 1e-9 && (s.roll + 0.7).abs() < 1e-9, "{s:?}");

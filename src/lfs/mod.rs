@@ -15,9 +15,10 @@
 
 pub mod attitude;
 pub mod camera;
+mod column_slopes;
+pub mod cp_constraint;
 pub mod cp_params;
 pub mod cp_pilot;
-mod column_slopes;
 pub mod delay;
 pub mod eval;
 pub mod frames;

@@ -107,7 +107,9 @@ impl RangeSensor {
                 .filter_map(|deg| scene.ray(pos_ned[0], pos_ned[1], -pos_ned[2], yaw_rad + deg.to_radians(), max_m))
                 .reduce(f64::min);
             if let Some(d) = closest {
-                let cm = (d * 100.0).round().clamp(f64::from(self.min_cm), f64::from(self.max_cm));
+                let cm = (d * 100.0)
+                    .round()
+                    .clamp(f64::from(self.min_cm), f64::from(self.max_cm));
                 *slot = cm as u16;
             }
         }

@@ -89,7 +89,9 @@ async fn run(link: Arc<Link>, target: Target, mut feed: CpFeed, tx: watch::Sende
                 tx.send_if_modified(|p| !std::mem::replace(&mut p.streaming, true));
             }
         }
-        let wake = clock.wall_until(next_stick.min(next_scan)).max(Duration::from_millis(1));
+        let wake = clock
+            .wall_until(next_stick.min(next_scan))
+            .max(Duration::from_millis(1));
         tokio::select! {
             r = rx.recv() => match r {
                 Ok(inb) => view.update(&inb.msg, clock.now()),
@@ -148,7 +150,10 @@ mod tests {
         let MavMessage::OBSTACLE_DISTANCE(m) = scan_to_msg(&s, d, 7) else {
             panic!()
         };
-        assert_eq!((m.increment, m.increment_f, m.min_distance, m.max_distance), (5, 5.0, 20, 1200));
+        assert_eq!(
+            (m.increment, m.increment_f, m.min_distance, m.max_distance),
+            (5, 5.0, 20, 1200)
+        );
         assert_eq!(m.frame, MavFrame::MAV_FRAME_BODY_FRD);
         assert_eq!((m.distances[3], m.distances[0]), (250, 1201));
         let t = Target {

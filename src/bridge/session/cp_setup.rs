@@ -24,8 +24,12 @@ pub const PX4_MAIN_POSCTL: u8 = 3;
 impl Session<'_> {
     /// The test's Collision Prevention parameters, once the vehicle shows it has Collision Prevention.
     pub async fn check_collision_prevention(&mut self) -> Result<CpParams, Stop> {
-        let params = CpParams::from_params(&self.test.params)
-            .map_err(|e| Stop::new(Status::Rejected, format!("the test's Collision Prevention settings: {e}")))?;
+        let params = CpParams::from_params(&self.test.params).map_err(|e| {
+            Stop::new(
+                Status::Rejected,
+                format!("the test's Collision Prevention settings: {e}"),
+            )
+        })?;
         let otherwise = "refusing the flight";
         if self.read_param("CP_DIST", otherwise).await?.is_none() {
             return Err(Stop::new(
@@ -41,7 +45,7 @@ impl Session<'_> {
     pub fn start_cp_feed(&mut self) -> watch::Receiver<CpProgress> {
         let mut pilot = PilotParams::default();
         if let Some(p) = self.test.params.iter().find(|p| p.name == "NAV_ACC_RAD") {
-            pilot.acceptance_m = p.value.clamp(0.5, 2.0);
+            pilot.acceptance_m = p.value.clamp(1.0, 3.0);
         }
         let goals = offboard::goals(&self.test.mission);
         let goals = match self.frame {
@@ -59,10 +63,35 @@ impl Session<'_> {
         rx
     }
 
+    /// Back to Position mode when a failsafe took the vehicle out of it mid-flight (e.g. a gap in the sticks
+    /// on a busy machine), as a pilot would; at most once per vehicle second, each time a warning.
+    pub async fn keep_position_mode(&mut self, last_try: &mut Option<Duration>) {
+        let now = self.link.clock().now();
+        let flying = self.view.armed && self.view.took_off;
+        if !flying
+            || self.view.px4_mode.0 == PX4_MAIN_POSCTL
+            || last_try.is_some_and(|t| now < t + Duration::from_secs(1))
+        {
+            return;
+        }
+        *last_try = Some(now);
+        let (main, sub) = self.view.px4_mode;
+        self.warnings.push(format!(
+            "the vehicle left Position mode (to {main}.{sub}); switched back"
+        ));
+        let mode = [1.0, f32::from(PX4_MAIN_POSCTL), 0.0, 0.0, 0.0, 0.0, 0.0];
+        if let Err(e) = self.command(MavCmd::MAV_CMD_DO_SET_MODE, mode).await {
+            self.warnings.push(format!("switching back to Position mode: {e}"));
+        }
+    }
+
     /// Position mode once the sticks stream (PX4 refuses it without manual control), then arming.
     pub async fn start_position_mode(&mut self, progress: &mut watch::Receiver<CpProgress>) -> Result<(), Stop> {
         let wait = self.link.clock().wall(Duration::from_secs(5));
-        if tokio::time::timeout(wait, progress.wait_for(|p| p.streaming)).await.is_err() {
+        if tokio::time::timeout(wait, progress.wait_for(|p| p.streaming))
+            .await
+            .is_err()
+        {
             return Err(Stop::new(
                 Status::LinkLost,
                 "no position from the vehicle to start the pilot and the lidar from",

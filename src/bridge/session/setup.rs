@@ -68,7 +68,9 @@ impl Session<'_> {
             .test
             .params
             .iter()
-            .filter(|p| p.name != "COM_OBS_AVOID" && !cp.is_some_and(|c| c.to_params().iter().any(|(n, _)| *n == p.name)))
+            .filter(|p| {
+                p.name != "COM_OBS_AVOID" && !cp.is_some_and(|c| c.to_params().iter().any(|(n, _)| *n == p.name))
+            })
             .map(|p| (p.name.clone(), p.value))
             .collect();
         match cp {
