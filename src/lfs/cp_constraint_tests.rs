@@ -21,10 +21,14 @@ fn braking_distance_known_answer() {
 }
 
 #[test]
-fn free_space_leaves_the_stick_alone() {
+fn free_space_scales_the_stick_by_the_sensor_range_only() {
     let (cp, lim) = (CpParams::default(), Px4Limits::default());
     let out = constrain([3.0, 0.0], [2.0, 0.0], 0.0, &map_with(&[]), &cp, &lim);
-    assert!((out[0] - 3.0).abs() < 1e-9 && out[1].abs() < 1e-9, "{out:?}");
+    // Out-of-range sectors count as obstacles at max + 1 cm: ((12.01 - 2) / (10 / 0.95))^2 = 0.904.
+    assert!((out[0] - 3.0 * 0.9043).abs() < 1e-3 && out[1].abs() < 1e-9, "{out:?}");
+    // Sideways to the nose's sector it is not scaled at all.
+    let out = constrain([0.0, -3.0], [0.0, 0.0], 0.0, &map_with(&[]), &cp, &lim);
+    assert!(out[0].abs() < 1e-9 && (out[1] + 3.0).abs() < 1e-9, "{out:?}");
 }
 
 #[test]

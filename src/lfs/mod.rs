@@ -17,6 +17,7 @@ pub mod attitude;
 pub mod camera;
 mod column_slopes;
 pub mod cp_constraint;
+pub mod cp_model;
 pub mod cp_params;
 pub mod cp_pilot;
 pub mod delay;
