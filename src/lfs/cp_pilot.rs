@@ -7,7 +7,9 @@
 //! error` (capped) only when the altitude is off by more than `alt_band_m`. A waypoint counts as reached
 //! within `acceptance_m` horizontally and `alt_acceptance_m` vertically; a pilot that does not reach it within its bound (the leg's length at
 //! `min_speed_m_s`, plus `grace_s`) gives up with the reason, so a vehicle held back by Collision Prevention
-//! ends as a timeout, never a hang. Pure and deterministic: the bridge and the LFS fly the same pilot.
+//! ends as a timeout, never a hang. Sticks move at most `slew_per_s` (in PX4's -1..1 units) and are centred
+//! before the pilot reports the end: PX4 takes a fast stick change in LAND as the pilot taking over (its
+//! COM_RC_STICK_OV, 30 %). Pure and deterministic: the bridge and the LFS fly the same pilot.
 
 /// The pilot's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,6 +32,8 @@ pub struct PilotParams {
     pub min_speed_m_s: f64,
     /// Extra time per leg, seconds.
     pub grace_s: f64,
+    /// Fastest stick movement, PX4 units (-1..1) per second.
+    pub slew_per_s: f64,
 }
 
 impl Default for PilotParams {
@@ -44,6 +48,7 @@ impl Default for PilotParams {
             alt_band_m: 0.3,
             min_speed_m_s: 0.5,
             grace_s: 30.0,
+            slew_per_s: 1.0,
         }
     }
 }
@@ -93,6 +98,10 @@ pub struct CpPilot {
     index: usize,
     params: PilotParams,
     leg_deadline_s: Option<f64>,
+    /// The sticks last given and when.
+    last: (Sticks, Option<f64>),
+    /// Why the pilot gave up, once it did (it centres the sticks first).
+    given_up: Option<String>,
 }
 
 impl CpPilot {
@@ -103,6 +112,8 @@ impl CpPilot {
             index: 0,
             params,
             leg_deadline_s: None,
+            last: (Sticks::CENTRED, None),
+            given_up: None,
         }
     }
 
@@ -111,8 +122,45 @@ impl CpPilot {
         self.goals.get(self.index).copied()
     }
 
-    /// The sticks at time `now_s` (seconds, any origin) from `pos_ned` with heading `yaw_rad`.
+    /// The sticks at time `now_s` (seconds, any origin) from `pos_ned` with heading `yaw_rad`, slewed; the
+    /// end (finished or given up) once they are centred.
     pub fn step(&mut self, now_s: f64, pos_ned: [f64; 3], yaw_rad: f64) -> PilotStep {
+        let wanted = match self.wanted(now_s, pos_ned, yaw_rad) {
+            PilotStep::Fly(s) => s,
+            _ => Sticks::CENTRED,
+        };
+        let dt = self.last.1.map_or(0.0, |t| (now_s - t).max(0.0));
+        let max = self.params.slew_per_s * dt;
+        let prev = self.last.0;
+        let toward = |from: f64, to: f64, scale: f64| {
+            let step = (to - from).clamp(-max / scale, max / scale);
+            if (to - from - step).abs() < 1e-9 {
+                to
+            } else {
+                from + step
+            }
+        };
+        let sticks = Sticks {
+            pitch: toward(prev.pitch, wanted.pitch, 1.0),
+            roll: toward(prev.roll, wanted.roll, 1.0),
+            throttle: toward(prev.throttle, wanted.throttle, 2.0),
+        };
+        self.last = (sticks, Some(now_s));
+        if sticks != Sticks::CENTRED {
+            return PilotStep::Fly(sticks);
+        }
+        match (&self.given_up, self.goal()) {
+            (Some(why), _) => PilotStep::Stuck(why.clone()),
+            (None, None) => PilotStep::Finished,
+            (None, Some(_)) => PilotStep::Fly(sticks),
+        }
+    }
+
+    /// The sticks wanted now, before slewing.
+    fn wanted(&mut self, now_s: f64, pos_ned: [f64; 3], yaw_rad: f64) -> PilotStep {
+        if let Some(why) = &self.given_up {
+            return PilotStep::Stuck(why.clone());
+        }
         while let Some(g) = self.goal() {
             let horizontal = (g[0] - pos_ned[0]).hypot(g[1] - pos_ned[1]);
             if horizontal > self.params.acceptance_m || (g[2] - pos_ned[2]).abs() > self.params.alt_acceptance_m {
@@ -129,12 +177,14 @@ impl CpPilot {
             .leg_deadline_s
             .get_or_insert(now_s + dist3(goal, pos_ned) / p.min_speed_m_s + p.grace_s);
         if now_s > deadline {
-            return PilotStep::Stuck(format!(
+            let why = format!(
                 "the pilot did not reach waypoint {} of {} within its bound ({:.1} m away)",
                 self.index + 1,
                 self.goals.len(),
                 dist3(goal, pos_ned)
-            ));
+            );
+            self.given_up = Some(why.clone());
+            return PilotStep::Stuck(why);
         }
         PilotStep::Fly(sticks_toward(p, pos_ned, yaw_rad, goal))
     }
@@ -187,14 +237,30 @@ mod tests {
         assert_eq!(s.to_mavlink(), (200, 0, 800, 0));
     }
 
+    /// Steps every 0.05 s from `t0` for `secs` at one position; the last step.
+    fn hold(pilot: &mut CpPilot, t0: f64, secs: f64, pos: [f64; 3]) -> PilotStep {
+        let n = (secs / 0.05).round() as usize;
+        (0..=n)
+            .map(|k| pilot.step(t0 + k as f64 * 0.05, pos, 0.0))
+            .last()
+            .unwrap()
+    }
+
     #[test]
-    fn waypoints_in_turn_then_finished() {
+    fn waypoints_in_turn_then_finished_with_the_sticks_centred() {
         let mut pilot = CpPilot::new(vec![[0.0, 0.0, -5.0], [20.0, 0.0, -5.0]], PilotParams::default());
-        assert!(matches!(pilot.step(0.0, [0.0, 0.0, 0.0], 0.0), PilotStep::Fly(s) if s.throttle > 0.5));
+        // The throttle rises at the slew rate: 0.5 of PX4's range per second is 0.25 of MAVLink's 0..1.
+        assert!(
+            matches!(hold(&mut pilot, 0.0, 0.2, [0.0, 0.0, 0.0]), PilotStep::Fly(s) if (s.throttle - 0.6).abs() < 1e-6)
+        );
         assert_eq!(pilot.goal(), Some([0.0, 0.0, -5.0]));
-        assert!(matches!(pilot.step(1.0, [0.0, 0.0, -4.5], 0.0), PilotStep::Fly(s) if s.pitch > 0.6));
+        assert!(
+            matches!(hold(&mut pilot, 1.0, 1.0, [0.0, 0.0, -4.5]), PilotStep::Fly(s) if (s.pitch - 0.7).abs() < 1e-9)
+        );
         assert_eq!(pilot.goal(), Some([20.0, 0.0, -5.0]));
-        assert_eq!(pilot.step(2.0, [19.5, 0.2, -5.1], 0.0), PilotStep::Finished);
+        // Reached: the sticks come back to the centre (0.7 s), then the pilot reports the end.
+        assert!(matches!(pilot.step(2.05, [19.5, 0.2, -5.1], 0.0), PilotStep::Fly(s) if s.pitch > 0.6));
+        assert_eq!(hold(&mut pilot, 2.1, 0.7, [19.5, 0.2, -5.1]), PilotStep::Finished);
     }
 
     #[test]
@@ -202,8 +268,12 @@ mod tests {
         let mut pilot = CpPilot::new(vec![[20.0, 0.0, -5.0]], PilotParams::default());
         // 20 m at 0.5 m/s plus 30 s: 70 s.
         assert!(matches!(pilot.step(0.0, [0.0, 0.0, -5.0], 0.0), PilotStep::Fly(_)));
-        assert!(matches!(pilot.step(69.0, [5.0, 0.0, -5.0], 0.0), PilotStep::Fly(_)));
-        match pilot.step(71.0, [5.0, 0.0, -5.0], 0.0) {
+        assert!(matches!(hold(&mut pilot, 68.0, 1.9, [5.0, 0.0, -5.0]), PilotStep::Fly(s) if s.pitch > 0.6));
+        // Given up at 70 s: the sticks are centred first, then the reason.
+        assert!(
+            matches!(pilot.step(70.05, [5.0, 0.0, -5.0], 0.0), PilotStep::Fly(s) if s.pitch < 0.7 && s.pitch > 0.0)
+        );
+        match hold(&mut pilot, 70.1, 1.0, [5.0, 0.0, -5.0]) {
             PilotStep::Stuck(why) => assert!(why.contains("waypoint 1 of 1") && why.contains("15.0 m"), "{why}"),
             other => panic!("{other:?}"),
         }
