@@ -24,8 +24,9 @@ fn without_boxes_the_pilot_flies_the_mission_and_lands() {
     assert_eq!(p.min_distance, None);
     let last = p.trajectory.samples.last().unwrap();
     let goal = *waypoints(&t.mission).last().unwrap();
+    // The sticks are centred slowly before LAND (PX4 takes a fast centring as a takeover): it drifts on.
     assert!(
-        (last.x - goal[0]).hypot(last.y - goal[1]) < 1.5 && last.z.abs() < 1e-9,
+        (last.x - goal[0]).hypot(last.y - goal[1]) < 5.0 && last.z.abs() < 1e-9,
         "{last:?}"
     );
 }

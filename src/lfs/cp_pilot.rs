@@ -7,9 +7,10 @@
 //! error` (capped) only when the altitude is off by more than `alt_band_m`. A waypoint counts as reached
 //! within `acceptance_m` horizontally and `alt_acceptance_m` vertically; a pilot that does not reach it within its bound (the leg's length at
 //! `min_speed_m_s`, plus `grace_s`) gives up with the reason, so a vehicle held back by Collision Prevention
-//! ends as a timeout, never a hang. Sticks move at most `slew_per_s` (in PX4's -1..1 units) and are centred
-//! before the pilot reports the end: PX4 takes a fast stick change in LAND as the pilot taking over (its
-//! COM_RC_STICK_OV, 30 %). Pure and deterministic: the bridge and the LFS fly the same pilot.
+//! ends as a timeout, never a hang. Sticks move at most `slew_per_s` (in PX4's -1..1 units), and are
+//! centred at `end_slew_per_s` before the pilot reports the end: PX4 takes a stick moving faster than
+//! COM_RC_STICK_OV (30 % per second, filtered) in LAND as the pilot taking over. Pure and deterministic: the
+//! bridge and the LFS fly the same pilot.
 
 /// The pilot's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,6 +35,8 @@ pub struct PilotParams {
     pub grace_s: f64,
     /// Fastest stick movement, PX4 units (-1..1) per second.
     pub slew_per_s: f64,
+    /// Fastest stick movement while centring at the end (below PX4's takeover rate).
+    pub end_slew_per_s: f64,
 }
 
 impl Default for PilotParams {
@@ -49,6 +52,7 @@ impl Default for PilotParams {
             min_speed_m_s: 0.5,
             grace_s: 30.0,
             slew_per_s: 1.0,
+            end_slew_per_s: 0.15,
         }
     }
 }
@@ -125,12 +129,12 @@ impl CpPilot {
     /// The sticks at time `now_s` (seconds, any origin) from `pos_ned` with heading `yaw_rad`, slewed; the
     /// end (finished or given up) once they are centred.
     pub fn step(&mut self, now_s: f64, pos_ned: [f64; 3], yaw_rad: f64) -> PilotStep {
-        let wanted = match self.wanted(now_s, pos_ned, yaw_rad) {
-            PilotStep::Fly(s) => s,
-            _ => Sticks::CENTRED,
+        let (wanted, rate) = match self.wanted(now_s, pos_ned, yaw_rad) {
+            PilotStep::Fly(s) => (s, self.params.slew_per_s),
+            _ => (Sticks::CENTRED, self.params.end_slew_per_s),
         };
         let dt = self.last.1.map_or(0.0, |t| (now_s - t).max(0.0));
-        let max = self.params.slew_per_s * dt;
+        let max = rate * dt;
         let prev = self.last.0;
         let toward = |from: f64, to: f64, scale: f64| {
             let step = (to - from).clamp(-max / scale, max / scale);
@@ -258,9 +262,10 @@ mod tests {
             matches!(hold(&mut pilot, 1.0, 1.0, [0.0, 0.0, -4.5]), PilotStep::Fly(s) if (s.pitch - 0.7).abs() < 1e-9)
         );
         assert_eq!(pilot.goal(), Some([20.0, 0.0, -5.0]));
-        // Reached: the sticks come back to the centre (0.7 s), then the pilot reports the end.
+        // Reached: the sticks come back to the centre slowly (0.7 / 0.15 = 4.7 s), then the pilot reports the end.
         assert!(matches!(pilot.step(2.05, [19.5, 0.2, -5.1], 0.0), PilotStep::Fly(s) if s.pitch > 0.6));
-        assert_eq!(hold(&mut pilot, 2.1, 0.7, [19.5, 0.2, -5.1]), PilotStep::Finished);
+        assert!(matches!(hold(&mut pilot, 2.1, 4.0, [19.5, 0.2, -5.1]), PilotStep::Fly(s) if s.pitch > 0.0));
+        assert_eq!(hold(&mut pilot, 6.15, 0.7, [19.5, 0.2, -5.1]), PilotStep::Finished);
     }
 
     #[test]
@@ -273,7 +278,7 @@ mod tests {
         assert!(
             matches!(pilot.step(70.05, [5.0, 0.0, -5.0], 0.0), PilotStep::Fly(s) if s.pitch < 0.7 && s.pitch > 0.0)
         );
-        match hold(&mut pilot, 70.1, 1.0, [5.0, 0.0, -5.0]) {
+        match hold(&mut pilot, 70.1, 5.0, [5.0, 0.0, -5.0]) {
             PilotStep::Stuck(why) => assert!(why.contains("waypoint 1 of 1") && why.contains("15.0 m"), "{why}"),
             other => panic!("{other:?}"),
         }
