@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
+use prgenuav::bridge::companion::predict::predict_cp;
 use prgenuav::bridge::session::gazebo::world_sdf;
 use prgenuav::bridge::sitl::slot::{self, Slot};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
@@ -112,7 +113,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let prediction = (!args.no_predict)
-        .then(|| predict(&test, PREDICTION_MOTION.model(), args.judge.into()))
+        .then(|| match args.mode {
+            Mode::CollisionPrevention => predict_cp(&test, args.judge.into()),
+            _ => predict(&test, PREDICTION_MOTION.model(), args.judge.into()),
+        })
         .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok());
     let mut opts = options(&args, prediction.as_ref())?;
     // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
@@ -292,10 +296,13 @@ fn print_text(report: &FlightReport) {
             m(cp.closest_centre_m)
         );
     }
+    let model = match report.mode {
+        FlyMode::CollisionPrevention => "collision-prevention",
+        _ => PREDICTION_MOTION.model().name(),
+    };
     println!(
-        "lfs_min_distance  {} (the LFS prediction, {} motion model)",
-        m(report.lfs_min_distance),
-        PREDICTION_MOTION.model().name()
+        "lfs_min_distance  {} (the LFS prediction, {model} motion model)",
+        m(report.lfs_min_distance)
     );
     for d in &report.per_obstacle {
         println!(
