@@ -157,6 +157,8 @@ pub enum Family {
     Paper,
     /// The split drawn too, and a third obstacle where the case allows.
     Extended,
+    /// Two boxes across the path with a gap around 2 x CP_DIST (the default with --mode collision-prevention).
+    Gate,
 }
 
 impl From<Family> for prgenuav::generator::Family {
@@ -164,6 +166,7 @@ impl From<Family> for prgenuav::generator::Family {
         match f {
             Family::Paper => Self::Paper,
             Family::Extended => Self::Extended,
+            Family::Gate => Self::Gate,
         }
     }
 }

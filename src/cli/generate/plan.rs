@@ -12,6 +12,7 @@ use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
 use prgenuav::campaign::fly::runner::RunnerSettings;
 use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 
+use prgenuav::generator::{Family, GeneratorConfig};
 use prgenuav::lfs::ensemble::MAX_MEMBERS;
 
 use super::Args;
@@ -175,7 +176,7 @@ pub(super) fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) 
         candidates: s.screening.candidates.unwrap_or(budget.saturating_mul(3).max(20)),
         threshold_m: s.screening.threshold_m.unwrap_or(THRESHOLD_M),
         max_iou: s.screening.max_iou.unwrap_or(MAX_IOU),
-        generator: req.generator.clone(),
+        generator: generator_for(args.mode, &req.generator),
         old_spelling: s.output.spelling == Some(Spelling::Old),
         ensemble: s.screening.ensemble.unwrap_or(if mock { 0 } else { LINK_ENSEMBLE }),
         hfs,
@@ -271,6 +272,15 @@ fn check(cfg: &CampaignConfig) -> anyhow::Result<()> {
 /// `path` made absolute against the working folder (not resolved through links: the user's spelling stays).
 pub(super) fn absolute(path: &Path) -> anyhow::Result<PathBuf> {
     std::path::absolute(path).with_context(|| format!("{}: cannot make the path absolute", path.display()))
+}
+
+/// The generator's settings for `mode`: Collision Prevention draws gates unless another family was asked for.
+fn generator_for(mode: Mode, asked: &GeneratorConfig) -> GeneratorConfig {
+    let mut g = asked.clone();
+    if mode == Mode::CollisionPrevention && g.family == Family::Paper {
+        g.family = Family::Gate;
+    }
+    g
 }
 
 #[cfg(test)]
