@@ -133,8 +133,7 @@ impl CollisionPrevention {
         acc: Xy,
         vel_sp: Xy,
         yaw: f64,
-        now: Duration,
-        inbox: &RangeInbox,
+        (inbox, now): (&RangeInbox, Duration),
         p: &CpParams,
         events: &mut Vec<CpEvent>,
     ) -> Xy {
@@ -276,7 +275,11 @@ impl CollisionPrevention {
             }
         }
         // PX4 multiplies an infinite "no constraint" by a zero direction here (NaN); the mock adds nothing.
-        if comp.is_finite() { (comp, comp_dir) } else { (0.0, Xy::zeros()) }
+        if comp.is_finite() {
+            (comp, comp_dir)
+        } else {
+            (0.0, Xy::zeros())
+        }
     }
 }
 

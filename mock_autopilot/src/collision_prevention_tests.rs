@@ -44,14 +44,20 @@ fn inbox(ahead_cm: u16, half_deg: f64, blind: &[usize]) -> RangeInbox {
 fn run(cp: &mut CollisionPrevention, acc: Xy, vel: Xy, b: &RangeInbox, p: &CpParams) -> (Xy, Vec<CpEvent>) {
     let mut ev = Vec::new();
     assert!(cp.active(p, T));
-    let out = cp.modify(acc, vel, 0.0, T, b, p, &mut ev);
+    let out = cp.modify(acc, vel, 0.0, (b, T), p, &mut ev);
     (out, ev)
 }
 
 #[test]
 fn far_obstacles_leave_the_stick_alone() {
     let p = params(2.0);
-    let (out, ev) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::zeros(), &inbox(3001, 0.0, &[]), &p);
+    let (out, ev) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::zeros(),
+        &inbox(3001, 0.0, &[]),
+        &p,
+    );
     assert!((out - Xy::new(6.0, 0.0)).norm() < 1e-9, "{out}");
     assert!(ev.is_empty());
 }
@@ -61,16 +67,40 @@ fn a_wall_ahead_scales_the_stick_down_and_brakes_a_fast_setpoint() {
     let p = params(2.0);
     let b = inbox(300, 30.0, &[]);
     // 1 m beyond CP_DIST: scale (1 / (10 / 0.95))^2, about 0.009.
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::zeros(), &b, &p);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::zeros(),
+        &b,
+        &p,
+    );
     assert!(out.x > 0.0 && out.x < 0.1, "{out}");
     // At 5 m/s towards it the velocity compensation brakes hard.
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::new(5.0, 0.0), &b, &p);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::new(5.0, 0.0),
+        &b,
+        &p,
+    );
     assert!(out.x < -5.0, "{out}");
     // Inside CP_DIST the stick pushes back out.
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::zeros(), &inbox(150, 30.0, &[]), &p);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::zeros(),
+        &inbox(150, 30.0, &[]),
+        &p,
+    );
     assert!(out.x < 0.0, "{out}");
     // Moving away is not constrained.
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(-6.0, 0.0), Xy::zeros(), &b, &p);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(-6.0, 0.0),
+        Xy::zeros(),
+        &b,
+        &p,
+    );
     assert!((out - Xy::new(-6.0, 0.0)).norm() < 1e-9, "{out}");
 }
 
@@ -80,11 +110,26 @@ fn the_guidance_angle_turns_the_setpoint_to_free_space() {
     // full room on both neighbours (15 degrees, within CP_GUIDE_ANG 30), and only its part towards the post is
     // scaled down: (0.966 * 0.036, 0.259) * 6.
     let p = params(2.0);
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::zeros(), &inbox(400, 5.0, &[]), &p);
-    assert!((out.y.abs() - 1.55).abs() < 0.01 && (out.x - 0.21).abs() < 0.01, "{out}");
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::zeros(),
+        &inbox(400, 5.0, &[]),
+        &p,
+    );
+    assert!(
+        (out.y.abs() - 1.55).abs() < 0.01 && (out.x - 0.21).abs() < 0.01,
+        "{out}"
+    );
     let mut q = p;
     q.guide_deg = 0.0;
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(6.0, 0.0), Xy::zeros(), &inbox(400, 5.0, &[]), &q);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(6.0, 0.0),
+        Xy::zeros(),
+        &inbox(400, 5.0, &[]),
+        &q,
+    );
     assert!(out.y.abs() < 1e-9, "{out}");
 }
 
@@ -95,11 +140,23 @@ fn unknown_sectors_block_the_stick_unless_cp_go_no_data() {
     let blind: Vec<usize> = (12..=24).collect();
     let b = inbox(3001, 0.0, &blind);
     let p = params(2.0);
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(0.0, 6.0), Xy::zeros(), &b, &p);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(0.0, 6.0),
+        Xy::zeros(),
+        &b,
+        &p,
+    );
     assert_eq!(out, Xy::zeros());
     let mut q = p;
     q.go_no_data = true;
-    let (out, _) = run(&mut CollisionPrevention::default(), Xy::new(0.0, 6.0), Xy::zeros(), &b, &q);
+    let (out, _) = run(
+        &mut CollisionPrevention::default(),
+        Xy::new(0.0, 6.0),
+        Xy::zeros(),
+        &b,
+        &q,
+    );
     assert!((out - Xy::new(0.0, 6.0)).norm() < 1e-9, "{out}");
 }
 
@@ -112,14 +169,20 @@ fn without_data_nothing_moves_and_hold_follows() {
     assert!(cp.active(&p, T));
     let mut t = T;
     while t < T + Duration::from_secs(6) {
-        assert_eq!(cp.modify(Xy::new(6.0, 0.0), Xy::zeros(), 0.0, t, &empty, &p, &mut ev), Xy::zeros());
+        assert_eq!(
+            cp.modify(Xy::new(6.0, 0.0), Xy::zeros(), 0.0, (&empty, t), &p, &mut ev),
+            Xy::zeros()
+        );
         if ev.contains(&CpEvent::Hold) {
             break;
         }
         t += Duration::from_millis(100);
     }
     let after = t - T;
-    assert!(after > NO_DATA_HOLD && after <= NO_DATA_HOLD + Duration::from_millis(1100), "{after:?}");
+    assert!(
+        after > NO_DATA_HOLD && after <= NO_DATA_HOLD + Duration::from_millis(1100),
+        "{after:?}"
+    );
     // Disabled: never active.
     let mut cp = CollisionPrevention::default();
     assert!(!cp.active(&params(-1.0), T));

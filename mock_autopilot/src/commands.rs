@@ -166,10 +166,6 @@ impl Vehicle {
             );
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
         }
-        if self.nav.mode() == FlightMode::Posctl && self.fresh_sticks().is_none() {
-            self.text(MavSeverity::MAV_SEVERITY_CRITICAL, "Arming denied: no manual control input");
-            return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
-        }
         self.arm();
         MavResult::MAV_RESULT_ACCEPTED
     }

@@ -74,12 +74,20 @@ pub fn lower_edge(bin: i64, width: f32, offset: f32) -> f32 {
 /// The map bin whose centre is nearest to `angle_deg` (body frame).
 pub fn bin_at(angle_deg: f32) -> usize {
     let b = (wrap_360(angle_deg) / BIN_DEG).round();
-    if b.is_finite() { wrap_bin(b as i64, BIN_COUNT as i64) as usize } else { 0 }
+    if b.is_finite() {
+        wrap_bin(b as i64, BIN_COUNT as i64) as usize
+    } else {
+        0
+    }
 }
 
 /// The sector width of a message: `increment_f` when positive, else `increment`.
 pub fn message_increment(m: &OBSTACLE_DISTANCE_DATA) -> f32 {
-    if m.increment_f > 0.0 { m.increment_f } else { f32::from(m.increment) }
+    if m.increment_f > 0.0 {
+        m.increment_f
+    } else {
+        f32::from(m.increment)
+    }
 }
 
 /// Whether message sector [lo, hi) and map bin [blo, bhi) overlap, with PX4's rules for edges.
@@ -108,9 +116,16 @@ impl ObstacleMap {
             return Ok(());
         }
         let offset = match m.frame {
-            MavFrame::MAV_FRAME_GLOBAL | MavFrame::MAV_FRAME_LOCAL_NED => m.angle_offset - (yaw_rad as f32).to_degrees(),
+            MavFrame::MAV_FRAME_GLOBAL | MavFrame::MAV_FRAME_LOCAL_NED => {
+                m.angle_offset - (yaw_rad as f32).to_degrees()
+            }
             MavFrame::MAV_FRAME_BODY_FRD => m.angle_offset,
-            other => return Err(format!("Obstacle message received in unsupported frame {}", other as u8)),
+            other => {
+                return Err(format!(
+                    "Obstacle message received in unsupported frame {}",
+                    other as u8
+                ));
+            }
         };
         self.stamp = self.stamp.max(received);
         self.max_distance = self.max_distance.max(m.max_distance);
@@ -145,7 +160,7 @@ impl ObstacleMap {
         let range = (100.0 * range_m + 0.5) as u16;
         let (cur, cur_range) = (self.distances[i], self.max_ranges[i]);
         if reading_m < range_m {
-            (cur < cur_range && range <= cur_range) || cur >= cur_range
+            range <= cur_range || cur >= cur_range
         } else {
             (cur >= cur_range && range >= cur_range) || (cur < cur_range && range == cur_range)
         }

@@ -104,7 +104,10 @@ fn the_echo_is_the_body_frame_map() {
     let mut m = message(MavFrame::MAV_FRAME_BODY_FRD, 5, 0.0, 0.0);
     m.distances[3] = 700;
     let e = ingest(&m, 0.0).to_message(42);
-    assert_eq!((e.frame, e.increment, e.increment_f, e.distances[3]), (MavFrame::MAV_FRAME_BODY_FRD, 0, 5.0, 700));
+    assert_eq!(
+        (e.frame, e.increment, e.increment_f, e.distances[3]),
+        (MavFrame::MAV_FRAME_BODY_FRD, 0, 5.0, 700)
+    );
 }
 
 fn frames() -> impl Strategy<Value = MavFrame> {
@@ -118,7 +121,14 @@ fn frames() -> impl Strategy<Value = MavFrame> {
 }
 
 fn floats() -> impl Strategy<Value = f32> {
-    prop_oneof![any::<f32>(), -720.0f32..720.0, Just(0.0), Just(5.0), Just(f32::NAN), Just(f32::INFINITY)]
+    prop_oneof![
+        any::<f32>(),
+        -720.0f32..720.0,
+        Just(0.0),
+        Just(5.0),
+        Just(f32::NAN),
+        Just(f32::INFINITY)
+    ]
 }
 
 proptest! {

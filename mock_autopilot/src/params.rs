@@ -79,6 +79,7 @@ const DEFAULTS: &[(&str, ParamValue)] = {
         ("MPC_XY_CRUISE", F(5.0)),
         ("MPC_XY_MAN_EXPO", F(0.6)),
         ("MPC_XY_P", F(0.95)),
+        ("MPC_XY_VEL_I_ACC", F(0.4)),
         ("MPC_XY_VEL_MAX", F(12.0)),
         ("MPC_XY_VEL_P_ACC", F(1.8)),
         ("MPC_YAWRAUTO_MAX", F(45.0)),

@@ -17,8 +17,9 @@ use crate::position_mode::{ManualCommand, ManualParams, PositionMode};
 use crate::sticks::{StickInput, Sticks};
 use crate::vehicle::{SYSTEM_ID, Vehicle};
 
-/// PX4 streams its fused obstacle map at 1 Hz on a normal (GCS) link.
-const ECHO_PERIOD: Duration = Duration::from_secs(1);
+/// PX4 streams its fused obstacle map at 10 Hz on the onboard link of ports 14580/14540, which the mock's
+/// ports imitate (1 Hz on a normal GCS link).
+const ECHO_PERIOD: Duration = Duration::from_millis(100);
 
 /// Stick and range-sensor input, Position mode's state and the manual-control-loss failsafe.
 #[derive(Debug, Clone, Default)]
@@ -98,7 +99,7 @@ impl Vehicle {
     /// Switching to Position mode while armed needs a position and sticks, as PX4's mode requirements.
     pub(crate) fn posctl_refusal(&self) -> Option<&'static str> {
         (!self.estimator_settled() || self.fresh_sticks().is_none())
-            .then_some("Switching to mode 'Position' is currently not possible")
+            .then_some("Switching to Position is currently not possible")
     }
 
     /// The manual-control-loss failsafe (see the module documentation).
@@ -127,7 +128,10 @@ impl Vehicle {
             Some(_) => {}
             None if !fresh && self.manual.had_sticks && !self.manual_loss_excepted(mode) => {
                 self.failsafe = true;
-                self.text(MavSeverity::MAV_SEVERITY_CRITICAL, "Failsafe: manual control lost, Hold");
+                self.text(
+                    MavSeverity::MAV_SEVERITY_CRITICAL,
+                    "Failsafe: manual control lost, Hold",
+                );
                 let l = Loss {
                     since: self.now,
                     acted: None,
@@ -173,3 +177,7 @@ impl Vehicle {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "posctl_tests.rs"]
+mod tests;

@@ -13,6 +13,11 @@ use crate::dynamics::{Body, GRAVITY_M_S2, Ned, wrap_pi};
 use crate::params::ParamTable;
 use crate::sticks::{Sticks, expo_deadzone};
 
+/// The airframe's linear drag (1/s): PX4's SIH quadrotor has `SIH_KDV` 1 N s/m on `SIH_MASS` 1 kg. The
+/// velocity loop's integrator works against it, so PX4 reaches a stick speed over seconds, not at once, and
+/// overshoots a stop a little when it brakes.
+pub const AIR_DRAG_PER_S: f64 = 1.0;
+
 /// The parameters of stick flight.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ManualParams {
@@ -26,6 +31,8 @@ pub struct ManualParams {
     pub xy_p: f64,
     /// MPC_XY_VEL_P_ACC, 1/s.
     pub xy_vel_p_acc: f64,
+    /// MPC_XY_VEL_I_ACC, 1/s².
+    pub xy_vel_i_acc: f64,
     /// MPC_HOLD_DZ: stick dead zone.
     pub hold_dz: f64,
     /// MPC_XY_MAN_EXPO, MPC_Z_MAN_EXPO, MPC_YAW_EXPO.
@@ -52,6 +59,7 @@ impl ManualParams {
             jerk_max: pos("MPC_JERK_MAX"),
             xy_p: pos("MPC_XY_P"),
             xy_vel_p_acc: pos("MPC_XY_VEL_P_ACC"),
+            xy_vel_i_acc: p.f64("MPC_XY_VEL_I_ACC").max(0.0),
             hold_dz: p.f64("MPC_HOLD_DZ"),
             expo: (p.f64("MPC_XY_MAN_EXPO"), p.f64("MPC_Z_MAN_EXPO"), p.f64("MPC_YAW_EXPO")),
             yaw_rate_max: pos("MPC_MAN_Y_MAX").to_radians(),
@@ -68,7 +76,7 @@ impl ManualParams {
 pub struct ManualCommand {
     /// Velocity to track, local NED m/s (position corrections included).
     pub vel_ned: Ned,
-    /// Feed-forward acceleration, local NED m/s².
+    /// Feed-forward acceleration plus the velocity integrator's, local NED m/s².
     pub acc_ned: Ned,
     /// Yaw rate, rad/s (clockwise positive).
     pub yaw_rate: f64,
@@ -84,6 +92,7 @@ pub struct PositionMode {
     vz_sp: f64,
     alt_lock: Option<f64>,
     last_vel_cmd: Xy,
+    vel_int: Xy,
     /// Collision Prevention of this activation.
     pub cp: CollisionPrevention,
 }
@@ -124,7 +133,9 @@ impl PositionMode {
         dt_s: f64,
         events: &mut Vec<CpEvent>,
     ) -> ManualCommand {
-        let (xy_vel, xy_acc) = self.horizontal(s, body, mp, cp, dt_s, events);
+        let (xy_vel, mut xy_acc) = self.horizontal(s, body, mp, cp, dt_s, events);
+        self.vel_int += (xy_vel - body.vel_ned.xy()) * (mp.xy_vel_i_acc * dt_s);
+        xy_acc += self.vel_int;
         let (vz, az) = self.vertical(s, body, mp, dt_s);
         let yaw_rate = expo_deadzone(s.yaw, mp.expo.2, mp.hold_dz) * mp.yaw_rate_max;
         ManualCommand {
@@ -153,9 +164,16 @@ impl PositionMode {
         let acc_scale = 2.0 * mp.acc_hor; // twice: against the drag the mean acceleration is half
         let mut acc = stick_ned * acc_scale;
         if self.cp.active(cpp, now) {
-            acc = self.cp.modify(acc, self.vel_sp, body.yaw_rad, now, inbox, cpp, events);
+            acc = self
+                .cp
+                .modify(acc, self.vel_sp, body.yaw_rad, (inbox, now), cpp, events);
         }
-        let mut drag = self.drag(acc_scale / mp.vel_manual, dt, stick.norm_squared() < f64::from(f32::EPSILON), mp);
+        let mut drag = self.drag(
+            acc_scale / mp.vel_manual,
+            dt,
+            stick.norm_squared() < f64::from(f32::EPSILON),
+            mp,
+        );
         let crossing = acc.norm_squared() < f64::from(f32::EPSILON)
             || sign(self.acc_sp.x) != sign(acc.x)
             || sign(self.acc_sp.y) != sign(acc.y);
@@ -164,15 +182,8 @@ impl PositionMode {
             self.vel_sp = Xy::zeros();
         }
         acc -= drag;
-        // Jerk limit per axis, in proportion to the change so both axes arrive together.
-        let change = acc - self.acc_sp;
-        let dir = if change.norm() > 0.0 { change / change.norm() } else { Xy::zeros() };
-        for k in 0..2 {
-            let max = dir[k].abs() * mp.jerk_max * dt;
-            acc[k] = self.acc_sp[k] + change[k].clamp(-max, max);
-        }
-        self.acc_sp = acc;
-        self.vel_sp += acc * dt;
+        self.acc_sp = self.jerk_limited(acc, mp.jerk_max, dt);
+        self.vel_sp += self.acc_sp * dt;
         let moving = self.vel_sp.norm_squared() > f64::from(f32::EPSILON);
         match self.pos_lock {
             None if !moving => self.pos_lock = Some(body.pos_ned.xy()),
@@ -188,6 +199,22 @@ impl PositionMode {
         };
         self.last_vel_cmd = vel_cmd;
         (vel_cmd, self.acc_sp)
+    }
+
+    /// `acc` within MPC_JERK_MAX of the last acceleration, per axis in proportion to the change so both axes
+    /// arrive together.
+    fn jerk_limited(&self, mut acc: Xy, jerk_max: f64, dt: f64) -> Xy {
+        let change = acc - self.acc_sp;
+        let dir = if change.norm() > 0.0 {
+            change / change.norm()
+        } else {
+            Xy::zeros()
+        };
+        for k in 0..2 {
+            let max = dir[k].abs() * jerk_max * dt;
+            acc[k] = self.acc_sp[k] + change[k].clamp(-max, max);
+        }
+        acc
     }
 
     /// The drag that limits the speed to MPC_VEL_MANUAL, boosted (over 0.8 s) while the stick is released so
@@ -225,8 +252,9 @@ impl PositionMode {
 
 impl Body {
     /// Tracks a stick command for `dt_s` seconds: PX4's velocity controller (P gains `MPC_XY_VEL_P_ACC`,
-    /// `MPC_Z_VEL_P_ACC`, with the feed-forward acceleration, within a 45-degree tilt and the vertical
-    /// acceleration limits), plus an external acceleration `disturbance` (gusts).
+    /// `MPC_Z_VEL_P_ACC`, with the feed-forward and integrator accelerations, within a 45-degree tilt and the
+    /// vertical acceleration limits) against the airframe's drag [`AIR_DRAG_PER_S`], plus an external
+    /// acceleration `disturbance` (gusts).
     pub fn track_manual(&mut self, c: &ManualCommand, mp: &ManualParams, dt_s: f64, disturbance: Ned) {
         if self.on_ground() && c.vel_ned.z >= 0.0 {
             // Landed and not asked to climb: the motors idle and nothing moves.
@@ -244,7 +272,8 @@ impl Body {
             acc.y *= GRAVITY_M_S2 / h;
         }
         self.acc_ned = acc;
-        self.vel_ned += (acc + disturbance) * dt_s;
+        let drag = Ned::new(self.vel_ned.x, self.vel_ned.y, 0.0) * AIR_DRAG_PER_S;
+        self.vel_ned += (acc - drag + disturbance) * dt_s;
         self.pos_ned += self.vel_ned * dt_s;
         if self.pos_ned.z >= 0.0 && self.vel_ned.z >= 0.0 {
             self.pos_ned.z = 0.0;

@@ -67,6 +67,10 @@ impl Vehicle {
         if mode == FlightMode::Mission && self.nav.count() == 0 {
             return Err(None);
         }
+        // Position mode requires manual control (PX4 v1.16 ModeUtil/mode_requirements.cpp).
+        if mode == FlightMode::Posctl && self.fresh_sticks().is_none() {
+            return Err(Some("Preflight Fail: No manual control input"));
+        }
         Ok(())
     }
 

@@ -1,6 +1,7 @@
 //! Integration tests: the mock on ephemeral UDP ports, flown by rust-mavlink and pymavlink clients.
 
 mod client;
+mod collision_prevention;
 mod faults;
 mod garbage;
 mod python;

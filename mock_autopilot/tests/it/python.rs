@@ -156,3 +156,35 @@ async fn pymavlink_against_the_cli_with_fault_flags() {
     assert!(ok, "pymavlink fault check failed:\n{out}");
     assert!(out.contains("FAULTS OK"), "{out}");
 }
+
+/// pymavlink as a pilot with a range sensor: the stick towards a wall stops near CP_DIST, and with
+/// Collision Prevention off it does not (the script's own check fails).
+#[tokio::test]
+async fn pymavlink_sticks_towards_a_wall_stop_near_cp_dist() {
+    if !pymavlink_available() {
+        return;
+    }
+    for (cp_dist, expect_ok) in [("3", true), ("-1", false)] {
+        let m = mock(5.0, |b| b.estimator_settle(Duration::ZERO)).await;
+        let port = m.local_addr().expect("addr").port();
+        let args: Vec<String> = [
+            script("cp_stop.py").display().to_string(),
+            "--url".into(),
+            format!("udpout:127.0.0.1:{port}"),
+            "--time-scale".into(),
+            "5".into(),
+            "--push".into(),
+            "20".into(),
+            "--cp-dist".into(),
+            cp_dist.into(),
+            "--expect".into(),
+            "2.5".into(),
+            "3.5".into(),
+        ]
+        .into();
+        let (ok, out) = run_script(args, Duration::from_secs(90)).await;
+        assert_eq!(ok, expect_ok, "CP_DIST {cp_dist}:\n{out}");
+        assert!(out.contains("closest"), "{out}");
+        m.shutdown().await.expect("stop");
+    }
+}
