@@ -185,8 +185,8 @@ fn step(st: &mut State, sticks: &Sticks, map: Option<&ObstacleMap>, cp: &CpParam
     // Releasing the stick brakes harder (PX4's brake boost).
     let boost = if len < 1e-6 { 2.0 } else { 1.0 };
     let drag = boost * acc_scale / lim.vel_manual;
-    for k in 0..2 {
-        st.vel_sp[k] += (acc[k] - drag * st.vel_sp[k]) * dt;
+    for (k, a) in acc.iter().enumerate() {
+        st.vel_sp[k] += (a - drag * st.vel_sp[k]) * dt;
         st.vel[k] += (st.vel_sp[k] - st.vel[k]) * (dt / cfg.vel_tau_s).min(1.0);
         st.pos[k] += st.vel[k] * dt;
     }
