@@ -112,12 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if write_world(&args, &test)? && args.world_only {
         return Ok(ExitCode::SUCCESS);
     }
-    let prediction = (!args.no_predict)
-        .then(|| match args.mode {
-            Mode::CollisionPrevention => predict_cp(&test, args.judge.into()),
-            _ => predict(&test, PREDICTION_MOTION.model(), args.judge.into()),
-        })
-        .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok());
+    let prediction = prediction(&args, &test);
     let mut opts = options(&args, prediction.as_ref())?;
     // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
     let px4 = match &build {
@@ -158,6 +153,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         print_text(&report);
     }
     Ok(exit_code(&report))
+}
+
+/// The LFS prediction for the mode flown (none with `--no-predict`; a failure is a warning).
+fn prediction(args: &Args, test: &TestCase) -> Option<Prediction> {
+    (!args.no_predict)
+        .then(|| match args.mode {
+            Mode::CollisionPrevention => predict_cp(test, args.judge.into()),
+            _ => predict(test, PREDICTION_MOTION.model(), args.judge.into()),
+        })
+        .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok())
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
@@ -281,21 +286,7 @@ fn print_text(report: &FlightReport) {
         );
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
-    if let Some(cp) = &report.collision_prevention {
-        let points = report
-            .min_distance
-            .map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
-        let inside = match cp.inside_cp_dist {
-            Some(true) => "came inside CP_DIST",
-            Some(false) => "kept CP_DIST",
-            None => "not measured",
-        };
-        println!(
-            "collision_prev.   {inside} {:.2} m (closest centre {}); points {points}",
-            cp.cp_dist_m,
-            m(cp.closest_centre_m)
-        );
-    }
+    print_cp(report);
     let model = match report.mode {
         FlyMode::CollisionPrevention => "collision-prevention",
         _ => PREDICTION_MOTION.model().name(),
@@ -333,6 +324,25 @@ fn print_text(report: &FlightReport) {
         }
     );
     print_notes(report);
+}
+
+/// A Collision Prevention flight's verdict: `CP_DIST` kept or not, and the competition's points.
+fn print_cp(report: &FlightReport) {
+    let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
+    let Some(cp) = &report.collision_prevention else { return };
+    let points = report
+        .min_distance
+        .map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
+    let inside = match cp.inside_cp_dist {
+        Some(true) => "came inside CP_DIST",
+        Some(false) => "kept CP_DIST",
+        None => "not measured",
+    };
+    println!(
+        "collision_prev.   {inside} {:.2} m (closest centre {}); points {points}",
+        cp.cp_dist_m,
+        m(cp.closest_centre_m)
+    );
 }
 
 /// The flight's side notes: how long the vehicle took to be ready, the clock, the companion, warnings.

@@ -74,4 +74,3 @@ fn the_throttle_maps_to_climb_rates_with_a_dead_zone() {
     assert!((climb_rate(1.0, &c) - 3.0).abs() < 1e-9);
     assert!((climb_rate(0.0, &c) + 1.5).abs() < 1e-9);
 }
-

@@ -52,7 +52,9 @@ fn mission2_with(obstacles: impl Fn([f64; 2], [f64; 2]) -> Vec<Obstacle>) -> Tes
 async fn a_wall_across_the_path_holds_the_vehicle_and_the_pilot_gives_up() {
     let test = mission2_with(|mid, dir| {
         // The long side perpendicular to the leg (the perpendicular's angle, within the rules' 0-90 degrees).
-        let across = (dir[1].atan2(dir[0]).to_degrees() + 90.0).rem_euclid(180.0).rem_euclid(90.0);
+        let across = (dir[1].atan2(dir[0]).to_degrees() + 90.0)
+            .rem_euclid(180.0)
+            .rem_euclid(90.0);
         vec![Obstacle::new(18.0, 2.0, 20.0, mid[0], mid[1], across)]
     });
     let r = fly_cp(&test).await;
