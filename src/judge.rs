@@ -1,6 +1,7 @@
 //! How the competition judges a flight (`docs/formats.md`, judging and scoring): minimum distance to the obstacles,
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
+pub mod cp_verdict;
 pub mod edition;
 pub mod similarity;
 pub mod wilson;

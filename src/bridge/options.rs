@@ -17,6 +17,10 @@ pub enum FlyMode {
     Offboard,
     /// PX4 flies the plain mission, no avoidance (the baseline).
     Mission,
+    /// PX4's Collision Prevention is the system under test: the bridge is the pilot in Position mode
+    /// (`MANUAL_CONTROL` toward each waypoint) and a virtual lidar (`OBSTACLE_DISTANCE`).
+    #[serde(rename = "collision-prevention")]
+    CollisionPrevention,
 }
 
 /// Options of one flight. Times are in the vehicle's seconds (see [`FlyOptions::time_scale`]).

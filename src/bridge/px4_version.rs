@@ -145,12 +145,18 @@ impl Release {
         match mode {
             FlyMode::Avoidance => self.avoidance_interface,
             FlyMode::Offboard | FlyMode::Mission => true,
+            FlyMode::CollisionPrevention => self.collision_prevention,
         }
     }
 
     /// The modes that fly here, in words (`offboard, mission`).
     pub fn modes(&self) -> String {
-        let all = [FlyMode::Avoidance, FlyMode::Offboard, FlyMode::Mission];
+        let all = [
+            FlyMode::Avoidance,
+            FlyMode::Offboard,
+            FlyMode::Mission,
+            FlyMode::CollisionPrevention,
+        ];
         let names: Vec<String> = all.into_iter().filter(|m| self.supports(*m)).map(mode_name).collect();
         names.join(", ")
     }

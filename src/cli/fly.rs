@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
+use prgenuav::bridge::companion::predict::predict_cp;
 use prgenuav::bridge::session::gazebo::world_sdf;
 use prgenuav::bridge::sitl::slot::{self, Slot};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
@@ -111,9 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if write_world(&args, &test)? && args.world_only {
         return Ok(ExitCode::SUCCESS);
     }
-    let prediction = (!args.no_predict)
-        .then(|| predict(&test, PREDICTION_MOTION.model(), args.judge.into()))
-        .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok());
+    let prediction = prediction(&args, &test);
     let mut opts = options(&args, prediction.as_ref())?;
     // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
     let px4 = match &build {
@@ -164,6 +163,16 @@ fn open_build(args: &Args) -> anyhow::Result<Option<Px4Build>> {
     let build = Px4Build::open(dir)?;
     build.check_mode(args.mode.into())?;
     Ok(Some(build))
+}
+
+/// The LFS prediction for the mode flown (none with `--no-predict`; a failure is a warning).
+fn prediction(args: &Args, test: &TestCase) -> Option<Prediction> {
+    (!args.no_predict)
+        .then(|| match args.mode {
+            Mode::CollisionPrevention => predict_cp(test, args.judge.into()),
+            _ => predict(test, PREDICTION_MOTION.model(), args.judge.into()),
+        })
+        .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok())
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
@@ -288,10 +297,14 @@ fn print_text(report: &FlightReport) {
         );
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
+    print_cp(report);
+    let model = match report.mode {
+        FlyMode::CollisionPrevention => "collision-prevention",
+        _ => PREDICTION_MOTION.model().name(),
+    };
     println!(
-        "lfs_min_distance  {} (the LFS prediction, {} motion model)",
-        m(report.lfs_min_distance),
-        PREDICTION_MOTION.model().name()
+        "lfs_min_distance  {} (the LFS prediction, {model} motion model)",
+        m(report.lfs_min_distance)
     );
     for d in &report.per_obstacle {
         println!(
@@ -322,6 +335,25 @@ fn print_text(report: &FlightReport) {
         }
     );
     print_notes(report);
+}
+
+/// A Collision Prevention flight's verdict: `CP_DIST` kept or not, and the competition's points.
+fn print_cp(report: &FlightReport) {
+    let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3} m"));
+    let Some(cp) = &report.collision_prevention else { return };
+    let points = report
+        .min_distance
+        .map_or("-".into(), |d| prgenuav::judge::points(d).to_string());
+    let inside = match cp.inside_cp_dist {
+        Some(true) => "came inside CP_DIST",
+        Some(false) => "kept CP_DIST",
+        None => "not measured",
+    };
+    println!(
+        "collision_prev.   {inside} {:.2} m (closest centre {}); points {points}",
+        cp.cp_dist_m,
+        m(cp.closest_centre_m)
+    );
 }
 
 /// The flight's side notes: how long the vehicle took to be ready, the clock, the companion, warnings.

@@ -74,6 +74,8 @@ pub enum Mode {
     Offboard,
     /// PX4 flies the plain mission, no avoidance (the baseline).
     Mission,
+    /// PX4's Collision Prevention is tested: prgenuav flies Position mode as a pilot and feeds a virtual lidar.
+    CollisionPrevention,
 }
 
 impl From<Mode> for FlyMode {
@@ -82,6 +84,7 @@ impl From<Mode> for FlyMode {
             Mode::Avoidance => FlyMode::Avoidance,
             Mode::Offboard => FlyMode::Offboard,
             Mode::Mission => FlyMode::Mission,
+            Mode::CollisionPrevention => FlyMode::CollisionPrevention,
         }
     }
 }
@@ -154,6 +157,8 @@ pub enum Family {
     Paper,
     /// The split drawn too, and a third obstacle where the case allows.
     Extended,
+    /// Two boxes across the path with a gap around 2 x CP_DIST (the default with --mode collision-prevention).
+    Gate,
 }
 
 impl From<Family> for prgenuav::generator::Family {
@@ -161,6 +166,7 @@ impl From<Family> for prgenuav::generator::Family {
         match f {
             Family::Paper => Self::Paper,
             Family::Extended => Self::Extended,
+            Family::Gate => Self::Gate,
         }
     }
 }

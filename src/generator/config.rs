@@ -15,6 +15,9 @@ pub enum Family {
     /// case allow. Opt-in: on the embedded mock it found fewer failures (mission 2, seeds 0-2, adapted
     /// campaign: 25 against 42 for the paper's family).
     Extended,
+    /// Two boxes across the path leaving a gap around 2 x `CP_DIST` ([`super::gate`]): the default with
+    /// `--mode collision-prevention`.
+    Gate,
 }
 
 /// Every knob of the two-obstacle construction (paper, section II). Lengths in metres, angles in degrees.

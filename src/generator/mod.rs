@@ -4,6 +4,7 @@
 
 pub mod adaptive;
 mod config;
+pub mod gate;
 mod placement;
 mod soi;
 
@@ -16,6 +17,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use crate::lfs::cp_params::{CpParams, DEFAULT_CP_DIST_M};
 use crate::model::{Arena, Mission, Obstacle, TestCase};
 use crate::rules::check_obstacles;
 
@@ -77,12 +79,17 @@ pub struct Generator {
     mirror: Mirror,
     a_side: Side,
     proposal: Proposal,
+    /// The `CP_DIST` the gate family's gaps are drawn around, metres.
+    cp_dist_m: f64,
 }
 
 impl Generator {
     /// A generator for `case`'s mission in the competition's arena.
     pub fn new(case: &TestCase, config: GeneratorConfig, seed: u64) -> Result<Self, GenerateError> {
-        Self::for_mission(&case.mission, Arena::default(), config, seed)
+        let mut g = Self::for_mission(&case.mission, Arena::default(), config, seed)?;
+        // A case whose CP parameters are refused is refused when it flies; its gates use the default.
+        g.cp_dist_m = CpParams::from_params(&case.params).map_or(DEFAULT_CP_DIST_M, |c| c.dist_m);
+        Ok(g)
     }
 
     /// A generator for any mission and arena.
@@ -106,6 +113,7 @@ impl Generator {
             mirror,
             a_side,
             proposal: Proposal::Histogram(Box::default()),
+            cp_dist_m: DEFAULT_CP_DIST_M,
         })
     }
 
@@ -169,13 +177,20 @@ impl Generator {
         rng.set_stream(index);
         let mut asked = 0;
         for attempt in 1..=self.config.max_attempts {
-            let Some((draw, obstacles)) = placement::draw_test(
-                &mut rng,
-                &self.soi,
-                (self.mirror, &self.arena),
-                &self.config,
-                (self.config.family, &self.proposal),
-            ) else {
+            let drawn = match self.config.family {
+                Family::Gate => {
+                    let place = (self.mirror, &self.arena);
+                    gate::draw_gate(&mut rng, &self.soi, place, &self.config, &self.proposal, self.cp_dist_m)
+                }
+                family => placement::draw_test(
+                    &mut rng,
+                    &self.soi,
+                    (self.mirror, &self.arena),
+                    &self.config,
+                    (family, &self.proposal),
+                ),
+            };
+            let Some((draw, obstacles)) = drawn else {
                 continue;
             };
             if check_obstacles(&obstacles, &self.mission, &self.arena).is_empty() {

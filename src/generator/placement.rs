@@ -225,14 +225,14 @@ fn third_obstacle(
     ))
 }
 
-fn lerp(r: Range, t: f64) -> f64 {
+pub(super) fn lerp(r: Range, t: f64) -> f64 {
     r.min + (r.max - r.min) * t
 }
 
 /// The family's unit draws (uniform, then mapped through the proposal `dist`); the others stay 0.
-fn unit_draws(rng: &mut impl Rng, family: Family, dist: &Proposal) -> [f64; DIMS] {
+pub(super) fn unit_draws(rng: &mut impl Rng, family: Family, dist: &Proposal) -> [f64; DIMS] {
     let taken = match family {
-        Family::Paper => PAPER_DIMS,
+        Family::Paper | Family::Gate => PAPER_DIMS,
         Family::Extended => DIMS,
     };
     let mut u = [0.0; DIMS];
@@ -249,7 +249,7 @@ fn unit_draws(rng: &mut impl Rng, family: Family, dist: &Proposal) -> [f64; DIMS
 /// reports), or the extended family's draw.
 fn split_of(cfg: &GeneratorConfig, family: Family, u: &mut [f64; DIMS]) -> f64 {
     match family {
-        Family::Paper => {
+        Family::Paper | Family::Gate => {
             let r = cfg.adapted_split;
             u[SPLIT] = if r.max > r.min {
                 ((cfg.split - r.min) / (r.max - r.min)).clamp(0.0, 1.0)
@@ -326,7 +326,7 @@ fn extent(c: P2, axis: V2, long: f64, short: f64, d: V2) -> (f64, f64) {
 
 /// A box whose long side (`long`) lies along `axis`, written with `r` in [0, 90] degrees as the rules want:
 /// a rectangle turned by more than 90 degrees is the same rectangle with `l` and `w` swapped.
-fn oriented(center: P2, axis: V2, long: f64, short: f64, height: f64) -> Obstacle {
+pub(super) fn oriented(center: P2, axis: V2, long: f64, short: f64, height: f64) -> Obstacle {
     let mut psi = axis.y.atan2(axis.x).to_degrees().rem_euclid(180.0);
     if psi >= 180.0 {
         psi = 0.0;

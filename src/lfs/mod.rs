@@ -16,11 +16,16 @@
 pub mod attitude;
 pub mod camera;
 mod column_slopes;
+pub mod cp_constraint;
+pub mod cp_model;
+pub mod cp_params;
+pub mod cp_pilot;
 pub mod delay;
 pub mod eval;
 pub mod frames;
 pub mod mission;
 pub mod motion;
+pub mod range_sensor;
 pub mod render;
 pub mod render_fast;
 pub mod sim;

@@ -75,7 +75,7 @@ async fn fly_mode(mode: FlyMode, n: u32) -> FlightReport {
     let speed = match mode {
         FlyMode::Mission => SPEED,
         FlyMode::Avoidance => LOCKSTEP_SPEED,
-        FlyMode::Offboard => PLANNED_SPEED,
+        FlyMode::Offboard | FlyMode::CollisionPrevention => PLANNED_SPEED,
     };
     let wait = lockstep.map(|_| mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT);
     let (m, url) = mock(speed, |b| b.lockstep(wait)).await;

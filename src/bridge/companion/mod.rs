@@ -3,6 +3,7 @@
 //! prediction reported beside the flight. Talks to the vehicle only through [`super::wire`].
 
 pub mod avoidance;
+pub mod cp_feed;
 pub mod frame;
 pub mod offboard;
 pub mod planner_steer;

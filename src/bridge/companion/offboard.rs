@@ -14,7 +14,7 @@ use super::steer_worker::SteerWorker;
 use crate::bridge::wire::exchange::Target;
 use crate::bridge::wire::link::{Link, Sender};
 use crate::bridge::wire::vehicle::VehicleView;
-use crate::model::{CMD_LAND, Mission};
+use crate::model::Mission;
 
 /// Setpoint period (20 Hz; PX4 leaves OFFBOARD after 0.5 s without one).
 pub const SETPOINT_PERIOD: Duration = Duration::from_millis(50);
@@ -22,19 +22,7 @@ pub const SETPOINT_PERIOD: Duration = Duration::from_millis(50);
 /// The goals, local NED metres: takeoff point, waypoints, and the land item's position at the previous
 /// altitude (PX4 flies there, then descends in LAND).
 pub fn goals(mission: &Mission) -> Vec<[f64; 3]> {
-    let mut out: Vec<[f64; 3]> = Vec::new();
-    for item in &mission.items {
-        let Some(p) = item.local else { continue };
-        let down = match item.command {
-            CMD_LAND => out.last().map_or(-p.alt_m, |g| g[2]),
-            _ => -p.alt_m,
-        };
-        out.push([p.north_m, p.east_m, down]);
-        if item.command == CMD_LAND {
-            break;
-        }
-    }
-    out
+    crate::lfs::cp_model::waypoints(mission)
 }
 
 /// Goal sequencing: which goal is current, and when all are reached.

@@ -30,3 +30,18 @@ pub fn predict(test: &TestCase, motion: MotionModel, judge: Judge) -> Result<Pre
         trajectory: r.trajectory,
     })
 }
+
+/// The Collision Prevention model's prediction ([`crate::lfs::cp_model`]) for `test` with its CP parameters.
+pub fn predict_cp(test: &TestCase, judge: Judge) -> Result<Prediction, String> {
+    use crate::lfs::cp_model::{CpSimConfig, simulate_cp};
+    let cp = crate::lfs::cp_params::CpParams::from_params(&test.params)?;
+    let config = CpSimConfig {
+        judge,
+        ..CpSimConfig::default()
+    };
+    let p = simulate_cp(test, &cp, &config);
+    Ok(Prediction {
+        min_distance: p.min_distance,
+        trajectory: p.trajectory,
+    })
+}

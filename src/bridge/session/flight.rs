@@ -11,6 +11,7 @@ use super::context::{Session, Stop, stop_for};
 use super::recorder::Recorder;
 use super::report::Status;
 use super::schedule::{Action, schedule};
+use crate::bridge::companion::cp_feed::CpProgress;
 use crate::bridge::companion::frame::{FramedSteer, TestFrame};
 use crate::bridge::companion::offboard::{self, Pilot, Progress};
 use crate::bridge::companion::planner_steer::PlannerSteer;
@@ -109,24 +110,27 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
         start_boot_ms: s.view.pose.map(|p| p.time_boot_ms),
     };
     let mut plan = schedule(&s.test.commands, &mut s.warnings);
-    let mut progress = if s.opts.mode == FlyMode::Offboard {
-        Some(start_pilot(s))
-    } else {
-        None
-    };
+    let mut progress = (s.opts.mode == FlyMode::Offboard).then(|| start_pilot(s));
+    let mut cp = (s.opts.mode == FlyMode::CollisionPrevention).then(|| s.start_cp_feed());
     let mut landing_sent = false;
+    let mut cp_mode_try = None;
     loop {
         let now = clock.now();
         while plan.front().is_some_and(|(at, _)| start + *at <= now) {
             let Some((_, action)) = plan.pop_front() else { break };
-            if let Err(stop) = execute(s, action, progress.as_mut()).await {
+            if let Err(stop) = execute(s, action, progress.as_mut(), cp.as_mut()).await {
                 return end(s, stop).await;
             }
         }
         if let Some(stop) = ends.check(s, rec, &clock, now).await {
             return stop;
         }
-        if !landing_sent && progress.as_ref().is_some_and(|p| p.borrow().finished) {
+        let pilots = (progress.as_ref(), cp.as_ref());
+        let finished = match pilot_news(s, rec, pilots, landing_sent, &mut cp_mode_try).await {
+            Ok(f) => f,
+            Err(stop) => return stop,
+        };
+        if !landing_sent && finished {
             landing_sent = true;
             if let Err(e) = s
                 .command(
@@ -151,6 +155,35 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
             _ = tokio::time::sleep(clock.wall(TICK)) => {}
         }
     }
+}
+
+/// Whether the pilot (offboard or Collision Prevention) reached every waypoint. A Collision Prevention pilot
+/// that gave up ends the flight as a timeout (landing it); a failsafe that took its vehicle out of Position
+/// mode is undone.
+async fn pilot_news(
+    s: &mut Session<'_>,
+    rec: &mut Recorder,
+    pilots: (Option<&watch::Receiver<Progress>>, Option<&watch::Receiver<CpProgress>>),
+    landing_sent: bool,
+    mode_try: &mut Option<Duration>,
+) -> Result<bool, Stop> {
+    let cp = match pilots {
+        (_, Some(cp)) => cp,
+        (offboard, None) => return Ok(offboard.is_some_and(|p| p.borrow().finished)),
+    };
+    let (stuck, finished, streaming) = {
+        let c = cp.borrow();
+        (c.stuck.clone(), c.finished, c.streaming)
+    };
+    if let Some(why) = stuck {
+        let stop = end(s, Stop::new(Status::Timeout, why)).await;
+        see_it_land(s, rec).await;
+        return Err(stop);
+    }
+    if streaming && !landing_sent && !finished {
+        s.keep_position_mode(mode_try).await;
+    }
+    Ok(finished)
 }
 
 /// Starts the offboard pilot over the mission's goals; its progress says when to switch modes and land.
@@ -226,7 +259,11 @@ async fn execute(
     s: &mut Session<'_>,
     action: Action,
     progress: Option<&mut watch::Receiver<Progress>>,
+    cp: Option<&mut watch::Receiver<CpProgress>>,
 ) -> Result<(), Stop> {
+    if let (Action::Start, Some(cp)) = (&action, cp) {
+        return s.start_position_mode(cp).await;
+    }
     let nan = f32::NAN;
     match (action, s.opts.mode) {
         (Action::Start, FlyMode::Offboard) => {

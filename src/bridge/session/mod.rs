@@ -7,6 +7,7 @@ pub mod anchor;
 pub mod capability;
 pub mod clock_watch;
 pub mod context;
+pub mod cp_setup;
 pub mod flight;
 pub mod gazebo;
 pub mod identify;

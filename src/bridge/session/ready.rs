@@ -111,7 +111,7 @@ impl ReadyState {
 
 /// The flight starts with the mission (first action Start, not offboard): switch to AUTO.MISSION first.
 pub fn starts_mission(s: &Session<'_>) -> bool {
-    s.opts.mode != FlyMode::Offboard
+    matches!(s.opts.mode, FlyMode::Avoidance | FlyMode::Mission)
         && schedule(&s.test.commands, &mut Vec::new())
             .front()
             .is_some_and(|(_, a)| *a == Action::Start)

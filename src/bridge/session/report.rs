@@ -122,6 +122,9 @@ pub struct FlightReport {
     pub companion_timing: Option<TimingReport>,
     /// The vehicle's MPC_XY_CRUISE the planner used, m/s (`null`: not read, PX4's default 5 m/s).
     pub planner_cruise_m_s: Option<f64>,
+    /// Collision Prevention flights: `CP_DIST` and whether the vehicle came inside it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collision_prevention: Option<crate::judge::cp_verdict::CpVerdict>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -205,6 +208,7 @@ impl FlightReport {
             clock: end.clock,
             companion_timing: end.companion_timing,
             planner_cruise_m_s: end.planner_cruise_m_s,
+            collision_prevention: None,
             samples: trajectory.samples.len(),
             trajectory,
         }

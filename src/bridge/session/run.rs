@@ -131,7 +131,10 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
     let reason = (stop.status != Status::Landed).then_some(reason);
     let vehicle_messages = s.messages.lock().map(|m| m.clone()).unwrap_or_default();
     let opts = s.opts;
-    FlightReport::judge(
+    let cp_dist = (opts.mode == crate::bridge::FlyMode::CollisionPrevention)
+        .then(|| crate::lfs::cp_params::CpParams::from_params(&s.test.params).ok())
+        .flatten();
+    let mut report = FlightReport::judge(
         trajectory,
         &s.test.obstacles,
         Ending {
@@ -151,7 +154,10 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
             companion_timing: s.companion.timing.report(),
             planner_cruise_m_s: s.mpc_xy_cruise_m_s,
         },
-    )
+    );
+    report.collision_prevention =
+        cp_dist.map(|c| crate::judge::cp_verdict::cp_verdict(&report.trajectory, &s.test.obstacles, c.dist_m));
+    report
 }
 
 /// Our ground-station heartbeat at 1 Hz (vehicle time) for the whole session.

@@ -31,7 +31,11 @@ pub const POSITION_RATE_HZ: f64 = 50.0;
 impl Session<'_> {
     /// Everything before the first command of the flight.
     pub async fn prepare(&mut self) -> Result<(), Stop> {
-        self.set_params().await?;
+        let cp = match self.opts.mode {
+            FlyMode::CollisionPrevention => Some(self.check_collision_prevention().await?),
+            _ => None,
+        };
+        self.set_params(cp).await?;
         if self.opts.mode != FlyMode::Mission {
             // PX4-Avoidance plans with the vehicle's cruise speed (its waypoint speed and line-pull distance);
             // read after the case's parameters are set, since they may change it.
@@ -59,12 +63,18 @@ impl Session<'_> {
         ready::wait_ready(self, &mut st).await
     }
 
-    async fn set_params(&mut self) -> Result<(), Stop> {
+    async fn set_params(&mut self, cp: Option<crate::lfs::cp_params::CpParams>) -> Result<(), Stop> {
         let release = self.check_release()?;
         let case: Vec<(String, f64)> = self.test.params.iter().map(|p| (p.name.clone(), p.value)).collect();
         let mut interface = release.map(|r| r.avoidance_interface);
         loop {
-            let (wanted, skipped) = capability::wanted_params(&case, self.opts.mode, interface);
+            let (mut wanted, skipped) = capability::wanted_params(&case, self.opts.mode, interface);
+            if let Some(cp) = cp {
+                // Collision Prevention's own values replace the case study's, which may name them too.
+                let own = cp.to_params();
+                wanted.retain(|(n, _)| !own.iter().any(|(o, _)| o == n));
+                wanted.extend(own);
+            }
             if !skipped.is_empty() {
                 let version = self.px4_version.as_ref().map(|v| v.text.clone());
                 self.warnings

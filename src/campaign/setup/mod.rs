@@ -10,6 +10,7 @@ use super::config::{CampaignConfig, CampaignError, Px4Backend, check_counts};
 use super::fly::mock_profile::MockProfile;
 use super::settings::{Requested, check_ranges};
 use crate::bridge::FlyMode;
+use crate::generator::{Family, GeneratorConfig};
 use crate::judge::Judge;
 
 /// Ensemble members ranking the shortlist when the vehicles are MAVLink ones (an ensemble costs more CPU than
@@ -69,7 +70,7 @@ pub fn build(ask: &Ask, req: &Requested) -> CampaignConfig {
         candidates: s.screening.candidates.unwrap_or(ask.budget.saturating_mul(3).max(20)),
         threshold_m: s.screening.threshold_m(),
         max_iou: s.screening.max_iou(),
-        generator: req.generator.clone(),
+        generator: generator_for(&ask.mode, &req.generator),
         old_spelling: s.output.spelling() == "old",
         ensemble: s.screening.ensemble.unwrap_or(if mock { 0 } else { LINK_ENSEMBLE }),
         hfs,
@@ -99,6 +100,15 @@ pub fn build(ask: &Ask, req: &Requested) -> CampaignConfig {
         jobs: ask.jobs,
         px4: ask.px4.clone(),
     }
+}
+
+/// The generator's settings for `mode`: Collision Prevention draws gates unless another family was asked for.
+fn generator_for(mode: &str, asked: &GeneratorConfig) -> GeneratorConfig {
+    let mut g = asked.clone();
+    if mode == "collision-prevention" && g.family == Family::Paper {
+        g.family = Family::Gate;
+    }
+    g
 }
 
 /// Checks a new campaign before anything is drawn: its counts, every setting, its vehicles and its prior.

@@ -19,7 +19,9 @@ use prgenuav::campaign::fly::vehicle::Vehicle;
 use prgenuav::campaign::report::outputs::Report;
 use prgenuav::campaign::report::user_report;
 use prgenuav::campaign::run::run_campaign;
+use prgenuav::campaign::screen::cp_screener::CpScreener;
 use prgenuav::campaign::screen::lfs_screener::LfsScreener;
+use prgenuav::campaign::screen::screener::Screener;
 use prgenuav::campaign::setup::fleet;
 use prgenuav::lfs::ensemble::EnsembleParams;
 use prgenuav::lfs::sim::SimConfig;
@@ -110,7 +112,12 @@ pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
         },
         ensemble: EnsembleParams::default(),
     };
-    let report = run_campaign(cfg, &plan.folder, &screener, vehicles, &progress, &stop)?;
+    let cp_screener = CpScreener { judge: cfg.judge };
+    let screener: &dyn Screener = match parse_stored::<Mode>(&cfg.mode, "mode")? {
+        Mode::CollisionPrevention => &cp_screener,
+        _ => &screener,
+    };
+    let report = run_campaign(cfg, &plan.folder, screener, vehicles, &progress, &stop)?;
     print_summary(&report, &plan, args.json)?;
     let unspent = cfg.budget.saturating_sub(report.suite.flown);
     if unspent > 0 && !stop.load(Ordering::SeqCst) {

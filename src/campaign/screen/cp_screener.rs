@@ -1,0 +1,69 @@
+//! The screener of a Collision Prevention campaign: one flight of the Collision Prevention LFS model
+//! ([`crate::lfs::cp_model`]) per candidate, with the case's CP parameters. It is deterministic (no wind, no
+//! perturbation), so it has no ensemble.
+
+use crate::campaign::screen::lfs_screener::NO_PREDICTION_M;
+use crate::campaign::screen::screener::Screener;
+use crate::judge::Judge;
+use crate::lfs::cp_model::{CpEnd, CpSimConfig, simulate_cp};
+use crate::lfs::cp_params::CpParams;
+use crate::model::{TestCase, Trajectory};
+
+/// Screens candidates with [`simulate_cp`].
+#[derive(Debug, Clone, Default)]
+pub struct CpScreener {
+    /// The judge edition of the predicted distance.
+    pub judge: Judge,
+}
+
+impl CpScreener {
+    fn config(&self) -> CpSimConfig {
+        CpSimConfig {
+            judge: self.judge,
+            ..CpSimConfig::default()
+        }
+    }
+}
+
+impl Screener for CpScreener {
+    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+        let cfg = self.config();
+        let cp = match CpParams::from_params(&test.params) {
+            Ok(cp) => cp,
+            Err(e) => return (NO_PREDICTION_M, cfg.timeout_s, format!("error: {e}")),
+        };
+        let p = simulate_cp(test, &cp, &cfg);
+        let d = p.min_distance.unwrap_or(NO_PREDICTION_M);
+        let (t, status) = match p.end {
+            CpEnd::Landed => (p.trajectory.duration_s(), "landed"),
+            // A pilot that gives up ends the flight early; rank it as the full timeout, as a flight that never lands.
+            CpEnd::Stuck(_) => (cfg.timeout_s, "timeout"),
+            CpEnd::Timeout => (cfg.timeout_s, "timeout"),
+        };
+        (d, t, status.into())
+    }
+
+    fn path(&self, test: &TestCase) -> Option<Trajectory> {
+        let cp = CpParams::from_params(&test.params).ok()?;
+        Some(simulate_cp(test, &cp, &self.config()).trajectory)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Obstacle;
+
+    #[test]
+    fn predicts_a_distance_for_boxes_and_none_without() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml");
+        let mut t = TestCase::load(&path).unwrap();
+        t.obstacles.clear();
+        let (d, time, status) = CpScreener::default().screen(&t);
+        assert_eq!((d, status.as_str()), (NO_PREDICTION_M, "landed"));
+        assert!(time > 10.0 && time < 200.0, "{time}");
+        t.obstacles = vec![Obstacle::new(2.0, 2.0, 20.0, -3.0, 27.0, 0.0)];
+        let (d, _, _) = CpScreener::default().screen(&t);
+        assert!(d < 10.0, "{d}");
+    }
+}
