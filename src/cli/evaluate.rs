@@ -7,7 +7,7 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, MAX_RUNS, evaluate_by_flying};
+use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, evaluate_by_flying};
 use prgenuav::campaign::evaluation::report;
 use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
 use prgenuav::campaign::fly::mock_profile::{DEFAULT_PROFILE, MockProfile};
@@ -16,10 +16,13 @@ use prgenuav::campaign::run::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS};
 use prgenuav::campaign::store::journal::FlightRecord;
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::model::Spelling;
+use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 
+use super::generate::jobs::{AtOnce, split};
 use super::generate::plan::{CONNECT_TIMEOUT_S, FLIGHT_TIMEOUT_S, MOCK_SPEED, Plan};
 use super::generate::px4::Px4Flags;
 use super::generate::vehicles;
+use super::limits;
 use super::values::{JudgeEdition, Mode, name_of};
 
 /// Arguments of `evaluate`.
@@ -44,8 +47,8 @@ pub struct Args {
     /// Fly each test as a job of an existing engine (as `generate --runner`, docs/runners.md).
     #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
     runner: Option<String>,
-    /// Runner jobs at once (with --runner).
-    #[arg(long, value_name = "N")]
+    /// Flights at once: embedded mocks (default one per core), --px4 instances or --runner jobs (default 1).
+    #[arg(short, long, value_name = "N")]
     jobs: Option<usize>,
     #[command(flatten)]
     px4: Px4Flags,
@@ -73,9 +76,10 @@ pub struct Args {
 /// else `generate`'s defaults; the flags given here override the backend.
 fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
     let stored = args.folder.join("campaign.json");
-    let mut cfg = if stored.is_file() {
-        let text = std::fs::read_to_string(&stored).with_context(|| format!("reading {}", stored.display()))?;
-        serde_json::from_str::<CampaignConfig>(&text)
+    // A link or a folder in its place is refused by the reader, naming it, rather than passed over.
+    let mut cfg = if std::fs::symlink_metadata(&stored).is_ok() {
+        let bytes = read_capped_no_follow(&stored, MAX_READ_BYTES)?;
+        serde_json::from_slice::<CampaignConfig>(&bytes)
             .with_context(|| format!("{}: not a campaign", stored.display()))?
     } else {
         defaults(args)
@@ -144,9 +148,6 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
     let Some(text) = &cfg.runner else {
         return Ok(None);
     };
-    if args.jobs == Some(0) {
-        bail!("--jobs must be at least 1");
-    }
     Ok(Some(RunnerSettings {
         template: Template::parse(text).map_err(anyhow::Error::msg)?,
         timeout: std::time::Duration::from_secs_f64(DEFAULT_JOB_TIMEOUT_S),
@@ -158,19 +159,35 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
 
 /// The numbers given, checked before any vehicle starts.
 fn check(args: &Args) -> anyhow::Result<()> {
-    if !(1..=MAX_RUNS).contains(&args.runs) {
-        bail!("--runs {}: expected 1 to {MAX_RUNS} flights per test", args.runs);
-    }
-    if !(args.similar_below.is_finite() && args.similar_below >= 0.0) {
-        bail!(
-            "--similar-below {}: expected a distance of 0 metres or more",
-            args.similar_below
-        );
-    }
+    limits::EVALUATE_RUNS.check(args.runs as f64)?;
+    limits::SIMILAR_BELOW.check(args.similar_below)?;
     if args.top == Some(0) {
-        bail!("--top must be at least 1");
+        bail!("--top 0 is out of range: 1 or more tests");
     }
     Ok(())
+}
+
+/// `--jobs` given to the backend that flies, as `generate` does, within what this machine runs.
+fn at_once(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<AtOnce> {
+    let at_once = split(cfg, args.jobs, args.mock_vehicles, args.px4.instances)?;
+    if let Some(n) = at_once.mock_vehicles {
+        let name = if args.mock_vehicles.is_some() {
+            "--mock-vehicles"
+        } else {
+            "--jobs on the embedded mocks"
+        };
+        let why = format!("{} per core of this machine", limits::MOCKS_PER_CORE);
+        limits::count(name, n, limits::max_mock_vehicles(), &why)?;
+    }
+    if let Some(n) = at_once.runner_jobs {
+        limits::count(
+            "--jobs",
+            n,
+            limits::MAX_JOBS,
+            "each job is a thread and a local process",
+        )?;
+    }
+    Ok(at_once)
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -179,14 +196,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if cfg.runner.is_some() && cfg.px4.is_some() {
         bail!("--runner and --px4 are two ways to fly: give one");
     }
+    args.px4.check(&cfg)?;
+    let at_once = at_once(&cfg, &args)?;
     let plan = Plan {
         runner: runner(&cfg, &args)?,
         cfg,
         folder: args.folder.clone(),
-        mock_vehicles: args.mock_vehicles,
+        mock_vehicles: at_once.mock_vehicles,
         connect_timeout_s: CONNECT_TIMEOUT_S,
-        jobs: args.jobs,
-        px4_instances: args.px4.instances,
+        jobs: at_once.runner_jobs,
+        px4_instances: at_once.px4_instances,
     };
     let (runtime, stop) = super::generate::runtime_stopped_by_signals()?;
     let mut fleet = vehicles(&plan, &runtime)?;

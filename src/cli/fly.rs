@@ -149,11 +149,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     print_anchoring(&report);
     if args.json {
-        super::print_json(&report)?;
+        super::print_json(&FlyJson {
+            report: &report,
+            lfs_motion_model: prediction.as_ref().map(|_| PREDICTION_MOTION.model().name()),
+        })?;
     } else {
         print_text(&report);
     }
     Ok(exit_code(&report))
+}
+
+/// `fly --json`: the flight's report and the motion model of the LFS prediction beside it.
+#[derive(serde::Serialize)]
+struct FlyJson<'a> {
+    #[serde(flatten)]
+    report: &'a FlightReport,
+    /// `null` when there is no prediction (`--no-predict`, or it failed).
+    lfs_motion_model: Option<&'static str>,
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
@@ -209,7 +221,12 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
         judge: args.judge.into(),
         anchor_at_vehicle_home: args.anchor_at_vehicle_home,
         ready_timeout_s: limits::FLY_READY_TIMEOUT.check(args.ready_timeout)?,
-        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
+        // Quiet or not, a listener: the vehicle is asked for its version, which the report names.
+        notices: Some(if args.quiet {
+            NoticeSink::new(|_| {})
+        } else {
+            NoticeSink::new(|n| eprintln!("{n}"))
+        }),
         ..FlyOptions::default()
     };
     opts.validate()?;
@@ -275,6 +292,9 @@ fn print_text(report: &FlightReport) {
             report.frame,
             super::wording::words(&format!("{src:?}"))
         );
+    }
+    if let Some(v) = &report.vehicle {
+        println!("vehicle           {v}");
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
     println!(

@@ -6,6 +6,7 @@
 use std::time::Duration;
 
 use anyhow::bail;
+use prgenuav::campaign::evaluation::flying::MAX_RUNS;
 use prgenuav::campaign::screen::parallel::available_threads;
 
 /// One setting's accepted values, `min..=max` (`open_min`: `min` itself excluded).
@@ -63,6 +64,9 @@ pub const CONFIRM: Limit = limit("--confirm (flight.confirm)", 1.0, 20.0, "fligh
 pub const FLY_TIMEOUT: Limit = above("fly --timeout", 0.0, 86_400.0, "s");
 pub const FLY_TIME_SCALE: Limit = above("fly --time-scale", 0.0, MAX_TIME_SCALE, "x wall time");
 pub const FLY_READY_TIMEOUT: Limit = above("fly --ready-timeout", 0.0, 3600.0, "s");
+/// DTW sums metres over the alignment: two different tests' averages lie some thousands of metres apart.
+pub const SIMILAR_BELOW: Limit = limit("evaluate/score --similar-below", 0.0, 1e6, "m");
+pub const EVALUATE_RUNS: Limit = limit("evaluate --runs", 1.0, MAX_RUNS as f64, "flights per test");
 
 /// The table docs/cli.md shows, beside the counts and ranges checked elsewhere (listed in [`render`]).
 #[cfg(test)]
@@ -79,6 +83,8 @@ pub const TABLE: &[Limit] = &[
     FLY_TIMEOUT,
     FLY_TIME_SCALE,
     FLY_READY_TIMEOUT,
+    SIMILAR_BELOW,
+    EVALUATE_RUNS,
 ];
 
 impl Limit {

@@ -314,7 +314,27 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
         a.extend(extra.iter().map(|s| s.to_string()));
         a
     };
+    let suite = tempfile::tempdir().unwrap();
+    let folder = suite.path().to_str().unwrap();
+    let on_suite = |command: &str, extra: &[&'static str]| {
+        let mut a = vec![command.to_string(), folder.to_string()];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let evaluate = |extra: &[&'static str]| on_suite("evaluate", extra);
     let cases: Vec<(Vec<String>, &str)> = vec![
+        (evaluate(&["--runs", "0"]), "--runs"),
+        (evaluate(&["--runs", "21"]), "--runs"),
+        (evaluate(&["--top", "0"]), "--top"),
+        (evaluate(&["--jobs", "0"]), "--jobs"),
+        (evaluate(&["--jobs", "100000"]), "--jobs on the embedded mocks"),
+        (
+            evaluate(&["--runner", "true {test}", "--jobs", "100000000"]),
+            "1 to 1024",
+        ),
+        (evaluate(&["--similar-below", "-1"]), "--similar-below"),
+        (evaluate(&["--similar-below", "1e300"]), "--similar-below"),
+        (on_suite("score", &["--similar-below", "nan"]), "--similar-below"),
         (generate(&["--mock-speed", "1e300"]), "--mock-speed"),
         (generate(&["--mock-speed", "0.5"]), "--mock-speed"),
         (generate(&["--connect-time-scale", "1e300"]), "--connect-time-scale"),
@@ -350,6 +370,11 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
         );
     }
     assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "no campaign folder");
+    assert_eq!(
+        std::fs::read_dir(suite.path()).unwrap().count(),
+        0,
+        "no evaluation folder"
+    );
 }
 
 #[test]

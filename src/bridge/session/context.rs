@@ -89,6 +89,8 @@ pub struct Session<'a> {
     pub mpc_xy_cruise_m_s: Option<f64>,
     /// Readiness timing and the arming budget.
     pub ready: Readiness,
+    /// Who answered.
+    pub identity: super::identify::VehicleIdentity,
 }
 
 /// Readiness as timed for the report and the arming budget.

@@ -8,6 +8,7 @@ use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
 use super::clock_watch::ClockReport;
+use super::identify::VehicleIdentity;
 use super::placement::Placement;
 use crate::bridge::companion::frame::{FRAME_NAME, FrameSource, TestFrame};
 use crate::bridge::companion::timing::TimingReport;
@@ -122,6 +123,8 @@ pub struct FlightReport {
     pub companion_timing: Option<TimingReport>,
     /// The vehicle's MPC_XY_CRUISE the planner used, m/s (`null`: not read, PX4's default 5 m/s).
     pub planner_cruise_m_s: Option<f64>,
+    /// The vehicle that flew, as it identified itself (`null`: none answered).
+    pub vehicle: Option<VehicleIdentity>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -162,6 +165,8 @@ pub struct Ending {
     pub companion_timing: Option<TimingReport>,
     /// The planner's cruise speed as read from the vehicle.
     pub planner_cruise_m_s: Option<f64>,
+    /// Who flew.
+    pub vehicle: Option<VehicleIdentity>,
 }
 
 impl FlightReport {
@@ -205,6 +210,7 @@ impl FlightReport {
             clock: end.clock,
             companion_timing: end.companion_timing,
             planner_cruise_m_s: end.planner_cruise_m_s,
+            vehicle: end.vehicle,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -247,6 +253,7 @@ mod tests {
             clock: None,
             companion_timing: None,
             planner_cruise_m_s: None,
+            vehicle: None,
         }
     }
 

@@ -70,12 +70,13 @@ async fn connect<'a>(
     let texts_rx = link.subscribe();
     let (target, heartbeat) = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
     link.lock(target.system);
-    // Only a live listener (the `fly` CLI) is told: a campaign's flights do not spend the wait.
+    // Its own receiver: the session's keeps every message the vehicle sends meanwhile. Only a live listener
+    // (the `fly` CLI) has the version asked for: a campaign's flights do not spend the wait.
+    let mut answers = link.subscribe();
+    let ask = opts.notices.is_some();
+    let identity = super::identify::identify(&link, &mut answers, target, &heartbeat, &cancel, ask).await;
     if let Some(sink) = &opts.notices {
-        // Its own receiver: the session's keeps every message the vehicle sends meanwhile.
-        let mut answers = link.subscribe();
-        let who = super::identify::describe(&link, &mut answers, target, &heartbeat, &cancel).await;
-        (sink.0)(&crate::bridge::wire::notices::Notice::Answered(who));
+        (sink.0)(&crate::bridge::wire::notices::Notice::Answered(identity.to_string()));
     }
     let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
     let messages = crate::bridge::wire::notices::Messages::default();
@@ -103,6 +104,7 @@ async fn connect<'a>(
         messages,
         mpc_xy_cruise_m_s: None,
         ready: Readiness::default(),
+        identity,
     };
     Ok((s, clock_report))
 }
@@ -148,6 +150,7 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
             clock,
             companion_timing: s.companion.timing.report(),
             planner_cruise_m_s: s.mpc_xy_cruise_m_s,
+            vehicle: Some(s.identity.clone()),
         },
     )
 }

@@ -23,7 +23,7 @@ pub fn split(
     instances: Option<usize>,
 ) -> anyhow::Result<AtOnce> {
     if jobs == Some(0) {
-        bail!("--jobs must be at least 1");
+        bail!("--jobs 0 is out of range: 1 or more");
     }
     let agree = |own: Option<usize>, name: &str| -> anyhow::Result<Option<usize>> {
         match (jobs, own) {

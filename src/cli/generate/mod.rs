@@ -2,7 +2,7 @@
 //! usually run with; the expert knobs are keys of the campaign TOML (`--config`) and hidden flags, both listed
 //! in docs/cli.md.
 
-mod jobs;
+pub(super) mod jobs;
 mod overlay;
 pub(super) mod plan;
 pub(super) mod px4;
