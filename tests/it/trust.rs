@@ -445,7 +445,21 @@ fn a_campaign_stores_its_case_absolute_and_another_spelling_of_it_is_no_conflict
     let (code, _, stderr) = prgenuav(&["generate", "./missions/mission2.yaml", "--resume", f, "--quiet"]);
     assert_eq!(code, 0, "the same file under another spelling: {stderr}");
     assert!(
-        stderr.contains("resuming as") && stderr.contains("budget 2"),
+        !stderr.contains("resuming as"),
+        "unchanged settings are not shown: {stderr}"
+    );
+    // Changed by hand since the first run: the resume names what changed, with both values.
+    let path = folder.join("campaign.json");
+    let mut edited = stored.clone();
+    edited["budget"] = 1.into();
+    edited["max_iou"] = 0.25.into();
+    std::fs::write(&path, serde_json::to_string_pretty(&edited).unwrap()).unwrap();
+    let (code, _, stderr) = prgenuav(&["generate", "--resume", f, "--quiet"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("campaign.json differs from what the campaign's first run wrote")
+            && stderr.contains("budget 2 -> 1; max_iou 0.5 -> 0.25")
+            && stderr.contains("resuming as"),
         "{stderr}"
     );
 }

@@ -8,6 +8,7 @@ pub(super) mod plan;
 pub(super) mod px4;
 mod resume;
 mod runner;
+mod stored_changes;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
