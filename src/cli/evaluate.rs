@@ -47,6 +47,10 @@ pub struct Args {
     /// Fly each test as a job of an existing engine (as `generate --runner`, docs/runners.md).
     #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
     runner: Option<String>,
+    /// With --runner: the command that cancels a job in its engine when stopped or timed out, with {id}
+    /// (as `generate --runner-cancel`).
+    #[arg(long, value_name = "COMMAND", requires = "runner")]
+    runner_cancel: Option<String>,
     /// Flights at once: embedded mocks (default one per core), --px4 instances or --runner jobs (default 1).
     #[arg(short, long, value_name = "N")]
     jobs: Option<usize>,
@@ -154,6 +158,12 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
         judge: cfg.judge,
         spelling: if cfg.old_spelling { Spelling::Old } else { Spelling::New },
         campaign_folder: args.folder.join(prgenuav::campaign::evaluation::flying::EVALUATION_DIR),
+        cancel: args
+            .runner_cancel
+            .as_deref()
+            .map(Template::parse_cancel)
+            .transpose()
+            .map_err(anyhow::Error::msg)?,
     }))
 }
 

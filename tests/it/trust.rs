@@ -332,7 +332,7 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
             evaluate(&["--runner", "true {test}", "--jobs", "100000000"]),
             "1 to 1024",
         ),
-        (evaluate(&["--similar-below", "-1"]), "--similar-below"),
+        (evaluate(&["--similar-below=-1"]), "--similar-below"),
         (evaluate(&["--similar-below", "1e300"]), "--similar-below"),
         (on_suite("score", &["--similar-below", "nan"]), "--similar-below"),
         (generate(&["--mock-speed", "1e300"]), "--mock-speed"),

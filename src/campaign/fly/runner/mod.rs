@@ -3,6 +3,7 @@
 //! `kubectl` Job, ...), and what the job left read back and judged here. A failed job is retried once; a flight
 //! whose retry fails too is journaled `backend_failed` (not charged to the budget) and the campaign goes on.
 
+pub mod cancel;
 pub mod job;
 pub mod leftovers;
 pub mod process;
@@ -43,6 +44,8 @@ pub struct RunnerSettings {
     pub spelling: Spelling,
     /// The campaign folder; jobs go to its `jobs/`.
     pub campaign_folder: PathBuf,
+    /// Cancels a stopped or timed-out job in its engine (`--runner-cancel`).
+    pub cancel: Option<Template>,
 }
 
 /// One job slot: `--jobs N` of them run at most N jobs at once.
@@ -98,12 +101,22 @@ impl RunnerVehicle {
             Ok(r) => r,
             Err(e) => return Attempt::Failed(format!("cannot start `sh -c {command}`: {e}")),
         };
+        // A job the engine still holds is cancelled there too, when the template says how.
+        let in_engine = || {
+            s.cancel
+                .as_ref()
+                .map(|c| format!("; {}", cancel::cancel_job(c, &folder.test, &folder.dir, &id)))
+                .unwrap_or_default()
+        };
         let code = match ran.ended {
-            Ended::Cancelled => return Attempt::Flew(stopped()),
+            Ended::Cancelled => {
+                return Attempt::Flew(Flown::unflown("aborted", format!("the job was stopped{}", in_engine())));
+            }
             Ended::TimedOut => {
                 return Attempt::Failed(format!(
-                    "timed out after {:.0} s (--job-timeout), killed{}",
+                    "timed out after {:.0} s (--job-timeout), killed{}{}",
                     s.timeout.as_secs_f64(),
+                    in_engine(),
                     tail(&stderr)
                 ));
             }
