@@ -289,6 +289,56 @@ fn sigterm_stops_a_runner_job_and_the_grandchild_it_detached() {
 }
 
 #[test]
+fn sigterm_cancels_the_jobs_an_engine_holds_with_the_runner_cancel_command() {
+    let out = tempfile::tempdir().unwrap();
+    let queue = tempfile::tempdir().unwrap();
+    let q = queue.path().display();
+    // A stand-in engine: the job it holds is no process of the campaign's (no job marker, its own session),
+    // as a Slurm or Kubernetes job is not; only its cancel command, by `{id}`, ends it.
+    let runner = format!(
+        "env -u PRGENUAV_JOB_DIR setsid sh -c 'echo $$ > {q}/{{id}}.pid; exec sleep 300' </dev/null >/dev/null \
+         2>&1 & sleep 300 # {{test}}"
+    );
+    let cancel = format!("kill $(cat {q}/{{id}}.pid)");
+    let args = ["--runner", &runner, "--jobs", "2", "--runner-cancel", &cancel];
+    let (mut child, folder) = start_flying(out.path(), &args);
+    let t0 = Instant::now();
+    while std::fs::read_dir(queue.path()).unwrap().count() < 2 {
+        assert!(t0.elapsed() < Duration::from_secs(30), "no job started");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "TERM");
+    let (code, took) = wait_bounded(&mut child, Duration::from_secs(30));
+    assert_eq!(code, Some(1));
+    std::thread::sleep(Duration::from_millis(200));
+    let mut survivors = Vec::new();
+    for entry in std::fs::read_dir(queue.path()).unwrap().flatten() {
+        let pid: i32 = std::fs::read_to_string(entry.path()).unwrap().trim().parse().unwrap();
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        if !stat.is_empty() && !stat.contains(") Z ") {
+            // SAFETY: kill(2) on the stand-in job this test started.
+            unsafe { libc::kill(pid, libc::SIGKILL) };
+            survivors.push(entry.path());
+        }
+    }
+    assert!(
+        survivors.is_empty(),
+        "jobs the engine held survived the stop: {survivors:?}"
+    );
+    assert!(took < Duration::from_secs(20), "stopped in {took:?}");
+    let reasons: Vec<String> = journal_lines(&folder)
+        .iter()
+        .filter(|r| r["status"] == "interrupted")
+        .map(|r| r["reason"].to_string())
+        .collect();
+    assert!(
+        reasons.iter().any(|r| r.contains("asked the engine to cancel it")),
+        "{reasons:?}"
+    );
+}
+
+#[test]
 fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
     let out = tempfile::tempdir().unwrap();
     let o = out.path().to_str().unwrap();
