@@ -288,6 +288,7 @@ fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
         assert!(t1.elapsed() < Duration::from_secs(30), "the campaign did not stop");
         std::thread::sleep(Duration::from_millis(100));
     }
+    let stopped = t1.elapsed();
     // scancel returns before Slurm has ended the job: give it a few seconds.
     let t2 = Instant::now();
     let mut left = queued(&conf);
@@ -308,7 +309,7 @@ fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
     println!(
         "{} job(s) cancelled in Slurm; the campaign stopped {:.1} s after SIGTERM, the queue was empty {:.1} s later",
         held.len(),
-        t1.elapsed().as_secs_f64(),
+        stopped.as_secs_f64(),
         t2.elapsed().as_secs_f64()
     );
 }
