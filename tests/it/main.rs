@@ -7,6 +7,7 @@ mod campaign_folder;
 mod cli_errors;
 mod documented;
 mod evaluate;
+mod flood;
 mod frame;
 mod generator;
 mod geometry_props;

@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU8, AtomicU32, Ordering};
 
 use mavlink::dialects::common::MavMessage;
-use mavlink::{MavHeader, MavlinkVersion, MavlinkReader};
+use mavlink::{MavHeader, MavlinkReader, MavlinkVersion};
 use tokio::net::UdpSocket;
 
 use super::link::{BoxFuture, Transport};
