@@ -58,11 +58,13 @@ fn other_system(k: u64) -> Vec<u8> {
 }
 
 /// Floods `port` until `stop`: mostly garbage (MAVLink start bytes among random ones), every fourth datagram
-/// another system's valid message. Returns the datagrams sent.
-fn flood(port: u16, stop: Arc<AtomicBool>) -> std::thread::JoinHandle<u64> {
+/// another system's valid message. Returns the datagrams sent and those the bridge sent back to the flooder.
+fn flood(port: u16, stop: Arc<AtomicBool>) -> std::thread::JoinHandle<(u64, u64)> {
     std::thread::spawn(move || {
         let socket = std::net::UdpSocket::bind("127.0.0.1:0").expect("bind");
-        let (mut sent, mut x) = (0u64, 0x2545_f491_4f6c_dd1du64);
+        socket.set_nonblocking(true).expect("non-blocking");
+        let (mut sent, mut answered, mut x) = (0u64, 0u64, 0x2545_f491_4f6c_dd1du64);
+        let mut buf = [0u8; 2048];
         while !stop.load(Ordering::Relaxed) {
             for _ in 0..BURST {
                 let datagram = if sent % 4 == 3 {
@@ -79,9 +81,12 @@ fn flood(port: u16, stop: Arc<AtomicBool>) -> std::thread::JoinHandle<u64> {
                 let _ = socket.send_to(&datagram, ("127.0.0.1", port));
                 sent += 1;
             }
+            while socket.recv_from(&mut buf).is_ok() {
+                answered += 1;
+            }
             std::thread::sleep(PAUSE);
         }
-        sent
+        (sent, answered)
     })
 }
 
@@ -130,12 +135,12 @@ async fn a_flight_on_a_flooded_udpin_port_completes() {
     let test = case(2).with_obstacles(valid_pair());
     let r = tokio::time::timeout(WALL_LIMIT, fly(&test, &opts, CancelToken::new())).await;
     stop.store(true, Ordering::Relaxed);
-    let sent = flooder.join().expect("flooder");
+    let (sent, answered) = flooder.join().expect("flooder");
     let grown_kb = rss_kb().saturating_sub(rss_before);
     drop(mock);
     let r = r.expect("the flight ends in bounded time").expect("a report");
     eprintln!(
-        "flooded flight: {:?} in {:.1} s wall, {sent} datagrams flooded, {} messages ignored, {} received, RSS grew \
+        "flooded flight: {:?} in {:.1} s wall, {sent} datagrams flooded ({answered} answered), {} messages ignored, {} received, RSS grew \
          {grown_kb} kB",
         r.status,
         t0.elapsed().as_secs_f64(),
@@ -148,6 +153,7 @@ async fn a_flight_on_a_flooded_udpin_port_completes() {
         "the flood reached the bridge: {:?}",
         r.link
     );
+    assert_eq!(answered, 0, "the bridge sent its commands to the flooder");
     assert!(grown_kb < 256 * 1024, "memory grew by {grown_kb} kB");
 }
 
@@ -165,9 +171,10 @@ async fn waiting_for_a_vehicle_on_a_flooded_port_ends_with_a_clear_error() {
     let t0 = Instant::now();
     let r = tokio::time::timeout(WALL_LIMIT, fly(&case(1), &opts, CancelToken::new())).await;
     stop.store(true, Ordering::Relaxed);
-    let sent = flooder.join().expect("flooder");
+    let (sent, answered) = flooder.join().expect("flooder");
     let e = r.expect("bounded").expect_err("no vehicle").to_string();
     assert!(e.contains("no autopilot heartbeat"), "{e}");
     assert!(t0.elapsed() < Duration::from_secs(15), "{:?}", t0.elapsed());
     assert!(sent > 1000, "{sent} datagrams");
+    assert_eq!(answered, 0, "nothing is sent before a vehicle spoke");
 }

@@ -2,7 +2,7 @@
 //! `udpin` replies to the sender of the last datagram, any datagram: a peer flooding the port with garbage or
 //! with another system's messages would carry every command to itself, and the vehicle would hear nothing. Here
 //! replies go to where the last valid message of the vehicle came from (the system the link locked onto; before
-//! that, any valid message's sender), and garbage moves nothing.
+//! that, an autopilot's heartbeat), and garbage or a ground station moves nothing.
 
 use std::collections::VecDeque;
 use std::io;
@@ -10,7 +10,7 @@ use std::net::SocketAddr;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU8, AtomicU32, Ordering};
 
-use mavlink::dialects::common::MavMessage;
+use mavlink::dialects::common::{MavAutopilot, MavMessage};
 use mavlink::{MavHeader, MavlinkReader, MavlinkVersion};
 use tokio::net::UdpSocket;
 
@@ -61,11 +61,21 @@ impl UdpInTransport {
             let (n, from) = self.socket.recv_from(&mut buf).await?;
             queue.extend(frames(&buf[..n]));
             let lock = self.locked.load(Ordering::Relaxed);
-            if queue.iter().any(|(h, _)| lock == 0 || u32::from(h.system_id) == lock) {
+            if queue.iter().any(|(h, m)| from_vehicle(h, m, lock)) {
                 *self.peer.lock().unwrap_or_else(|p| p.into_inner()) = Some(from);
             }
         }
         Ok(())
+    }
+}
+
+/// Whether a message is the vehicle's: from the system the link locked onto, or, before that, an autopilot's
+/// heartbeat (what the bridge waits for; a ground station's does not count).
+fn from_vehicle(header: &MavHeader, msg: &MavMessage, locked: u32) -> bool {
+    match (locked, msg) {
+        (0, MavMessage::HEARTBEAT(h)) => h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID,
+        (0, _) => false,
+        (system, _) => u32::from(header.system_id) == system,
     }
 }
 
