@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use prgenuav::generator::GeneratorConfig;
 use prgenuav::model::Range;
+use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped};
 use serde::{Deserialize, Serialize};
 
 use super::values::{Family, Motion, Spelling};
@@ -106,7 +106,12 @@ impl Loaded {
         let Some(path) = path else {
             return Ok(Self::default());
         };
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        // As every input: a regular file within the cap, never blocking on a FIFO or a device.
+        let bytes = read_capped(path, MAX_READ_BYTES)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let at = e.utf8_error().valid_up_to();
+            anyhow::anyhow!("{}: not UTF-8 text (invalid byte at offset {at})", path.display())
+        })?;
         Self::parse(&text, path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
     }
 

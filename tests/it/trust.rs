@@ -446,6 +446,90 @@ fn a_fifo_and_a_device_as_flights_are_refused_at_once() {
 }
 
 #[test]
+fn bad_inputs_are_refused_at_once_naming_the_file_and_the_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fifo = d.join("fifo.toml");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo(3) on a path we own; no memory is shared.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    std::fs::create_dir(d.join("folder.yaml")).unwrap();
+    std::fs::write(d.join("bytes.toml"), b"seed = \xff\n").unwrap();
+    let name = |f: &str| d.join(f).to_str().unwrap().to_string();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("fifo.toml"),
+            ],
+            "a FIFO",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                "/dev/zero".into(),
+            ],
+            "a device",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("folder.yaml"),
+            ],
+            "folder",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("bytes.toml"),
+            ],
+            "not UTF-8",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("gone.toml"),
+            ],
+            "No such file",
+        ),
+        (vec!["check".into(), name("gone.yaml")], "No such file"),
+        (vec!["check".into(), name("folder.yaml")], "folder"),
+        (vec!["simulate".into(), name("fifo.toml")], "a FIFO"),
+        (vec!["evaluate".into(), name("gone")], "No such file"),
+    ];
+    for (args, cause) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let t0 = Instant::now();
+        let (code, _, err) = prgenuav(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "{args:?} took {:?}",
+            t0.elapsed()
+        );
+        let file = args.last().unwrap();
+        assert!(err.contains(file) && err.contains(cause), "{args:?}: {err}");
+        assert_eq!(err.matches(cause).count(), 1, "the cause twice: {err}");
+        assert!(err.matches("os error").count() <= 1, "the cause twice: {err}");
+    }
+}
+
+#[test]
 fn ctrl_c_during_screening_exits_1_with_a_report_and_the_resume_command() {
     let out = tempfile::tempdir().unwrap();
     let o = out.path().to_str().unwrap();

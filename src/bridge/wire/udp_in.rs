@@ -75,7 +75,7 @@ fn from_vehicle(header: &MavHeader, msg: &MavMessage, locked: u32) -> bool {
     match (locked, msg) {
         (0, MavMessage::HEARTBEAT(h)) => h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID,
         (0, _) => false,
-        (system, _) => u32::from(header.system_id) == system,
+        (system, _) => header.system_id == system,
     }
 }
 
