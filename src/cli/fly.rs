@@ -148,15 +148,21 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
     print_anchoring(&report);
-    if args.json {
-        super::print_json(&FlyJson {
-            report: &report,
-            lfs_motion_model: prediction.as_ref().map(|_| PREDICTION_MOTION.model().name()),
-        })?;
-    } else {
-        print_text(&report);
-    }
+    print_report(&report, prediction.is_some(), args.json)?;
     Ok(exit_code(&report))
+}
+
+/// `--json`: the report with the prediction's motion model; otherwise the text.
+fn print_report(report: &FlightReport, predicted: bool, json: bool) -> anyhow::Result<()> {
+    if json {
+        let lfs_motion_model = predicted.then(|| PREDICTION_MOTION.model().name());
+        return super::print_json(&FlyJson {
+            report,
+            lfs_motion_model,
+        });
+    }
+    print_text(report);
+    Ok(())
 }
 
 /// `fly --json`: the flight's report and the motion model of the LFS prediction beside it.

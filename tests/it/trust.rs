@@ -453,7 +453,7 @@ fn bad_inputs_are_refused_at_once_naming_the_file_and_the_cause_once() {
     let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
     // SAFETY: mkfifo(3) on a path we own; no memory is shared.
     assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-    std::fs::create_dir(d.join("folder.yaml")).unwrap();
+    std::fs::create_dir(d.join("dir.yaml")).unwrap();
     std::fs::write(d.join("bytes.toml"), b"seed = \xff\n").unwrap();
     let name = |f: &str| d.join(f).to_str().unwrap().to_string();
     let cases: Vec<(Vec<String>, &str)> = vec![
@@ -483,9 +483,9 @@ fn bad_inputs_are_refused_at_once_naming_the_file_and_the_cause_once() {
                 "missions/mission2.yaml".into(),
                 "3".into(),
                 "--config".into(),
-                name("folder.yaml"),
+                name("dir.yaml"),
             ],
-            "folder",
+            "it is a folder",
         ),
         (
             vec![
@@ -508,7 +508,7 @@ fn bad_inputs_are_refused_at_once_naming_the_file_and_the_cause_once() {
             "No such file",
         ),
         (vec!["check".into(), name("gone.yaml")], "No such file"),
-        (vec!["check".into(), name("folder.yaml")], "folder"),
+        (vec!["check".into(), name("dir.yaml")], "it is a folder"),
         (vec!["simulate".into(), name("fifo.toml")], "a FIFO"),
         (vec!["evaluate".into(), name("gone")], "No such file"),
     ];

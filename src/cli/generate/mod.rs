@@ -71,7 +71,7 @@ pub struct Args {
     job_timeout: Option<f64>,
     /// With --runner: the command that cancels a job in its engine when the campaign stops or the job times
     /// out, with {id} (`scancel --name {id}`; docs/runners.md). Not stored: give it again with --resume.
-    #[arg(long, value_name = "COMMAND")]
+    #[arg(long, hide = true, value_name = "COMMAND")]
     runner_cancel: Option<String>,
     /// How the flights avoid the virtual obstacles.
     #[arg(long, hide = true, value_enum, default_value_t = Mode::Avoidance)]

@@ -8,8 +8,6 @@ use prgenuav::campaign::run::{CampaignConfig, FIRST_SETTINGS_FILE};
 use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 use serde_json::Value;
 
-use super::resume::show;
-
 /// Settings a resume may change by flag (`--jobs`): a difference there is the user's own.
 const MAY_CHANGE: [&str; 1] = ["jobs"];
 /// Differences named in full; beyond them, a count.
@@ -81,6 +79,17 @@ fn differences(prefix: &str, first: &Value, now: &Value, out: &mut Vec<String>) 
 fn is_range(v: &Value) -> bool {
     v.as_object()
         .is_some_and(|o| o.len() == 2 && o.contains_key("min") && o.contains_key("max"))
+}
+
+/// A value as typed: strings bare, lists comma-separated, ranges `MIN,MAX`.
+fn show(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.clone(),
+        Value::Null => "(none)".into(),
+        Value::Array(a) => a.iter().map(show).collect::<Vec<_>>().join(","),
+        Value::Object(o) if is_range(v) => format!("{},{}", show(&o["min"]), show(&o["max"])),
+        other => other.to_string(),
+    }
 }
 
 /// A value as typed, in backquotes when it holds spaces (a runner template).

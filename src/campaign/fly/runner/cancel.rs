@@ -18,6 +18,11 @@ pub const CANCEL_STDOUT: &str = "prgenuav-cancel.stdout";
 /// Its error output, beside it.
 pub const CANCEL_STDERR: &str = "prgenuav-cancel.stderr";
 
+/// `; ` and what [`cancel_job`] did, or nothing without a cancel command.
+pub fn note(template: Option<&Template>, test: &Path, dir: &Path, id: &str) -> String {
+    template.map_or_else(String::new, |t| format!("; {}", cancel_job(t, test, dir, id)))
+}
+
 /// Runs `template` for the job `id` flying `test` in `dir`; what it did, in words, for the flight's reason.
 pub fn cancel_job(template: &Template, test: &Path, dir: &Path, id: &str) -> String {
     let command = template.render(&test.to_string_lossy(), &dir.to_string_lossy(), id);

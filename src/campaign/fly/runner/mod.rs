@@ -102,22 +102,16 @@ impl RunnerVehicle {
             Err(e) => return Attempt::Failed(format!("cannot start `sh -c {command}`: {e}")),
         };
         // A job the engine still holds is cancelled there too, when the template says how.
-        let in_engine = || {
-            s.cancel
-                .as_ref()
-                .map(|c| format!("; {}", cancel::cancel_job(c, &folder.test, &folder.dir, &id)))
-                .unwrap_or_default()
-        };
+        let in_engine = || cancel::note(s.cancel.as_ref(), &folder.test, &folder.dir, &id);
         let code = match ran.ended {
             Ended::Cancelled => {
                 return Attempt::Flew(Flown::unflown("aborted", format!("the job was stopped{}", in_engine())));
             }
             Ended::TimedOut => {
+                let limit = s.timeout.as_secs_f64();
+                let (note, tail) = (in_engine(), tail(&stderr));
                 return Attempt::Failed(format!(
-                    "timed out after {:.0} s (--job-timeout), killed{}{}",
-                    s.timeout.as_secs_f64(),
-                    in_engine(),
-                    tail(&stderr)
+                    "timed out after {limit:.0} s (--job-timeout), killed{note}{tail}"
                 ));
             }
             Ended::Exited(code) => code,
