@@ -10,6 +10,7 @@ use super::session::run;
 use super::wire::cancel::CancelToken;
 use super::wire::clock;
 use super::wire::link::{self, Transport};
+use super::wire::udp_in::UdpInTransport;
 use super::wire::url::LinkAddress;
 use crate::model::TestCase;
 
@@ -20,7 +21,7 @@ pub async fn fly(test: &TestCase, opts: &FlyOptions, cancel: CancelToken) -> Res
     opts.validate()?;
     let address = LinkAddress::parse(&opts.connect)?.to_mavlink();
     let transport = open_with_retry(&address, opts, &cancel).await?;
-    fly_on(test, opts, Arc::new(transport), cancel).await
+    fly_on(test, opts, transport, cancel).await
 }
 
 /// Opens the link. A refused TCP connection (the simulator is still starting) and a UDP port still in use are
@@ -33,10 +34,10 @@ async fn open_with_retry(
     address: &str,
     opts: &FlyOptions,
     cancel: &CancelToken,
-) -> Result<link::MavTransport, BridgeError> {
+) -> Result<Arc<dyn Transport>, BridgeError> {
     let deadline = std::time::Instant::now() + clock::secs(opts.heartbeat_wait_s);
     loop {
-        match link::MavTransport::open(address).await {
+        match open(address).await {
             Ok(t) => return Ok(t),
             Err(e)
                 if matches!(
@@ -55,6 +56,15 @@ async fn open_with_retry(
             }
         }
     }
+}
+
+/// `udpin` on a socket that answers only the vehicle (a flood on the port cannot take its replies); any other
+/// address through rust-mavlink.
+async fn open(address: &str) -> std::io::Result<Arc<dyn Transport>> {
+    if let Some(host_port) = address.strip_prefix("udpin:") {
+        return Ok(Arc::new(UdpInTransport::bind(host_port).await?));
+    }
+    Ok(Arc::new(link::MavTransport::open(address).await?))
 }
 
 /// As [`fly`] on an already open transport (`opts.connect` only names it in messages).

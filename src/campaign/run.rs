@@ -145,7 +145,7 @@ fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
 /// `campaign.json` (what `--resume` continues).
 fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, CampaignError> {
     std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
-        path: folder.to_path_buf(),
+        path: folder.join("flights"),
         action: "cannot create",
         source,
     })?;
@@ -161,9 +161,17 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, Cam
             )));
         }
     }
-    write_json(&folder.join("campaign.json"), cfg, true)?;
+    let settings = folder.join("campaign.json");
+    // What the campaign began with, kept apart: a resume shows what was changed in campaign.json since.
+    if std::fs::symlink_metadata(&settings).is_err() {
+        write_json(&folder.join(FIRST_SETTINGS_FILE), cfg, true)?;
+    }
+    write_json(&settings, cfg, true)?;
     Ok(lock)
 }
+
+/// `campaign.json` as the campaign's first run wrote it, never rewritten.
+pub const FIRST_SETTINGS_FILE: &str = "campaign.first.json";
 
 /// Both campaigns end the same way: the journal's flights written out as tests and reports.
 fn finish(

@@ -7,20 +7,23 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, MAX_RUNS, evaluate_by_flying};
+use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, evaluate_by_flying};
 use prgenuav::campaign::evaluation::report;
 use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
 use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::campaign::run::CampaignConfig;
-use prgenuav::campaign::settings::{Flight, Requested};
-use prgenuav::campaign::setup::fleet::AtOnce;
+use prgenuav::campaign::settings::keys::flags::JOBS;
+use prgenuav::campaign::settings::{Flight, Requested, find};
+use prgenuav::campaign::setup::fleet::{AtOnce, split};
 use prgenuav::campaign::setup::{self, Ask};
 use prgenuav::campaign::store::journal::FlightRecord;
 use prgenuav::model::Spelling;
+use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 
 use super::generate::plan::Plan;
 use super::generate::px4::Px4Flags;
 use super::generate::vehicles;
+use super::limits;
 use super::values::{JudgeEdition, Mode, name_of};
 
 /// Arguments of `evaluate`.
@@ -45,8 +48,12 @@ pub struct Args {
     /// Fly each test as a job of an existing engine (as `generate --runner`, docs/runners.md).
     #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
     runner: Option<String>,
-    /// Runner jobs at once (with --runner).
-    #[arg(long, value_name = "N")]
+    /// With --runner: the command that cancels a job in its engine when stopped or timed out, with {id}
+    /// (as `generate --runner-cancel`).
+    #[arg(long, value_name = "COMMAND", requires = "runner")]
+    runner_cancel: Option<String>,
+    /// Flights at once: embedded mocks (default one per core), --px4 instances or --runner jobs (default 1).
+    #[arg(short, long, value_name = "N")]
     jobs: Option<usize>,
     #[command(flatten)]
     px4: Px4Flags,
@@ -74,9 +81,10 @@ pub struct Args {
 /// else `generate`'s defaults; the flags given here override the backend.
 fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
     let stored = args.folder.join("campaign.json");
-    let mut cfg = if stored.is_file() {
-        let text = std::fs::read_to_string(&stored).with_context(|| format!("reading {}", stored.display()))?;
-        serde_json::from_str::<CampaignConfig>(&text)
+    // A link or a folder in its place is refused by the reader, naming it, rather than passed over.
+    let mut cfg = if std::fs::symlink_metadata(&stored).is_ok() {
+        let bytes = read_capped_no_follow(&stored, MAX_READ_BYTES)?;
+        serde_json::from_slice::<CampaignConfig>(&bytes)
             .with_context(|| format!("{}: not a campaign", stored.display()))?
     } else {
         defaults(args)
@@ -123,33 +131,48 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
     let Some(text) = &cfg.runner else {
         return Ok(None);
     };
-    if args.jobs == Some(0) {
-        bail!("--jobs must be at least 1");
-    }
     Ok(Some(RunnerSettings {
         template: Template::parse(text).map_err(anyhow::Error::msg)?,
         timeout: std::time::Duration::from_secs_f64(DEFAULT_JOB_TIMEOUT_S),
         judge: cfg.judge,
         spelling: if cfg.old_spelling { Spelling::Old } else { Spelling::New },
         campaign_folder: args.folder.join(prgenuav::campaign::evaluation::flying::EVALUATION_DIR),
+        cancel: args
+            .runner_cancel
+            .as_deref()
+            .map(Template::parse_cancel)
+            .transpose()
+            .map_err(anyhow::Error::msg)?,
     }))
 }
 
 /// The numbers given, checked before any vehicle starts.
 fn check(args: &Args) -> anyhow::Result<()> {
-    if !(1..=MAX_RUNS).contains(&args.runs) {
-        bail!("--runs {}: expected 1 to {MAX_RUNS} flights per test", args.runs);
-    }
-    if !(args.similar_below.is_finite() && args.similar_below >= 0.0) {
-        bail!(
-            "--similar-below {}: expected a distance of 0 metres or more",
-            args.similar_below
-        );
-    }
+    limits::EVALUATE_RUNS.check(args.runs as f64)?;
+    limits::SIMILAR_BELOW.check(args.similar_below)?;
     if args.top == Some(0) {
-        bail!("--top must be at least 1");
+        bail!("--top 0 is out of range: 1 or more tests");
     }
     Ok(())
+}
+
+/// `--jobs` given to the backend that flies, as `generate` does, within what this machine runs.
+fn at_once(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<AtOnce> {
+    let at_once = split(cfg, args.jobs, args.mock_vehicles, args.px4.instances)?;
+    if let Some(n) = at_once.mock_vehicles {
+        let name = if args.mock_vehicles.is_some() {
+            "--mock-vehicles"
+        } else {
+            "--jobs on the embedded mocks"
+        };
+        if let Some(limit) = find("mock", "vehicles").and_then(|s| s.range) {
+            limit.check(name, n as f64).map_err(anyhow::Error::msg)?;
+        }
+    }
+    if let Some(n) = at_once.runner_jobs {
+        JOBS.check("--jobs", n as f64).map_err(anyhow::Error::msg)?;
+    }
+    Ok(at_once)
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -158,15 +181,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if cfg.runner.is_some() && cfg.px4.is_some() {
         bail!("--runner and --px4 are two ways to fly: give one");
     }
+    args.px4.check(&cfg)?;
+    let at_once = at_once(&cfg, &args)?;
     let plan = Plan {
         runner: runner(&cfg, &args)?,
         cfg,
         folder: args.folder.clone(),
-        at_once: AtOnce {
-            mock_vehicles: args.mock_vehicles,
-            runner_jobs: args.jobs,
-            px4_instances: args.px4.instances,
-        },
+        at_once,
         connect_timeout_s: Flight::default().connect_timeout_s(),
     };
     let (runtime, stop) = super::generate::runtime_stopped_by_signals()?;

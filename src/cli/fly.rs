@@ -147,11 +147,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
     print_anchoring(&report);
-    if args.json {
-        super::print_json(&report)?;
-    } else {
-        print_text(&report);
-    }
+    print_report(&report, prediction.is_some(), args.json)?;
     Ok(exit_code(&report))
 }
 
@@ -173,6 +169,36 @@ fn prediction(args: &Args, test: &TestCase) -> Option<Prediction> {
             _ => predict(test, PREDICTION_MOTION.model(), args.judge.into()),
         })
         .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok())
+}
+
+/// `--json`: the report with the prediction's motion model; otherwise the text.
+fn print_report(report: &FlightReport, predicted: bool, json: bool) -> anyhow::Result<()> {
+    if json {
+        let lfs_motion_model = predicted.then(|| prediction_model(report.mode));
+        return super::print_json(&FlyJson {
+            report,
+            lfs_motion_model,
+        });
+    }
+    print_text(report);
+    Ok(())
+}
+
+/// `fly --json`: the flight's report and the motion model of the LFS prediction beside it.
+#[derive(serde::Serialize)]
+struct FlyJson<'a> {
+    #[serde(flatten)]
+    report: &'a FlightReport,
+    /// `null` when there is no prediction (`--no-predict`, or it failed).
+    lfs_motion_model: Option<&'static str>,
+}
+
+/// The LFS model that predicted a flight of `mode`.
+fn prediction_model(mode: FlyMode) -> &'static str {
+    match mode {
+        FlyMode::CollisionPrevention => "collision-prevention",
+        _ => PREDICTION_MOTION.model().name(),
+    }
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
@@ -228,7 +254,12 @@ fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOp
         judge: args.judge.into(),
         anchor_at_vehicle_home: args.anchor_at_vehicle_home,
         ready_timeout_s: limits::FLY_READY_TIMEOUT.check(args.ready_timeout)?,
-        notices: (!args.quiet).then(|| NoticeSink::new(|n| eprintln!("{n}"))),
+        // Quiet or not, a listener: the vehicle is asked for its version, which the report names.
+        notices: Some(if args.quiet {
+            NoticeSink::new(|_| {})
+        } else {
+            NoticeSink::new(|n| eprintln!("{n}"))
+        }),
         ..FlyOptions::default()
     };
     opts.validate()?;
@@ -296,12 +327,12 @@ fn print_text(report: &FlightReport) {
             super::wording::words(&format!("{src:?}"))
         );
     }
+    if let Some(v) = &report.vehicle {
+        println!("vehicle           {v}");
+    }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
     print_cp(report);
-    let model = match report.mode {
-        FlyMode::CollisionPrevention => "collision-prevention",
-        _ => PREDICTION_MOTION.model().name(),
-    };
+    let model = prediction_model(report.mode);
     println!(
         "lfs_min_distance  {} (the LFS prediction, {model} motion model)",
         m(report.lfs_min_distance)

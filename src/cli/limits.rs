@@ -2,6 +2,7 @@
 //! from its declaration (`prgenuav::campaign::settings`), checked before anything is read, sampled, started or
 //! flown (exit 2, naming the flag, the TOML key and the range).
 
+use prgenuav::campaign::evaluation::flying::MAX_RUNS;
 use prgenuav::campaign::settings::keys::MAX_TIME_SCALE;
 use prgenuav::model::Limit;
 
@@ -34,6 +35,16 @@ pub const FLY_READY_TIMEOUT: Named = Named {
     limit: Limit::above(0.0, 3600.0, "s"),
 };
 
+/// DTW sums metres over the alignment: two different tests' averages lie some thousands of metres apart.
+pub const SIMILAR_BELOW: Named = Named {
+    names: "evaluate/score --similar-below",
+    limit: Limit::within(0.0, 1e6, "m"),
+};
+pub const EVALUATE_RUNS: Named = Named {
+    names: "evaluate --runs",
+    limit: Limit::within(1.0, MAX_RUNS as f64, "flights per test"),
+};
+
 /// The ranges section of docs/cli.md.
 #[cfg(test)]
 pub fn render(s: &mut String) {
@@ -63,7 +74,13 @@ pub fn render(s: &mut String) {
     for (name, l) in rows {
         let _ = writeln!(s, "| {name} | {} |", l.range());
     }
-    for n in [FLY_TIMEOUT, FLY_TIME_SCALE, FLY_READY_TIMEOUT] {
+    for n in [
+        FLY_TIMEOUT,
+        FLY_TIME_SCALE,
+        FLY_READY_TIMEOUT,
+        SIMILAR_BELOW,
+        EVALUATE_RUNS,
+    ] {
         let _ = writeln!(s, "| {} | {} |", n.names, n.limit.range());
     }
     let _ = writeln!(

@@ -40,12 +40,7 @@ struct Both {
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(args.similar_below.is_finite() && args.similar_below >= 0.0) {
-        bail!(
-            "--similar-below {}: expected a distance of 0 metres or more",
-            args.similar_below
-        );
-    }
+    super::limits::SIMILAR_BELOW.check(args.similar_below)?;
     let suite = score_folder(&args.folder, args.judge.into())?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());

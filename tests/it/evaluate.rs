@@ -93,7 +93,7 @@ fn score_and_evaluate_refuse_bad_input_with_a_clear_message() {
     for runs in ["0", "21"] {
         let (code, _, err) = prgenuav(&["evaluate", d.to_str().unwrap(), "--runs", runs]);
         assert_eq!(code, 2, "{err}");
-        assert!(err.contains("--runs") && err.contains("1 to 20"), "{err}");
+        assert!(err.contains("--runs") && err.contains("<= 20"), "{err}");
     }
     let (code, _, err) = prgenuav(&["score", d.to_str().unwrap(), "--similar-below=-1"]);
     assert_eq!(code, 2);
@@ -141,7 +141,7 @@ fn evaluate_flies_each_test_n_times_on_the_mock_and_resumes_without_flying_again
         "--top",
         "2",
         "--json",
-        "--mock-vehicles",
+        "--jobs",
         "2",
     ];
     let (code, out, err) = prgenuav(&args);
@@ -168,15 +168,15 @@ fn evaluate_flies_each_test_n_times_on_the_mock_and_resumes_without_flying_again
         "--top",
         "2",
         "--json",
-        "--mock-vehicles",
-        "2",
+        "--jobs",
+        "1",
     ];
     let (code, out, err) = prgenuav(&more);
     assert_eq!(code, 0, "{err}");
     assert_eq!(json(&out)["tests"][0]["runs"].as_array().unwrap().len(), 3);
-    let lines = std::fs::read_to_string(folder.join("journal.jsonl"))
-        .unwrap()
-        .lines()
-        .count();
-    assert_eq!(lines, 6);
+    let journal = std::fs::read_to_string(folder.join("journal.jsonl")).unwrap();
+    let vehicles: Vec<Value> = journal.lines().map(|l| json(l)["vehicle"].clone()).collect();
+    assert_eq!(vehicles.len(), 6);
+    // --jobs sets the embedded mocks as in `generate`: one vehicle flew both new runs.
+    assert!(vehicles[4..].iter().all(|v| v == "mock#0"), "{vehicles:?}");
 }

@@ -256,18 +256,23 @@ async fn fly_cli_exits_2_for_a_far_vehicle_and_prints_the_boxes_when_anchored() 
                 "--time-scale",
                 "10",
             ];
-            args.extend(["--no-predict", "--json", "--no-fence"]);
+            args.extend(["--json", "--no-fence"]);
             args.extend(extra);
             super::prgenuav(&args)
         })
     };
-    let (code, out, _) = tokio::time::timeout(WALL_LIMIT, run(&[]))
+    let (code, out, _) = tokio::time::timeout(WALL_LIMIT, run(&["--quiet"]))
         .await
         .expect("bounded")
         .expect("ran");
     assert_eq!(code, 2, "{out}");
     let json: serde_json::Value = serde_json::from_str(&out).expect("json");
     assert_eq!(json["status"], "rejected");
+    // Who flew and which model predicted it, also with --quiet.
+    assert_eq!(json["vehicle"]["autopilot"], "PX4", "{json}");
+    assert_eq!(json["vehicle"]["vehicle_type"], "quadrotor", "{json}");
+    assert_eq!(json["vehicle"]["flight_software"], "1.14.0", "{json}");
+    assert_eq!(json["lfs_motion_model"], "px4", "{json}");
     assert!(
         json["reason"]
             .as_str()
@@ -275,10 +280,13 @@ async fn fly_cli_exits_2_for_a_far_vehicle_and_prints_the_boxes_when_anchored() 
             .contains("--anchor-at-vehicle-home"),
         "{json}"
     );
-    let (code, out, err) = tokio::time::timeout(WALL_LIMIT, run(&["--anchor-at-vehicle-home", "--judge", "2025"]))
-        .await
-        .expect("bounded")
-        .expect("ran");
+    let (code, out, err) = tokio::time::timeout(
+        WALL_LIMIT,
+        run(&["--anchor-at-vehicle-home", "--judge", "2025", "--no-predict"]),
+    )
+    .await
+    .expect("bounded")
+    .expect("ran");
     m.shutdown().await.expect("mock stops");
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(err.contains("box 0 centre now at"), "{err}");
@@ -289,6 +297,11 @@ async fn fly_cli_exits_2_for_a_far_vehicle_and_prints_the_boxes_when_anchored() 
     );
     assert_eq!(json["frame_source"], "gps_global_origin");
     assert_eq!(json["placement"]["anchored"], true);
+    assert_eq!(
+        json["lfs_motion_model"],
+        serde_json::Value::Null,
+        "no prediction, no model"
+    );
 }
 
 #[test]

@@ -35,12 +35,17 @@ async fn the_vehicle_that_answered_is_named_first() {
     };
     let test = case(2).with_obstacles(valid_pair());
     let r = tokio::time::timeout(Duration::from_secs(60), fly(&test, &opts, cancel)).await;
-    assert!(r.is_ok(), "bounded");
+    let report = r.expect("bounded").expect("a report of the stopped flight");
     mock.shutdown().await.expect("mock stops");
     let heard = heard.lock().expect("log").clone();
     assert_eq!(
         heard.first().map(String::as_str),
         Some("vehicle answered: system 1, component 1: PX4 quadrotor, flight software 1.14.0"),
         "{heard:?}"
+    );
+    let who = report.vehicle.expect("the report names the vehicle");
+    assert_eq!(
+        (who.system, who.autopilot.as_str(), who.flight_software.as_deref()),
+        (1, "PX4", Some("1.14.0"))
     );
 }

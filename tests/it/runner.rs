@@ -216,7 +216,7 @@ fn bad_runner_settings_are_refused_before_anything_runs() {
             "--jobs 0 is out of range: 1 to 1024",
         ),
         (vec!["--runner", "fly {test}", "--job-timeout=-1"], "--job-timeout"),
-        (vec!["--job-timeout", "5"], "goes with --runner"),
+        (vec!["--job-timeout", "5"], "go with --runner"),
         (vec!["--jobs", "2", "--mock-vehicles", "3"], "disagree"),
         (
             vec!["--jobs", "2", "--connect", "udpin:0.0.0.0:14540"],

@@ -234,3 +234,82 @@ fn a_campaign_flies_px4_flights_as_slurm_jobs() {
         s - d
     );
 }
+
+/// The names of the jobs Slurm holds now.
+fn queued(conf: &Path) -> Vec<String> {
+    let out = Command::new("squeue")
+        .args(["-h", "-o", "%j"])
+        .env("SLURM_CONF", conf)
+        .output()
+        .expect("squeue");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+/// `sbatch --wait` submits a job and waits for it: stopping that client leaves the job to Slurm, so a
+/// stopped campaign must cancel it there (`--runner-cancel 'scancel --name {id}'`).
+#[test]
+#[ignore = "needs root, slurm-wlm and munge: cargo test --test it slurm -- --ignored"]
+fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
+    let cluster = Cluster::start();
+    let conf = cluster.conf();
+    let out = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_prgenuav"))
+        .args([
+            "generate",
+            "missions/mission2.yaml",
+            "4",
+            "--no-learn",
+            "--candidates",
+            "8",
+        ])
+        .args(["--ensemble", "0", "--confirm", "1", "--quiet", "--jobs", "2"])
+        .args([
+            "--runner",
+            "sbatch --wait --quiet -J {id} -o /dev/null --wrap 'sleep 300' # {test}",
+        ])
+        .args(["--runner-cancel", "scancel --name {id}", "--out"])
+        .arg(out.path())
+        .env("SLURM_CONF", &conf)
+        .current_dir(repo())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !queued(&conf).iter().any(|j| j.starts_with("prg-")) {
+        assert!(t0.elapsed() < Duration::from_secs(180), "no job reached Slurm");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let held = queued(&conf);
+    run_ok(Command::new("kill").args(["-TERM", &child.id().to_string()]));
+    let t1 = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(t1.elapsed() < Duration::from_secs(30), "the campaign did not stop");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let stopped = t1.elapsed();
+    // scancel returns before Slurm has ended the job: give it a few seconds.
+    let t2 = Instant::now();
+    let mut left = queued(&conf);
+    while !left.is_empty() && t2.elapsed() < Duration::from_secs(15) {
+        std::thread::sleep(Duration::from_millis(200));
+        left = queued(&conf);
+    }
+    for name in &left {
+        let _ = Command::new("scancel")
+            .args(["--name", name])
+            .env("SLURM_CONF", &conf)
+            .status();
+    }
+    assert!(
+        left.is_empty(),
+        "held {held:?}; still in Slurm after the stop: {left:?}"
+    );
+    println!(
+        "{} job(s) cancelled in Slurm; the campaign stopped {:.1} s after SIGTERM, the queue was empty {:.1} s later",
+        held.len(),
+        stopped.as_secs_f64(),
+        t2.elapsed().as_secs_f64()
+    );
+}

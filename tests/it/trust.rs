@@ -289,6 +289,56 @@ fn sigterm_stops_a_runner_job_and_the_grandchild_it_detached() {
 }
 
 #[test]
+fn sigterm_cancels_the_jobs_an_engine_holds_with_the_runner_cancel_command() {
+    let out = tempfile::tempdir().unwrap();
+    let queue = tempfile::tempdir().unwrap();
+    let q = queue.path().display();
+    // A stand-in engine: the job it holds is no process of the campaign's (no job marker, its own session),
+    // as a Slurm or Kubernetes job is not; only its cancel command, by `{id}`, ends it.
+    let runner = format!(
+        "env -u PRGENUAV_JOB_DIR setsid sh -c 'echo $$ > {q}/{{id}}.pid; exec sleep 300' </dev/null >/dev/null \
+         2>&1 & sleep 300 # {{test}}"
+    );
+    let cancel = format!("kill $(cat {q}/{{id}}.pid)");
+    let args = ["--runner", &runner, "--jobs", "2", "--runner-cancel", &cancel];
+    let (mut child, folder) = start_flying(out.path(), &args);
+    let t0 = Instant::now();
+    while std::fs::read_dir(queue.path()).unwrap().count() < 2 {
+        assert!(t0.elapsed() < Duration::from_secs(30), "no job started");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "TERM");
+    let (code, took) = wait_bounded(&mut child, Duration::from_secs(30));
+    assert_eq!(code, Some(1));
+    std::thread::sleep(Duration::from_millis(200));
+    let mut survivors = Vec::new();
+    for entry in std::fs::read_dir(queue.path()).unwrap().flatten() {
+        let pid: i32 = std::fs::read_to_string(entry.path()).unwrap().trim().parse().unwrap();
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        if !stat.is_empty() && !stat.contains(") Z ") {
+            // SAFETY: kill(2) on the stand-in job this test started.
+            unsafe { libc::kill(pid, libc::SIGKILL) };
+            survivors.push(entry.path());
+        }
+    }
+    assert!(
+        survivors.is_empty(),
+        "jobs the engine held survived the stop: {survivors:?}"
+    );
+    assert!(took < Duration::from_secs(20), "stopped in {took:?}");
+    let reasons: Vec<String> = journal_lines(&folder)
+        .iter()
+        .filter(|r| r["status"] == "interrupted")
+        .map(|r| r["reason"].to_string())
+        .collect();
+    assert!(
+        reasons.iter().any(|r| r.contains("asked the engine to cancel it")),
+        "{reasons:?}"
+    );
+}
+
+#[test]
 fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
     let out = tempfile::tempdir().unwrap();
     let o = out.path().to_str().unwrap();
@@ -314,7 +364,27 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
         a.extend(extra.iter().map(|s| s.to_string()));
         a
     };
+    let suite = tempfile::tempdir().unwrap();
+    let folder = suite.path().to_str().unwrap();
+    let on_suite = |command: &str, extra: &[&'static str]| {
+        let mut a = vec![command.to_string(), folder.to_string()];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let evaluate = |extra: &[&'static str]| on_suite("evaluate", extra);
     let cases: Vec<(Vec<String>, &str)> = vec![
+        (evaluate(&["--runs", "0"]), "--runs"),
+        (evaluate(&["--runs", "21"]), "--runs"),
+        (evaluate(&["--top", "0"]), "--top"),
+        (evaluate(&["--jobs", "0"]), "--jobs"),
+        (evaluate(&["--jobs", "100000"]), "--jobs on the embedded mocks"),
+        (
+            evaluate(&["--runner", "true {test}", "--jobs", "100000000"]),
+            "1 to 1024",
+        ),
+        (evaluate(&["--similar-below=-1"]), "--similar-below"),
+        (evaluate(&["--similar-below", "1e300"]), "--similar-below"),
+        (on_suite("score", &["--similar-below", "nan"]), "--similar-below"),
         (generate(&["--mock-speed", "1e300"]), "--mock-speed"),
         (generate(&["--mock-speed", "0.5"]), "--mock-speed"),
         (generate(&["--connect-time-scale", "1e300"]), "--connect-time-scale"),
@@ -351,6 +421,11 @@ fn numbers_beyond_their_documented_range_are_refused_before_anything_starts() {
         );
     }
     assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "no campaign folder");
+    assert_eq!(
+        std::fs::read_dir(suite.path()).unwrap().count(),
+        0,
+        "no evaluation folder"
+    );
     every_declared_range_is_refused_in_the_campaign_toml(o);
 }
 
@@ -408,6 +483,90 @@ fn a_fifo_and_a_device_as_flights_are_refused_at_once() {
 }
 
 #[test]
+fn bad_inputs_are_refused_at_once_naming_the_file_and_the_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fifo = d.join("fifo.toml");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: mkfifo(3) on a path we own; no memory is shared.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    std::fs::create_dir(d.join("dir.yaml")).unwrap();
+    std::fs::write(d.join("bytes.toml"), b"seed = \xff\n").unwrap();
+    let name = |f: &str| d.join(f).to_str().unwrap().to_string();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("fifo.toml"),
+            ],
+            "a FIFO",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                "/dev/zero".into(),
+            ],
+            "a device",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("dir.yaml"),
+            ],
+            "it is a folder",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("bytes.toml"),
+            ],
+            "not UTF-8",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "missions/mission2.yaml".into(),
+                "3".into(),
+                "--config".into(),
+                name("gone.toml"),
+            ],
+            "No such file",
+        ),
+        (vec!["check".into(), name("gone.yaml")], "No such file"),
+        (vec!["check".into(), name("dir.yaml")], "it is a folder"),
+        (vec!["simulate".into(), name("fifo.toml")], "a FIFO"),
+        (vec!["evaluate".into(), name("gone")], "No such file"),
+    ];
+    for (args, cause) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let t0 = Instant::now();
+        let (code, _, err) = prgenuav(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "{args:?} took {:?}",
+            t0.elapsed()
+        );
+        let file = args.last().unwrap();
+        assert!(err.contains(file) && err.contains(cause), "{args:?}: {err}");
+        assert_eq!(err.matches(cause).count(), 1, "the cause twice: {err}");
+        assert!(err.matches("os error").count() <= 1, "the cause twice: {err}");
+    }
+}
+
+#[test]
 fn ctrl_c_during_screening_exits_1_with_a_report_and_the_resume_command() {
     let out = tempfile::tempdir().unwrap();
     let o = out.path().to_str().unwrap();
@@ -457,7 +616,21 @@ fn a_campaign_stores_its_case_absolute_and_another_spelling_of_it_is_no_conflict
     let (code, _, stderr) = prgenuav(&["generate", "./missions/mission2.yaml", "--resume", f, "--quiet"]);
     assert_eq!(code, 0, "the same file under another spelling: {stderr}");
     assert!(
-        stderr.contains("resuming as") && stderr.contains("budget 2"),
+        !stderr.contains("resuming as"),
+        "unchanged settings are not shown: {stderr}"
+    );
+    // Changed by hand since the first run: the resume names what changed, with both values.
+    let path = folder.join("campaign.json");
+    let mut edited = stored.clone();
+    edited["budget"] = 1.into();
+    edited["max_iou"] = 0.25.into();
+    std::fs::write(&path, serde_json::to_string_pretty(&edited).unwrap()).unwrap();
+    let (code, _, stderr) = prgenuav(&["generate", "--resume", f, "--quiet"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("campaign.json differs from what the campaign's first run wrote")
+            && stderr.contains("budget 2 -> 1; max_iou 0.5 -> 0.25")
+            && stderr.contains("resuming as"),
         "{stderr}"
     );
 }

@@ -92,6 +92,8 @@ pub struct Session<'a> {
     pub ready: Readiness,
     /// The PX4 release the vehicle reported in AUTOPILOT_VERSION (None: another autopilot, or no answer).
     pub px4_version: Option<Px4Version>,
+    /// Who answered.
+    pub identity: super::identify::VehicleIdentity,
 }
 
 /// Readiness as timed for the report and the arming budget.

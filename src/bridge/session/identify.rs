@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use mavlink::dialects::common::{COMMAND_LONG_DATA, HEARTBEAT_DATA, MavAutopilot, MavCmd, MavMessage};
+use serde::Serialize;
 use tokio::sync::broadcast;
 
 use crate::bridge::px4_version::Px4Version;
@@ -17,19 +18,45 @@ use crate::bridge::wire::link::{Inbound, Link, Sender};
 /// How long the vehicle gets to say its version (vehicle time); without an answer the version is left out.
 const VERSION_WAIT: Duration = Duration::from_millis(1500);
 
-/// The vehicle in words, e.g. `system 1, component 1: PX4 quadrotor, flight software 1.14.0`, given its
-/// AUTOPILOT_VERSION.flight_sw_version (from [`flight_sw_version`]).
-pub fn describe(target: Target, heartbeat: &HEARTBEAT_DATA, flight_sw: Option<u32>) -> String {
-    let autopilot = words(&format!("{:?}", heartbeat.autopilot), "MAV_AUTOPILOT_");
-    let kind = words(&format!("{:?}", heartbeat.mavtype), "MAV_TYPE_");
-    let mut text = format!(
-        "system {}, component {}: {autopilot} {kind}",
-        target.system, target.component
-    );
-    if let Some(v) = flight_sw {
-        text.push_str(&format!(", flight software {}", software_version(v)));
+/// Who answered, as its heartbeat and AUTOPILOT_VERSION said; in `fly --json` as `vehicle`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct VehicleIdentity {
+    /// MAVLink system id the bridge locked onto.
+    pub system: u8,
+    /// Its component id.
+    pub component: u8,
+    /// The autopilot, in words (`PX4`, `ArduPilot`, `generic`).
+    pub autopilot: String,
+    /// The vehicle type, in words (`quadrotor`).
+    pub vehicle_type: String,
+    /// Its flight software version (`1.14.0`), when it answered the request for it.
+    pub flight_software: Option<String>,
+}
+
+impl std::fmt::Display for VehicleIdentity {
+    /// E.g. `system 1, component 1: PX4 quadrotor, flight software 1.14.0`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "system {}, component {}: {} {}",
+            self.system, self.component, self.autopilot, self.vehicle_type
+        )?;
+        match &self.flight_software {
+            Some(v) => write!(f, ", flight software {v}"),
+            None => Ok(()),
+        }
     }
-    text
+}
+
+/// The vehicle `heartbeat` came from, with its AUTOPILOT_VERSION.flight_sw_version (from [`flight_sw_version`]).
+pub fn identity(target: Target, heartbeat: &HEARTBEAT_DATA, flight_sw: Option<u32>) -> VehicleIdentity {
+    VehicleIdentity {
+        system: target.system,
+        component: target.component,
+        autopilot: words(&format!("{:?}", heartbeat.autopilot), "MAV_AUTOPILOT_"),
+        vehicle_type: words(&format!("{:?}", heartbeat.mavtype), "MAV_TYPE_"),
+        flight_software: flight_sw.map(software_version),
+    }
 }
 
 /// The PX4 release a PX4 vehicle reports (None for another autopilot or no usable answer).
@@ -115,5 +142,18 @@ mod tests {
         assert_eq!(words("MAV_TYPE_QUADROTOR", "MAV_TYPE_"), "quadrotor");
         assert_eq!(words("MAV_AUTOPILOT_ARDUPILOTMEGA", "MAV_AUTOPILOT_"), "ArduPilot");
         assert_eq!(words("MAV_TYPE_FIXED_WING", "MAV_TYPE_"), "fixed wing");
+        let mut who = VehicleIdentity {
+            system: 1,
+            component: 1,
+            autopilot: "PX4".into(),
+            vehicle_type: "quadrotor".into(),
+            flight_software: Some("1.14.0".into()),
+        };
+        assert_eq!(
+            who.to_string(),
+            "system 1, component 1: PX4 quadrotor, flight software 1.14.0"
+        );
+        who.flight_software = None;
+        assert_eq!(who.to_string(), "system 1, component 1: PX4 quadrotor");
     }
 }

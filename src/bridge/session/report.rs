@@ -8,6 +8,7 @@ use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
 use super::clock_watch::ClockReport;
+use super::identify::VehicleIdentity;
 use super::placement::Placement;
 use crate::bridge::companion::frame::{FRAME_NAME, FrameSource, TestFrame};
 use crate::bridge::companion::timing::TimingReport;
@@ -125,6 +126,8 @@ pub struct FlightReport {
     /// Collision Prevention flights: `CP_DIST` and whether the vehicle came inside it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collision_prevention: Option<crate::judge::cp_verdict::CpVerdict>,
+    /// The vehicle that flew, as it identified itself (`null`: none answered).
+    pub vehicle: Option<VehicleIdentity>,
     /// Positions recorded.
     pub samples: usize,
     /// The recorded trajectory (not in the JSON; see the CSV).
@@ -165,6 +168,8 @@ pub struct Ending {
     pub companion_timing: Option<TimingReport>,
     /// The planner's cruise speed as read from the vehicle.
     pub planner_cruise_m_s: Option<f64>,
+    /// Who flew.
+    pub vehicle: Option<VehicleIdentity>,
 }
 
 impl FlightReport {
@@ -209,6 +214,7 @@ impl FlightReport {
             companion_timing: end.companion_timing,
             planner_cruise_m_s: end.planner_cruise_m_s,
             collision_prevention: None,
+            vehicle: end.vehicle,
             samples: trajectory.samples.len(),
             trajectory,
         }
@@ -251,6 +257,7 @@ mod tests {
             clock: None,
             companion_timing: None,
             planner_cruise_m_s: None,
+            vehicle: None,
         }
     }
 

@@ -74,9 +74,9 @@ async fn connect<'a>(
     // which modes and parameters this vehicle has (see `capability`).
     let mut answers = link.subscribe();
     let flight_sw = super::identify::flight_sw_version(&link, &mut answers, target, &cancel).await;
+    let identity = super::identify::identity(target, &heartbeat, flight_sw);
     if let Some(sink) = &opts.notices {
-        let who = super::identify::describe(target, &heartbeat, flight_sw);
-        (sink.0)(&crate::bridge::wire::notices::Notice::Answered(who));
+        (sink.0)(&crate::bridge::wire::notices::Notice::Answered(identity.to_string()));
     }
     let clock_report = super::clock_watch::start(&link, opts, &mut tasks).await;
     let messages = crate::bridge::wire::notices::Messages::default();
@@ -105,6 +105,7 @@ async fn connect<'a>(
         mpc_xy_cruise_m_s: None,
         ready: Readiness::default(),
         px4_version: super::identify::px4_version(&heartbeat, flight_sw),
+        identity,
     };
     Ok((s, clock_report))
 }
@@ -153,6 +154,7 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
             clock,
             companion_timing: s.companion.timing.report(),
             planner_cruise_m_s: s.mpc_xy_cruise_m_s,
+            vehicle: Some(s.identity.clone()),
         },
     );
     report.collision_prevention =

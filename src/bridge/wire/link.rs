@@ -35,6 +35,8 @@ pub trait Transport: Send + Sync + 'static {
     fn send<'a>(&'a self, header: MavHeader, msg: &'a MavMessage) -> BoxFuture<'a, io::Result<()>>;
     /// The next valid message (invalid frames are skipped inside).
     fn recv(&self) -> BoxFuture<'_, io::Result<(MavHeader, MavMessage)>>;
+    /// The link locked onto the vehicle `system_id` (a transport that picks whom to answer listens).
+    fn lock(&self, _system_id: u8) {}
 }
 
 /// Any rust-mavlink connection (udpin/udpout/tcpout/tcpin/serial).
@@ -190,6 +192,7 @@ impl Link {
     /// From now on, only messages from `system_id` are delivered.
     pub fn lock(&self, system_id: u8) {
         self.locked.store(u32::from(system_id), Ordering::Relaxed);
+        self.transport.lock(system_id);
     }
 
     /// The locked system id, if any.

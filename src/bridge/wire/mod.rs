@@ -15,5 +15,6 @@ pub mod param_read;
 pub mod params;
 pub mod plan_items;
 pub mod pose;
+pub mod udp_in;
 pub mod url;
 pub mod vehicle;

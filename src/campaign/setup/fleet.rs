@@ -33,7 +33,7 @@ pub fn split(
     instances: Option<usize>,
 ) -> Result<AtOnce, CampaignError> {
     if jobs == Some(0) {
-        return Err(CampaignError::Config("--jobs must be at least 1".into()));
+        return Err(CampaignError::Config("--jobs 0 is out of range: 1 or more".into()));
     }
     let agree = |own: Option<usize>, name: &str| match (jobs, own) {
         (Some(j), Some(o)) if j != o => Err(CampaignError::Config(format!(

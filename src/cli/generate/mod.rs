@@ -6,6 +6,7 @@ pub(super) mod plan;
 pub(super) mod px4;
 mod resume;
 mod runner;
+mod stored_changes;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,6 +64,10 @@ pub struct Args {
     /// Wall-time limit of one runner job, seconds (with --runner; default 1200).
     #[arg(long, hide = true, value_name = "S")]
     job_timeout: Option<f64>,
+    /// With --runner: the command that cancels a job in its engine when the campaign stops or the job times
+    /// out, with {id} (`scancel --name {id}`; docs/runners.md). Not stored: give it again with --resume.
+    #[arg(long, hide = true, value_name = "COMMAND")]
+    runner_cancel: Option<String>,
     /// How the flights avoid the virtual obstacles.
     #[arg(long, hide = true, value_enum, default_value_t = Mode::Avoidance)]
     mode: Mode,

@@ -61,8 +61,11 @@ pub(super) fn resumed(
     if !conflicts.is_empty() {
         bail!("{}", conflicts.join("\n"));
     }
-    // What runs is what the file says now, whoever wrote it last: shown, even with --quiet.
-    eprintln!("{}", stored_summary(&stored, &path));
+    // What runs is what the file says now, whoever wrote it last: when that is not what the campaign began
+    // with, shown, even with --quiet.
+    if let Some(changed) = super::stored_changes::changes_since_first_run(folder, &stored) {
+        eprintln!("{changed}\n{}", stored_summary(&stored, &path));
+    }
     Ok(stored)
 }
 

@@ -14,12 +14,13 @@ use prgenuav::campaign::settings::keys::flags::{JOB_TIMEOUT, JOBS};
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
 pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
     let Some(text) = &cfg.runner else {
-        if args.job_timeout.is_some() {
-            bail!("--job-timeout goes with --runner");
+        if args.job_timeout.is_some() || args.runner_cancel.is_some() {
+            bail!("--job-timeout and --runner-cancel go with --runner");
         }
         return Ok(None);
     };
     let template = Template::parse(text).map_err(anyhow::Error::msg)?;
+    let cancel = args.runner_cancel.as_deref().map(Template::parse_cancel).transpose();
     if let Some(jobs) = cfg.jobs {
         JOBS.check("--jobs", jobs as f64).map_err(anyhow::Error::msg)?;
     }
@@ -36,5 +37,6 @@ pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Opti
             ModelSpelling::New
         },
         campaign_folder: PathBuf::new(),
+        cancel: cancel.map_err(anyhow::Error::msg)?,
     }))
 }

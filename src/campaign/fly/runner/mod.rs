@@ -3,6 +3,7 @@
 //! `kubectl` Job, ...), and what the job left read back and judged here. A failed job is retried once; a flight
 //! whose retry fails too is journaled `backend_failed` (not charged to the budget) and the campaign goes on.
 
+pub mod cancel;
 pub mod job;
 pub mod leftovers;
 pub mod process;
@@ -14,6 +15,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
 use crate::judge::Judge;
@@ -43,6 +45,8 @@ pub struct RunnerSettings {
     pub spelling: Spelling,
     /// The campaign folder; jobs go to its `jobs/`.
     pub campaign_folder: PathBuf,
+    /// Cancels a stopped or timed-out job in its engine (`--runner-cancel`).
+    pub cancel: Option<Template>,
 }
 
 /// One job slot: `--jobs N` of them run at most N jobs at once.
@@ -98,13 +102,20 @@ impl RunnerVehicle {
             Ok(r) => r,
             Err(e) => return Attempt::Failed(format!("cannot start `sh -c {command}`: {e}")),
         };
+        // A job the engine still holds is cancelled there too, when the template says how.
+        let in_engine = || cancel::note(s.cancel.as_ref(), &folder.test, &folder.dir, &id);
         let code = match ran.ended {
-            Ended::Cancelled => return Attempt::Flew(stopped()),
+            Ended::Cancelled => {
+                return Attempt::Flew(Flown::unflown(
+                    FlightStatus::Aborted,
+                    format!("the job was stopped{}", in_engine()),
+                ));
+            }
             Ended::TimedOut => {
+                let limit = s.timeout.as_secs_f64();
+                let (note, tail) = (in_engine(), tail(&stderr));
                 return Attempt::Failed(format!(
-                    "timed out after {:.0} s (--job-timeout), killed{}",
-                    s.timeout.as_secs_f64(),
-                    tail(&stderr)
+                    "timed out after {limit:.0} s (--job-timeout), killed{note}{tail}"
                 ));
             }
             Ended::Exited(code) => code,

@@ -9,6 +9,7 @@ fn settings(template: &str, folder: &Path, timeout_ms: u64) -> RunnerSettings {
         judge: Judge::E2026,
         spelling: Spelling::New,
         campaign_folder: folder.to_path_buf(),
+        cancel: None,
     }
 }
 
@@ -98,6 +99,44 @@ fn a_stopped_campaign_stops_the_job() {
     let mut v = RunnerVehicle::new(0, Arc::new(settings("sleep 30; : {test}", tmp.path(), 60_000)));
     let r = v.fly(&test_case(), &tmp.path().join("c.csv"), &AtomicBool::new(true));
     assert_eq!(r.unwrap().status, FlightStatus::Aborted);
+}
+
+#[test]
+fn a_job_stopped_or_timed_out_is_cancelled_in_its_engine_by_its_id() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cancel = Template::parse_cancel("echo {id} >> ../../cancelled").unwrap();
+    let with_cancel = |template: &str, timeout_ms| RunnerSettings {
+        cancel: Some(cancel.clone()),
+        ..settings(template, tmp.path(), timeout_ms)
+    };
+    let mut v = RunnerVehicle::new(0, Arc::new(with_cancel("sleep 30; : {test}", 60_000)));
+    let stop = Arc::new(AtomicBool::new(false));
+    let raise = stop.clone();
+    let t = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        raise.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+    let f = v
+        .fly(&test_case(), &tmp.path().join("flights/candidate_3.csv"), &stop)
+        .unwrap();
+    t.join().unwrap();
+    assert_eq!(f.status, FlightStatus::Aborted);
+    let reason = f.reason.unwrap();
+    assert!(reason.contains("asked the engine to cancel it"), "{reason}");
+    let ids = std::fs::read_to_string(tmp.path().join("cancelled")).unwrap();
+    assert_eq!(ids, format!("{}\n", job_id(tmp.path(), "candidate_3", 1)));
+    // Past its time limit, each attempt's job is cancelled under its own id.
+    std::fs::remove_file(tmp.path().join("cancelled")).unwrap();
+    let mut v = RunnerVehicle::new(0, Arc::new(with_cancel("sleep 30; : {test}", 200)));
+    let f = v.fly(
+        &test_case(),
+        &tmp.path().join("flights/candidate_4.csv"),
+        &AtomicBool::new(false),
+    );
+    assert_eq!(f.unwrap().status, FlightStatus::BackendFailed);
+    let ids = std::fs::read_to_string(tmp.path().join("cancelled")).unwrap();
+    let want: Vec<String> = (1..=2).map(|n| job_id(tmp.path(), "candidate_4", n)).collect();
+    assert_eq!(ids.lines().collect::<Vec<_>>(), want);
 }
 
 #[test]

@@ -52,8 +52,18 @@ fn pieces(text: &str) -> Vec<Piece<'_>> {
 impl Template {
     /// Checks `text`: not empty, `{test}` present, no unknown `{placeholder}`.
     pub fn parse(text: &str) -> Result<Self, String> {
+        Self::parse_for(text, "--runner", "test", "the job would not know which test to fly")
+    }
+
+    /// The command that cancels a job the engine still holds (`scancel --name {id}`): as [`Self::parse`], with
+    /// `{id}` required instead of `{test}`.
+    pub fn parse_cancel(text: &str) -> Result<Self, String> {
+        Self::parse_for(text, "--runner-cancel", "id", "it would not know which job to cancel")
+    }
+
+    fn parse_for(text: &str, flag: &str, required: &str, why: &str) -> Result<Self, String> {
         if text.trim().is_empty() {
-            return Err("--runner: the command template is empty".into());
+            return Err(format!("{flag}: the command template is empty"));
         }
         let slots: Vec<&str> = pieces(text)
             .into_iter()
@@ -64,13 +74,13 @@ impl Template {
             .collect();
         if let Some(bad) = slots.iter().find(|s| !PLACEHOLDERS.contains(s)) {
             return Err(format!(
-                "--runner: unknown placeholder {{{bad}}} in {text:?}; the placeholders are {{test}}, {{dir}} and \
+                "{flag}: unknown placeholder {{{bad}}} in {text:?}; the placeholders are {{test}}, {{dir}} and \
                  {{id}} (write ${{{bad}}} for a shell variable)"
             ));
         }
-        if !slots.contains(&"test") {
+        if !slots.contains(&required) {
             return Err(format!(
-                "--runner: the command template {text:?} has no {{test}}: the job would not know which test to fly"
+                "{flag}: the command template {text:?} has no {{{required}}}: {why}"
             ));
         }
         Ok(Self { text: text.to_string() })
@@ -143,6 +153,10 @@ mod tests {
             "{e}"
         );
         assert!(Template::parse("  ").unwrap_err().contains("empty"));
+        let e = Template::parse_cancel("scancel --name {test}").unwrap_err();
+        assert!(e.starts_with("--runner-cancel") && e.contains("no {id}"), "{e}");
+        let c = Template::parse_cancel("scancel --name {id}").unwrap();
+        assert_eq!(c.render("t", "d", "prg-1-2-1"), "scancel --name prg-1-2-1");
     }
 
     #[test]
