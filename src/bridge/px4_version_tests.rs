@@ -41,9 +41,16 @@ fn the_table_splits_at_v1_16() {
         assert!(r.collision_prevention, "{tag}");
         assert_eq!(r.supports(FlyMode::Avoidance), avoid, "{tag}");
         assert!(r.supports(FlyMode::Offboard) && r.supports(FlyMode::Mission), "{tag}");
+        assert!(r.supports(FlyMode::CollisionPrevention), "{tag}");
     }
-    assert_eq!(v("v1.14.0").release().unwrap().modes(), "avoidance, offboard, mission");
-    assert_eq!(v("v1.16.2").release().unwrap().modes(), "offboard, mission");
+    assert_eq!(
+        v("v1.14.0").release().unwrap().modes(),
+        "avoidance, offboard, mission, collision-prevention"
+    );
+    assert_eq!(
+        v("v1.16.2").release().unwrap().modes(),
+        "offboard, mission, collision-prevention"
+    );
 }
 
 #[test]
@@ -63,7 +70,10 @@ fn the_avoidance_refusal_names_the_version_and_the_modes_that_work() {
         msg.starts_with("--mode avoidance: PX4 v1.16.2 has no obstacle-avoidance interface"),
         "{msg}"
     );
-    assert!(msg.ends_with("modes that work on PX4 1.16: offboard, mission"), "{msg}");
+    assert!(
+        msg.ends_with("modes that work on PX4 1.16: offboard, mission, collision-prevention"),
+        "{msg}"
+    );
 }
 
 proptest! {

@@ -30,7 +30,7 @@ fn avoidance_on_a_v1_16_build_is_refused_naming_the_version_and_the_modes_that_w
         assert_eq!(code, 2, "{args:?}: {err}");
         assert!(
             err.contains("--mode avoidance: PX4 v1.16.2 has no obstacle-avoidance interface")
-                && err.contains("modes that work on PX4 1.16: offboard, mission"),
+                && err.contains("modes that work on PX4 1.16: offboard, mission, collision-prevention"),
             "{args:?}: {err}"
         );
     }
@@ -128,7 +128,7 @@ async fn avoidance_on_a_vehicle_reporting_v1_16_is_refused_before_anything_is_up
     let reason = r.reason.unwrap_or_default();
     assert!(
         reason.contains("--mode avoidance: PX4 1.16.2 has no obstacle-avoidance interface")
-            && reason.contains("modes that work on PX4 1.16: offboard, mission"),
+            && reason.contains("modes that work on PX4 1.16: offboard, mission, collision-prevention"),
         "{reason}"
     );
     assert_eq!(

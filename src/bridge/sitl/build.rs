@@ -232,7 +232,7 @@ mod tests {
             "{refused}"
         );
         assert!(
-            refused.ends_with("modes that work on PX4 1.16: offboard, mission"),
+            refused.ends_with("modes that work on PX4 1.16: offboard, mission, collision-prevention"),
             "{refused}"
         );
         assert_eq!(v116.check_mode(FlyMode::Offboard), Ok(()));

@@ -121,9 +121,11 @@ generator! {
         choices: &[
             ("paper", "The paper's two-obstacle S."),
             ("extended", "The split drawn too, and a third obstacle where the case allows."),
+            ("gate", "Two boxes across the path with a gap around 2 x CP_DIST."),
         ],
-        help: "`paper` (two obstacles, the paper's split) or `extended` (the split drawn from `adapted_split`, and a \
-               third obstacle beyond the pair where the mission leaves room).",
+        help: "`paper` (two obstacles, the paper's split), `extended` (the split drawn from `adapted_split`, and a \
+               third obstacle beyond the pair where the mission leaves room) or `gate` (two boxes across the path \
+               with a gap around 2 x CP_DIST; the default with --mode collision-prevention).",
     },
     adapted_split: Range {
         stored: "generator.adapted_split",

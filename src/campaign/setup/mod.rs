@@ -172,8 +172,9 @@ pub fn fly_mode(name: &str) -> Result<FlyMode, CampaignError> {
         "avoidance" => Ok(FlyMode::Avoidance),
         "offboard" => Ok(FlyMode::Offboard),
         "mission" => Ok(FlyMode::Mission),
+        "collision-prevention" => Ok(FlyMode::CollisionPrevention),
         other => Err(config(&format!(
-            "mode (--mode) {other:?} is not one of avoidance, offboard, mission"
+            "mode (--mode) {other:?} is not one of avoidance, offboard, mission, collision-prevention"
         ))),
     }
 }

@@ -27,7 +27,7 @@ pub use template::Template;
 /// Default wall-time limit of one job, seconds: above Aerialist's own limit on a Docker test (its
 /// `DOCKER_TIMEOUT`, 1000 s) plus a container's start.
 pub const DEFAULT_JOB_TIMEOUT_S: f64 = 1200.0;
-/// The command as run, kept in the job folder.
+/// The command as run, kept in the job folder for a look or a rerun by hand (a job runs without it).
 pub const COMMAND_FILE: &str = "prgenuav-job.sh";
 /// Bytes of a failed job's stderr quoted in its reason.
 const TAIL_BYTES: usize = 600;
@@ -95,7 +95,6 @@ impl RunnerVehicle {
             .render(&folder.test.to_string_lossy(), &folder.dir.to_string_lossy(), &id);
         let mut skip = folder.inputs.clone();
         skip.push(folder.dir.join(COMMAND_FILE));
-        // Kept for a look or a rerun by hand; a job runs without it.
         let _ = write_atomic(&folder.dir.join(COMMAND_FILE), format!("{command}\n").as_bytes());
         let (stdout, stderr) = (folder.dir.join(job::STDOUT_FILE), folder.dir.join(job::STDERR_FILE));
         let ran = match process::run(&command, &folder.dir, &stdout, &stderr, s.timeout, cancel) {
@@ -106,10 +105,8 @@ impl RunnerVehicle {
         let in_engine = || cancel::note(s.cancel.as_ref(), &folder.test, &folder.dir, &id);
         let code = match ran.ended {
             Ended::Cancelled => {
-                return Attempt::Flew(Flown::unflown(
-                    FlightStatus::Aborted,
-                    format!("the job was stopped{}", in_engine()),
-                ));
+                let why = format!("the job was stopped{}", in_engine());
+                return Attempt::Flew(Flown::unflown(FlightStatus::Aborted, why));
             }
             Ended::TimedOut => {
                 let limit = s.timeout.as_secs_f64();
