@@ -2,7 +2,7 @@
 //! gap around 2 x `CP_DIST`, so PX4's Collision Prevention must let the vehicle through a gap where each side
 //! is about `CP_DIST` away, with the gap perhaps off the path (one box beside it, one across it).
 //!
-//! In the canonical frame (the SoI flown toward +y, [`super::placement`]): the gate's line crosses the SoI
+//! In the canonical frame (the SoI flown toward +y, `generator::placement`): the gate's line crosses the SoI
 //! at a drawn share of its length, tilted from the perpendicular by a drawn angle; the gap's width and its
 //! centre's offset from the path are drawn too. Five unit draws, as the paper's family, so the adaptive
 //! campaign learns over them the same way: `u[0]` box length, `u[1]` where along the SoI, `u[2]` tilt,
