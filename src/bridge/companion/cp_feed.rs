@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use mavlink::dialects::common::{MANUAL_CONTROL_DATA, MavDistanceSensor, MavFrame, MavMessage, OBSTACLE_DISTANCE_DATA};
-use tokio::sync::{broadcast, watch};
+use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
 use super::frame::TestFrame;
@@ -92,14 +92,7 @@ async fn run(link: Arc<Link>, target: Target, mut feed: CpFeed, tx: watch::Sende
         let wake = clock
             .wall_until(next_stick.min(next_scan))
             .max(Duration::from_millis(1));
-        tokio::select! {
-            r = rx.recv() => match r {
-                Ok(inb) => view.update(&inb.msg, clock.now()),
-                Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wake).await,
-            },
-            _ = tokio::time::sleep(wake) => {}
-        }
+        view.update_within(&mut rx, &clock, wake).await;
     }
 }
 

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use mavlink::dialects::common::{MavFrame, MavMessage, PositionTargetTypemask, SET_POSITION_TARGET_LOCAL_NED_DATA};
-use tokio::sync::{broadcast, watch};
+use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
@@ -176,14 +176,7 @@ async fn run(link: Arc<Link>, target: Target, mut pilot: Pilot, steer: Box<dyn S
             }
         }
         let wake = clock.wall_until(next);
-        tokio::select! {
-            r = rx.recv() => match r {
-                Ok(inb) => view.update(&inb.msg, clock.now()),
-                Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => tokio::time::sleep(wake).await,
-            },
-            _ = tokio::time::sleep(wake) => {}
-        }
+        view.update_within(&mut rx, &clock, wake).await;
     }
 }
 

@@ -45,6 +45,25 @@ pub struct VehicleView {
 }
 
 impl VehicleView {
+    /// Takes in what arrives on `rx` until `wake` (wall time) has passed or one message came; a closed
+    /// link just waits, so a companion loop keeps its own schedule.
+    pub async fn update_within(
+        &mut self,
+        rx: &mut tokio::sync::broadcast::Receiver<std::sync::Arc<super::link::Inbound>>,
+        clock: &super::clock::VehicleClock,
+        wake: Duration,
+    ) {
+        use tokio::sync::broadcast::error::RecvError;
+        tokio::select! {
+            r = rx.recv() => match r {
+                Ok(inb) => self.update(&inb.msg, clock.now()),
+                Err(RecvError::Lagged(_)) => {}
+                Err(RecvError::Closed) => tokio::time::sleep(wake).await,
+            },
+            _ = tokio::time::sleep(wake) => {}
+        }
+    }
+
     /// Folds one message in, at vehicle-clock time `now`.
     pub fn update(&mut self, msg: &MavMessage, now: Duration) {
         self.last_heard = Some(now);
