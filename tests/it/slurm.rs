@@ -274,6 +274,7 @@ fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
         .arg(out.path())
         .env("SLURM_CONF", &conf)
         .current_dir(repo())
+        .stderr(std::fs::File::create(out.path().join("stderr.txt")).unwrap())
         .spawn()
         .unwrap();
     let t0 = Instant::now();
@@ -304,7 +305,8 @@ fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
     }
     assert!(
         left.is_empty(),
-        "held {held:?}; still in Slurm after the stop: {left:?}"
+        "held {held:?}; still in Slurm after the stop: {left:?}\n{}",
+        campaign_trace(out.path())
     );
     println!(
         "{} job(s) cancelled in Slurm; the campaign stopped {:.1} s after SIGTERM, the queue was empty {:.1} s later",
@@ -312,4 +314,29 @@ fn a_stopped_campaign_cancels_its_jobs_in_slurm() {
         stopped.as_secs_f64(),
         t2.elapsed().as_secs_f64()
     );
+}
+
+/// What a stopped campaign left to explain a failure: its error output, its journal and each job's cancel
+/// output.
+fn campaign_trace(folder: &Path) -> String {
+    let read = |p: PathBuf| {
+        format!(
+            "--- {}\n{}",
+            p.display(),
+            std::fs::read_to_string(&p).unwrap_or_default()
+        )
+    };
+    let mut parts = vec![read(folder.join("stderr.txt")), read(folder.join("journal.jsonl"))];
+    if let Ok(jobs) = std::fs::read_dir(folder.join("jobs")) {
+        for job in jobs.filter_map(Result::ok) {
+            for file in [
+                "prgenuav-cancel.stdout",
+                "prgenuav-cancel.stderr",
+                "prgenuav-job.stderr",
+            ] {
+                parts.push(read(job.path().join(file)));
+            }
+        }
+    }
+    parts.join("\n")
 }

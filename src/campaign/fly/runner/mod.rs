@@ -131,9 +131,12 @@ impl RunnerVehicle {
                 Attempt::Flew(b.flown)
             }
             (Some(0), Err(e)) => Attempt::Failed(format!("{e}{}", tail(&stderr))),
+            // A submitting command that failed (lost contact with its engine, say) may leave its job there:
+            // cancelled before the retry, so one candidate never flies twice at once.
             (code, _) => Attempt::Failed(format!(
-                "exited with {}{}",
+                "exited with {}{}{}",
                 code.map_or("a signal".into(), |c| format!("code {c}")),
+                in_engine(),
                 tail(&stderr)
             )),
         }

@@ -140,6 +140,28 @@ fn a_job_stopped_or_timed_out_is_cancelled_in_its_engine_by_its_id() {
 }
 
 #[test]
+fn a_job_whose_command_failed_is_cancelled_in_its_engine_before_the_retry() {
+    let tmp = tempfile::tempdir().unwrap();
+    let settings = RunnerSettings {
+        cancel: Some(Template::parse_cancel("echo {id} >> ../../cancelled").unwrap()),
+        ..settings("echo lost the controller >&2; exit 1; : {test}", tmp.path(), 60_000)
+    };
+    let mut v = RunnerVehicle::new(0, Arc::new(settings));
+    let f = v.fly(
+        &test_case(),
+        &tmp.path().join("flights/candidate_5.csv"),
+        &AtomicBool::new(false),
+    );
+    let f = f.unwrap();
+    assert_eq!(f.status, FlightStatus::BackendFailed);
+    let reason = f.reason.unwrap();
+    assert!(reason.contains("asked the engine to cancel it"), "{reason}");
+    let ids = std::fs::read_to_string(tmp.path().join("cancelled")).unwrap();
+    let want: Vec<String> = (1..=2).map(|n| job_id(tmp.path(), "candidate_5", n)).collect();
+    assert_eq!(ids.lines().collect::<Vec<_>>(), want);
+}
+
+#[test]
 fn no_job_slots_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let e = RunnerVehicle::fleet(settings("x {test}", tmp.path(), 1), 0)
