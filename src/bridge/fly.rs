@@ -10,6 +10,7 @@ use super::session::run;
 use super::wire::cancel::CancelToken;
 use super::wire::clock;
 use super::wire::link::{self, Transport};
+use super::wire::tcp_in::TcpInTransport;
 use super::wire::udp_in::UdpInTransport;
 use super::wire::url::LinkAddress;
 use crate::model::TestCase;
@@ -58,11 +59,15 @@ async fn open_with_retry(
     }
 }
 
-/// `udpin` on a socket that answers only the vehicle (a flood on the port cannot take its replies); any other
-/// address through rust-mavlink.
+/// `udpin` on a socket that answers only the vehicle (a flood on the port cannot take its replies), `tcpin` on a
+/// listener that settles on the client that is the vehicle (and never waits for one itself); any other address
+/// through rust-mavlink.
 async fn open(address: &str) -> std::io::Result<Arc<dyn Transport>> {
     if let Some(host_port) = address.strip_prefix("udpin:") {
         return Ok(Arc::new(UdpInTransport::bind(host_port).await?));
+    }
+    if let Some(host_port) = address.strip_prefix("tcpin:") {
+        return Ok(Arc::new(TcpInTransport::bind(host_port).await?));
     }
     Ok(Arc::new(link::MavTransport::open(address).await?))
 }

@@ -56,6 +56,11 @@ pub(crate) fn resolve(base: &Path, name: &str) -> std::result::Result<PathBuf, S
         .find(|p| p.is_file())
         .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()));
     found.ok_or_else(|| {
+        // A folder (or a device) by that name is what the user most likely meant: say so rather than "not found".
+        if let Some(p) = tried.iter().find(|p| p.exists()) {
+            let what = if p.is_dir() { "a folder" } else { "not a regular file" };
+            return format!("{name:?} names {}, which is {what}: it must name a file", p.display());
+        }
         let list: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
         format!(
             "file {name:?} not found (tried, in order: {}; a relative name is looked for in the working folder, \
@@ -112,6 +117,15 @@ mod tests {
     fn a_case_resolves_its_files_from_a_parent_of_its_folder() {
         let found = resolve(&repo().join("missions"), "missions/mission2.plan").unwrap();
         assert_eq!(found, repo().join("missions/mission2.plan"));
+    }
+
+    #[test]
+    fn a_name_that_is_a_folder_is_told_as_a_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("mission.plan")).unwrap();
+        let e = resolve(dir.path(), &dir.path().join("mission.plan").display().to_string()).unwrap_err();
+        assert!(e.contains("which is a folder: it must name a file"), "{e}");
+        assert!(!e.contains("not found"), "{e}");
     }
 
     #[test]

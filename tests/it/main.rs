@@ -34,6 +34,7 @@ mod score;
 mod similarity_reference;
 mod sizes;
 mod slurm;
+mod tcp_flood;
 mod trust;
 mod ulog;
 

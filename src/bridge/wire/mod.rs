@@ -15,6 +15,7 @@ pub mod param_read;
 pub mod params;
 pub mod plan_items;
 pub mod pose;
+pub mod tcp_in;
 pub mod udp_in;
 pub mod url;
 pub mod vehicle;

@@ -71,7 +71,7 @@ impl UdpInTransport {
 
 /// Whether a message is the vehicle's: from the system the link locked onto, or, before that, an autopilot's
 /// heartbeat (what the bridge waits for; a ground station's does not count).
-fn from_vehicle(header: &MavHeader, msg: &MavMessage, locked: u32) -> bool {
+pub(super) fn from_vehicle(header: &MavHeader, msg: &MavMessage, locked: u32) -> bool {
     match (locked, msg) {
         (0, MavMessage::HEARTBEAT(h)) => h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID,
         (0, _) => false,
