@@ -38,7 +38,16 @@ async fn open_with_retry(
 ) -> Result<Arc<dyn Transport>, BridgeError> {
     let deadline = std::time::Instant::now() + clock::secs(opts.heartbeat_wait_s);
     loop {
-        match open(address).await {
+        // A connect the network never answers (a `tcpout` to a silent host) ends with the wait or the stop.
+        let opened = tokio::select! {
+            opened = open(address) => opened,
+            () = tokio::time::sleep_until(deadline.into()) => Err(std::io::Error::new(
+                std::io::ErrorKind::TimedOut,
+                format!("not open within {:.0} s (the heartbeat wait)", opts.heartbeat_wait_s),
+            )),
+            () = cancel.cancelled() => Err(std::io::Error::new(std::io::ErrorKind::Interrupted, "stopped")),
+        };
+        match opened {
             Ok(t) => return Ok(t),
             Err(e)
                 if matches!(
