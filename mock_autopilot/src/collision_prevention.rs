@@ -13,6 +13,7 @@ use nalgebra::Vector2;
 use crate::dynamics::max_speed_from_distance;
 use crate::obstacle_map::{BIN_COUNT, BIN_DEG, ObstacleMap, RANGE_TIMEOUT, UNKNOWN, bin_at, wrap_360};
 use crate::params::ParamTable;
+use crate::release::Px4Release;
 
 /// A horizontal NED vector (x North, y East).
 pub type Xy = Vector2<f64>;
@@ -42,6 +43,8 @@ pub struct CpParams {
     pub xy_vel_p_acc: f64,
     /// MPC_VEL_MANUAL, m/s.
     pub vel_manual: f64,
+    /// Whether the release calls Collision Prevention in the Position mode `MPC_POS_MODE` selects.
+    pub in_position_mode: bool,
 }
 
 impl CpParams {
@@ -58,12 +61,21 @@ impl CpParams {
             acc_hor: pos("MPC_ACC_HOR"),
             xy_vel_p_acc: pos("MPC_XY_VEL_P_ACC"),
             vel_manual: pos("MPC_VEL_MANUAL"),
+            in_position_mode: true,
         }
     }
 
-    /// Collision Prevention acts when CP_DIST is positive.
+    /// As [`Self::from_params`], for `release`, whose Collision Prevention may ignore the Position mode set.
+    pub fn for_release(p: &ParamTable, release: Px4Release) -> Self {
+        Self {
+            in_position_mode: release.cp_acts_in_position_mode(p.f64("MPC_POS_MODE")),
+            ..Self::from_params(p)
+        }
+    }
+
+    /// Collision Prevention acts when CP_DIST is positive, in a Position mode that calls it.
     pub fn active(&self) -> bool {
-        self.dist_m > 0.0
+        self.dist_m > 0.0 && self.in_position_mode
     }
 }
 

@@ -72,6 +72,7 @@ const DEFAULTS: &[(&str, ParamValue)] = {
         ("MPC_LAND_ALT2", F(5.0)),
         ("MPC_LAND_SPEED", F(0.7)),
         ("MPC_MAN_Y_MAX", F(150.0)),
+        ("MPC_POS_MODE", I(4)),
         ("MPC_THR_HOVER", F(0.5)),
         ("MPC_THR_MIN", F(0.12)),
         ("MPC_TKO_SPEED", F(1.5)),

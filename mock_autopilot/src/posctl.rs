@@ -52,7 +52,7 @@ impl Vehicle {
         }
         let sticks = self.fresh_sticks().unwrap_or_default();
         let mp = ManualParams::from_params(&self.params);
-        let cpp = CpParams::from_params(&self.params);
+        let cpp = CpParams::for_release(&self.params, self.release);
         let mut events = Vec::new();
         let body = self.body;
         let now = self.now;

@@ -6,6 +6,7 @@ use super::*;
 use crate::obstacles::{ObstacleWorld, SolidBox};
 use crate::params::ParamValue;
 use crate::range_scan::RangeSensor;
+use crate::release::Px4Release;
 use crate::scenarios::{GCS, command};
 use crate::vehicle::VehicleConfig;
 
@@ -24,10 +25,16 @@ fn wall() -> SolidBox {
     }
 }
 
+/// A vehicle acting as PX4 v1.16.2, whose Position mode and Collision Prevention the mock models.
 fn vehicle(params: &[(&str, ParamValue)]) -> Vehicle {
+    vehicle_of(Px4Release::parse("1.16.2").unwrap(), params)
+}
+
+fn vehicle_of(release: Px4Release, params: &[(&str, ParamValue)]) -> Vehicle {
     Vehicle::new(VehicleConfig {
         params: params.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         collision: Some(Box::new(ObstacleWorld::new(vec![wall()]))),
+        release,
         ..Default::default()
     })
 }
@@ -173,6 +180,26 @@ fn cp_dist_minus_one_flies_into_the_wall() {
     let mut seen = airborne_in_posctl(&mut v, true);
     run(&mut v, 20.0, Some((1000, 0)), true, &mut seen);
     assert!(v.state().crashed, "flew to x {:.1}", seen.max_x);
+}
+
+#[test]
+fn v1_14_collision_prevention_ignores_the_acceleration_based_position_mode() {
+    // PX4 v1.14 SIH at its default MPC_POS_MODE 4 flew a CP_DIST 2 test into a box; with 3 it held back.
+    let mut v = vehicle_of(Px4Release::V1_14_0, &cp(3.0));
+    let mut seen = airborne_in_posctl(&mut v, true);
+    run(&mut v, 20.0, Some((1000, 0)), true, &mut seen);
+    assert!(v.state().crashed, "flew to x {:.1}", seen.max_x);
+    assert_eq!(seen.echoes, 0, "no map echoed while Collision Prevention is idle");
+    let mut params = cp(3.0).to_vec();
+    params.push(("MPC_POS_MODE", ParamValue::Int(3)));
+    let mut v = vehicle_of(Px4Release::V1_14_0, &params);
+    let mut seen = airborne_in_posctl(&mut v, true);
+    run(&mut v, 20.0, Some((1000, 0)), true, &mut seen);
+    assert!(
+        !v.state().crashed && 19.0 - seen.max_x > 2.0,
+        "flew to x {:.1}",
+        seen.max_x
+    );
 }
 
 #[test]

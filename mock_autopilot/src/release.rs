@@ -53,6 +53,17 @@ impl Px4Release {
     pub fn has_avoidance_interface(self) -> bool {
         (self.major, self.minor) < (1, 16)
     }
+
+    /// Whether Collision Prevention acts in Position mode with `MPC_POS_MODE` `mode`: before v1.16 only the
+    /// velocity-based modes call it (0, 3; the default 4 ignores every range message), from v1.16 only the
+    /// acceleration-based one (4).
+    pub fn cp_acts_in_position_mode(self, mode: f64) -> bool {
+        if (self.major, self.minor) < (1, 16) {
+            mode == 0.0 || mode == 3.0
+        } else {
+            mode == 4.0
+        }
+    }
 }
 
 #[cfg(test)]
@@ -67,6 +78,9 @@ mod tests {
         assert_eq!(Px4Release::default().flight_sw_version(), (1 << 24) | (14 << 16) | 255);
         assert!(Px4Release::parse("1.15.4").unwrap().has_avoidance_interface());
         assert!(!Px4Release::parse("1.18.0").unwrap().has_avoidance_interface());
+        let (v14, v16) = (Px4Release::V1_14_0, Px4Release::parse("1.16.2").unwrap());
+        assert!(!v14.cp_acts_in_position_mode(4.0) && v14.cp_acts_in_position_mode(3.0));
+        assert!(v16.cp_acts_in_position_mode(4.0) && !v16.cp_acts_in_position_mode(0.0));
         for bad in ["0.16.0", "1.16", "1.16.2.1", "1.300.0", "x", ""] {
             assert!(Px4Release::parse(bad).is_err(), "{bad}");
         }

@@ -155,6 +155,7 @@ pub struct Vehicle {
     pub(crate) feasibility_pending: bool,
     seed: u64,
     pub(crate) flight_sw_version: u32,
+    pub(crate) release: Px4Release,
     flights: u64,
     gusts: Gusts,
 }
@@ -206,6 +207,7 @@ impl Vehicle {
             feasibility_pending: false,
             seed: cfg.seed,
             flight_sw_version: cfg.release.flight_sw_version(),
+            release: cfg.release,
             flights: 0,
             gusts: Gusts::calm(),
         }

@@ -95,6 +95,10 @@ pub struct Release {
     pub avoidance_interface: bool,
     /// Collision Prevention (`CP_DIST`, fed by `OBSTACLE_DISTANCE`, acting in Position mode).
     pub collision_prevention: bool,
+    /// The `MPC_POS_MODE` values in which that Collision Prevention acts, the one to set first: up to v1.15
+    /// only the velocity-based Position modes call it (0 direct, 3 smoothed; not PX4's default 4), from
+    /// v1.16 only the acceleration-based one (4).
+    pub cp_position_modes: &'static [u8],
     /// How this row was established.
     pub checked: Checked,
 }
@@ -107,6 +111,7 @@ pub const RELEASES: [Release; 4] = [
         home: HomeUnits::IntE7,
         avoidance_interface: true,
         collision_prevention: true,
+        cp_position_modes: &[3, 0],
         checked: Checked::Flown,
     },
     Release {
@@ -115,6 +120,7 @@ pub const RELEASES: [Release; 4] = [
         home: HomeUnits::IntE7,
         avoidance_interface: true,
         collision_prevention: true,
+        cp_position_modes: &[3, 0],
         checked: Checked::Source,
     },
     Release {
@@ -123,6 +129,7 @@ pub const RELEASES: [Release; 4] = [
         home: HomeUnits::FloatDegrees,
         avoidance_interface: false,
         collision_prevention: true,
+        cp_position_modes: &[4],
         checked: Checked::Flown,
     },
     Release {
@@ -131,6 +138,7 @@ pub const RELEASES: [Release; 4] = [
         home: HomeUnits::FloatDegrees,
         avoidance_interface: false,
         collision_prevention: true,
+        cp_position_modes: &[4],
         checked: Checked::Source,
     },
 ];

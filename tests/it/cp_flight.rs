@@ -71,4 +71,10 @@ async fn a_wall_across_the_path_holds_the_vehicle_and_the_pilot_gives_up() {
         "{:?}",
         r.warnings
     );
+    // The mock acts as PX4 v1.14, whose Collision Prevention ignores its default MPC_POS_MODE 4.
+    assert!(
+        r.warnings.iter().any(|w| w.contains("MPC_POS_MODE set to 3")),
+        "{:?}",
+        r.warnings
+    );
 }

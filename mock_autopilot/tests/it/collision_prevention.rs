@@ -7,6 +7,7 @@ use mavlink::AsyncMavConnection;
 use mavlink::dialects::common::*;
 use mock_autopilot::obstacles::{ObstacleWorld, SolidBox};
 use mock_autopilot::range_scan::RangeSensor;
+use mock_autopilot::release::Px4Release;
 use mock_autopilot::{FlightMode, MockHandle};
 
 use crate::client::{Gcs, mock};
@@ -27,12 +28,18 @@ fn wall() -> SolidBox {
     }
 }
 
+/// A mock acting as PX4 v1.16.2, whose Collision Prevention (at the default `MPC_POS_MODE` 4) it models.
 async fn spawn() -> MockHandle {
     mock(SPEED, |b| {
         b.collision(Box::new(ObstacleWorld::new(vec![wall()])))
             .estimator_settle(Duration::ZERO)
+            .px4_release(v1_16())
     })
     .await
+}
+
+fn v1_16() -> Px4Release {
+    Px4Release::parse("1.16.2").expect("a release")
 }
 
 fn sticks(x: i16) -> MavMessage {

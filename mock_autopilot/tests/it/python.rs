@@ -165,7 +165,9 @@ async fn pymavlink_sticks_towards_a_wall_stop_near_cp_dist() {
         return;
     }
     for (cp_dist, expect_ok) in [("3", true), ("-1", false)] {
-        let m = mock(5.0, |b| b.estimator_settle(Duration::ZERO)).await;
+        // As PX4 v1.16, whose Collision Prevention acts at the default MPC_POS_MODE.
+        let v1_16 = mock_autopilot::release::Px4Release::parse("1.16.2").expect("a release");
+        let m = mock(5.0, |b| b.estimator_settle(Duration::ZERO).px4_release(v1_16)).await;
         let port = m.local_addr().expect("addr").port();
         let args: Vec<String> = [
             script("cp_stop.py").display().to_string(),

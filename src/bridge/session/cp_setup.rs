@@ -14,6 +14,7 @@ use super::context::{Session, Stop, stop_for};
 use super::report::Status;
 use crate::bridge::companion::cp_feed::{self, CpFeed, CpProgress};
 use crate::bridge::companion::offboard;
+use crate::bridge::px4_version::Release;
 use crate::lfs::cp_params::CpParams;
 use crate::lfs::cp_pilot::{CpPilot, PilotParams};
 use crate::lfs::range_sensor::{RangeSensor, SensorScene};
@@ -39,6 +40,27 @@ impl Session<'_> {
             ));
         }
         Ok(params)
+    }
+
+    /// `MPC_POS_MODE` for this flight when the vehicle's value is one where its release's Collision Prevention
+    /// does not act (PX4 v1.14's default 4 ignores every `OBSTACLE_DISTANCE`), with a warning saying so; `None`
+    /// when the value is right or the release is unknown (left as it is).
+    pub async fn cp_position_mode(&mut self, release: Option<&Release>) -> Result<Option<(String, f64)>, Stop> {
+        let Some(release) = release else { return Ok(None) };
+        let now = self
+            .read_param("MPC_POS_MODE", "flying with its Position mode as it is")
+            .await?;
+        let Some(change) = position_mode_change(release, now) else {
+            return Ok(None);
+        };
+        let version = self.px4_version.as_ref().map_or_else(String::new, |v| format!(" {v}"));
+        self.warnings.push(format!(
+            "MPC_POS_MODE set to {change} for this flight: PX4{version}'s Collision Prevention acts only with \
+             MPC_POS_MODE {}, and the vehicle had {}",
+            list(release.cp_position_modes),
+            now.map_or_else(|| "none".into(), |v| format!("{v:.0}"))
+        ));
+        Ok(Some(("MPC_POS_MODE".into(), f64::from(change))))
     }
 
     /// Starts the pilot (over the mission's waypoints, in the vehicle's frame) and the lidar.
@@ -102,5 +124,44 @@ impl Session<'_> {
             .await
             .map_err(|e| stop_for("switching to Position mode (POSCTL)", e))?;
         super::ready::arm(self).await
+    }
+}
+
+/// The `MPC_POS_MODE` to set so that `release`'s Collision Prevention acts, given the vehicle's value (`None`
+/// when it already does; a vehicle that did not say is set too).
+fn position_mode_change(release: &Release, now: Option<f64>) -> Option<u8> {
+    let acts = now.is_some_and(|v| release.cp_position_modes.iter().any(|m| f64::from(*m) == v));
+    if acts {
+        None
+    } else {
+        release.cp_position_modes.first().copied()
+    }
+}
+
+fn list(modes: &[u8]) -> String {
+    let names: Vec<String> = modes.iter().map(u8::to_string).collect();
+    names.join(" or ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bridge::px4_version::RELEASES;
+
+    fn release(minor: u32) -> &'static Release {
+        RELEASES.iter().find(|r| r.minor == minor).unwrap()
+    }
+
+    #[test]
+    fn the_position_mode_is_set_where_the_release_collision_prevention_acts() {
+        // v1.14's default (acceleration based) ignores Collision Prevention: smoothed velocity is set.
+        assert_eq!(position_mode_change(release(14), Some(4.0)), Some(3));
+        assert_eq!(position_mode_change(release(14), Some(0.0)), None);
+        assert_eq!(position_mode_change(release(15), Some(3.0)), None);
+        // v1.16 acts only in the acceleration-based mode, its default.
+        assert_eq!(position_mode_change(release(16), Some(4.0)), None);
+        assert_eq!(position_mode_change(release(16), Some(0.0)), Some(4));
+        assert_eq!(position_mode_change(release(17), None), Some(4));
+        assert_eq!(list(release(14).cp_position_modes), "3 or 0");
     }
 }

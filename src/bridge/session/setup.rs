@@ -67,6 +67,10 @@ impl Session<'_> {
         let release = self.check_release()?;
         let case: Vec<(String, f64)> = self.test.params.iter().map(|p| (p.name.clone(), p.value)).collect();
         let mut interface = release.map(|r| r.avoidance_interface);
+        let position_mode = match cp {
+            Some(_) => self.cp_position_mode(release).await?,
+            None => None,
+        };
         loop {
             let (mut wanted, skipped) = capability::wanted_params(&case, self.opts.mode, interface);
             if let Some(cp) = cp {
@@ -74,6 +78,7 @@ impl Session<'_> {
                 let own = cp.to_params();
                 wanted.retain(|(n, _)| !own.iter().any(|(o, _)| o == n));
                 wanted.extend(own);
+                wanted.extend(position_mode.clone());
             }
             if !skipped.is_empty() {
                 let version = self.px4_version.as_ref().map(|v| v.text.clone());
