@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed, tallies};
+use crate::campaign::report::expected_score::TestExpectation;
 use crate::campaign::store::journal::FlightRecord;
 use crate::judge::{Z90, test_score, wilson_interval};
 use crate::model::Obstacle;
@@ -30,7 +31,8 @@ pub struct TestVerdict {
     pub failure_rate_low: f64,
     /// Its upper bound.
     pub failure_rate_high: f64,
-    /// More than half of `--confirm` flights failed: written as `test_N.yaml`.
+    /// Written as `test_N.yaml`: more than half of its `--confirm` flights failed, until the campaign aims
+    /// at the 2026 score ([`crate::campaign::report::expected_score`]) and writes by expected points.
     pub confirmed: bool,
     /// Its majority is settled (false: the budget ran out before its confirmation).
     pub settled: bool,
@@ -43,6 +45,12 @@ pub struct TestVerdict {
     pub trajectories: Vec<PathBuf>,
     /// The file it is written as: `test_N.yaml` when confirmed, else `unconfirmed/test_K.yaml`.
     pub reported_as: Option<String>,
+    /// Its expected 2026 figures ([`crate::campaign::report::expected_score`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub expected: Option<TestExpectation>,
+    /// The better written test whose flown trajectory it copies (`test_K.yaml`): set aside, not written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_duplicate_of: Option<String>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
     pub first_flight: usize,
@@ -87,6 +95,8 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             test_score: test_score(&distances, &times, best_flight.obstacles.len()),
             trajectories: flights.iter().map(|r| r.trajectory.clone()).collect(),
             reported_as: None,
+            expected: None,
+            near_duplicate_of: None,
             first_flight,
         };
         out.push((verdict, flights));
