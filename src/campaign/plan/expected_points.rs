@@ -194,7 +194,10 @@ mod tests {
         let near = estimate(&evidence(&[3.0], &[0.1], None));
         assert!((near.mean - 5.0 * 0.25 / 1.25).abs() < 1e-12, "{near:?}");
         let crowd = estimate(&evidence(&[3.0], &[0.1; 40], None));
-        assert!((crowd.mean - 2.5).abs() < 1e-12, "40 neighbours weigh one flight: {crowd:?}");
+        assert!(
+            (crowd.mean - 2.5).abs() < 1e-12,
+            "40 neighbours weigh one flight: {crowd:?}"
+        );
     }
 
     #[test]

@@ -70,7 +70,11 @@ pub struct SuiteExpectation {
 /// Estimates, ranks and chooses the tests to write among `tests` (each with its flights) of the campaign's
 /// `records`, setting `expected`, `confirmed` (written) and `near_duplicate_of`; reads the flights'
 /// trajectories from `folder`. Returns the written suite's expectation.
-pub fn aim(folder: &Path, records: &[FlightRecord], tests: &mut [(TestVerdict, Vec<&FlightRecord>)]) -> SuiteExpectation {
+pub fn aim(
+    folder: &Path,
+    records: &[FlightRecord],
+    tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
+) -> SuiteExpectation {
     let flights = Flights::new(records);
     for (t, own) in tests.iter_mut() {
         t.expected = Some(flights.expectation(t, own));
@@ -96,7 +100,11 @@ pub fn aim(folder: &Path, records: &[FlightRecord], tests: &mut [(TestVerdict, V
         .filter(|(_, d)| d.is_none())
         .filter_map(|(a, _)| a)
         .collect();
-    suite(tests.iter().map(|(t, _)| t), duplicates.iter().flatten().count(), sim_pen(&kept, SIMILAR_BELOW_M))
+    suite(
+        tests.iter().map(|(t, _)| t),
+        duplicates.iter().flatten().count(),
+        sim_pen(&kept, SIMILAR_BELOW_M),
+    )
 }
 
 /// Best first: the higher expected score, then the candidate index.
@@ -200,6 +208,43 @@ impl<'a> Flights<'a> {
             score_high: score(points.high),
         }
     }
+}
+
+/// The summary table's rows of the written suite's expected 2026 score (none without an expectation).
+pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
+    use std::fmt::Write as _;
+    let Some(e) = e else { return };
+    let _ = writeln!(
+        md,
+        "| expected 2026 score of the written tests (10-90 %): sum of expected test scores x sim_pen | {:.3} \
+         ({:.3}-{:.3}) = {:.3} x {:.3} |",
+        e.final_score, e.final_low, e.final_high, e.total_score, e.sim_pen
+    );
+    let _ = writeln!(
+        md,
+        "| tests set aside as near-duplicate trajectories (DTW < {} m to a better written test) | {} |",
+        e.similar_below_m, e.near_duplicates
+    );
+}
+
+/// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
+pub fn how_sure(e: Option<&SuiteExpectation>, others: usize) -> String {
+    let Some(e) = e else {
+        return String::new();
+    };
+    let others = match others {
+        0 => String::new(),
+        n => format!(
+            "; {} failed but not surely enough, or copy a better test's trajectory ({}/)",
+            super::user_report::plural(n, "more test"),
+            super::user_report::UNCONFIRMED_DIR
+        ),
+    };
+    format!(
+        "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
+         expected 2026 score {:.2} (10-90 %: {:.2}-{:.2}){others}.",
+        e.final_score, e.final_low, e.final_high
+    )
 }
 
 #[cfg(test)]

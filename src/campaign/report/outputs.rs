@@ -5,12 +5,12 @@
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::config::CampaignInput;
 use crate::campaign::learn::calibration::Learnt;
-use crate::campaign::report::{backends, expected_score};
 use crate::campaign::report::markdown::markdown;
 use crate::campaign::report::suite::summary;
 pub use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
 use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
+use crate::campaign::report::{backends, expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::io::{write_atomic, write_json};

@@ -62,9 +62,7 @@ pub fn sim_pen(averages: &[Trajectory], similar_below_m: f64) -> f64 {
         return 1.0;
     }
     let similar = (0..averages.len())
-        .filter(|&j| {
-            (0..j).any(|i| path_distance(&averages[i], &averages[j]).is_some_and(|d| d < similar_below_m))
-        })
+        .filter(|&j| (0..j).any(|i| path_distance(&averages[i], &averages[j]).is_some_and(|d| d < similar_below_m)))
         .count();
     1.0 - similar as f64 / averages.len() as f64
 }
@@ -113,6 +111,10 @@ mod tests {
         // Set aside against the kept tests only: the third copies the first, not the set-aside second.
         let three = [Some(a.clone()), Some(a.clone()), Some(b), Some(a)];
         assert_eq!(near_duplicates(&three, 75.0), [None, Some(0), None, Some(0)]);
-        assert_eq!(near_duplicates(&[None, None], 75.0), [None, None], "nothing to compare: kept");
+        assert_eq!(
+            near_duplicates(&[None, None], 75.0),
+            [None, None],
+            "nothing to compare: kept"
+        );
     }
 }
