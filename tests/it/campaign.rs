@@ -418,7 +418,10 @@ fn confirm_2_on_the_mock_flies_each_failure_again_and_writes_its_runs() {
     assert!(folder.join("test_0-2.csv").is_file() || folder.join("test_0-1.csv").is_file());
     let unconfirmed: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("unconfirmed.json")).unwrap()).unwrap();
-    assert_eq!(unconfirmed[0]["reported_as"], "unconfirmed/test_0.yaml", "the near-duplicate kept on disk");
+    assert_eq!(
+        unconfirmed[0]["reported_as"], "unconfirmed/test_0.yaml",
+        "the near-duplicate kept on disk"
+    );
     assert!(
         std::fs::read_to_string(folder.join("report.md"))
             .unwrap()

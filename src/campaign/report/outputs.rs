@@ -76,7 +76,7 @@ pub fn write_outputs(
     Ok(report)
 }
 
-/// Writes each confirmed failing test as `test_N` (YAML, its best failing flight's trajectory CSV and a plot;
+/// Writes each test to write as `test_N` (YAML, its best failing flight's trajectory CSV and a plot;
 /// its other flights as `test_N-<flight>.csv`, the runs `score` reads); returns (candidate, file name).
 fn write_failing_tests(
     input: &CampaignInput,

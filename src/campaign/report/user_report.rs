@@ -150,9 +150,9 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
         s.distinct_failing,
         plural(s.flown, "flight")
     ));
-    lines.push(format!(
-        "How sure: {}",
-        super::expected_score::how_sure(s.expected_2026.as_ref(), unconfirmed.len())
+    lines.push(super::expected_score::how_sure(
+        s.expected_2026.as_ref(),
+        unconfirmed.len(),
     ));
     lines.push(format!(
         "Next: open test_0.svg, or fly it again: prgenuav fly {}",
