@@ -9,12 +9,11 @@
 use std::cmp::Ordering;
 use std::path::Path;
 
-use serde::Serialize;
-
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::evaluation::SIMILAR_BELOW_M;
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
-use crate::campaign::plan::expected_points::{Evidence, PointsEstimate, counts, estimate, prior_bands};
+use crate::campaign::plan::expected_points::{Evidence, counts, estimate, prior_bands};
+pub use crate::campaign::report::expected_figures::{SuiteExpectation, TestExpectation};
 use crate::campaign::report::suite::DISTINCT_IOU;
 use crate::campaign::report::trajectory_guard::{flown_average, near_duplicates, sim_pen};
 use crate::campaign::report::verdicts::TestVerdict;
@@ -26,46 +25,6 @@ use crate::model::{Obstacle, Trajectory};
 /// Flown tests overlapping a test by at least this footprint IoU are its neighbours: the campaign's own
 /// near-duplicate rule, so a neighbour is a test it would not fly as new.
 pub const NEIGHBOUR_IOU: f64 = DISTINCT_IOU;
-
-/// A test's expected 2026 figures.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct TestExpectation {
-    /// Expected points of a flight, with its 10-90 % interval.
-    pub points: PointsEstimate,
-    /// Expected flight time, minutes: its flown flights' mean (the prediction when none has a distance).
-    pub minutes: f64,
-    /// Expected 2026 test score: expected points x 10 / (obstacles² x minutes).
-    pub score: f64,
-    /// The score at the points' 10 % bound.
-    pub score_low: f64,
-    /// The score at the points' 90 % bound.
-    pub score_high: f64,
-}
-
-/// The written suite's expected 2026 score.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SuiteExpectation {
-    /// Tests written.
-    pub tests: usize,
-    /// Tests that earned a place but were set aside as near-duplicate trajectories.
-    pub near_duplicates: usize,
-    /// The DTW distance below which two average trajectories are too similar (`evaluate`'s default), m.
-    pub similar_below_m: f64,
-    /// Sum of the written tests' expected scores.
-    pub total_score: f64,
-    /// The sum at their 10 % bounds.
-    pub total_low: f64,
-    /// The sum at their 90 % bounds.
-    pub total_high: f64,
-    /// The similarity penalty of the written tests' flown averages.
-    pub sim_pen: f64,
-    /// total_score x sim_pen: the expected 2026 score.
-    pub final_score: f64,
-    /// total_low x sim_pen.
-    pub final_low: f64,
-    /// total_high x sim_pen.
-    pub final_high: f64,
-}
 
 /// Estimates, ranks and chooses the tests to write among `tests` (each with its flights) of the campaign's
 /// `records`, setting `expected`, `confirmed` (written) and `near_duplicate_of`; reads the flights'
@@ -225,26 +184,6 @@ pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
         "| tests set aside as near-duplicate trajectories (DTW < {} m to a better written test) | {} |",
         e.similar_below_m, e.near_duplicates
     );
-}
-
-/// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
-pub fn how_sure(e: Option<&SuiteExpectation>, others: usize) -> String {
-    let Some(e) = e else {
-        return "Each written test failed at least once.".into();
-    };
-    let others = match others {
-        0 => String::new(),
-        n => format!(
-            "; {} failed but not surely enough, or copy a better test's trajectory ({}/)",
-            super::user_report::plural(n, "more test"),
-            super::user_report::UNCONFIRMED_DIR
-        ),
-    };
-    format!(
-        "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
-         expected 2026 score {:.2} (10-90 %: {:.2}-{:.2}){others}.",
-        e.final_score, e.final_low, e.final_high
-    )
 }
 
 #[cfg(test)]

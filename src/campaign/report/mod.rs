@@ -5,6 +5,7 @@
 
 pub mod backends;
 pub mod document;
+pub mod expected_figures;
 pub mod expected_score;
 pub mod folder_score;
 pub mod markdown;

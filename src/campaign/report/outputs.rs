@@ -21,7 +21,7 @@ use crate::plot::{FlightPlot, PathStyle};
 pub use crate::campaign::report::document::{FlownTest, Report, StageTimes};
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each test to write, best first, then
-/// report.json and report.md (and with `--confirm` above 1, `unconfirmed.json`), for the campaign `input` that
+/// report.json and report.md (and `unconfirmed.json` with `--confirm` above 1 or tests not written), for the campaign `input` that
 /// drew `candidates_screened` candidates and flew the charged flights of `journal`. Returns the report.
 pub fn write_outputs(
     input: &CampaignInput,
@@ -67,8 +67,8 @@ pub fn write_outputs(
         folder: input.folder.to_path_buf(),
     };
     user_report::write_pictures(input, &report.view())?;
-    if cfg.confirm > 1 {
-        let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
+    let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
+    if cfg.confirm > 1 || !unconfirmed.is_empty() {
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
     }
     write_json(&input.folder.join("report.json"), &report, true)?;

@@ -150,10 +150,7 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
         s.distinct_failing,
         plural(s.flown, "flight")
     ));
-    lines.push(super::expected_score::how_sure(
-        s.expected_2026.as_ref(),
-        unconfirmed.len(),
-    ));
+    lines.push(how_sure(s.expected_2026.as_ref(), unconfirmed.len()));
     lines.push(format!(
         "Next: open test_0.svg, or fly it again: prgenuav fly {}",
         folder.join("test_0.yaml").display()
@@ -239,10 +236,29 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
     let meaning = if s.failing == 0 {
         format!("{} {next}", v[0])
     } else {
-        let sure = super::expected_score::how_sure(s.expected_2026.as_ref(), unconfirmed);
+        let sure = how_sure(s.expected_2026.as_ref(), unconfirmed);
         format!("{sure} {next}").trim_start().to_string()
     };
     vec![figures, meaning, format!("output folder: {}", folder.display())]
+}
+
+/// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
+fn how_sure(e: Option<&super::expected_figures::SuiteExpectation>, others: usize) -> String {
+    let Some(e) = e else {
+        return "Each written test failed at least once.".into();
+    };
+    let others = match others {
+        0 => String::new(),
+        n => format!(
+            "; {} failed but not surely enough, or copy a better test's trajectory ({UNCONFIRMED_DIR}/)",
+            plural(n, "more test")
+        ),
+    };
+    format!(
+        "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
+         expected 2026 score {:.2} (10-90 %: {:.2}-{:.2}){others}.",
+        e.final_score, e.final_low, e.final_high
+    )
 }
 
 /// `1 test`, `2 tests`: a count and its noun, plural when the count is not one.

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed, tallies};
-use crate::campaign::report::expected_score::TestExpectation;
+use crate::campaign::report::expected_figures::TestExpectation;
 use crate::campaign::store::journal::FlightRecord;
 use crate::judge::{Z90, test_score, wilson_interval};
 use crate::model::Obstacle;
