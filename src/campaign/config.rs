@@ -95,7 +95,7 @@ pub struct CampaignConfig {
     #[serde(default)]
     pub child_max_iou: Option<f64>,
     /// Flights a failing test gets at most (`--confirm`): it is flown again until the majority of this many
-    /// flights is settled, and reported only when more than half of them fail ([`super::fly::confirm`]). 1 (also
+    /// flights is settled ([`super::fly::confirm`]); its flights feed its expected 2026 points. 1 (also
     /// when the key is absent: such campaigns flew every test once) is one flight per test.
     #[serde(default = "one_flight")]
     pub confirm: usize,

@@ -93,7 +93,7 @@ fn a_campaign_run_from_elsewhere_writes_every_documented_file() {
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(lines.len(), 3, "{stdout}");
     assert!(
-        lines[0].starts_with("1 failing test (1 distinct at IoU 0.5) of 6 flights"),
+        lines[0].starts_with("2 failing tests (2 distinct at IoU 0.5) of 6 flights"),
         "{stdout}"
     );
     let folder = tmp

@@ -8,6 +8,7 @@ mod cli_errors;
 mod cp_flight;
 mod documented;
 mod evaluate;
+mod expected_2026;
 mod flood;
 mod frame;
 mod generator;

@@ -42,7 +42,7 @@ fn the_main_job_flies_the_pinned_journal() {
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(
         stdout.starts_with(
-            "1 failing test (1 distinct at IoU 0.5) of 6 flights (35 candidates screened), failure score 1.37"
+            "2 failing tests (2 distinct at IoU 0.5) of 6 flights (35 candidates screened), failure score 1.82"
         ),
         "{stdout}"
     );

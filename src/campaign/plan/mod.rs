@@ -3,6 +3,7 @@
 
 pub mod diversity_guard;
 pub mod draw;
+pub mod expected_points;
 pub mod neighbours;
 pub mod rank;
 pub mod rounds;

@@ -5,9 +5,12 @@
 
 pub mod backends;
 pub mod document;
+pub mod expected_figures;
+pub mod expected_score;
 pub mod folder_score;
 pub mod markdown;
 pub mod outputs;
 pub mod suite;
+pub mod trajectory_guard;
 pub mod user_report;
 pub mod verdicts;

@@ -1,16 +1,16 @@
-//! The campaign's outputs: the failing tests best first, with their flights, and report.json / report.md. With
-//! `--confirm` K > 1 only the confirmed tests are written as `test_N`; the others that failed are listed in
-//! `unconfirmed.json` and the report.
+//! The campaign's outputs: the failing tests best first, with their flights, and report.json / report.md. Only
+//! the tests expected to earn 2026 points, less near-duplicate trajectories, are written as `test_N`, by their
+//! expected score ([`expected_score`]); the others that failed are listed in `unconfirmed.json` and the report.
 
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::config::CampaignInput;
 use crate::campaign::learn::calibration::Learnt;
-use crate::campaign::report::backends;
 use crate::campaign::report::markdown::markdown;
 use crate::campaign::report::suite::summary;
 pub use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
 use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
+use crate::campaign::report::{backends, expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::io::{write_atomic, write_json};
@@ -20,8 +20,8 @@ use crate::plot::{FlightPlot, PathStyle};
 
 pub use crate::campaign::report::document::{FlownTest, Report, StageTimes};
 
-/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each confirmed failing test, best first, then
-/// report.json and report.md (and with `--confirm` above 1, `unconfirmed.json`), for the campaign `input` that
+/// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each test to write, best first, then
+/// report.json and report.md (and `unconfirmed.json` with `--confirm` above 1 or tests not written), for the campaign `input` that
 /// drew `candidates_screened` candidates and flew the charged flights of `journal`. Returns the report.
 pub fn write_outputs(
     input: &CampaignInput,
@@ -35,12 +35,14 @@ pub fn write_outputs(
     let charged = journal.charged();
     let records = charged.as_slice();
     let mut tests = verdicts(records, cfg.confirm);
+    let expected_2026 = expected_score::aim(input.folder, records, &mut tests);
     let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
     let mut tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
     user_report::write_unconfirmed(input, &mut tests, spelling(input))?;
     let mut suite = summary(records, &tests, cfg.screen);
     suite.confirm = cfg.confirm;
+    suite.expected_2026 = Some(expected_2026);
     suite.candidates_screened = candidates_screened;
     suite.screening_per_s = if cfg.screen && stages.screen_s > 0.0 {
         candidates_screened as f64 / stages.screen_s
@@ -65,8 +67,8 @@ pub fn write_outputs(
         folder: input.folder.to_path_buf(),
     };
     user_report::write_pictures(input, &report.view())?;
-    if cfg.confirm > 1 {
-        let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
+    let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
+    if cfg.confirm > 1 || !unconfirmed.is_empty() {
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
     }
     write_json(&input.folder.join("report.json"), &report, true)?;
@@ -74,7 +76,7 @@ pub fn write_outputs(
     Ok(report)
 }
 
-/// Writes each confirmed failing test as `test_N` (YAML, its best failing flight's trajectory CSV and a plot;
+/// Writes each test to write as `test_N` (YAML, its best failing flight's trajectory CSV and a plot;
 /// its other flights as `test_N-<flight>.csv`, the runs `score` reads); returns (candidate, file name).
 fn write_failing_tests(
     input: &CampaignInput,

@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed_again, first_flights};
+use crate::campaign::report::expected_figures::SuiteExpectation;
 use crate::campaign::report::verdicts::{TestVerdict, score_sum};
 use crate::campaign::store::journal::{FlightRecord, flights_charged};
 use crate::judge::{distinct_tests, diversity};
@@ -22,7 +23,7 @@ pub struct SuiteSummary {
     pub candidates_screened: usize,
     /// Flights made.
     pub flown: usize,
-    /// Reported tests: confirmed as failing (more than half of up to `confirm` flights below 1.5 m).
+    /// Written tests: expected to earn 2026 points, less near-duplicate trajectories.
     pub failing: usize,
     /// Sum of the reported tests' scores (each over its flights).
     pub failure_score: f64,
@@ -70,6 +71,9 @@ pub struct SuiteSummary {
     pub failed_again: usize,
     /// `failed_again / flown_again`: how often a first failure repeats.
     pub confirmation_rate: Option<f64>,
+    /// The written suite's expected 2026 score (set by the caller).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub expected_2026: Option<SuiteExpectation>,
 }
 
 /// Mean |predicted - flown| of the first (or last) quarter of the flights with a flown distance.
@@ -138,6 +142,7 @@ pub(in crate::campaign) fn summary(records: &[FlightRecord], tests: &[TestVerdic
         flown_again,
         failed_again: again,
         confirmation_rate: (flown_again > 0).then(|| again as f64 / flown_again as f64),
+        expected_2026: None,
     }
 }
 

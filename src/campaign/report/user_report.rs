@@ -145,23 +145,12 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
         .map_or(f64::NAN, |t| t.best_min_distance);
     lines.push(format!(
         "Found {} ({} distinct) in {}: the drone flew closer than {FAIL_M} m to an obstacle; test_0, the \
-         surest, came to {best:.2} m.",
+         best expected 2026 score, came to {best:.2} m.",
         plural(s.failing, "failing test"),
         s.distinct_failing,
         plural(s.flown, "flight")
     ));
-    lines.push(if s.confirm > 1 {
-        format!(
-            "How sure: each failed on more than half of up to {} flights of it; {} more failed at least once but \
-             not on most flights, or the budget ran out first ({UNCONFIRMED_DIR}/).",
-            s.confirm,
-            unconfirmed.len()
-        )
-    } else {
-        "How sure: each failed on one flight (--confirm 1); a flight does not repeat exactly, so fly a test \
-         again before relying on it."
-            .into()
-    });
+    lines.push(how_sure(s.expected_2026.as_ref(), unconfirmed.len()));
     lines.push(format!(
         "Next: open test_0.svg, or fly it again: prgenuav fly {}",
         folder.join("test_0.yaml").display()
@@ -173,7 +162,8 @@ fn only_unconfirmed(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines
     let s = &r.suite;
     let unsettled = unconfirmed.iter().filter(|t| !t.settled).count();
     lines.push(format!(
-        "No confirmed failing test in {}, but {} failed at least once (the closest at {:.2} m).",
+        "No test expected to earn 2026 points surely enough in {}, but {} failed at least once (the closest \
+         at {:.2} m).",
         plural(s.flown, "flight"),
         plural(unconfirmed.len(), "test"),
         unconfirmed
@@ -184,11 +174,10 @@ fn only_unconfirmed(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines
     lines.push(if unsettled > 0 {
         format!(
             "How sure: not yet; the budget ran out before {unsettled} of them could be flown again (a test \
-             counts only when more than half of up to {} flights fail).",
-            s.confirm
+             is written when the 10 % bound of its expected points is above zero)."
         )
     } else {
-        "How sure: they failed once but not on most of their flights again.".into()
+        "How sure: they failed, but too rarely over their flights to expect points surely.".into()
     });
     lines.push(format!(
         "Next: fly one again (prgenuav fly {}), or run a larger budget: prgenuav generate {} {} --seed {}",
@@ -246,22 +235,30 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
     let unconfirmed = r.tests.iter().filter(|t| !t.confirmed).count();
     let meaning = if s.failing == 0 {
         format!("{} {next}", v[0])
-    } else if s.confirm > 1 {
-        let others = match unconfirmed {
-            0 => String::new(),
-            n => format!(
-                "; {} failed at least once but not on most flights ({UNCONFIRMED_DIR}/)",
-                plural(n, "more test")
-            ),
-        };
-        format!(
-            "Confirmed on more than half of up to {} flights each{others}. {next}",
-            s.confirm
-        )
     } else {
-        next
+        let sure = how_sure(s.expected_2026.as_ref(), unconfirmed);
+        format!("{sure} {next}").trim_start().to_string()
     };
     vec![figures, meaning, format!("output folder: {}", folder.display())]
+}
+
+/// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
+fn how_sure(e: Option<&super::expected_figures::SuiteExpectation>, others: usize) -> String {
+    let Some(e) = e else {
+        return "Each written test failed at least once.".into();
+    };
+    let others = match others {
+        0 => String::new(),
+        n => format!(
+            "; {} failed but not surely enough, or copy a better test's trajectory ({UNCONFIRMED_DIR}/)",
+            plural(n, "more test")
+        ),
+    };
+    format!(
+        "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
+         expected 2026 score {:.2} (10-90 %: {:.2}-{:.2}){others}.",
+        e.final_score, e.final_low, e.final_high
+    )
 }
 
 /// `1 test`, `2 tests`: a count and its noun, plural when the count is not one.

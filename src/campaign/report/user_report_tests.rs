@@ -9,16 +9,22 @@ use crate::campaign::report::verdicts::verdicts;
 use crate::campaign::store::journal::{FlightRecord, test_record};
 use crate::judge::Judge;
 
+/// A flight of `candidate`, whose box is its own (no test is another's neighbour).
 fn flight(candidate: u64, attempt: u32, d: f64) -> FlightRecord {
+    let x = candidate as f64 * 20.0;
     FlightRecord {
         attempt,
+        obstacles: vec![crate::model::Obstacle::new(2.0, 2.0, 20.0, x, 20.0, 0.0)],
         ..test_record(candidate, 1.0, Some(d))
     }
 }
 
 /// A report over `records` as the campaign would name its tests.
 fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
-    let mut tests: Vec<TestVerdict> = verdicts(records, confirm).into_iter().map(|(t, _)| t).collect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut pairs = verdicts(records, confirm);
+    let expected = crate::campaign::report::expected_score::aim(dir.path(), records, &mut pairs);
+    let mut tests: Vec<TestVerdict> = pairs.into_iter().map(|(t, _)| t).collect();
     let (mut c, mut u) = (0, 0);
     for t in &mut tests {
         t.reported_as = Some(if t.confirmed {
@@ -31,6 +37,7 @@ fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
     }
     let mut suite = summary(records, &tests, true);
     suite.confirm = confirm;
+    suite.expected_2026 = Some(expected);
     Report {
         case: "missions/mission1.yaml".into(),
         judge: Judge::default(),
@@ -52,18 +59,23 @@ fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
 }
 
 #[test]
-fn a_failure_the_budget_could_not_confirm_says_so_and_what_to_run_next() {
-    // Flight 9 failed at 1.34 m and the budget ended before it flew again.
-    let records: Vec<FlightRecord> = (0..9).map(|c| flight(c, 0, 3.0)).chain([flight(9, 0, 1.34)]).collect();
-    let r = report(&records, 3, 10);
+fn a_failure_too_rare_to_earn_points_says_so_and_what_to_run_next() {
+    // Test 9 failed at 1.34 m, then passed 4 times: one point in five flights is not sure to earn.
+    let again = (1..5).map(|a| flight(9, a, 3.0));
+    let records: Vec<FlightRecord> = (0..9)
+        .map(|c| flight(c, 0, 3.0))
+        .chain([flight(9, 0, 1.34)])
+        .chain(again)
+        .collect();
+    let r = report(&records, 5, 14);
     let v = verdict(&r.view(), &r.folder).join("\n");
     assert!(
-        v.contains("No confirmed failing test in 10 flights, but 1 test failed at least once"),
+        v.contains("No test expected to earn 2026 points surely enough in 14 flights, but 1 test failed at least once"),
         "{v}"
     );
-    assert!(v.contains("1.34 m") && v.contains("budget ran out"), "{v}");
+    assert!(v.contains("1.34 m") && v.contains("too rarely"), "{v}");
     assert!(
-        v.contains("prgenuav generate missions/mission1.yaml 20 --seed 0"),
+        v.contains("prgenuav generate missions/mission1.yaml 28 --seed 0"),
         "{v}"
     );
     assert!(v.contains("out/2026-11-27T16-16-37/unconfirmed/test_0.yaml"), "{v}");
@@ -87,17 +99,22 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
         flight(2, 0, 1.0),
         flight(2, 1, 3.0),
         flight(2, 2, 3.0),
+        flight(2, 3, 3.0),
+        flight(2, 4, 3.0),
     ];
-    let r = report(&records, 3, 5);
+    let r = report(&records, 5, 7);
     let v = verdict(&r.view(), Path::new("f"));
     assert_eq!(v.len(), 3, "{v:?}");
     assert!(
-        v[0].starts_with("Found 1 failing test (1 distinct) in 5 flights"),
+        v[0].starts_with("Found 1 failing test (1 distinct) in 7 flights"),
         "{v:?}"
     );
-    assert!(v[0].contains("test_0, the surest, came to 0.50 m"), "{v:?}");
     assert!(
-        v[1].contains("1 more failed at least once but not on most flights"),
+        v[0].contains("test_0, the best expected 2026 score, came to 0.50 m"),
+        "{v:?}"
+    );
+    assert!(
+        v[1].contains("expected 2026 score") && v[1].contains("1 more test failed but not surely enough"),
         "{v:?}"
     );
     assert!(v[2].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");

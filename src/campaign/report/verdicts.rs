@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed, tallies};
+use crate::campaign::report::expected_figures::TestExpectation;
 use crate::campaign::store::journal::FlightRecord;
 use crate::judge::{Z90, test_score, wilson_interval};
 use crate::model::Obstacle;
@@ -30,7 +31,8 @@ pub struct TestVerdict {
     pub failure_rate_low: f64,
     /// Its upper bound.
     pub failure_rate_high: f64,
-    /// More than half of `--confirm` flights failed: written as `test_N.yaml`.
+    /// Written as `test_N.yaml`: more than half of its `--confirm` flights failed, until the campaign aims
+    /// at the 2026 score ([`crate::campaign::report::expected_score`]) and writes by expected points.
     pub confirmed: bool,
     /// Its majority is settled (false: the budget ran out before its confirmation).
     pub settled: bool,
@@ -43,6 +45,12 @@ pub struct TestVerdict {
     pub trajectories: Vec<PathBuf>,
     /// The file it is written as: `test_N.yaml` when confirmed, else `unconfirmed/test_K.yaml`.
     pub reported_as: Option<String>,
+    /// Its expected 2026 figures ([`crate::campaign::report::expected_score`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub expected: Option<TestExpectation>,
+    /// The better written test whose flown trajectory it copies (`test_K.yaml`): set aside, not written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_duplicate_of: Option<String>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
     pub first_flight: usize,
@@ -87,6 +95,8 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             test_score: test_score(&distances, &times, best_flight.obstacles.len()),
             trajectories: flights.iter().map(|r| r.trajectory.clone()).collect(),
             reported_as: None,
+            expected: None,
+            near_duplicate_of: None,
             first_flight,
         };
         out.push((verdict, flights));
@@ -117,29 +127,40 @@ pub fn score_sum<'a>(tests: impl Iterator<Item = &'a TestVerdict>) -> f64 {
     t.iter().map(|v| v.test_score).sum::<f64>() + 0.0 // an empty sum is -0.0, printed "-0.00"
 }
 
-/// The tests that failed, best first, for report.md: the confirmed ones, then those that were not.
+/// The tests that failed, best first, for report.md: the written ones, then those that were not.
 pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
     use std::fmt::Write as _;
     let _ = writeln!(
         md,
-        "## Tests that failed\n\nEach failing test was flown again until the majority of {confirm} flights was \
-         settled; confirmed: more than half failed. Ranked by the failure rate's 90 % Wilson lower bound.\n"
+        "## Tests that failed\n\nA failing test was flown again until the majority of {confirm} flights was \
+         settled (`--confirm`). Ranked by the expected 2026 test score (expected points of a flight, from its \
+         flights, its neighbours' and the calibrated prediction, per expected minute); written when the 10 % \
+         bound of its expected points is above zero and its flown trajectory copies no better written test's.\n"
     );
     let _ = writeln!(
         md,
-        "| candidate | failed / flights | failure rate (90 % interval) | best flown m | score | verdict |"
+        "| candidate | failed / flights | failure rate (90 % interval) | best flown m | expected points (10-90 %) | \
+         expected score | verdict |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for t in tests {
         let file = t.reported_as.as_deref().unwrap_or_default();
-        let verdict = match (t.confirmed, t.settled) {
-            (true, _) => file.to_string(),
-            (false, true) => format!("unconfirmed: {file}"),
-            (false, false) => format!("unconfirmed (budget spent before its confirmation): {file}"),
+        let verdict = match (t.confirmed, &t.near_duplicate_of, t.settled) {
+            (true, _, _) => file.to_string(),
+            (false, Some(better), _) => format!("near-duplicate of {better}: {file}"),
+            (false, None, true) => format!("unconfirmed: {file}"),
+            (false, None, false) => format!("unconfirmed (budget spent before its confirmation): {file}"),
         };
+        let (points, score) = t.expected.map_or(("n/a".into(), "n/a".into()), |e| {
+            let p = e.points;
+            (
+                format!("{:.2} ({:.2}-{:.2})", p.mean, p.low, p.high),
+                format!("{:.3}", e.score),
+            )
+        });
         let _ = writeln!(
             md,
-            "| {} | {} / {} | {:.2} ({:.2}-{:.2}) | {:.3} | {:.3} | {verdict} |",
+            "| {} | {} / {} | {:.2} ({:.2}-{:.2}) | {:.3} | {points} | {score} | {verdict} |",
             t.candidate,
             t.failures,
             t.flights,
@@ -147,7 +168,6 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
             t.failure_rate_low,
             t.failure_rate_high,
             t.best_min_distance,
-            t.test_score
         );
     }
     let _ = writeln!(md);

@@ -130,16 +130,17 @@ section! {
                                  avoidance mode)", "3"] {
             flag: Some(Flag::value("--confirm", "K").shown(
                 "Flights a failing test gets at most: it is flown again until the majority of K flights is \
-                 settled, and written as test_N.yaml only when more than half of its flights fail (default: 3; 1 \
-                 on the embedded mock's gust-free `competition` profile, whose flights repeat; 1 flies every test \
-                 once).",
+                 settled; the re-flights narrow the estimate of its expected 2026 points, by which tests are \
+                 written (default: 3; 1 on the embedded mock's gust-free `competition` profile, whose flights \
+                 repeat; 1 flies every test once).",
             )),
             stored: "confirm",
             range: Some(Limit::count(1, 20, "flights per test")),
             help: "Flights a failing test gets at most (K, at least 1). A test whose flight fails is flown again, \
                    before any new candidate and within the budget, until the majority of K flights is settled (K = \
-                   3: two failures or two passes). Only a test more than half of whose flights fail is written as \
-                   `test_N.yaml`; the others that failed go to `unconfirmed.json`. 1 flies every test once.",
+                   3: two failures or two passes). Its flights narrow the estimate of its expected 2026 points: a test \
+                   is written as `test_N.yaml` when the 10 % bound of that estimate is above zero (docs/campaign.md); \
+                   the others that failed go to `unconfirmed.json`. 1 flies every test once.",
         },
         overlap: bool = [setup "true with --connect, --px4 and --runner vehicles, false with the embedded mock",
                          "false"] {

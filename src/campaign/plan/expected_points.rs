@@ -1,0 +1,210 @@
+//! The expected 2026 points of a flown test: how many points one of its flights earns on average (the 2026
+//! judge flies it 5 times and scores the mean), with the uncertainty said.
+//!
+//! Each flight lands in one points band (5, 2, 1 or 0 points). The band probabilities get a Dirichlet-like
+//! pseudo-count blend: the calibrated LFS prediction is a prior of [`PRIOR_FLIGHTS`] pseudo-flights (its band
+//! shares from the campaign's residual spread), each of the test's own flights counts one, and each flight of
+//! a neighbour (a test overlapping it) counts [`NEIGHBOUR_WEIGHT`], all neighbours together at most
+//! [`MAX_NEIGHBOUR_FLIGHTS`]. Expected points = sum of band share x band points; the interval is the 10-90 %
+//! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points). How the constants were
+//! chosen: docs/campaign.md#expected-2026-points.
+
+use serde::Serialize;
+
+use crate::judge::points;
+
+/// The points of each band, best first.
+pub const BAND_POINTS: [f64; 4] = [5.0, 2.0, 1.0, 0.0];
+
+/// Weight of the calibrated LFS prediction, pseudo-flights: the prior weight the LFS's bias calibration
+/// chose by cross-validation ([`crate::campaign::learn::calibration::DEFAULT_PRIOR_FLIGHTS`]).
+pub const PRIOR_FLIGHTS: f64 = crate::campaign::learn::calibration::DEFAULT_PRIOR_FLIGHTS;
+
+/// Weight of one neighbour flight, in own flights.
+pub const NEIGHBOUR_WEIGHT: f64 = 0.25;
+
+/// All neighbour flights together count for at most this many own flights: a place flown often must not
+/// drown the test's own flights.
+pub const MAX_NEIGHBOUR_FLIGHTS: f64 = 1.0;
+
+/// Fewer residuals than this give no spread: the prediction is then left out (no calibration).
+pub const MIN_RESIDUALS: usize = 3;
+
+/// The standard normal's 90 % quantile: the interval is 10-90 %.
+pub const Z80: f64 = 1.281_551_565_545;
+
+/// Flights (or pseudo-flights) per band, in [`BAND_POINTS`] order.
+pub type Bands = [f64; 4];
+
+/// The band of a flight's points.
+pub fn band(flight_points: u32) -> usize {
+    match flight_points {
+        5.. => 0,
+        2..=4 => 1,
+        1 => 2,
+        0 => 3,
+    }
+}
+
+/// Flights per band of flown distances (metres).
+pub fn counts(distances: impl IntoIterator<Item = f64>) -> Bands {
+    let mut c = [0.0; 4];
+    for d in distances {
+        c[band(points(d))] += 1.0;
+    }
+    c
+}
+
+/// The calibrated prediction's band shares: the share of the campaign's residuals (flown - calibrated
+/// prediction, metres) that would put a flight predicted at `predicted_m` into each band. `None` with fewer
+/// than [`MIN_RESIDUALS`] residuals or a prediction that is not finite.
+pub fn prior_bands(predicted_m: f64, residuals: &[f64]) -> Option<Bands> {
+    if residuals.len() < MIN_RESIDUALS || !predicted_m.is_finite() {
+        return None;
+    }
+    let c = counts(residuals.iter().map(|r| (predicted_m + r).max(0.0)));
+    Some(c.map(|n| n / residuals.len() as f64))
+}
+
+/// What a test's estimate is made of.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evidence {
+    /// Its own flights per band.
+    pub own: Bands,
+    /// Its neighbours' flights per band.
+    pub neighbours: Bands,
+    /// The calibrated prediction's band shares (`None`: no calibration).
+    pub prior: Option<Bands>,
+}
+
+/// The expected points of one flight of a test, with its 10-90 % interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PointsEstimate {
+    /// Expected points of a flight (= expected mean points over 5 flights).
+    pub mean: f64,
+    /// 10 % bound.
+    pub low: f64,
+    /// 90 % bound.
+    pub high: f64,
+    /// What the estimate weighs, in flights (prior, own and neighbours').
+    pub weight: f64,
+}
+
+impl PointsEstimate {
+    /// Whether the test is expected to earn points with enough confidence: the 10 % bound is above zero.
+    pub fn earns(&self) -> bool {
+        self.low > 0.0
+    }
+}
+
+/// The pseudo-counts of `e`: prior, own flights and down-weighted neighbours.
+pub fn pseudo_counts(e: &Evidence) -> Bands {
+    let neighbour_flights: f64 = e.neighbours.iter().sum();
+    let w = if neighbour_flights > 0.0 {
+        NEIGHBOUR_WEIGHT.min(MAX_NEIGHBOUR_FLIGHTS / neighbour_flights)
+    } else {
+        0.0
+    };
+    std::array::from_fn(|i| e.own[i] + w * e.neighbours[i] + e.prior.map_or(0.0, |p| PRIOR_FLIGHTS * p[i]))
+}
+
+/// The estimate from `e`. Without any evidence: 0 points expected, anything from 0 to 5 possible.
+pub fn estimate(e: &Evidence) -> PointsEstimate {
+    let alpha = pseudo_counts(e);
+    let total: f64 = alpha.iter().sum();
+    if total <= 0.0 {
+        return PointsEstimate {
+            mean: 0.0,
+            low: 0.0,
+            high: BAND_POINTS[0],
+            weight: 0.0,
+        };
+    }
+    let share = alpha.map(|a| a / total);
+    let mean: f64 = (0..4).map(|i| share[i] * BAND_POINTS[i]).sum();
+    let square: f64 = (0..4).map(|i| share[i] * BAND_POINTS[i] * BAND_POINTS[i]).sum();
+    // Variance of sum p_i v_i when p ~ Dirichlet(alpha).
+    let sd = ((square - mean * mean).max(0.0) / (total + 1.0)).sqrt();
+    PointsEstimate {
+        mean,
+        low: (mean - Z80 * sd).clamp(0.0, BAND_POINTS[0]),
+        high: (mean + Z80 * sd).clamp(0.0, BAND_POINTS[0]),
+        weight: total,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn evidence(own: &[f64], neighbours: &[f64], prior: Option<Bands>) -> Evidence {
+        Evidence {
+            own: counts(own.iter().copied()),
+            neighbours: counts(neighbours.iter().copied()),
+            prior,
+        }
+    }
+
+    #[test]
+    fn no_flights_and_no_calibration_expect_nothing_and_know_nothing() {
+        let e = estimate(&evidence(&[], &[], None));
+        assert_eq!((e.mean, e.low, e.high, e.weight), (0.0, 0.0, 5.0, 0.0));
+        assert!(!e.earns());
+    }
+
+    #[test]
+    fn no_flights_follow_the_calibrated_prediction() {
+        let prior = prior_bands(0.6, &[-0.5, 0.0, 0.1, 2.0]).expect("enough residuals");
+        // 0.1 m -> 5 points, 0.6 and 0.7 m -> 2, 2.6 m -> 0.
+        assert_eq!(prior, [0.25, 0.5, 0.0, 0.25]);
+        let e = estimate(&evidence(&[], &[], Some(prior)));
+        assert!((e.mean - 2.25).abs() < 1e-12, "{e:?}");
+        assert!(e.low < e.mean && e.mean < e.high);
+        assert_eq!(e.weight, PRIOR_FLIGHTS);
+    }
+
+    #[test]
+    fn all_5_point_flights_expect_nearly_5_and_earn() {
+        let own = [0.1, 0.2, 0.0, 0.05, 0.1];
+        let alone = estimate(&evidence(&own, &[], None));
+        assert_eq!((alone.mean, alone.low, alone.high), (5.0, 5.0, 5.0));
+        let prior = Some([0.0, 0.0, 0.0, 1.0]);
+        let e = estimate(&evidence(&own, &[], prior));
+        assert!((e.mean - 5.0 * 5.0 / 6.0).abs() < 1e-12, "{e:?}");
+        assert!(e.earns() && e.high <= 5.0 && e.low < e.mean);
+    }
+
+    #[test]
+    fn more_flights_narrow_the_interval() {
+        let prior = Some([0.1, 0.2, 0.2, 0.5]);
+        let one = estimate(&evidence(&[0.5], &[], prior));
+        let three = estimate(&evidence(&[0.5, 0.6, 0.7], &[], prior));
+        assert!(three.high - three.low < one.high - one.low, "{one:?} {three:?}");
+        // One 1-point flight among passes: enough of three flights, not of five.
+        let one_of_three = estimate(&evidence(&[1.4, 2.0, 2.5], &[], None));
+        assert!(one_of_three.earns(), "{one_of_three:?}");
+        let one_of_five = estimate(&evidence(&[1.4, 2.0, 2.5, 3.0, 2.2], &[], None));
+        assert!(!one_of_five.earns(), "{one_of_five:?}");
+    }
+
+    #[test]
+    fn neighbours_count_less_than_own_flights_and_never_drown_them() {
+        let own = estimate(&evidence(&[3.0], &[], None));
+        assert_eq!(own.mean, 0.0);
+        let near = estimate(&evidence(&[3.0], &[0.1], None));
+        assert!((near.mean - 5.0 * 0.25 / 1.25).abs() < 1e-12, "{near:?}");
+        let crowd = estimate(&evidence(&[3.0], &[0.1; 40], None));
+        assert!(
+            (crowd.mean - 2.5).abs() < 1e-12,
+            "40 neighbours weigh one flight: {crowd:?}"
+        );
+    }
+
+    #[test]
+    fn too_few_residuals_or_no_prediction_give_no_prior() {
+        assert_eq!(prior_bands(0.5, &[0.0, 0.1]), None);
+        assert_eq!(prior_bands(f64::INFINITY, &[0.0, 0.1, 0.2]), None);
+        assert_eq!(band(5), 0);
+        assert_eq!(band(0), 3);
+    }
+}

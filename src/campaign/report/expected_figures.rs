@@ -1,0 +1,46 @@
+//! The expected 2026 figures of a campaign's tests and of its written suite, as report.json carries them
+//! (computed by [`crate::campaign::report::expected_score`]).
+
+use serde::Serialize;
+
+use crate::campaign::plan::expected_points::PointsEstimate;
+
+/// A test's expected 2026 figures.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TestExpectation {
+    /// Expected points of a flight, with its 10-90 % interval.
+    pub points: PointsEstimate,
+    /// Expected flight time, minutes: its flown flights' mean (the prediction when none has a distance).
+    pub minutes: f64,
+    /// Expected 2026 test score: expected points x 10 / (obstacles² x minutes).
+    pub score: f64,
+    /// The score at the points' 10 % bound.
+    pub score_low: f64,
+    /// The score at the points' 90 % bound.
+    pub score_high: f64,
+}
+
+/// The written suite's expected 2026 score.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SuiteExpectation {
+    /// Tests written.
+    pub tests: usize,
+    /// Tests that earned a place but were set aside as near-duplicate trajectories.
+    pub near_duplicates: usize,
+    /// The DTW distance below which two average trajectories are too similar (`evaluate`'s default), m.
+    pub similar_below_m: f64,
+    /// Sum of the written tests' expected scores.
+    pub total_score: f64,
+    /// The sum at their 10 % bounds.
+    pub total_low: f64,
+    /// The sum at their 90 % bounds.
+    pub total_high: f64,
+    /// The similarity penalty of the written tests' flown averages.
+    pub sim_pen: f64,
+    /// total_score x sim_pen: the expected 2026 score.
+    pub final_score: f64,
+    /// total_low x sim_pen.
+    pub final_low: f64,
+    /// total_high x sim_pen.
+    pub final_high: f64,
+}

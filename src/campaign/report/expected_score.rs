@@ -1,0 +1,191 @@
+//! The campaign aims at the 2026 score: every test that failed gets its expected mean points over 5 flights
+//! ([`crate::campaign::plan::expected_points`]) from its own flights, its neighbours' (the flown tests whose
+//! footprints overlap it by IoU >= [`NEIGHBOUR_IOU`]) and the calibrated prediction; the tests rank by their
+//! expected 2026 score (expected points per expected minute, x 10 / obstacles²). Written are those that
+//! failed at least once and whose 10 % bound of expected points is above zero, less the near-duplicate
+//! trajectories of better written tests ([`crate::campaign::report::trajectory_guard`]). The suite's
+//! expected 2026 score is the sum of the written tests' expected scores times the expected `sim_pen`.
+
+use std::cmp::Ordering;
+use std::path::Path;
+
+use crate::campaign::candidate::CandidateId;
+use crate::campaign::evaluation::SIMILAR_BELOW_M;
+use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
+use crate::campaign::plan::expected_points::{Evidence, counts, estimate, prior_bands};
+pub use crate::campaign::report::expected_figures::{SuiteExpectation, TestExpectation};
+use crate::campaign::report::suite::DISTINCT_IOU;
+use crate::campaign::report::trajectory_guard::{flown_average, near_duplicates, sim_pen};
+use crate::campaign::report::verdicts::TestVerdict;
+use crate::campaign::store::journal::FlightRecord;
+use crate::geometry::{Footprint, union_iou};
+use crate::model::competition::TEST_SCORE_SCALE;
+use crate::model::{Obstacle, Trajectory};
+
+/// Flown tests overlapping a test by at least this footprint IoU are its neighbours: the campaign's own
+/// near-duplicate rule, so a neighbour is a test it would not fly as new.
+pub const NEIGHBOUR_IOU: f64 = DISTINCT_IOU;
+
+/// Estimates, ranks and chooses the tests to write among `tests` (each with its flights) of the campaign's
+/// `records`, setting `expected`, `confirmed` (written) and `near_duplicate_of`; reads the flights'
+/// trajectories from `folder`. Returns the written suite's expectation.
+pub fn aim(
+    folder: &Path,
+    records: &[FlightRecord],
+    tests: &mut [(TestVerdict, Vec<&FlightRecord>)],
+) -> SuiteExpectation {
+    let flights = Flights::new(records);
+    for (t, own) in tests.iter_mut() {
+        t.expected = Some(flights.expectation(t, own));
+    }
+    tests.sort_by(|a, b| better(&a.0, &b.0));
+    let mut averages = Vec::new();
+    let mut earning = Vec::new();
+    for (i, (t, own)) in tests.iter_mut().enumerate() {
+        t.confirmed = t.failures > 0 && t.expected.is_some_and(|e| e.points.earns());
+        if t.confirmed {
+            averages.push(flown_average(folder, own));
+            earning.push(i);
+        }
+    }
+    let duplicates = near_duplicates(&averages, SIMILAR_BELOW_M);
+    for (&i, dup) in earning.iter().zip(&duplicates) {
+        if let Some(k) = dup {
+            tests[i].0.confirmed = false;
+            tests[i].0.near_duplicate_of = Some(format!("test_{k}.yaml"));
+        }
+    }
+    let kept: Vec<Trajectory> = (averages.into_iter().zip(&duplicates))
+        .filter(|(_, d)| d.is_none())
+        .filter_map(|(a, _)| a)
+        .collect();
+    suite(
+        tests.iter().map(|(t, _)| t),
+        duplicates.iter().flatten().count(),
+        sim_pen(&kept, SIMILAR_BELOW_M),
+    )
+}
+
+/// Best first: the higher expected score, then the candidate index.
+fn better(a: &TestVerdict, b: &TestVerdict) -> Ordering {
+    let score = |t: &TestVerdict| t.expected.map_or(0.0, |e| e.score);
+    score(b).total_cmp(&score(a)).then(a.candidate.cmp(&b.candidate))
+}
+
+/// The written suite's figures.
+fn suite<'a>(tests: impl Iterator<Item = &'a TestVerdict>, near_duplicates: usize, pen: f64) -> SuiteExpectation {
+    let written: Vec<TestExpectation> = tests.filter(|t| t.confirmed).filter_map(|t| t.expected).collect();
+    let sum = |f: fn(&TestExpectation) -> f64| written.iter().map(f).sum::<f64>() + 0.0;
+    let (total_score, total_low, total_high) = (sum(|e| e.score), sum(|e| e.score_low), sum(|e| e.score_high));
+    SuiteExpectation {
+        tests: written.len(),
+        near_duplicates,
+        similar_below_m: SIMILAR_BELOW_M,
+        total_score,
+        total_low,
+        total_high,
+        sim_pen: pen,
+        final_score: total_score * pen,
+        final_low: total_low * pen,
+        final_high: total_high * pen,
+    }
+}
+
+/// What every estimate reads of the campaign's flights, computed once: each flight's footprints, and the
+/// residuals (flown - calibrated prediction, clipped as the calibration clips them).
+pub struct Flights<'a> {
+    records: &'a [FlightRecord],
+    prints: Vec<Vec<Footprint>>,
+    residuals: Vec<(CandidateId, f64)>,
+}
+
+fn prints(o: &[Obstacle]) -> Vec<Footprint> {
+    o.iter().map(Obstacle::footprint).collect()
+}
+
+impl<'a> Flights<'a> {
+    /// The campaign's charged flights.
+    pub fn new(records: &'a [FlightRecord]) -> Self {
+        let residuals = (records.iter())
+            .filter(|r| r.predicted_min_distance.is_finite())
+            .filter_map(|r| Some((r.candidate, r.min_distance? - r.predicted_min_distance)))
+            .map(|(c, e)| (c, e.clamp(-MAX_RESIDUAL_M, MAX_RESIDUAL_M)))
+            .collect();
+        Self {
+            records,
+            prints: records.iter().map(|r| prints(&r.obstacles)).collect(),
+            residuals,
+        }
+    }
+
+    /// What the estimate of `candidate` (with `obstacles` and its flights `own`) rests on. The prior is its
+    /// first flight's prediction, spread by the other tests' residuals (its own would count its flights
+    /// twice).
+    fn evidence(&self, candidate: CandidateId, obstacles: &[Obstacle], own: &[&FlightRecord]) -> Evidence {
+        let mine = prints(obstacles);
+        let neighbours = (self.records.iter().zip(&self.prints))
+            .filter(|(r, p)| r.candidate != candidate && union_iou(&mine, p) >= NEIGHBOUR_IOU)
+            .filter_map(|(r, _)| r.min_distance);
+        let residuals: Vec<f64> = (self.residuals.iter())
+            .filter(|(c, _)| *c != candidate)
+            .map(|(_, e)| *e)
+            .collect();
+        let predicted = (own.iter().min_by_key(|r| r.attempt)).map_or(f64::NAN, |r| r.predicted_min_distance);
+        Evidence {
+            own: counts(own.iter().filter_map(|r| r.min_distance)),
+            neighbours: counts(neighbours),
+            prior: prior_bands(predicted, &residuals),
+        }
+    }
+
+    /// The expectation of test `t` with its flights `own`.
+    pub fn expectation(&self, t: &TestVerdict, own: &[&FlightRecord]) -> TestExpectation {
+        let points = estimate(&self.evidence(t.candidate, &t.obstacles, own));
+        let flown: Vec<f64> = (own.iter())
+            .filter(|r| r.min_distance.is_some())
+            .map(|r| r.flight_time_s)
+            .collect();
+        let seconds = if flown.is_empty() {
+            own.first().map_or(0.0, |r| r.predicted_flight_time_s)
+        } else {
+            flown.iter().sum::<f64>() / flown.len() as f64
+        };
+        let minutes = seconds / 60.0;
+        let k = t.obstacles.len() as f64;
+        let score = |p: f64| {
+            if minutes > 0.0 && k > 0.0 {
+                p * TEST_SCORE_SCALE / (k * k * minutes)
+            } else {
+                0.0
+            }
+        };
+        TestExpectation {
+            points,
+            minutes,
+            score: score(points.mean),
+            score_low: score(points.low),
+            score_high: score(points.high),
+        }
+    }
+}
+
+/// The summary table's rows of the written suite's expected 2026 score (none without an expectation).
+pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
+    use std::fmt::Write as _;
+    let Some(e) = e else { return };
+    let _ = writeln!(
+        md,
+        "| expected 2026 score of the written tests (10-90 %): sum of expected test scores x sim_pen | {:.3} \
+         ({:.3}-{:.3}) = {:.3} x {:.3} |",
+        e.final_score, e.final_low, e.final_high, e.total_score, e.sim_pen
+    );
+    let _ = writeln!(
+        md,
+        "| tests set aside as near-duplicate trajectories (DTW < {} m to a better written test) | {} |",
+        e.similar_below_m, e.near_duplicates
+    );
+}
+
+#[cfg(test)]
+#[path = "expected_score_tests.rs"]
+mod tests;

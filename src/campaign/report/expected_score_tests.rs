@@ -1,0 +1,87 @@
+use super::*;
+use crate::campaign::report::verdicts::verdicts;
+use crate::campaign::store::journal::test_record;
+
+/// A flight of `candidate` with two boxes placed by its index (far apart between candidates), flown to `d`
+/// metres in `time_s`; its trajectory is not on disk.
+fn flight(candidate: u64, attempt: u32, d: f64, time_s: f64) -> FlightRecord {
+    let x = candidate as f64 * 30.0;
+    FlightRecord {
+        attempt,
+        obstacles: vec![
+            Obstacle::new(4.0, 4.0, 20.0, x, 10.0, 0.0),
+            Obstacle::new(4.0, 4.0, 20.0, x, 30.0, 0.0),
+        ],
+        flight_time_s: time_s,
+        trajectory: format!("flights/c{candidate}_{attempt}.csv").into(),
+        ..test_record(candidate, d, Some(d))
+    }
+}
+
+fn aimed(records: &[FlightRecord]) -> (Vec<TestVerdict>, SuiteExpectation) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut tests = verdicts(records, 3);
+    let suite = aim(dir.path(), records, &mut tests);
+    (tests.into_iter().map(|(t, _)| t).collect(), suite)
+}
+
+#[test]
+fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
+    // 3 was predicted to pass.
+    let predicted_pass = |r: FlightRecord| FlightRecord {
+        predicted_min_distance: 2.0,
+        ..r
+    };
+    let records = [
+        // 1: two 2-point flights in 2 minutes; 2: one 5-point flight in 1 minute; 3: one 1-point flight of
+        // five; 4: never failed.
+        flight(1, 0, 0.5, 120.0),
+        flight(1, 1, 0.6, 120.0),
+        flight(2, 0, 0.1, 60.0),
+        predicted_pass(flight(3, 0, 1.4, 60.0)),
+        predicted_pass(flight(3, 1, 2.0, 60.0)),
+        predicted_pass(flight(3, 2, 2.1, 60.0)),
+        predicted_pass(flight(3, 3, 2.2, 60.0)),
+        predicted_pass(flight(3, 4, 2.3, 60.0)),
+        flight(4, 0, 3.0, 60.0),
+    ];
+    let (tests, suite) = aimed(&records);
+    let order: Vec<(u64, bool)> = tests.iter().map(|t| (t.candidate.0, t.confirmed)).collect();
+    assert_eq!(order, [(2, true), (1, true), (3, false)], "{tests:#?}");
+    let e: Vec<TestExpectation> = tests.iter().filter_map(|t| t.expected).collect();
+    assert!(e[0].score > e[1].score && e[1].score > e[2].score);
+    assert!((e[1].minutes - 2.0).abs() < 1e-12);
+    for x in &e {
+        assert!(x.score_low <= x.score && x.score <= x.score_high, "{x:?}");
+    }
+    assert_eq!(suite.tests, 2);
+    assert!((suite.total_score - (e[0].score + e[1].score)).abs() < 1e-12);
+    assert_eq!(suite.sim_pen, 1.0, "no trajectory on disk: nothing to compare");
+    assert_eq!(suite.final_score, suite.total_score);
+    assert!(suite.final_low <= suite.final_score && suite.final_score <= suite.final_high);
+}
+
+#[test]
+fn the_calibrated_prediction_and_neighbours_move_the_estimate() {
+    let alone = [flight(1, 0, 1.2, 60.0)];
+    let (tests, _) = aimed(&alone);
+    let base = tests[0].expected.expect("estimated").points;
+    assert_eq!(base.mean, 1.0, "no calibration, no neighbour: its own flight alone");
+    // A neighbour overlapping it (same place) flew to 0.1 m: the estimate rises.
+    let mut near = flight(1, 0, 0.1, 60.0);
+    near.candidate = CandidateId(9);
+    let (tests, _) = aimed(&[alone[0].clone(), near]);
+    let t = tests.iter().find(|t| t.candidate.0 == 1).expect("test 1");
+    assert!(t.expected.expect("estimated").points.mean > base.mean);
+    // Three other tests whose flights came 2 m further than predicted: the prior expects a pass.
+    let mut records = vec![alone[0].clone()];
+    for c in 2..5 {
+        records.push(FlightRecord {
+            predicted_min_distance: 1.0,
+            ..flight(c, 0, 3.0, 60.0)
+        });
+    }
+    let (tests, _) = aimed(&records);
+    let t = tests.iter().find(|t| t.candidate.0 == 1).expect("test 1");
+    assert!(t.expected.expect("estimated").points.mean < base.mean);
+}
