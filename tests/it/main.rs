@@ -5,6 +5,7 @@ mod bridge;
 mod campaign;
 mod campaign_folder;
 mod cli_errors;
+mod cp_campaign;
 mod cp_flight;
 mod documented;
 mod evaluate;
