@@ -23,6 +23,7 @@ mod missions;
 mod pinned;
 mod pty;
 mod px4_campaign;
+mod px4_cp;
 mod px4_fake;
 mod px4_reference;
 mod px4_sitl;
