@@ -285,3 +285,21 @@ fn lockstep_waits_for_the_next_stick_and_goes_on_when_released() {
     run(&mut v, 0.2, None, false, &mut seen);
     assert!(v.lockstep_blocked(), "waits again once sticks came back");
 }
+
+#[test]
+fn lockstep_keeps_the_sticks_fresh_for_arming_in_position_mode() {
+    let mut v = vehicle(&[]);
+    let mut seen = Seen::default();
+    run(&mut v, 8.0, Some((0, 0)), false, &mut seen);
+    assert!(!v.lockstep_blocked(), "disarmed outside Position mode: no wait");
+    v.handle(&GCS, &posctl());
+    run(&mut v, 0.2, Some((0, 0)), false, &mut seen);
+    assert_eq!(v.state().mode, FlightMode::Posctl, "{:?}", seen.texts);
+    run(&mut v, 0.2, None, false, &mut seen);
+    assert!(
+        v.lockstep_blocked(),
+        "disarmed in Position mode, the sticks are waited for"
+    );
+    v.handle(&GCS, &sticks(0, 0));
+    assert!(!v.lockstep_blocked());
+}

@@ -1,5 +1,5 @@
-//! Lockstep on the pilot's sticks: once a pilot has flown the armed vehicle with MANUAL_CONTROL, a lockstep
-//! simulation holds its clock while the latest stick is older than [`STICK_LOCKSTEP_AGE`], so the stick
+//! Lockstep on the pilot's sticks: once a pilot sends MANUAL_CONTROL to the vehicle, armed or in Position mode,
+//! a lockstep simulation holds its clock while the latest stick is older than [`STICK_LOCKSTEP_AGE`], so the stick
 //! stream never gaps in vehicle time however fast the clock runs or however busy the machine is (at a high
 //! speed factor a few milliseconds of wall time would otherwise exceed `COM_RC_LOSS_T`).
 
@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use mavlink::dialects::common::MavSeverity;
 
+use crate::modes::FlightMode;
 use crate::vehicle::Vehicle;
 
 /// The vehicle waits for the next stick once the latest is this old: two periods of a 20 Hz pilot, well
@@ -14,10 +15,10 @@ use crate::vehicle::Vehicle;
 pub const STICK_LOCKSTEP_AGE: Duration = Duration::from_millis(100);
 
 impl Vehicle {
-    /// True while the armed vehicle, flown by sticks, waits for the pilot's next stick.
+    /// True while the vehicle, armed or in Position mode (whose arming check needs fresh sticks), waits for
+    /// the next stick of a pilot that has sent some.
     pub(crate) fn stick_lockstep_blocked(&self) -> bool {
-        self.armed
-            && self.manual.had_sticks
+        (self.armed || self.nav.mode() == FlightMode::Posctl)
             && !self.manual.stick_wait_over
             && self
                 .manual
