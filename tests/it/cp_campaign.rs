@@ -1,13 +1,13 @@
-//! A Collision Prevention campaign on the embedded mocks at their default settings: every flight lands (the
-//! mocks hold their clocks for the pilot's sticks, so no stick gap at the default speed trips the
-//! manual-control-loss failsafe) and the journal and report carry each flight's Collision Prevention verdict.
+//! A Collision Prevention campaign on the embedded mocks at their default settings: every flight takes off and
+//! flies (the mocks hold their clocks for the pilot's sticks, so no stick gap trips the manual-control-loss
+//! failsafe) and the journal and report carry each flight's Collision Prevention verdict.
 
 use std::time::Duration;
 
 use super::campaign::{output_folder, spawn, wait_bounded};
 
 #[test]
-fn a_mock_cp_campaign_at_default_settings_lands_and_journals_its_verdicts() {
+fn a_mock_cp_campaign_at_default_settings_flies_and_journals_its_verdicts() {
     let out = tempfile::tempdir().unwrap();
     let child = spawn(&[
         "generate",
@@ -27,8 +27,13 @@ fn a_mock_cp_campaign_at_default_settings_lands_and_journals_its_verdicts() {
     let records: Vec<serde_json::Value> = journal.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert!(!records.is_empty(), "nothing flown: {stderr}");
     for r in &records {
-        assert_eq!(r["status"], "landed", "{r}");
-        assert!(!r.to_string().contains("manual control lost"), "{r}");
+        // Collision Prevention may let the mock's vehicle into a box (`collision`), or hold it (`timeout`).
+        let flew = ["landed", "collision", "timeout"].contains(&r["status"].as_str().unwrap_or(""));
+        assert!(flew && r["flight_time_s"].as_f64() > Some(20.0), "{r}");
+        assert!(
+            !r.to_string().contains("manual control lost") && !r.to_string().contains("no sticks"),
+            "{r}"
+        );
         let centre = r["closest_centre_m"].as_f64().expect("closest centre journaled");
         assert_eq!(r["inside_cp_dist"].as_bool(), Some(centre < 2.0), "{r}");
     }
