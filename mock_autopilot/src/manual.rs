@@ -16,6 +16,8 @@ pub struct ManualState {
     pub(crate) had_sticks: bool,
     pub(crate) loss: Option<Loss>,
     pub(crate) next_echo: Duration,
+    /// A lockstep wait for the sticks timed out: no more waits until the next stick.
+    pub(crate) stick_wait_over: bool,
 }
 
 /// A manual-control-loss failsafe under way.

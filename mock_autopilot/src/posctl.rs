@@ -26,6 +26,7 @@ impl Vehicle {
     pub(crate) fn on_manual_control(&mut self, m: &MANUAL_CONTROL_DATA) {
         if m.target == 0 || m.target == SYSTEM_ID {
             self.manual.sticks.on_message(m, self.now);
+            self.manual.stick_wait_over = false;
         }
     }
 

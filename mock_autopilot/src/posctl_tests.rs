@@ -279,3 +279,54 @@ fn a_mission_flown_without_sticks_never_sees_the_loss_failsafe() {
         seen.texts
     );
 }
+
+#[test]
+fn lockstep_waits_for_the_next_stick_and_goes_on_when_released() {
+    let mut v = vehicle(&[]);
+    let mut seen = airborne_in_posctl(&mut v, false);
+    assert!(!v.lockstep_blocked(), "sticks are fresh");
+    let mut waited = Duration::ZERO;
+    while !v.lockstep_blocked() && waited < Duration::from_secs(1) {
+        v.step(DT);
+        waited += DT;
+    }
+    assert!(
+        waited > crate::stick_lockstep::STICK_LOCKSTEP_AGE - Duration::from_millis(40)
+            && waited <= crate::stick_lockstep::STICK_LOCKSTEP_AGE,
+        "blocked after {waited:?} without sticks"
+    );
+    v.handle(&GCS, &sticks(0, 0));
+    assert!(!v.lockstep_blocked(), "a stick releases the clock");
+    run(&mut v, 0.2, None, false, &mut seen);
+    assert!(v.lockstep_blocked());
+    v.lockstep_release();
+    assert!(!v.lockstep_blocked(), "released: no more waits");
+    run(&mut v, 0.2, None, false, &mut seen);
+    assert!(!v.lockstep_blocked(), "until sticks come back");
+    assert!(
+        seen.texts.iter().any(|t| t.contains("no sticks in time")),
+        "{:?}",
+        seen.texts
+    );
+    v.handle(&GCS, &sticks(0, 0));
+    run(&mut v, 0.2, None, false, &mut seen);
+    assert!(v.lockstep_blocked(), "waits again once sticks came back");
+}
+
+#[test]
+fn lockstep_keeps_the_sticks_fresh_for_arming_in_position_mode() {
+    let mut v = vehicle(&[]);
+    let mut seen = Seen::default();
+    run(&mut v, 8.0, Some((0, 0)), false, &mut seen);
+    assert!(!v.lockstep_blocked(), "disarmed outside Position mode: no wait");
+    v.handle(&GCS, &posctl());
+    run(&mut v, 0.2, Some((0, 0)), false, &mut seen);
+    assert_eq!(v.state().mode, FlightMode::Posctl, "{:?}", seen.texts);
+    run(&mut v, 0.2, None, false, &mut seen);
+    assert!(
+        v.lockstep_blocked(),
+        "disarmed in Position mode, the sticks are waited for"
+    );
+    v.handle(&GCS, &sticks(0, 0));
+    assert!(!v.lockstep_blocked());
+}

@@ -77,6 +77,11 @@ impl StickInput {
             .map(|(s, _)| s)
     }
 
+    /// When the latest sticks came (vehicle time).
+    pub fn received_at(&self) -> Option<Duration> {
+        self.latest.map(|(_, at)| at)
+    }
+
     /// Forgets every stick input (reboot).
     pub fn clear(&mut self) {
         self.latest = None;

@@ -415,17 +415,22 @@ impl Vehicle {
     }
 
     /// True while a lockstep simulation must hold its clock: the vehicle flies with avoidance and the
-    /// companion has not answered the latest trajectory request yet.
+    /// companion has not answered the latest trajectory request yet, or a pilot flies it and its next stick is
+    /// due ([`crate::stick_lockstep`]).
     pub fn lockstep_blocked(&self) -> bool {
-        self.armed
+        (self.armed
             && self.params.f64("COM_OBS_AVOID") >= 1.0
             && self.nav.mode().is_auto()
-            && self.avoidance.awaiting_answer(self.now)
+            && self.avoidance.awaiting_answer(self.now))
+            || self.stick_lockstep_blocked()
     }
 
     /// Go on without the answer (the lockstep wait timed out; the avoidance timeout logic takes over). Said
     /// aloud: from here the flight depends on the machine's load and is no longer repeatable.
     pub fn lockstep_release(&mut self) {
+        if self.stick_lockstep_blocked() {
+            return self.stick_lockstep_release();
+        }
         self.avoidance.release();
         self.text(
             MavSeverity::MAV_SEVERITY_WARNING,

@@ -57,6 +57,7 @@ fn landed(d: f64) -> Flown {
         flight_time_s: 40.0,
         warnings: Vec::new(),
         reason: None,
+        cp: None,
     }
 }
 

@@ -32,6 +32,8 @@ fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
         vehicle: "mock".into(),
         trajectory: PathBuf::from(format!("flights/candidate_{candidate}.csv")),
         wall_s: 2.0,
+        closest_centre_m: None,
+        inside_cp_dist: None,
     }
 }
 

@@ -32,7 +32,7 @@ pub(super) fn build_of(bin: &Path) -> Px4Build {
 }
 
 /// Starts instance `instance` (its API link sends to UDP 14540 + instance), stopped when dropped.
-fn start(bin: &Path, instance: u8) -> Px4Sitl {
+pub(super) fn start(bin: &Path, instance: u8) -> Px4Sitl {
     let spec = SitlSpec::for_build(&build_of(bin), instance, SPEED);
     Px4Sitl::start(&spec).expect("PX4 SITL starts")
 }
@@ -44,7 +44,7 @@ fn generated(n: u32, k: u64) -> TestCase {
     c.with_obstacles(g.sample(k).expect("sample").obstacles.to_vec())
 }
 
-async fn fly_on(px4: &Px4Sitl, test: &TestCase, mode: FlyMode, what: &str) -> FlightReport {
+pub(super) async fn fly_on(px4: &Px4Sitl, test: &TestCase, mode: FlyMode, what: &str) -> FlightReport {
     let opts = FlyOptions {
         connect: px4.url(),
         mode,

@@ -69,9 +69,12 @@ async fn run(link: Arc<Link>, target: Target, mut feed: CpFeed, tx: watch::Sende
             }
             if now >= next_stick {
                 next_stick = now + STICK_PERIOD;
-                // The pilot's clock starts at arming: on the ground the sticks stay centred.
+                // The pilot's clock starts at arming: on the ground the sticks stay centred. It runs on the
+                // pose's own time, which a lockstep vehicle holds while it waits for the sticks.
                 let step = match view.armed {
-                    true => feed.pilot.step(now.as_secs_f64(), pose.pos_ned, yaw),
+                    true => feed
+                        .pilot
+                        .step(f64::from(pose.time_boot_ms) / 1000.0, pose.pos_ned, yaw),
                     false => PilotStep::Fly(Sticks::CENTRED),
                 };
                 let sticks = match step {

@@ -49,6 +49,7 @@ pub(in crate::campaign) fn flown(report: FlightReport) -> Flown {
         flight_time_s: report.flight_time_s,
         warnings: report.warnings,
         reason: report.reason,
+        cp: report.collision_prevention,
     }
 }
 

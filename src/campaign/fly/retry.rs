@@ -138,6 +138,7 @@ mod tests {
             flight_time_s: 60.0,
             warnings: Vec::new(),
             reason: None,
+            cp: None,
         }
     }
 

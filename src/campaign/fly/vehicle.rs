@@ -8,6 +8,7 @@ use crate::campaign::candidate::Screened;
 use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::confirm::Tally;
 use crate::campaign::store::journal::FlightRecord;
+use crate::judge::cp_verdict::CpVerdict;
 use crate::model::TestCase;
 
 /// How one flight ended, as the vehicle's side reports it.
@@ -25,6 +26,8 @@ pub struct Flown {
     pub warnings: Vec<String>,
     /// Why the flight stopped, in words, when it did not land.
     pub reason: Option<String>,
+    /// The Collision Prevention verdict of a flight in that mode.
+    pub cp: Option<CpVerdict>,
 }
 
 impl Flown {
@@ -37,6 +40,7 @@ impl Flown {
             flight_time_s: 0.0,
             warnings: Vec::new(),
             reason: Some(reason),
+            cp: None,
         }
     }
 }
@@ -163,6 +167,8 @@ impl Job {
             vehicle,
             trajectory,
             wall_s,
+            closest_centre_m: flown.cp.and_then(|v| v.closest_centre_m),
+            inside_cp_dist: flown.cp.and_then(|v| v.inside_cp_dist),
         }
     }
 }

@@ -102,6 +102,8 @@ mod tests {
             trajectory: "x.csv".into(),
             wall_s,
             attempt: 0,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         }
     }
 

@@ -77,6 +77,12 @@ pub struct FlownTest {
     pub reported_as: Option<String>,
     /// The vehicle that flew it.
     pub vehicle: String,
+    /// Collision Prevention: the closest the vehicle's centre came to a box, metres.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closest_centre_m: Option<f64>,
+    /// Collision Prevention: whether the vehicle came inside `CP_DIST`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inside_cp_dist: Option<bool>,
 }
 
 /// The whole report.
@@ -105,6 +111,9 @@ pub struct Report {
     pub learning: Option<Learnt>,
     /// Per backend (mock, px4, runner, MAVLink URL): flights, failed jobs, wall time per flight.
     pub backends: Vec<BackendSummary>,
+    /// Collision Prevention per test (left out in the other modes).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub collision_prevention: Vec<crate::campaign::report::cp_tests::CpTest>,
     /// The command line and version that made it.
     pub invocation: Invocation,
     /// The campaign folder (the next commands report.md suggests name it).

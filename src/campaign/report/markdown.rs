@@ -31,6 +31,7 @@ pub fn markdown(r: &Report) -> String {
     );
     summary_table(&mut md, r);
     crate::campaign::report::verdicts::markdown(&mut md, &r.tests, s.confirm);
+    crate::campaign::report::cp_tests::markdown(&mut md, &r.collision_prevention);
     backends::markdown(&mut md, &r.backends);
     if let Some(l) = &r.learning {
         learning_section(&mut md, l);

@@ -4,6 +4,7 @@
 //! any folder of flown tests ([`folder_score`]).
 
 pub mod backends;
+pub mod cp_tests;
 pub mod document;
 pub mod expected_figures;
 pub mod expected_score;

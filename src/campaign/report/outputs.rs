@@ -63,6 +63,7 @@ pub fn write_outputs(
         learning: learning.cloned(),
         // The whole journal: the flights backends failed around are not in `records`.
         backends: backends::summarise(journal.records()),
+        collision_prevention: crate::campaign::report::cp_tests::cp_tests(records),
         invocation: Invocation::current(),
         folder: input.folder.to_path_buf(),
     };
@@ -148,6 +149,8 @@ fn flown_test(r: &FlightRecord, reported: &[(CandidateId, String)]) -> FlownTest
         },
         reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
         vehicle: r.vehicle.clone(),
+        closest_centre_m: r.closest_centre_m,
+        inside_cp_dist: r.inside_cp_dist,
     }
 }
 

@@ -50,6 +50,7 @@ fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
         stages: StageTimes::default(),
         learning: None,
         backends: Vec::new(),
+        collision_prevention: Vec::new(),
         invocation: Invocation {
             command: "prgenuav generate missions/mission1.yaml 10".into(),
             version: "9.9.9".into(),
@@ -147,6 +148,8 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
         test_score: 0.0,
         reported_as: None,
         vehicle: "mock".into(),
+        closest_centre_m: None,
+        inside_cp_dist: None,
     });
     let v = verdict(&r.view(), Path::new("f")).join("\n");
     assert!(

@@ -65,7 +65,8 @@ section! {
             flag: Some(Flag::value("--mock-speed", "K")),
             stored: "mock_speed",
             range: Some(Limit::within(1.0, MAX_TIME_SCALE, "x wall time")),
-            help: "Clock speed of the embedded mock autopilots, times real time; in lockstep an upper bound.",
+            help: "Clock speed of the embedded mock autopilots, times real time; in lockstep an upper bound. Not \
+                   given: 20 in collision-prevention mode (the speed its pilot's sticks keep up with).",
         },
         lockstep: bool = [value true] {
             flag: Some(Flag::switch("--mock-free-running", false).helped(

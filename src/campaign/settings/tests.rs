@@ -133,4 +133,14 @@ fn flags_replace_the_file_and_are_recorded_by_their_stored_names() {
     let cfg = setup::build(&ask(), &req);
     assert_eq!(cfg.mock_speed, 20.0);
     assert_eq!(setup::build(&ask(), &Requested::default()).mock_speed, 100.0);
+    let cp = Ask {
+        mode: "collision-prevention".into(),
+        ..ask()
+    };
+    assert_eq!(
+        setup::build(&cp, &Requested::default()).mock_speed,
+        setup::CP_MOCK_SPEED
+    );
+    let file_only = lay_over(&file, &[]).unwrap();
+    assert_eq!(setup::build(&cp, &file_only).mock_speed, 50.0, "a given speed wins");
 }

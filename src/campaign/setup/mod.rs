@@ -20,6 +20,10 @@ const LINK_ENSEMBLE: usize = 8;
 /// passes when flown again, and so on the default mock profile, whose gusts are fitted to that. A mock without
 /// gusts repeats every flight, so it flies each test once.
 const SCATTERING_CONFIRM: usize = 3;
+/// The embedded mocks' speed in `collision-prevention` mode unless `--mock-speed` says otherwise: the pilot's
+/// 20 Hz sticks keep up with a mock holding its clock for them at this speed, and at the default 100 the
+/// vehicle was seen never to take off (docs/collision-prevention.md#campaigns).
+pub const CP_MOCK_SPEED: f64 = 20.0;
 
 /// What a campaign is asked to fly, beyond the settings of the campaign TOML.
 #[derive(Debug, Clone)]
@@ -76,7 +80,10 @@ pub fn build(ask: &Ask, req: &Requested) -> CampaignConfig {
         hfs,
         mode: ask.mode.clone(),
         motion: s.screening.motion(),
-        mock_speed: s.mock.speed(),
+        mock_speed: match (ask.mode.as_str(), s.mock.speed) {
+            ("collision-prevention", None) => CP_MOCK_SPEED,
+            _ => s.mock.speed(),
+        },
         mock_lockstep: s.mock.lockstep(),
         mock_latency_ms: s.mock.latency_ms(),
         mock_profile,

@@ -55,6 +55,13 @@ pub struct FlightRecord {
     pub trajectory: PathBuf,
     /// Wall-clock seconds the flight took.
     pub wall_s: f64,
+    /// A Collision Prevention flight: the closest the vehicle's centre came to a box, metres (absent in other
+    /// modes and in journals written before it was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closest_centre_m: Option<f64>,
+    /// A Collision Prevention flight: whether the vehicle came inside `CP_DIST`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inside_cp_dist: Option<bool>,
 }
 
 impl FlightRecord {
@@ -78,6 +85,8 @@ impl FlightRecord {
                 vehicle: String::new(),
                 trajectory: PathBuf::new(),
                 wall_s: 0.0,
+                closest_centre_m: None,
+                inside_cp_dist: None,
             })
             .collect()
     }
@@ -347,6 +356,8 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         vehicle: "x".into(),
         trajectory: "t.csv".into(),
         wall_s: 1.0,
+        closest_centre_m: None,
+        inside_cp_dist: None,
     }
 }
 
@@ -373,6 +384,8 @@ mod tests {
             vehicle: "mock".into(),
             trajectory: "flights/candidate_1.csv".into(),
             wall_s: 0.3,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         }
     }
 

@@ -69,6 +69,7 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
     for (field, d) in [
         ("min_distance", record.min_distance),
         ("min_distance_raw", record.min_distance_raw),
+        ("closest_centre_m", record.closest_centre_m),
     ] {
         if let Some(d) = d
             && !(d.is_finite() && (0.0..=size_m).contains(&d))

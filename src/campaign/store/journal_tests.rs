@@ -154,3 +154,36 @@ fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
     assert_eq!(pending, vec![3]);
     assert_eq!(Journal::read(&path).unwrap().len(), 2);
 }
+
+#[test]
+fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load() {
+    // A line as journals were written before the Collision Prevention verdict was kept.
+    let old = r#"{"candidate":2,"obstacles":[],"predicted_min_distance":1.8,"predicted_flight_time_s":50.0,"min_distance":1.2,"min_distance_raw":1.2,"status":"landed","flight_time_s":40.0,"vehicle":"mock#0","trajectory":"flights/candidate_2.csv","wall_s":1.1}"#;
+    let cp = FlightRecord {
+        closest_centre_m: Some(1.35),
+        inside_cp_dist: Some(true),
+        ..record(3)
+    };
+    let line = serde_json::to_string(&cp).unwrap();
+    assert!(
+        line.contains(r#""closest_centre_m":1.35,"inside_cp_dist":true"#),
+        "{line}"
+    );
+    assert!(
+        !serde_json::to_string(&record(4)).unwrap().contains("inside_cp_dist"),
+        "left out when absent"
+    );
+    let (_d, path) = journal(format!("{old}\n{line}\n").as_bytes());
+    let read = Journal::read(&path).unwrap();
+    assert_eq!((read[0].closest_centre_m, read[0].inside_cp_dist), (None, None));
+    assert_eq!(
+        (read[1].closest_centre_m, read[1].inside_cp_dist),
+        (Some(1.35), Some(true))
+    );
+    let bad = FlightRecord {
+        closest_centre_m: Some(-0.5),
+        ..cp
+    };
+    let e = crate::campaign::store::journal_check::check_record(&bad, 100.0).unwrap_err();
+    assert!(e.contains("closest_centre_m") && e.contains("outside"), "{e}");
+}

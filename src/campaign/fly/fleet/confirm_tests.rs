@@ -37,6 +37,7 @@ impl Vehicle for Scripted {
             flight_time_s: 40.0,
             warnings: Vec::new(),
             reason: None,
+            cp: None,
         })
     }
 }

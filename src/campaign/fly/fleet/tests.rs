@@ -38,6 +38,7 @@ impl Vehicle for Fake {
                 flight_time_s: 0.0,
                 warnings: Vec::new(),
                 reason: Some("not ready to arm: no valid data from Compass 0".into()),
+                cp: None,
             });
         }
         if !self.reachable {
@@ -68,6 +69,7 @@ impl Vehicle for Fake {
             flight_time_s: 40.0,
             warnings: Vec::new(),
             reason: None,
+            cp: None,
         })
     }
 }
