@@ -80,7 +80,8 @@ fn flies_the_pinned_journal(switch: &str, pinned: &str) {
     let flown = decided(&read(&campaign_folder(out.path()).join("journal.jsonl")));
     let pinned_flights = decided(&read(&repo().join(pinned)));
     assert_eq!(
-        flown, pinned_flights,
+        flown,
+        pinned_flights,
         "the journal moved from {pinned}; if that is meant, record it again with `prgenuav generate {}` and say why",
         args[1..args.len() - 3].join(" ")
     );
@@ -136,7 +137,10 @@ fn a_folder_the_one_pass_campaign_left_when_killed_resumes_to_the_uninterrupted_
     let (code, stdout, stderr) = prgenuav(&["generate", "--resume", dir.path().to_str().expect("utf-8"), "--quiet"]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     let after = read(&dir.path().join("journal.jsonl"));
-    assert!(after.starts_with(&before), "the journaled flights are kept as they were");
+    assert!(
+        after.starts_with(&before),
+        "the journaled flights are kept as they were"
+    );
     let mut resumed = decided(&after);
     let mut uninterrupted = decided(&read(&repo().join(NO_LEARN)));
     // Two vehicles land in either order; what is flown is what the uninterrupted campaign flies.

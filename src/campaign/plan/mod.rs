@@ -6,4 +6,3 @@ pub mod draw;
 pub mod neighbours;
 pub mod rank;
 pub mod rounds;
-pub mod single_pass;
