@@ -421,6 +421,9 @@ fn a_run_reads_the_journal_file_once() {
     }
 }
 
+/// A change to a journal line.
+type Edit = dyn Fn(&mut serde_json::Value);
+
 /// `dir`'s journal with its first line changed by `edit`.
 fn edit_first_line(dir: &Path, edit: impl Fn(&mut serde_json::Value)) {
     let path = dir.join("journal.jsonl");
@@ -442,8 +445,7 @@ fn a_journal_line_another_campaign_wrote_stops_the_resume_learning_or_not() {
         r["obstacles"][0]["position"]["x"] = (x + 0.5).into();
     };
     let beyond = |r: &mut serde_json::Value| r["candidate"] = 999.into();
-    let cases: [(CampaignConfig, &dyn Fn(&mut serde_json::Value)); 3] =
-        [(config(4), &moved), (adapted(16), &moved), (config(4), &beyond)];
+    let cases: [(CampaignConfig, &Edit); 3] = [(config(4), &moved), (adapted(16), &moved), (config(4), &beyond)];
     for (cfg, edit) in cases {
         let dir = tempfile::tempdir().unwrap();
         let flown = Arc::new(Mutex::new(Vec::new()));
