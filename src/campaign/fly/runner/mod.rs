@@ -133,14 +133,16 @@ impl RunnerVehicle {
             (Some(0), Err(e)) => Attempt::Failed(format!("{e}{}", tail(&stderr))),
             // A submitting command that failed (lost contact with its engine, say) may leave its job there:
             // cancelled before the retry, so one candidate never flies twice at once.
-            (code, _) => Attempt::Failed(format!(
-                "exited with {}{}{}",
-                code.map_or("a signal".into(), |c| format!("code {c}")),
-                in_engine(),
-                tail(&stderr)
-            )),
+            (code, _) => failed_exit(code, &in_engine(), &stderr),
         }
     }
+}
+
+/// A job command that exited without a result: its exit in words, what was done about the job in its engine,
+/// and the end of its error output.
+fn failed_exit(code: Option<i32>, in_engine: &str, stderr: &Path) -> Attempt {
+    let code = code.map_or("a signal".into(), |c| format!("code {c}"));
+    Attempt::Failed(format!("exited with {code}{in_engine}{}", tail(stderr)))
 }
 
 impl Vehicle for RunnerVehicle {
