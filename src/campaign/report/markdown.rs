@@ -54,7 +54,7 @@ fn summary_table(md: &mut String, r: &Report) {
     let _ = writeln!(md, "| failing tests with three obstacles | {} |", s.failing_with_three);
     let _ = writeln!(md, "| failure score | {:.3} |", s.failure_score);
     let _ = writeln!(md, "| diversity | {} |", opt(s.diversity));
-    crate::campaign::report::expected_score::markdown_rows(md, s.expected_2026.as_ref());
+    crate::campaign::report::expected::score::markdown_rows(md, s.expected_2026.as_ref());
     if s.confirm > 1 {
         confirm_rows(md, s);
     }

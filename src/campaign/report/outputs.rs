@@ -10,7 +10,7 @@ use crate::campaign::report::suite::summary;
 pub use crate::campaign::report::suite::{DISTINCT_IOU, SuiteSummary};
 use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
-use crate::campaign::report::{backends, expected_score};
+use crate::campaign::report::{backends, expected::score as expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::io::{write_atomic, write_json};

@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed_again, first_flights};
-use crate::campaign::report::expected_figures::SuiteExpectation;
+use crate::campaign::report::expected::figures::SuiteExpectation;
 use crate::campaign::report::verdicts::{TestVerdict, score_sum};
 use crate::campaign::store::journal::{FlightRecord, flights_charged};
 use crate::judge::{distinct_tests, diversity};

@@ -243,7 +243,7 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
 }
 
 /// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
-fn how_sure(e: Option<&super::expected_figures::SuiteExpectation>, others: usize) -> String {
+fn how_sure(e: Option<&super::expected::figures::SuiteExpectation>, others: usize) -> String {
     let Some(e) = e else {
         return "Each written test failed at least once.".into();
     };

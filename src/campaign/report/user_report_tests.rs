@@ -23,7 +23,7 @@ fn flight(candidate: u64, attempt: u32, d: f64) -> FlightRecord {
 fn report(records: &[FlightRecord], confirm: usize, budget: usize) -> Report {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut pairs = verdicts(records, confirm);
-    let expected = crate::campaign::report::expected_score::aim(dir.path(), records, &mut pairs);
+    let expected = crate::campaign::report::expected::score::aim(dir.path(), records, &mut pairs);
     let mut tests: Vec<TestVerdict> = pairs.into_iter().map(|(t, _)| t).collect();
     let (mut c, mut u) = (0, 0);
     for t in &mut tests {

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::campaign::fly::confirm::{failed, tallies};
-use crate::campaign::report::expected_figures::TestExpectation;
+use crate::campaign::report::expected::figures::TestExpectation;
 use crate::campaign::store::journal::FlightRecord;
 use crate::judge::{Z90, test_score, wilson_interval};
 use crate::model::Obstacle;
@@ -32,7 +32,7 @@ pub struct TestVerdict {
     /// Its upper bound.
     pub failure_rate_high: f64,
     /// Written as `test_N.yaml`: more than half of its `--confirm` flights failed, until the campaign aims
-    /// at the 2026 score ([`crate::campaign::report::expected_score`]) and writes by expected points.
+    /// at the 2026 score ([`crate::campaign::report::expected::score`]) and writes by expected points.
     pub confirmed: bool,
     /// Its majority is settled (false: the budget ran out before its confirmation).
     pub settled: bool,
@@ -45,7 +45,7 @@ pub struct TestVerdict {
     pub trajectories: Vec<PathBuf>,
     /// The file it is written as: `test_N.yaml` when confirmed, else `unconfirmed/test_K.yaml`.
     pub reported_as: Option<String>,
-    /// Its expected 2026 figures ([`crate::campaign::report::expected_score`]).
+    /// Its expected 2026 figures ([`crate::campaign::report::expected::score`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub expected: Option<TestExpectation>,
     /// The better written test whose flown trajectory it copies (`test_K.yaml`): set aside, not written.

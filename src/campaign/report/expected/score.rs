@@ -3,7 +3,7 @@
 //! footprints overlap it by IoU >= [`NEIGHBOUR_IOU`]) and the calibrated prediction; the tests rank by their
 //! expected 2026 score (expected points per expected minute, x 10 / obstacles²). Written are those that
 //! failed at least once and whose 10 % bound of expected points is above zero, less the near-duplicate
-//! trajectories of better written tests ([`crate::campaign::report::trajectory_guard`]). The suite's
+//! trajectories of better written tests ([`crate::campaign::report::expected::trajectory_guard`]). The suite's
 //! expected 2026 score is the sum of the written tests' expected scores times the expected `sim_pen`.
 
 use std::cmp::Ordering;
@@ -13,9 +13,9 @@ use crate::campaign::candidate::CandidateId;
 use crate::campaign::evaluation::SIMILAR_BELOW_M;
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
 use crate::campaign::plan::expected_points::{Evidence, counts, estimate, prior_bands};
-pub use crate::campaign::report::expected_figures::{SuiteExpectation, TestExpectation};
+pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
+use crate::campaign::report::expected::trajectory_guard::{flown_average, near_duplicates, sim_pen};
 use crate::campaign::report::suite::DISTINCT_IOU;
-use crate::campaign::report::trajectory_guard::{flown_average, near_duplicates, sim_pen};
 use crate::campaign::report::verdicts::TestVerdict;
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
@@ -187,5 +187,5 @@ pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
 }
 
 #[cfg(test)]
-#[path = "expected_score_tests.rs"]
+#[path = "score_tests.rs"]
 mod tests;

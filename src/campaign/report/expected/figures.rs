@@ -1,5 +1,5 @@
 //! The expected 2026 figures of a campaign's tests and of its written suite, as report.json carries them
-//! (computed by [`crate::campaign::report::expected_score`]).
+//! (computed by [`crate::campaign::report::expected::score`]).
 
 use serde::Serialize;
 
