@@ -39,7 +39,9 @@ async fn open_with_retry(
     let deadline = std::time::Instant::now() + clock::secs(opts.heartbeat_wait_s);
     loop {
         // A connect the network never answers (a `tcpout` to a silent host) ends with the wait or the stop.
+        // Biased: an open that ends at once (a port in use) reports its own error, not the deadline's.
         let opened = tokio::select! {
+            biased;
             opened = open(address) => opened,
             () = tokio::time::sleep_until(deadline.into()) => Err(std::io::Error::new(
                 std::io::ErrorKind::TimedOut,
