@@ -22,7 +22,6 @@ mod layering;
 mod lfs;
 mod missions;
 mod pinned;
-mod pinned_static;
 mod pty;
 mod px4_campaign;
 mod px4_cp;

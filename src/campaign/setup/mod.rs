@@ -3,7 +3,6 @@
 //! [`crate::campaign::run::run_campaign`] gets the same campaign as the command line from the same request.
 
 pub mod fleet;
-pub mod resume;
 
 use std::path::PathBuf;
 
