@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering};
 
 use mavlink::dialects::common::MavMessage;
 use mavlink::error::MessageReadError;
-use mavlink::{AsyncMavlinkReader, MavHeader, MavlinkVersion};
+use mavlink::{AsyncMavlinkReader, MavHeader};
 use tokio::io::AsyncWriteExt;
 use tokio::net::TcpListener;
 use tokio::net::tcp::OwnedWriteHalf;
@@ -22,7 +22,7 @@ use tokio::sync::{Mutex, Notify, mpsc};
 use tokio::task::{AbortHandle, JoinSet};
 
 use super::link::{BoxFuture, Transport};
-use super::udp_in::from_vehicle;
+use super::udp_in::{encode, from_vehicle};
 
 /// Clients held at once before one is the vehicle; a newcomer past it drops the oldest.
 pub const MAX_UNDECIDED: usize = 8;
@@ -167,14 +167,7 @@ impl Transport for TcpInTransport {
             // As `udpin`: nothing to answer before the vehicle spoke.
             let mut writer = self.shared.writer.lock().await;
             let Some(w) = writer.as_mut() else { return Ok(()) };
-            let header = MavHeader {
-                sequence: self.sequence.fetch_add(1, Ordering::Relaxed),
-                ..header
-            };
-            let mut bytes = Vec::with_capacity(280);
-            mavlink::write_versioned_msg(&mut bytes, MavlinkVersion::V2, header, msg)
-                .map_err(|e| io::Error::other(e.to_string()))?;
-            w.write_all(&bytes).await
+            w.write_all(&encode(header, &self.sequence, msg)?).await
         })
     }
 

@@ -1,5 +1,6 @@
 use std::time::Duration;
 
+use mavlink::MavlinkVersion;
 use mavlink::dialects::common::{HEARTBEAT_DATA, MavAutopilot, MavModeFlag, MavState, MavType};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;

@@ -96,18 +96,25 @@ fn frames(datagram: &[u8]) -> Vec<(MavHeader, MavMessage)> {
     out
 }
 
+/// One MAVLink 2 frame of `msg`, numbered by the transport's own `sequence` (shared by the listening
+/// transports, which answer whoever the vehicle is).
+pub(super) fn encode(header: MavHeader, sequence: &AtomicU8, msg: &MavMessage) -> io::Result<Vec<u8>> {
+    let header = MavHeader {
+        sequence: sequence.fetch_add(1, Ordering::Relaxed),
+        ..header
+    };
+    let mut bytes = Vec::with_capacity(280);
+    mavlink::write_versioned_msg(&mut bytes, MavlinkVersion::V2, header, msg)
+        .map_err(|e| io::Error::other(e.to_string()))?;
+    Ok(bytes)
+}
+
 impl Transport for UdpInTransport {
     fn send<'a>(&'a self, header: MavHeader, msg: &'a MavMessage) -> BoxFuture<'a, io::Result<()>> {
         Box::pin(async move {
             // As rust-mavlink's udpin: nothing to answer before the vehicle spoke.
             let Some(peer) = self.peer() else { return Ok(()) };
-            let header = MavHeader {
-                sequence: self.sequence.fetch_add(1, Ordering::Relaxed),
-                ..header
-            };
-            let mut bytes = Vec::with_capacity(280);
-            mavlink::write_versioned_msg(&mut bytes, MavlinkVersion::V2, header, msg)
-                .map_err(|e| io::Error::other(e.to_string()))?;
+            let bytes = encode(header, &self.sequence, msg)?;
             self.socket.send_to(&bytes, peer).await.map(|_| ())
         })
     }
