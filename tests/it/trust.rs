@@ -154,17 +154,27 @@ fn start_flying(out: &Path, extra: &[&str]) -> (Child, PathBuf) {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
+    // Read on a thread, so a campaign that never says `[fly]` fails the test in 3 minutes instead of hanging it.
     let stderr = child.stderr.take().unwrap();
-    let mut lines = BufReader::new(stderr).lines();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
     let t0 = Instant::now();
-    while t0.elapsed() < Duration::from_secs(120) {
-        match lines.next() {
-            Some(Ok(line)) if line.starts_with("[fly]") => break,
-            Some(_) => {}
-            None => panic!("generate ended before flying"),
+    let mut seen = Vec::new();
+    loop {
+        let left = Duration::from_secs(180).saturating_sub(t0.elapsed());
+        match rx.recv_timeout(left) {
+            Ok(line) if line.starts_with("[fly]") => break,
+            Ok(line) => seen.push(line),
+            Err(e) => {
+                let _ = child.kill();
+                panic!("no `[fly]` stage ({e:?}); stderr so far:\n{}", seen.join("\n"));
+            }
         }
     }
-    std::thread::spawn(move || lines.for_each(drop));
     let folder = std::fs::read_dir(out).unwrap().next().unwrap().unwrap().path();
     (child, folder)
 }
