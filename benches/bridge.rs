@@ -11,7 +11,7 @@ use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMiss
 use mock_autopilot::{Faults, LinkSpec, MockAutopilot, MockHandle, SpeedFactor};
 use prgenuav::bridge::CancelToken;
 use prgenuav::bridge::wire::clock::VehicleClock;
-use prgenuav::bridge::wire::exchange::{Retry, Target};
+use prgenuav::bridge::wire::exchange::{RetryPolicy, Target};
 use prgenuav::bridge::wire::link::{Link, MavTransport};
 use prgenuav::bridge::wire::mission_upload::MissionUpload;
 
@@ -73,7 +73,7 @@ fn upload(c: &mut Criterion) {
                     target,
                     MavMissionType::MAV_MISSION_TYPE_MISSION,
                     plan.clone(),
-                    Retry::MISSION,
+                    RetryPolicy::MISSION,
                 );
                 rt.block_on(link.exchange(up, &cancel)).expect("upload accepted")
             })

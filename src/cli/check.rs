@@ -8,7 +8,7 @@ use prgenuav::rules::{Violation, check};
 
 /// Arguments of `check`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct CheckArgs {
     /// The test (or case study) YAML.
     test: PathBuf,
     /// Print `{"valid", "violations": [{"path", "value", "rule"}]}`.
@@ -22,7 +22,7 @@ struct Report<'a> {
     violations: &'a [Violation],
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: CheckArgs) -> anyhow::Result<ExitCode> {
     let test = TestCase::load(&args.test)?;
     let violations = check(&test, &Arena::default());
     let valid = violations.is_empty();

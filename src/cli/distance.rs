@@ -11,7 +11,7 @@ use prgenuav::model::{TestCase, Trajectory};
 
 /// Arguments of `distance`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct DistanceArgs {
     /// The test YAML (its obstacles are measured against).
     test: PathBuf,
     /// The flight: an Aerialist trajectory CSV (`timestamp,x,y,z,r`, microseconds, local NED, z up).
@@ -25,7 +25,7 @@ pub struct Args {
     judge: JudgeEdition,
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: DistanceArgs) -> anyhow::Result<ExitCode> {
     let judge = Judge::from(args.judge);
     let test = TestCase::load(&args.test)?;
     let flight = Trajectory::load_csv(&args.flight)?;

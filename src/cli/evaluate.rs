@@ -28,7 +28,7 @@ use super::values::{JudgeEdition, Mode, name_of};
 
 /// Arguments of `evaluate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct EvaluateArgs {
     /// The suite: a `generate` output folder or any folder of test_N.yaml files, best first.
     folder: PathBuf,
     /// Flights per test (1 to 20; the 2026 competition flies 5).
@@ -79,7 +79,7 @@ pub struct Args {
 
 /// The vehicles' settings: the suite's campaign.json when it has one (the same mock it was generated on),
 /// else `generate`'s defaults; the flags given here override the backend.
-fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
+fn config(args: &EvaluateArgs) -> anyhow::Result<CampaignConfig> {
     let stored = args.folder.join("campaign.json");
     // A link or a folder in its place is refused by the reader, naming it, rather than passed over.
     let mut cfg = if std::fs::symlink_metadata(&stored).is_ok() {
@@ -111,7 +111,7 @@ fn config(args: &Args) -> anyhow::Result<CampaignConfig> {
     Ok(cfg)
 }
 
-fn defaults(args: &Args) -> CampaignConfig {
+fn defaults(args: &EvaluateArgs) -> CampaignConfig {
     let ask = Ask {
         case: args.folder.clone(),
         budget: 1,
@@ -127,7 +127,7 @@ fn defaults(args: &Args) -> CampaignConfig {
     setup::build(&ask, &Requested::default())
 }
 
-fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
+fn runner(cfg: &CampaignConfig, args: &EvaluateArgs) -> anyhow::Result<Option<RunnerSettings>> {
     let Some(text) = &cfg.runner else {
         return Ok(None);
     };
@@ -147,7 +147,7 @@ fn runner(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSett
 }
 
 /// The numbers given, checked before any vehicle starts.
-fn check(args: &Args) -> anyhow::Result<()> {
+fn check(args: &EvaluateArgs) -> anyhow::Result<()> {
     limits::EVALUATE_RUNS.check(args.runs as f64)?;
     limits::SIMILAR_BELOW.check(args.similar_below)?;
     if args.top == Some(0) {
@@ -157,7 +157,7 @@ fn check(args: &Args) -> anyhow::Result<()> {
 }
 
 /// `--jobs` given to the backend that flies, as `generate` does, within what this machine runs.
-fn at_once(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<AtOnce> {
+fn at_once(cfg: &CampaignConfig, args: &EvaluateArgs) -> anyhow::Result<AtOnce> {
     let at_once = split(cfg, args.jobs, args.mock_vehicles, args.px4.instances)?;
     if let Some(n) = at_once.mock_vehicles {
         let name = if args.mock_vehicles.is_some() {
@@ -175,7 +175,7 @@ fn at_once(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<AtOnce> {
     Ok(at_once)
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
     check(&args)?;
     let cfg = config(&args)?;
     if cfg.runner.is_some() && cfg.px4.is_some() {

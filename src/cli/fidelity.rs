@@ -12,11 +12,11 @@ use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
 use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FidelityReport, FlightCase, evaluate_with, load_dir};
 use prgenuav::lfs::sim::SimConfig;
 
-use super::values::{FovEstimate, Motion, name_of};
+use super::values::{FovEstimateArg, Motion, name_of};
 
 /// Arguments of `fidelity`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct FidelityArgs {
     /// Folder of flight JSON files (the format of the competition flights in tests/data/hfs-flights).
     dir: PathBuf,
     /// Motion model of the simulated vehicle.
@@ -44,7 +44,7 @@ pub struct Args {
     seed: u64,
     /// Where the planner's camera FOV comes from (default: the planner's default).
     #[arg(long, value_enum)]
-    fov_estimate: Option<FovEstimate>,
+    fov_estimate: Option<FovEstimateArg>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -66,7 +66,7 @@ fn line(name: &str, a: &Aggregates) -> String {
     s
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: FidelityArgs) -> anyhow::Result<ExitCode> {
     if args.jobs == 0 {
         bail!("--jobs must be at least 1");
     }
@@ -149,7 +149,7 @@ fn print_report(report: &FidelityReport) {
     }
 }
 
-fn run_cv(args: &Args, cases: &[FlightCase], base: &SimConfig, k: usize) -> anyhow::Result<ExitCode> {
+fn run_cv(args: &FidelityArgs, cases: &[FlightCase], base: &SimConfig, k: usize) -> anyhow::Result<ExitCode> {
     let motion = name_of(&args.motion);
     let Some(grid) = default_grid(&motion) else {
         bail!("no cross-validation grid for motion model {motion}");

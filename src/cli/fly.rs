@@ -30,7 +30,7 @@ const PREDICTION_MOTION: Motion = Motion::Px4;
 
 /// Arguments of `fly`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct FlyArgs {
     /// The test YAML (mission, parameters, commands and the virtual obstacles).
     test: PathBuf,
     /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
@@ -97,7 +97,7 @@ pub struct Args {
     quiet: bool,
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     // Arguments first, resources second.
     LinkAddress::parse(&args.connect)?;
     super::check_outputs(&[
@@ -152,7 +152,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 /// `--px4`: the checked build folder, refused when its release cannot fly `--mode`.
-fn open_build(args: &Args) -> anyhow::Result<Option<Px4Build>> {
+fn open_build(args: &FlyArgs) -> anyhow::Result<Option<Px4Build>> {
     let Some(dir) = args.px4.as_deref() else {
         return Ok(None);
     };
@@ -162,7 +162,7 @@ fn open_build(args: &Args) -> anyhow::Result<Option<Px4Build>> {
 }
 
 /// The LFS prediction for the mode flown (none with `--no-predict`; a failure is a warning).
-fn prediction(args: &Args, test: &TestCase) -> Option<Prediction> {
+fn prediction(args: &FlyArgs, test: &TestCase) -> Option<Prediction> {
     (!args.no_predict)
         .then(|| match args.mode {
             Mode::CollisionPrevention => predict_cp(test, args.judge.into()),
@@ -202,7 +202,7 @@ fn prediction_model(mode: FlyMode) -> &'static str {
 }
 
 /// Writes the Gazebo world of the test's boxes where `--world` asks; whether it did.
-fn write_world(args: &Args, test: &TestCase) -> anyhow::Result<bool> {
+fn write_world(args: &FlyArgs, test: &TestCase) -> anyhow::Result<bool> {
     let Some(path) = &args.world else { return Ok(false) };
     write_atomic(path, world_sdf(&test.obstacles).as_bytes()).with_context(|| format!("writing {}", path.display()))?;
     Ok(true)
@@ -233,7 +233,7 @@ fn exit_code(report: &FlightReport) -> ExitCode {
 }
 
 /// The bridge's options from the flags, checked before anything is contacted.
-fn options(args: &Args, prediction: Option<&Prediction>) -> anyhow::Result<FlyOptions> {
+fn options(args: &FlyArgs, prediction: Option<&Prediction>) -> anyhow::Result<FlyOptions> {
     let opts = FlyOptions {
         connect: args.connect.clone(),
         mode: args.mode.into(),

@@ -42,29 +42,29 @@ enum Command {
     /// The main job: sample candidates, screen them with the LFS, fly the most severe within BUDGET flights,
     /// and write the failing tests best first with a report.
     #[command(override_usage = "prgenuav generate [OPTIONS] CASE BUDGET\n       prgenuav generate --resume FOLDER")]
-    Generate(Box<generate::Args>),
+    Generate(Box<generate::GenerateArgs>),
     /// Check a test against the competition's rules (exit 0 valid, 1 violations, 2 unreadable).
-    Check(check::Args),
+    Check(check::CheckArgs),
     /// Minimum distance of a recorded flight (Aerialist trajectory CSV) to a test's obstacles.
-    Distance(distance::Args),
+    Distance(distance::DistanceArgs),
     /// Write N generated tests for a case study (the paper's two-obstacle placement, no screening).
     #[command(override_usage = "prgenuav sample [OPTIONS] CASE N")]
-    Sample(sample::Args),
+    Sample(sample::SampleArgs),
     /// The competition's metrics for a folder of tests with flights (trajectory CSVs or PX4 ULogs).
-    Score(score::Args),
+    Score(score::ScoreArgs),
     /// Fly every test of a suite several times (the 2026 competition's 5) and score it the 2026 way: mean
     /// points, average trajectories, similarity penalty (docs/evaluate.md).
-    Evaluate(Box<evaluate::Args>),
+    Evaluate(Box<evaluate::EvaluateArgs>),
     /// Render the depth image (and point cloud) the vehicle's camera sees at a pose.
-    Render(render::Args),
+    Render(render::RenderArgs),
     /// Simulate a test with the low-fidelity simulator (3DVFH* + depth camera) and predict its minimum distance.
-    Simulate(simulate::Args),
+    Simulate(simulate::SimulateArgs),
     /// Compare simulated with real minimum distances over a folder of recorded flights (JSON).
-    Fidelity(fidelity::Args),
+    Fidelity(fidelity::FidelityArgs),
     /// Fly a test over MAVLink (PX4 SITL, hardware or the mock) with virtual obstacles; report the true minimum
     /// distance (exit 0: landed or collision; 1: the flight did not complete (timeout, link lost, aborted,
     /// refused by the vehicle); 2: an error, also a vehicle too far from the test's home).
-    Fly(fly::Args),
+    Fly(fly::FlyArgs),
 }
 
 /// The command line's definition, with a fixed help width so `--help` and docs/cli.md read the same on every

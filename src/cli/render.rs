@@ -10,11 +10,11 @@ use prgenuav::io::write_atomic;
 use prgenuav::lfs::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
 use prgenuav::lfs::render::{CameraPose, Scene, cloud_from_depth, render_depth};
 
-use super::values::Camera;
+use super::values::CameraArg;
 
 /// Arguments of `render`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct RenderArgs {
     /// The test YAML whose obstacles are rendered (with the ground plane).
     test: PathBuf,
     /// Vehicle pose `X,Y,Z,YAW`: X North and Y East in metres (local NED), Z height above ground in metres
@@ -22,8 +22,8 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true, value_name = "X,Y,Z,YAW")]
     pose: String,
     /// Camera preset.
-    #[arg(long, value_enum, default_value_t = Camera::Hfs)]
-    camera: Camera,
+    #[arg(long, value_enum, default_value_t = CameraArg::Hfs)]
+    camera: CameraArg,
     /// The depth image to write: float32 NumPy .npy, shape (H, W), metres along the optical axis, NaN = no
     /// return.
     #[arg(long, value_name = "FILE.npy")]
@@ -49,7 +49,7 @@ fn parse_pose(s: &str) -> anyhow::Result<[f64; 4]> {
     Ok(v)
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let [x, y, z, yaw_deg] = parse_pose(&args.pose)?;
     super::check_outputs(&[
         ("--out-file", Some(args.out_file.as_path())),

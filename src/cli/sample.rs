@@ -20,7 +20,7 @@ const MAX_COUNT: u64 = 5_000;
 
 /// Arguments of `sample`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct SampleArgs {
     /// The case study YAML (mission, params, commands).
     #[arg(value_name = "CASE")]
     case: PathBuf,
@@ -78,7 +78,7 @@ struct Written<'a> {
     placement: &'a Placement,
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: SampleArgs) -> anyhow::Result<ExitCode> {
     let count = args.n.or(args.count).unwrap_or_default();
     if !(1..=MAX_COUNT).contains(&count) {
         bail!("N {count} is out of range: 1 to {MAX_COUNT} tests");

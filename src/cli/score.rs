@@ -13,7 +13,7 @@ use serde::Serialize;
 
 /// Arguments of `score`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct ScoreArgs {
     /// Folder with test_N.yaml files and their flights (test_N.csv, test_N.ulg, or runs test_N-K.csv|ulg).
     folder: PathBuf,
     /// Print the full result as JSON.
@@ -39,7 +39,7 @@ struct Both {
     evaluation_2026: Evaluation,
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: ScoreArgs) -> anyhow::Result<ExitCode> {
     super::limits::SIMILAR_BELOW.check(args.similar_below)?;
     let suite = score_folder(&args.folder, args.judge.into())?;
     if suite.tests.is_empty() {

@@ -9,24 +9,24 @@ use anyhow::{Context, bail};
 use prgenuav::io::write_atomic;
 use prgenuav::judge::{Judge, ObstacleDistance};
 use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS, run_ensemble};
-use prgenuav::lfs::sim::{SimConfig, SimResult, Status, simulate};
+use prgenuav::lfs::sim::{SimConfig, SimResult, SimStatus, simulate};
 use prgenuav::model::TestCase;
 use prgenuav::model::competition::FAIL_BELOW_M;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
-use super::values::{Camera, JudgeEdition, Motion};
+use super::values::{CameraArg, JudgeEdition, Motion};
 
 /// Arguments of `simulate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct SimulateArgs {
     /// The test YAML (obstacles + mission).
     test: PathBuf,
     /// Motion model of the simulated vehicle.
     #[arg(long, value_enum, default_value_t = Motion::Paper)]
     motion: Motion,
     /// Depth camera preset.
-    #[arg(long, value_enum, default_value_t = Camera::Hfs)]
-    camera: Camera,
+    #[arg(long, value_enum, default_value_t = CameraArg::Hfs)]
+    camera: CameraArg,
     /// Print `{"min_distance", "min_distance_raw", "per_obstacle", "status", "flight_time_s", "cycles", "wall_ms"}`, with
     /// `"ensemble": {"n", "seed", "p_fail", "member_min_distances"}` under `--ensemble`.
     #[arg(long)]
@@ -67,7 +67,7 @@ struct Report {
     min_distance: Option<f64>,
     min_distance_raw: Option<f64>,
     per_obstacle: Vec<ObstacleDistance>,
-    status: Status,
+    status: SimStatus,
     flight_time_s: f64,
     cycles: u64,
     wall_ms: f64,
@@ -75,7 +75,7 @@ struct Report {
     ensemble: Option<EnsembleReport>,
 }
 
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
     let judge = Judge::from(args.judge);
     super::check_outputs(&[
         ("--trajectory", args.trajectory.as_deref()),
@@ -131,7 +131,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 /// `--trajectory` and `--plot`.
-fn write_files(args: &Args, test: &TestCase, result: &SimResult) -> anyhow::Result<()> {
+fn write_files(args: &SimulateArgs, test: &TestCase, result: &SimResult) -> anyhow::Result<()> {
     if let Some(path) = &args.trajectory {
         write_atomic(path, result.trajectory.to_csv().as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;

@@ -5,8 +5,8 @@
 use clap::ValueEnum;
 use prgenuav::bridge::FlyMode;
 use prgenuav::judge::Judge;
-use prgenuav::lfs::camera::Camera as CameraModel;
-use prgenuav::lfs::fov_estimate::FovEstimate as FovEstimateModel;
+use prgenuav::lfs::camera::Camera;
+use prgenuav::lfs::fov_estimate::FovEstimate;
 use prgenuav::lfs::sim::MotionModel;
 use serde::{Deserialize, Serialize};
 
@@ -29,18 +29,18 @@ pub fn parse_stored<T: ValueEnum>(text: &str, what: &str) -> anyhow::Result<T> {
 /// Key spelling of written YAML files.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Spelling {
+pub enum SpellingArg {
     /// `robot:` and `mission:` (Aerialist since 2025-09).
     New,
     /// `drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's).
     Old,
 }
 
-impl From<Spelling> for prgenuav::model::Spelling {
-    fn from(s: Spelling) -> Self {
+impl From<SpellingArg> for prgenuav::model::Spelling {
+    fn from(s: SpellingArg) -> Self {
         match s {
-            Spelling::New => Self::New,
-            Spelling::Old => Self::Old,
+            SpellingArg::New => Self::New,
+            SpellingArg::Old => Self::Old,
         }
     }
 }
@@ -111,7 +111,7 @@ impl From<JudgeEdition> for Judge {
 
 /// A depth-camera preset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Camera {
+pub enum CameraArg {
     /// The competition's camera: 59 deg, 640 x 480.
     Hfs,
     /// The 2019 model PX4-Avoidance was tuned with: the competition's camera at 64 x 48.
@@ -121,38 +121,38 @@ pub enum Camera {
     D455,
 }
 
-impl Camera {
+impl CameraArg {
     /// The preset's intrinsics and clipping.
-    pub fn model(self) -> CameraModel {
+    pub fn model(self) -> Camera {
         match self {
-            Camera::Hfs => CameraModel::hfs(),
-            Camera::V2019 => CameraModel::v2019(),
-            Camera::D455 => CameraModel::d455(),
+            CameraArg::Hfs => Camera::hfs(),
+            CameraArg::V2019 => Camera::v2019(),
+            CameraArg::D455 => Camera::d455(),
         }
     }
 }
 
 /// Where the planner's camera field of view comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum FovEstimate {
+pub enum FovEstimateArg {
     /// The pinhole span of the camera, fixed for the flight.
     Fixed,
     /// Estimated from each frame's extreme points, widened and never narrowed (as PX4-Avoidance does).
     Maxima,
 }
 
-impl From<FovEstimate> for FovEstimateModel {
-    fn from(f: FovEstimate) -> Self {
+impl From<FovEstimateArg> for FovEstimate {
+    fn from(f: FovEstimateArg) -> Self {
         match f {
-            FovEstimate::Fixed => FovEstimateModel::Fixed,
-            FovEstimate::Maxima => FovEstimateModel::FromMaxima,
+            FovEstimateArg::Fixed => FovEstimate::Fixed,
+            FovEstimateArg::Maxima => FovEstimate::FromMaxima,
         }
     }
 }
 
 /// `--family`'s values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Family {
+pub enum FamilyArg {
     /// The paper's two-obstacle S.
     Paper,
     /// The split drawn too, and a third obstacle where the case allows.
@@ -161,12 +161,12 @@ pub enum Family {
     Gate,
 }
 
-impl From<Family> for prgenuav::generator::Family {
-    fn from(f: Family) -> Self {
+impl From<FamilyArg> for prgenuav::generator::Family {
+    fn from(f: FamilyArg) -> Self {
         match f {
-            Family::Paper => Self::Paper,
-            Family::Extended => Self::Extended,
-            Family::Gate => Self::Gate,
+            FamilyArg::Paper => Self::Paper,
+            FamilyArg::Extended => Self::Extended,
+            FamilyArg::Gate => Self::Gate,
         }
     }
 }
@@ -188,11 +188,11 @@ mod tests {
                 Some(m.model().name())
             );
         }
-        for c in Camera::value_variants() {
-            assert_eq!(CameraModel::preset(&name_of(c)).map(|x| x.name), Some(c.model().name));
+        for c in CameraArg::value_variants() {
+            assert_eq!(Camera::preset(&name_of(c)).map(|x| x.name), Some(c.model().name));
         }
-        for f in FovEstimate::value_variants() {
-            assert_eq!(FovEstimateModel::by_name(&name_of(f)), Some((*f).into()));
+        for f in FovEstimateArg::value_variants() {
+            assert_eq!(FovEstimate::by_name(&name_of(f)), Some((*f).into()));
         }
         for j in JudgeEdition::value_variants() {
             assert_eq!(name_of(j).parse::<Judge>(), Ok((*j).into()));
@@ -207,8 +207,8 @@ mod tests {
             s.choices.iter().map(|(n, _)| n.to_string()).collect()
         };
         assert_eq!(declared("screening", "motion"), names::<Motion>());
-        assert_eq!(declared("output", "spelling"), names::<Spelling>());
-        assert_eq!(declared("generator", "family"), names::<Family>());
+        assert_eq!(declared("output", "spelling"), names::<SpellingArg>());
+        assert_eq!(declared("generator", "family"), names::<FamilyArg>());
         let e = parse_stored::<Mode>("ofboard", "mode").unwrap_err().to_string();
         assert!(e.contains("avoidance, offboard, mission"), "{e}");
     }

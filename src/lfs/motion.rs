@@ -36,7 +36,7 @@ use nalgebra::Vector3;
 
 /// The vehicle's kinematic state (ENU).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Vehicle {
+pub struct KinematicState {
     /// Body origin, ENU metres.
     pub position_enu: Vector3<f64>,
     /// Velocity, ENU m/s.
@@ -90,7 +90,7 @@ impl PaperParams {
     }
 
     /// Moves `v` one step of `dt` seconds towards `target` (ENU) by the paper's rule.
-    pub fn step(&self, v: &mut Vehicle, target: &Vector3<f64>, dt: f64) {
+    pub fn step(&self, v: &mut KinematicState, target: &Vector3<f64>, dt: f64) {
         let d = target - v.position_enu;
         let mut fraction = 1.0;
         if d.xy().norm() > 0.1 {
@@ -150,7 +150,7 @@ impl Default for Px4Params {
 
 impl Px4Params {
     /// Tracks the position setpoint `sp` and yaw setpoint `yaw_sp` (ENU radians) for `dt` seconds.
-    pub fn track(&self, v: &mut Vehicle, sp: &Vector3<f64>, yaw_sp: f64, dt: f64) {
+    pub fn track(&self, v: &mut KinematicState, sp: &Vector3<f64>, yaw_sp: f64, dt: f64) {
         let n = self.substeps.max(1);
         let h = dt / f64::from(n);
         for _ in 0..n {
@@ -181,7 +181,7 @@ impl Px4Params {
     /// Velocity change of one sub-step `h` towards `cmd` with acceleration and jerk limits: the acceleration
     /// heads for the largest value from which the velocity error can still be closed without overshoot at this
     /// jerk (`sqrt(2 jerk |dv|)`, at most `max_acc`) and changes at most `jerk * h` per sub-step.
-    fn jerk_limited_dv(&self, v: &mut Vehicle, cmd: &Vector3<f64>, jerk: f64, h: f64) -> Vector3<f64> {
+    fn jerk_limited_dv(&self, v: &mut KinematicState, cmd: &Vector3<f64>, jerk: f64, h: f64) -> Vector3<f64> {
         let err = cmd - v.velocity_enu;
         let n = err.norm();
         let want = if n > 1e-12 {
@@ -199,7 +199,7 @@ fn limit(d: Vector3<f64>, max: f64) -> Vector3<f64> {
 }
 
 /// Moves `v` vertically towards altitude `alt_m` at `speed_m_s` (takeoff climb and landing descent), holding xy.
-pub fn vertical_step(v: &mut Vehicle, alt_m: f64, speed_m_s: f64, dt: f64) {
+pub fn vertical_step(v: &mut KinematicState, alt_m: f64, speed_m_s: f64, dt: f64) {
     let dz = (alt_m - v.position_enu.z).clamp(-speed_m_s * dt, speed_m_s * dt);
     v.position_enu.z += dz;
     v.velocity_enu = Vector3::new(0.0, 0.0, if dt > 0.0 { dz / dt } else { 0.0 });
@@ -210,8 +210,8 @@ pub fn vertical_step(v: &mut Vehicle, alt_m: f64, speed_m_s: f64, dt: f64) {
 mod tests {
     use super::*;
 
-    fn at(x: f64, y: f64, yaw_deg: f64) -> Vehicle {
-        Vehicle {
+    fn at(x: f64, y: f64, yaw_deg: f64) -> KinematicState {
+        KinematicState {
             position_enu: Vector3::new(x, y, 10.0),
             velocity_enu: Vector3::zeros(),
             acceleration_enu: Vector3::zeros(),

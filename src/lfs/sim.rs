@@ -14,7 +14,7 @@ use super::camera::Camera;
 use super::delay::DelayQueue;
 use super::frames::yaw_enu_to_ned_rad;
 use super::mission::{MissionParams, MissionRunner, Phase};
-use super::motion::{PaperParams, Px4Params, Vehicle, vertical_step};
+use super::motion::{KinematicState, PaperParams, Px4Params, vertical_step};
 use super::render::{CameraPose, Scene};
 use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
 use crate::judge::judge_in_frame;
@@ -22,7 +22,7 @@ use crate::model::{Mission, Obstacle, Param, Sample, TestCase, Trajectory};
 use prgenuav_planner::planner::{PlanInput, Planner, VehicleState};
 use prgenuav_planner::waypoint::{NavState, WaypointGenerator, WaypointInput};
 
-pub use super::sim_config::{MotionModel, SimConfig, SimError, SimResult, Status, cruise_param};
+pub use super::sim_config::{MotionModel, SimConfig, SimError, SimResult, SimStatus, cruise_param};
 
 /// The stages of one tick, in order.
 pub const STAGES: [&str; 5] = ["sense", "plan", "control", "integrate", "record"];
@@ -42,9 +42,9 @@ pub struct World {
     /// Ticks run.
     pub cycles: u64,
     /// The vehicle.
-    pub vehicle: Vehicle,
+    pub vehicle: KinematicState,
     /// Set once the flight is over.
-    pub status: Option<Status>,
+    pub status: Option<SimStatus>,
     tilt: TiltState,
     scene: Scene,
     obstacles: Vec<Obstacle>,
@@ -94,7 +94,7 @@ impl World {
         let mission_params = config.mission.unwrap_or_else(|| MissionParams::from_params(px4_params));
         let mission = MissionRunner::new(mission, mission_params).ok_or(SimError::EmptyMission)?;
         // PX4 starts facing North (yaw 0) in Gazebo's default spawn; ENU yaw pi/2.
-        let vehicle = Vehicle {
+        let vehicle = KinematicState {
             position_enu: Vector3::zeros(),
             velocity_enu: Vector3::zeros(),
             acceleration_enu: Vector3::zeros(),
@@ -175,13 +175,13 @@ impl World {
             );
             if r.is_err() {
                 // Only a pose inside a box fails here (the height was checked).
-                self.status = Some(Status::Collision);
+                self.status = Some(SimStatus::Collision);
                 return;
             }
         }
         let state = self.vehicle_state();
         if self.planner.update_cloud(&self.frame, &state, dt as f32).is_err() {
-            self.status = Some(Status::Stuck);
+            self.status = Some(SimStatus::Stuck);
         }
     }
 
@@ -202,7 +202,7 @@ impl World {
             now_s: self.time_s,
         };
         if self.planner.plan(&input).is_err() {
-            self.status = Some(Status::Stuck);
+            self.status = Some(SimStatus::Stuck);
         }
     }
 
@@ -314,18 +314,18 @@ impl World {
             p.z < o.top_m() && p.z >= o.position.z && o.footprint().contains(crate::geometry::P2::new(p.y, p.x))
         });
         if inside {
-            self.status = Some(Status::Collision);
+            self.status = Some(SimStatus::Collision);
         } else if self.mission.phase() == Phase::Landed {
-            self.status = Some(Status::Landed);
+            self.status = Some(SimStatus::Landed);
         } else if self.time_s >= self.config.timeout_s - 1e-9 {
-            self.status = Some(Status::Timeout);
+            self.status = Some(SimStatus::Timeout);
         } else {
             let d = (self.mission.goal_enu(&p) - p).norm();
             if d <= self.best_goal_dist_m - self.config.progress_m || !self.best_goal_dist_m.is_finite() {
                 self.best_goal_dist_m = d;
                 self.last_progress_s = self.time_s;
             } else if self.time_s - self.last_progress_s > self.config.stuck_s {
-                self.status = Some(Status::Stuck);
+                self.status = Some(SimStatus::Stuck);
             }
         }
     }
@@ -383,7 +383,7 @@ impl World {
 
 /// Runs one tick of `dt` seconds through [`STAGES`]; returns the status once the flight is over (then further
 /// calls do nothing).
-pub fn step(world: &mut World, dt: f64) -> Option<Status> {
+pub fn step(world: &mut World, dt: f64) -> Option<SimStatus> {
     if world.status.is_some() {
         return world.status;
     }

@@ -50,7 +50,7 @@ impl MotionModel {
 /// How a flight ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Status {
+pub enum SimStatus {
     /// Touched down after the land item.
     Landed,
     /// No progress towards the current target for `stuck_s`.
@@ -144,7 +144,7 @@ pub struct SimResult {
     /// Flown path, Aerialist frame, one sample per tick from t = 0 (on the ground at home).
     pub trajectory: Trajectory,
     /// How it ended.
-    pub status: Status,
+    pub status: SimStatus,
     /// Simulated seconds until the end.
     pub flight_time_s: f64,
     /// Ticks simulated (one planner cycle each).

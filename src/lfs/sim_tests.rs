@@ -22,7 +22,7 @@ fn free_mission_lands_near_the_land_item() {
             ..Default::default()
         };
         let r = simulate(&mission(1), &config).unwrap();
-        assert_eq!(r.status, Status::Landed, "{motion}");
+        assert_eq!(r.status, SimStatus::Landed, "{motion}");
         let last = r.trajectory.samples.last().unwrap();
         assert!(last.z.abs() < 1e-9);
         assert!((last.x - 3.3).hypot(last.y - 53.09) < 1.0, "{motion}: {last:?}");
@@ -42,7 +42,7 @@ fn two_obstacles_are_passed_without_collision() {
             ..Default::default()
         };
         let r = simulate(&test, &config).unwrap();
-        assert_eq!(r.status, Status::Landed, "{motion}");
+        assert_eq!(r.status, SimStatus::Landed, "{motion}");
         let d = r.distance.unwrap();
         assert!(
             d.min_distance > 0.3 && d.min_distance < 10.0,
@@ -62,7 +62,7 @@ fn termination_statuses() {
         ..Default::default()
     };
     let r = simulate(&test, &timeout).unwrap();
-    assert_eq!(r.status, Status::Timeout);
+    assert_eq!(r.status, SimStatus::Timeout);
     assert!((r.flight_time_s - 5.0).abs() < 1e-6 && r.cycles == 50);
 
     let stuck = SimConfig {
@@ -71,13 +71,13 @@ fn termination_statuses() {
         ..Default::default()
     };
     let r = simulate(&test, &stuck).unwrap();
-    assert_eq!(r.status, Status::Stuck);
+    assert_eq!(r.status, SimStatus::Stuck);
     assert!(r.flight_time_s > 3.0 && r.flight_time_s < 3.5, "{}", r.flight_time_s);
 
     // Home inside a (low) box: the vehicle is in it from the start.
     let trapped = mission(2).with_obstacles(vec![Obstacle::new(4.0, 4.0, 5.0, 0.0, 0.0, 0.0)]);
     let r = simulate(&trapped, &SimConfig::default()).unwrap();
-    assert_eq!(r.status, Status::Collision);
+    assert_eq!(r.status, SimStatus::Collision);
     assert_eq!(r.distance.unwrap().min_distance, 0.0);
 }
 
@@ -93,7 +93,7 @@ fn stages_are_named_in_order_and_step_is_idempotent_after_the_end() {
     for _ in 0..10 {
         last = step(&mut w, 0.1);
     }
-    assert_eq!(last, Some(Status::Timeout));
+    assert_eq!(last, Some(SimStatus::Timeout));
     assert_eq!(w.cycles, 3);
 }
 
@@ -163,5 +163,5 @@ fn estimated_fov_is_narrow_and_low_after_a_ground_only_takeoff() {
     assert!((f.h_fov_deg - 58.9).abs() < 0.3, "{f:?}");
     assert!(f.v_fov_deg < 25.0 && f.pitch_deg > 8.0, "{f:?}");
     let r = simulate(&mission(1), w.config()).unwrap();
-    assert_eq!(r.status, Status::Landed);
+    assert_eq!(r.status, SimStatus::Landed);
 }

@@ -136,7 +136,7 @@ async fn mission_mode_missions_1_to_3() {
 /// GF_ACTION is warning-only during the flight and PX4's default (2, Hold) again afterwards.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn geofence_action_is_restored_after_the_flight() {
-    use prgenuav::bridge::wire::exchange::{Retry, Target};
+    use prgenuav::bridge::wire::exchange::{RetryPolicy, Target};
     use prgenuav::bridge::wire::link::{Link, MavTransport};
     use prgenuav::bridge::wire::params::ParamSet;
     let test = generated(1);
@@ -162,7 +162,7 @@ async fn geofence_action_is_restored_after_the_flight() {
         component: 1,
     };
     // Setting the value it should already have reports the value it had.
-    let p = ParamSet::new(target, vec![("GF_ACTION".into(), 2.0)], Retry::PARAM);
+    let p = ParamSet::new(target, vec![("GF_ACTION".into(), 2.0)], RetryPolicy::PARAM);
     let changes = tokio::time::timeout(WALL_LIMIT, link.exchange(p, &CancelToken::new()))
         .await
         .expect("bounded")

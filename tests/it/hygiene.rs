@@ -87,3 +87,43 @@ fn the_check_finds_numbered_references_and_nothing_else() {
     assert!(numbered_refs("bridge::session::flight, the session 's link, issue a command").is_empty());
     assert!(numbered_refs("subsession 3, tissue 4").is_empty());
 }
+
+/// The public types (`pub struct`, `enum`, `trait`, `type`) declared in `text`, by name.
+fn public_types(text: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    for line in text.lines() {
+        let t = line.trim_start();
+        for kind in ["pub struct ", "pub enum ", "pub trait ", "pub type "] {
+            if let Some(rest) = t.strip_prefix(kind) {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                names.push(name);
+            }
+        }
+    }
+    names
+}
+
+/// Two public types of one name in one crate make a reader check the import to know which is meant.
+#[test]
+fn no_two_public_types_of_the_main_crate_share_a_name() {
+    let mut files = Vec::new();
+    text_files(&super::repo().join("src"), &mut files);
+    let mut seen: std::collections::BTreeMap<String, Vec<PathBuf>> = Default::default();
+    for f in files.iter().filter(|f| f.extension().is_some_and(|x| x == "rs")) {
+        let text = std::fs::read_to_string(f).expect("read");
+        for name in public_types(&text) {
+            seen.entry(name).or_default().push(f.clone());
+        }
+    }
+    let shared: Vec<_> = seen.iter().filter(|(_, at)| at.len() > 1).collect();
+    assert!(shared.is_empty(), "public types sharing a name: {shared:#?}");
+}
+
+#[test]
+fn the_type_scan_finds_declarations_and_not_their_uses() {
+    let text = "pub struct A {\n    pub(crate) enum B,\n  pub enum C<T> {}\npub trait D: Send {}\nlet x: pub_struct;\n";
+    assert_eq!(public_types(text), ["A", "C", "D"]);
+}

@@ -10,7 +10,7 @@ fn mirrored_answers_warn_above_one_percent() {
     assert!(s.warning().is_some_and(|w| w.starts_with("40 of 740")));
 }
 
-use crate::bridge::companion::steer::{Mirror, Straight};
+use crate::bridge::companion::steer::{MirrorSetpoint, Straight};
 use crate::bridge::wire::pose::PoseNed;
 
 fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
@@ -37,9 +37,12 @@ fn flying() -> VehicleView {
 fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
     let mut c = Companion::default();
     let t0 = Duration::ZERO;
-    assert!(c.answer(&flying(), &mut Mirror, t0, 0).is_none(), "nobody asked");
+    assert!(
+        c.answer(&flying(), &mut MirrorSetpoint, t0, 0).is_none(),
+        "nobody asked"
+    );
     c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], u16::MAX), t0);
-    let a = c.answer(&flying(), &mut Mirror, t0, 7).unwrap();
+    let a = c.answer(&flying(), &mut MirrorSetpoint, t0, 7).unwrap();
     assert_eq!(
         (a.pos_x[0], a.pos_y[0], a.pos_z[0], a.valid_points),
         (1.0, 2.0, -3.0, 1)
@@ -48,7 +51,8 @@ fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
     assert!(a.pos_x[1].is_nan());
     assert_eq!(c.mirrored, 1);
     assert!(
-        c.answer(&flying(), &mut Mirror, Duration::from_secs(2), 0).is_none(),
+        c.answer(&flying(), &mut MirrorSetpoint, Duration::from_secs(2), 0)
+            .is_none(),
         "stale request"
     );
 }

@@ -113,25 +113,31 @@ fn setpoint_msg(target: Target, time_boot_ms: u32, sp: &SteerOutput) -> MavMessa
 
 /// Progress of the offboard pilot, for the session.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Progress {
+pub struct PilotProgress {
     /// At least one setpoint went out (the mode switch may follow).
     pub streaming: bool,
     /// Every goal was reached.
     pub finished: bool,
 }
 
-/// Streams setpoints until aborted; `Progress` tells the session when to switch modes and when to land.
+/// Streams setpoints until aborted; `PilotProgress` tells the session when to switch modes and when to land.
 pub fn spawn(
     link: Arc<Link>,
     target: Target,
     pilot: Pilot,
     steer: Box<dyn Steer>,
-) -> (JoinHandle<()>, watch::Receiver<Progress>) {
-    let (tx, rx) = watch::channel(Progress::default());
+) -> (JoinHandle<()>, watch::Receiver<PilotProgress>) {
+    let (tx, rx) = watch::channel(PilotProgress::default());
     (tokio::spawn(run(link, target, pilot, steer, tx)), rx)
 }
 
-async fn run(link: Arc<Link>, target: Target, mut pilot: Pilot, steer: Box<dyn Steer>, tx: watch::Sender<Progress>) {
+async fn run(
+    link: Arc<Link>,
+    target: Target,
+    mut pilot: Pilot,
+    steer: Box<dyn Steer>,
+    tx: watch::Sender<PilotProgress>,
+) {
     let clock = link.clock();
     let mut rx = link.subscribe();
     let mut view = VehicleView::default();

@@ -93,9 +93,9 @@ impl Steer for Straight {
 
 /// Never plans: the companion mirrors PX4's setpoint (the interface's required fallback).
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Mirror;
+pub struct MirrorSetpoint;
 
-impl Steer for Mirror {
+impl Steer for MirrorSetpoint {
     fn steer(&mut self, _: &SteerInput) -> Option<SteerOutput> {
         None
     }
@@ -125,6 +125,6 @@ mod tests {
             (out.yaw_rad.unwrap() - std::f64::consts::FRAC_PI_2).abs() < 1e-12,
             "East is +90 degrees"
         );
-        assert_eq!(Mirror.steer(&input), None);
+        assert_eq!(MirrorSetpoint.steer(&input), None);
     }
 }

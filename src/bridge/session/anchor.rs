@@ -10,7 +10,7 @@ use mavlink::dialects::common::MavCmd;
 use tokio::sync::broadcast;
 
 use super::context::{Session, Stop};
-use super::placement::{LatLonAlt, MIS_DIST_1WP_DEFAULT_M, Placement, too_far, too_far_reason};
+use super::placement::{LatLonAlt, MIS_DIST_1WP_DEFAULT_M, VehiclePlacement, too_far, too_far_reason};
 use super::report::Status;
 use crate::bridge::companion::frame::TestFrame;
 use crate::bridge::wire::vehicle::VehicleView;
@@ -42,7 +42,7 @@ impl<'a> Session<'a> {
             let t = self.test.anchored_at(home);
             self.test = slot.get_or_init(|| t);
         }
-        self.placement = Some(Placement {
+        self.placement = Some(VehiclePlacement {
             vehicle_home: home.into(),
             test_home: self.test.home.into(),
             distance_m,

@@ -9,7 +9,7 @@ use std::time::Duration;
 use mavlink::dialects::common::{MavCmd, MavResult};
 use tokio::sync::broadcast;
 
-use super::placement::Placement;
+use super::placement::VehiclePlacement;
 use super::report::Status;
 use super::tasks::Tasks;
 use crate::bridge::companion::avoidance::CompanionStats;
@@ -17,8 +17,8 @@ use crate::bridge::companion::frame::TestFrame;
 use crate::bridge::options::FlyOptions;
 use crate::bridge::px4_version::Px4Version;
 use crate::bridge::wire::cancel::CancelToken;
-use crate::bridge::wire::command::Command;
-use crate::bridge::wire::exchange::{ProtocolError, Retry, Target};
+use crate::bridge::wire::command::AckedCommand;
+use crate::bridge::wire::exchange::{ProtocolError, RetryPolicy, Target};
 use crate::bridge::wire::link::{Inbound, Link};
 use crate::bridge::wire::notices::Messages;
 use crate::bridge::wire::param_read::ParamRead;
@@ -83,7 +83,7 @@ pub struct Session<'a> {
     /// PX4's local frame -> the test's frame, once measured ([`super::anchor`]).
     pub frame: Option<TestFrame>,
     /// Where the vehicle stood against the test's home, once known.
-    pub placement: Option<Placement>,
+    pub placement: Option<VehiclePlacement>,
     /// The vehicle's STATUSTEXT of severity WARNING or worse, as they arrived.
     pub messages: Messages,
     /// The vehicle's MPC_XY_CRUISE (m/s) the planner uses, once read (avoidance and offboard modes).
@@ -124,7 +124,7 @@ impl Session<'_> {
 
     /// Runs a command to its ACK.
     pub async fn command(&self, cmd: MavCmd, params: [f32; 7]) -> Result<(), ProtocolError> {
-        let c = Command::new(self.target, cmd, params, Retry::COMMAND);
+        let c = AckedCommand::new(self.target, cmd, params, RetryPolicy::COMMAND);
         self.link.exchange(c, &self.cancel).await
     }
 
@@ -170,7 +170,7 @@ impl Session<'_> {
     /// Reads the vehicle's parameter `name` (bounded: 4 tries of 1 s); when it does not answer, `Ok(None)` and a
     /// warning saying what is assumed instead (`otherwise`). Only a cancel stops the flight.
     pub async fn read_param(&mut self, name: &str, otherwise: &str) -> Result<Option<f64>, Stop> {
-        let quick = Retry {
+        let quick = RetryPolicy {
             timeout: Duration::from_secs(1),
             max_retries: 3,
         };

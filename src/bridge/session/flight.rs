@@ -13,15 +13,15 @@ use super::report::Status;
 use super::schedule::{Action, schedule};
 use crate::bridge::companion::cp_feed::CpProgress;
 use crate::bridge::companion::frame::{FramedSteer, TestFrame};
-use crate::bridge::companion::offboard::{self, Pilot, Progress};
+use crate::bridge::companion::offboard::{self, Pilot, PilotProgress};
 use crate::bridge::companion::planner_steer::PlannerSteer;
-use crate::bridge::companion::steer::{Mirror, Steer, Straight};
+use crate::bridge::companion::steer::{MirrorSetpoint, Steer, Straight};
 use crate::bridge::options::FlyMode;
 use crate::bridge::options::{FlyMode as Mode, FlyOptions};
 use crate::bridge::wire::cancel::CancelToken;
 use crate::bridge::wire::clock::{VehicleClock, secs};
-use crate::bridge::wire::command::Command;
-use crate::bridge::wire::exchange::Retry;
+use crate::bridge::wire::command::AckedCommand;
+use crate::bridge::wire::exchange::RetryPolicy;
 use crate::bridge::wire::vehicle::{PX4_MAIN_OFFBOARD, VehicleView};
 use crate::lfs::camera::Camera;
 use crate::model::TestCase;
@@ -41,7 +41,7 @@ pub fn steer_for(
     let steer = PlannerSteer::with_cruise(&test.obstacles, Camera::hfs(), mpc_xy_cruise_m_s);
     let planned: Box<dyn Steer> = match (steer, opts.mode) {
         (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
-        (_, Mode::Avoidance) => return Box::new(Mirror),
+        (_, Mode::Avoidance) => return Box::new(MirrorSetpoint),
         _ => Box::new(Straight),
     };
     match frame {
@@ -163,7 +163,10 @@ pub async fn follow(s: &mut Session<'_>, rec: &mut Recorder) -> Stop {
 async fn pilot_news(
     s: &mut Session<'_>,
     rec: &mut Recorder,
-    pilots: (Option<&watch::Receiver<Progress>>, Option<&watch::Receiver<CpProgress>>),
+    pilots: (
+        Option<&watch::Receiver<PilotProgress>>,
+        Option<&watch::Receiver<CpProgress>>,
+    ),
     landing_sent: bool,
     mode_try: &mut Option<Duration>,
 ) -> Result<bool, Stop> {
@@ -187,7 +190,7 @@ async fn pilot_news(
 }
 
 /// Starts the offboard pilot over the mission's goals; its progress says when to switch modes and land.
-fn start_pilot(s: &mut Session<'_>) -> watch::Receiver<Progress> {
+fn start_pilot(s: &mut Session<'_>) -> watch::Receiver<PilotProgress> {
     let acc = s
         .test
         .params
@@ -258,7 +261,7 @@ impl Ends {
 async fn execute(
     s: &mut Session<'_>,
     action: Action,
-    progress: Option<&mut watch::Receiver<Progress>>,
+    progress: Option<&mut watch::Receiver<PilotProgress>>,
     cp: Option<&mut watch::Receiver<CpProgress>>,
 ) -> Result<(), Stop> {
     if let (Action::Start, Some(cp)) = (&action, cp) {
@@ -315,14 +318,14 @@ async fn end(s: &mut Session<'_>, stop: Stop) -> Stop {
     if !needs_landing(&s.view, stop.status) {
         return stop;
     }
-    let quick = Retry {
+    let quick = RetryPolicy {
         timeout: Duration::from_millis(1000),
         max_retries: 2,
     };
     let uncancellable = CancelToken::new();
     let nan = f32::NAN;
     for cmd in [MavCmd::MAV_CMD_NAV_LAND, MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH] {
-        let c = Command::new(s.target, cmd, [0.0, 0.0, 0.0, nan, nan, nan, nan], quick);
+        let c = AckedCommand::new(s.target, cmd, [0.0, 0.0, 0.0, nan, nan, nan, nan], quick);
         match s.link.exchange(c, &uncancellable).await {
             Ok(()) => {
                 s.warnings.push(format!("{cmd:?} sent after {}", stop.status.as_str()));

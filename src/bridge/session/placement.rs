@@ -43,7 +43,7 @@ impl From<GeoPoint> for LatLonAlt {
 
 /// Where the vehicle stood against the test's home.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Placement {
+pub struct VehiclePlacement {
     /// The vehicle's HOME_POSITION.
     pub vehicle_home: LatLonAlt,
     /// The test's home it was compared with (after re-anchoring: the vehicle's home).

@@ -9,7 +9,7 @@ use crate::model::{Obstacle, Trajectory};
 
 use super::clock_watch::ClockReport;
 use super::identify::VehicleIdentity;
-use super::placement::Placement;
+use super::placement::VehiclePlacement;
 use crate::bridge::companion::frame::{FRAME_NAME, FrameSource, TestFrame};
 use crate::bridge::companion::timing::TimingReport;
 use crate::bridge::options::FlyMode;
@@ -88,7 +88,7 @@ pub struct FlightReport {
     /// Where the vehicle's EKF origin lies in the test's frame, (North, East) metres.
     pub frame_origin_offset_m: Option<[f64; 2]>,
     /// Where the vehicle stood against the test's home (and the boxes' latitude/longitude).
-    pub placement: Option<Placement>,
+    pub placement: Option<VehiclePlacement>,
     /// The competition's minimum distance (0.5 s bins), metres; `null` without obstacles or positions.
     pub min_distance: Option<f64>,
     /// The continuous minimum distance, metres.
@@ -157,7 +157,7 @@ pub struct Ending {
     /// The test's frame, if it was measured (the trajectory is in it).
     pub frame: Option<TestFrame>,
     /// The vehicle against the test's home.
-    pub placement: Option<Placement>,
+    pub placement: Option<VehiclePlacement>,
     /// Readiness wait, vehicle seconds.
     pub ready_wait_s: Option<f64>,
     /// The vehicle's messages.

@@ -15,7 +15,7 @@ use super::report::Status;
 use crate::bridge::companion::avoidance;
 use crate::bridge::options::FlyMode;
 use crate::bridge::wire::cancel::CancelToken;
-use crate::bridge::wire::exchange::{ProtocolError, Retry};
+use crate::bridge::wire::exchange::{ProtocolError, RetryPolicy};
 use crate::bridge::wire::mission_download::MissionDownload;
 use crate::bridge::wire::mission_upload::MissionUpload;
 use crate::bridge::wire::params::ParamSet;
@@ -85,7 +85,7 @@ impl Session<'_> {
                 self.warnings
                     .push(capability::skipped_warning(&skipped, version.as_deref()));
             }
-            let p = ParamSet::new(self.target, wanted, Retry::PARAM);
+            let p = ParamSet::new(self.target, wanted, RetryPolicy::PARAM);
             match self.link.exchange(p, &self.cancel).await {
                 Ok(_) => return Ok(()),
                 // A vehicle of unknown release that turns out to lack the avoidance interface.
@@ -103,13 +103,13 @@ impl Session<'_> {
     async fn upload_mission(&mut self) -> Result<(), Stop> {
         let items = mission_items(&self.test.mission).map_err(|e| Stop::new(Status::Rejected, e))?;
         let ty = MavMissionType::MAV_MISSION_TYPE_MISSION;
-        let up = MissionUpload::new(self.target, ty, items.clone(), Retry::MISSION);
+        let up = MissionUpload::new(self.target, ty, items.clone(), RetryPolicy::MISSION);
         self.link
             .exchange(up, &self.cancel)
             .await
             .map_err(|e| stop_for("uploading the mission", e))?;
         self.ready.mission_uploaded_at = Some(self.link.clock().now());
-        let down = MissionDownload::new(self.target, ty, Retry::MISSION);
+        let down = MissionDownload::new(self.target, ty, RetryPolicy::MISSION);
         let got = self
             .link
             .exchange(down, &self.cancel)
@@ -131,7 +131,7 @@ impl Session<'_> {
         } else {
             Vec::new()
         };
-        let up = MissionUpload::new(self.target, ty, items, Retry::MISSION);
+        let up = MissionUpload::new(self.target, ty, items, RetryPolicy::MISSION);
         match self.link.exchange(up, &self.cancel).await {
             Ok(_) if wanted => {}
             Ok(_) => return Ok(()),
@@ -145,7 +145,11 @@ impl Session<'_> {
                 return Ok(());
             }
         }
-        let p = ParamSet::new(self.target, vec![("GF_ACTION".into(), GF_WARNING_ONLY)], Retry::PARAM);
+        let p = ParamSet::new(
+            self.target,
+            vec![("GF_ACTION".into(), GF_WARNING_ONLY)],
+            RetryPolicy::PARAM,
+        );
         match self.link.exchange(p, &self.cancel).await {
             Ok(changes) => {
                 self.fence_uploaded = true;
@@ -158,7 +162,7 @@ impl Session<'_> {
                 // A fence that may act (e.g. Hold) would steer the test: take it away again.
                 self.warnings
                     .push(format!("GF_ACTION not set to warning-only ({e}); fence removed"));
-                let clear = MissionUpload::new(self.target, ty, Vec::new(), Retry::MISSION);
+                let clear = MissionUpload::new(self.target, ty, Vec::new(), RetryPolicy::MISSION);
                 if let Err(e) = self.link.exchange(clear, &self.cancel).await {
                     return Err(stop_for("removing the geofence", e));
                 }
@@ -184,7 +188,7 @@ impl Session<'_> {
         if self.restore.is_empty() {
             return;
         }
-        let quick = Retry {
+        let quick = RetryPolicy {
             timeout: Duration::from_secs(1),
             max_retries: 2,
         };

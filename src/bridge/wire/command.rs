@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{COMMAND_LONG_DATA, MavCmd, MavMessage, MavResult};
 
-use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
+use super::exchange::{Exchange, ProtocolError, RetryPolicy, Step, Target};
 
 /// How long to keep waiting after an IN_PROGRESS ack before resending (vehicle time).
 pub const IN_PROGRESS_WAIT: Duration = Duration::from_secs(5);
@@ -18,11 +18,11 @@ pub const MAX_TEMPORARY_REJECTIONS: u32 = 3;
 
 /// One command and its acknowledgement.
 #[derive(Debug, Clone)]
-pub struct Command {
+pub struct AckedCommand {
     target: Target,
     command: MavCmd,
     params: [f32; 7],
-    retry: Retry,
+    retry: RetryPolicy,
     confirmation: u8,
     in_a_row: u32,
     retries: u32,
@@ -30,9 +30,9 @@ pub struct Command {
     deadline: Duration,
 }
 
-impl Command {
+impl AckedCommand {
     /// `command` with `params` (param1..param7) to `target`.
-    pub fn new(target: Target, command: MavCmd, params: [f32; 7], retry: Retry) -> Self {
+    pub fn new(target: Target, command: MavCmd, params: [f32; 7], retry: RetryPolicy) -> Self {
         Self {
             target,
             command,
@@ -69,7 +69,7 @@ impl Command {
     }
 }
 
-impl Exchange for Command {
+impl Exchange for AckedCommand {
     type Output = ();
 
     fn start(&mut self, now: Duration) -> Vec<MavMessage> {
@@ -150,7 +150,7 @@ mod tests {
     #[test]
     fn retries_increment_confirmation() {
         let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
-        let mut c = Command::new(T, arm, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Retry::COMMAND);
+        let mut c = AckedCommand::new(T, arm, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], RetryPolicy::COMMAND);
         let mut n = 0;
         let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| {
             n += 1;
@@ -175,7 +175,7 @@ mod tests {
     #[test]
     fn in_progress_waits_then_final_result() {
         let cmd = MavCmd::MAV_CMD_MISSION_START;
-        let mut c = Command::new(T, cmd, [0.0; 7], Retry::COMMAND);
+        let mut c = AckedCommand::new(T, cmd, [0.0; 7], RetryPolicy::COMMAND);
         let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| {
             vec![
                 ack(MavCmd::MAV_CMD_NAV_LAND, MavResult::MAV_RESULT_DENIED),
@@ -198,7 +198,7 @@ mod tests {
     #[test]
     fn a_temporary_rejection_is_asked_again() {
         let cmd = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
-        let mut c = Command::new(T, cmd, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], Retry::COMMAND);
+        let mut c = AckedCommand::new(T, cmd, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], RetryPolicy::COMMAND);
         let mut asked = 0;
         let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| {
             asked += 1;
@@ -215,9 +215,9 @@ mod tests {
 
     #[test]
     fn silence_is_bounded() {
-        let mut c = Command::new(T, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], Retry::COMMAND);
+        let mut c = AckedCommand::new(T, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], RetryPolicy::COMMAND);
         let (r, sent) = run_scripted(&mut c, Duration::from_millis(10), |_, _| vec![]);
-        let n = Retry::COMMAND.max_retries;
+        let n = RetryPolicy::COMMAND.max_retries;
         assert!(
             matches!(r, Err(ProtocolError::Timeout { retries, .. }) if retries == n),
             "{r:?}"

@@ -17,31 +17,31 @@ pub struct Target {
 
 /// How long to wait for an answer and how often to retry, in vehicle time.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Retry {
+pub struct RetryPolicy {
     /// Wait this long for each answer.
     pub timeout: Duration,
     /// Resend at most this many times in a row without progress.
     pub max_retries: u32,
 }
 
-impl Retry {
+impl RetryPolicy {
     /// Retries in a row for every exchange. At 20 % loss each way a round trip fails 36 % of the time, so the
     /// MAVLink protocols' customary 5 retries lose one exchange in 460 and a flight's ~40 exchanges fail 1 setup
     /// in 12 (measured: 1 in 25 mock flights); 10 lose one in 78 000. The price: a vehicle that falls silent
     /// during setup is declared lost after 11 timeouts instead of 6.
     const IN_A_ROW: u32 = 10;
     /// The mission protocol (1.5 s per answer, as the MAVLink spec).
-    pub const MISSION: Retry = Retry {
+    pub const MISSION: RetryPolicy = RetryPolicy {
         timeout: Duration::from_millis(1500),
         max_retries: Self::IN_A_ROW,
     };
     /// Commands (1 s per answer, as MAVSDK).
-    pub const COMMAND: Retry = Retry {
+    pub const COMMAND: RetryPolicy = RetryPolicy {
         timeout: Duration::from_millis(1000),
         max_retries: Self::IN_A_ROW,
     };
     /// Parameters (1 s per answer).
-    pub const PARAM: Retry = Retry {
+    pub const PARAM: RetryPolicy = RetryPolicy {
         timeout: Duration::from_millis(1000),
         max_retries: Self::IN_A_ROW,
     };

@@ -399,8 +399,8 @@ mod tests {
 
     #[tokio::test]
     async fn exchange_over_a_link_counts_retries_and_cancels() {
-        use super::super::command::Command;
-        use super::super::exchange::{Retry, Target};
+        use super::super::command::AckedCommand;
+        use super::super::exchange::{RetryPolicy, Target};
         use mavlink::dialects::common::COMMAND_ACK_DATA;
         let (ours, theirs) = memory::pair();
         // Vehicle time runs 100x, so the 1 s command timeout is 10 ms of wall time.
@@ -425,7 +425,7 @@ mod tests {
             system: 1,
             component: 1,
         };
-        let cmd = Command::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], Retry::COMMAND);
+        let cmd = AckedCommand::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], RetryPolicy::COMMAND);
         let cancel = CancelToken::new();
         let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel))
             .await
@@ -433,7 +433,7 @@ mod tests {
         assert_eq!(r, Ok(()));
         assert_eq!(link.stats().retries, 2);
         cancel.cancel();
-        let cmd = Command::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], Retry::COMMAND);
+        let cmd = AckedCommand::new(t, MavCmd::MAV_CMD_NAV_LAND, [0.0; 7], RetryPolicy::COMMAND);
         let r = tokio::time::timeout(Duration::from_secs(5), link.exchange(cmd, &cancel))
             .await
             .unwrap();

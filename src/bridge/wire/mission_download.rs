@@ -8,14 +8,14 @@ use mavlink::dialects::common::{
     MavMissionResult, MavMissionType,
 };
 
-use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
+use super::exchange::{Exchange, ProtocolError, RetryPolicy, Step, Target};
 
 /// Downloads the plan of one mission type.
 #[derive(Debug, Clone)]
 pub struct MissionDownload {
     target: Target,
     mission_type: MavMissionType,
-    retry: Retry,
+    retry: RetryPolicy,
     count: Option<u16>,
     items: Vec<MISSION_ITEM_INT_DATA>,
     in_a_row: u32,
@@ -25,7 +25,7 @@ pub struct MissionDownload {
 
 impl MissionDownload {
     /// A download of `mission_type` from `target`.
-    pub fn new(target: Target, mission_type: MavMissionType, retry: Retry) -> Self {
+    pub fn new(target: Target, mission_type: MavMissionType, retry: RetryPolicy) -> Self {
         Self {
             target,
             mission_type,
@@ -174,7 +174,7 @@ mod tests {
 
     #[test]
     fn downloads_in_order_and_acks() {
-        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, Retry::MISSION);
+        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, RetryPolicy::MISSION);
         let (r, sent) = run_scripted(&mut d, Duration::from_millis(10), vehicle(3, |_| false));
         let items = r.unwrap();
         assert_eq!(items.iter().map(|i| i.x).collect::<Vec<_>>(), vec![0, 10, 20]);
@@ -185,10 +185,10 @@ mod tests {
 
     #[test]
     fn empty_and_lossy() {
-        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, Retry::MISSION);
+        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, RetryPolicy::MISSION);
         let (r, _) = run_scripted(&mut d, Duration::from_millis(10), vehicle(0, |_| false));
         assert_eq!(r.unwrap().len(), 0);
-        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, Retry::MISSION);
+        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, RetryPolicy::MISSION);
         let (r, _) = run_scripted(&mut d, Duration::from_millis(10), vehicle(4, |k| k % 3 == 1));
         assert_eq!(r.unwrap().len(), 4);
         assert!(d.retries() >= 2);
@@ -196,10 +196,10 @@ mod tests {
 
     #[test]
     fn silence_and_refusal() {
-        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, Retry::MISSION);
+        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, RetryPolicy::MISSION);
         let (r, _) = run_scripted(&mut d, Duration::from_millis(10), |_, _| vec![]);
         assert!(matches!(r, Err(ProtocolError::Timeout { .. })));
-        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, Retry::MISSION);
+        let mut d = MissionDownload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, RetryPolicy::MISSION);
         let (r, _) = run_scripted(&mut d, Duration::from_millis(10), |_, _| {
             vec![MavMessage::MISSION_ACK(MISSION_ACK_DATA {
                 mavtype: MavMissionResult::MAV_MISSION_INVALID_SEQUENCE,

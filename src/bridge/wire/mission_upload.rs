@@ -8,7 +8,7 @@ use mavlink::dialects::common::{
     MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MavMessage, MavMissionResult, MavMissionType,
 };
 
-use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
+use super::exchange::{Exchange, ProtocolError, RetryPolicy, Step, Target};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Sent {
@@ -22,7 +22,7 @@ pub struct MissionUpload {
     target: Target,
     mission_type: MavMissionType,
     items: Vec<MISSION_ITEM_INT_DATA>,
-    retry: Retry,
+    retry: RetryPolicy,
     last: Sent,
     /// Highest item sent so far (progress resets the retry budget).
     highest: Option<u16>,
@@ -33,7 +33,12 @@ pub struct MissionUpload {
 
 impl MissionUpload {
     /// An upload of `items` (their `seq`, targets and `mission_type` are set here).
-    pub fn new(target: Target, mission_type: MavMissionType, items: Vec<MISSION_ITEM_INT_DATA>, retry: Retry) -> Self {
+    pub fn new(
+        target: Target,
+        mission_type: MavMissionType,
+        items: Vec<MISSION_ITEM_INT_DATA>,
+        retry: RetryPolicy,
+    ) -> Self {
         let items = items
             .into_iter()
             .enumerate()
@@ -215,7 +220,12 @@ mod tests {
 
     #[test]
     fn clean_upload() {
-        let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(5), Retry::MISSION);
+        let mut up = MissionUpload::new(
+            T,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            items(5),
+            RetryPolicy::MISSION,
+        );
         let ok = MavMissionResult::MAV_MISSION_ACCEPTED;
         let (r, sent) = run_scripted(&mut up, Duration::from_millis(10), vehicle(5, ok, |_| false));
         assert_eq!(r, Ok(42));
@@ -230,7 +240,12 @@ mod tests {
 
     #[test]
     fn empty_plan_is_a_clear() {
-        let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, vec![], Retry::MISSION);
+        let mut up = MissionUpload::new(
+            T,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            vec![],
+            RetryPolicy::MISSION,
+        );
         let ok = MavMissionResult::MAV_MISSION_ACCEPTED;
         let (r, _) = run_scripted(&mut up, Duration::from_millis(10), vehicle(0, ok, |_| false));
         assert_eq!(r, Ok(0));
@@ -238,7 +253,12 @@ mod tests {
 
     #[test]
     fn lost_messages_are_retried() {
-        let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(4), Retry::MISSION);
+        let mut up = MissionUpload::new(
+            T,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            items(4),
+            RetryPolicy::MISSION,
+        );
         let ok = MavMissionResult::MAV_MISSION_ACCEPTED;
         // Lose the first count, and the answer to item 2 once.
         let (r, _) = run_scripted(&mut up, Duration::from_millis(10), vehicle(4, ok, |k| k == 1 || k == 4));
@@ -261,7 +281,12 @@ mod tests {
             MAV_MISSION_DENIED,
             MAV_MISSION_OPERATION_CANCELLED,
         ] {
-            let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(3), Retry::MISSION);
+            let mut up = MissionUpload::new(
+                T,
+                MavMissionType::MAV_MISSION_TYPE_MISSION,
+                items(3),
+                RetryPolicy::MISSION,
+            );
             let (r, _) = run_scripted(&mut up, Duration::from_millis(10), vehicle(3, code, |_| false));
             let e = r.unwrap_err();
             assert!(matches!(e, ProtocolError::MissionRefused { result, .. } if result == code));
@@ -275,9 +300,14 @@ mod tests {
 
     #[test]
     fn silence_times_out_after_bounded_retries() {
-        let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(3), Retry::MISSION);
+        let mut up = MissionUpload::new(
+            T,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            items(3),
+            RetryPolicy::MISSION,
+        );
         let (r, sent) = run_scripted(&mut up, Duration::from_millis(10), |_, _| vec![]);
-        let n = Retry::MISSION.max_retries;
+        let n = RetryPolicy::MISSION.max_retries;
         assert!(
             matches!(r, Err(ProtocolError::Timeout { retries, .. }) if retries == n),
             "{r:?}"
@@ -287,7 +317,12 @@ mod tests {
 
     #[test]
     fn other_types_and_stale_acks_are_ignored() {
-        let mut up = MissionUpload::new(T, MavMissionType::MAV_MISSION_TYPE_MISSION, items(2), Retry::MISSION);
+        let mut up = MissionUpload::new(
+            T,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            items(2),
+            RetryPolicy::MISSION,
+        );
         up.start(Duration::ZERO);
         let accepted = ack(MavMissionResult::MAV_MISSION_ACCEPTED, 1);
         assert!(

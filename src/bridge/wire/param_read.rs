@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MavMessage, PARAM_REQUEST_READ_DATA};
 
-use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
+use super::exchange::{Exchange, ProtocolError, RetryPolicy, Step, Target};
 use super::params::decode;
 
 /// Reads one parameter's value.
@@ -13,14 +13,14 @@ use super::params::decode;
 pub struct ParamRead {
     target: Target,
     name: String,
-    retry: Retry,
+    retry: RetryPolicy,
     retries: u32,
     deadline: Duration,
 }
 
 impl ParamRead {
     /// Reads `name` from `target`.
-    pub fn new(target: Target, name: &str, retry: Retry) -> Self {
+    pub fn new(target: Target, name: &str, retry: RetryPolicy) -> Self {
         Self {
             target,
             name: name.to_string(),
@@ -113,7 +113,7 @@ mod tests {
     #[test]
     fn reads_after_a_lost_request_and_gives_up_on_silence() {
         let mut n = 0;
-        let mut r = ParamRead::new(T, "MIS_DIST_1WP", Retry::PARAM);
+        let mut r = ParamRead::new(T, "MIS_DIST_1WP", RetryPolicy::PARAM);
         let (got, sent) = run_scripted(&mut r, Duration::from_millis(100), |m, _| {
             n += 1;
             match m {
@@ -123,15 +123,15 @@ mod tests {
         });
         assert_eq!(got, Ok(900.0));
         assert_eq!(sent.len(), 2, "one retry");
-        let mut r = ParamRead::new(T, "NOPE", Retry::PARAM);
+        let mut r = ParamRead::new(T, "NOPE", RetryPolicy::PARAM);
         let (got, sent) = run_scripted(&mut r, Duration::from_millis(100), |_, _| vec![]);
         assert_eq!(
             got,
             Err(ProtocolError::Timeout {
                 what: "reading parameter NOPE".into(),
-                retries: Retry::PARAM.max_retries
+                retries: RetryPolicy::PARAM.max_retries
             })
         );
-        assert_eq!(sent.len(), 1 + Retry::PARAM.max_retries as usize);
+        assert_eq!(sent.len(), 1 + RetryPolicy::PARAM.max_retries as usize);
     }
 }

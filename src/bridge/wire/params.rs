@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MavMessage, MavParamType, PARAM_REQUEST_READ_DATA, PARAM_SET_DATA};
 
-use super::exchange::{Exchange, ProtocolError, Retry, Step, Target};
+use super::exchange::{Exchange, ProtocolError, RetryPolicy, Step, Target};
 
 /// Whether a MAVLink parameter type holds an integer (bytewise-encoded by PX4).
 pub fn is_int(t: MavParamType) -> bool {
@@ -76,7 +76,7 @@ pub struct ParamSet {
     phase: Phase,
     last_seen: Option<f64>,
     done: Vec<ParamChange>,
-    retry: Retry,
+    retry: RetryPolicy,
     in_a_row: u32,
     retries: u32,
     deadline: Duration,
@@ -84,7 +84,7 @@ pub struct ParamSet {
 
 impl ParamSet {
     /// Sets `wanted` (name, value) in order on `target`.
-    pub fn new(target: Target, wanted: Vec<(String, f64)>, retry: Retry) -> Self {
+    pub fn new(target: Target, wanted: Vec<(String, f64)>, retry: RetryPolicy) -> Self {
         Self {
             target,
             wanted,
@@ -284,7 +284,7 @@ mod tests {
 
     fn set(list: &[(&str, f64)], drop: impl FnMut(usize) -> bool) -> (Result<Vec<ParamChange>, ProtocolError>, u32) {
         let wanted = list.iter().map(|(n, v)| (n.to_string(), *v)).collect();
-        let mut p = ParamSet::new(T, wanted, Retry::PARAM);
+        let mut p = ParamSet::new(T, wanted, RetryPolicy::PARAM);
         let (r, _) = run_scripted(&mut p, Duration::from_millis(10), vehicle(drop));
         (r, p.retries())
     }
@@ -323,13 +323,13 @@ mod tests {
         );
         let (r, _) = set(&[("NAV_ACC_RAD", 500.0)], |_| false);
         assert!(matches!(r, Err(ProtocolError::ParamMismatch { got: 2.0, .. })), "{r:?}");
-        let mut p = ParamSet::new(T, vec![("X".into(), 1.0)], Retry::PARAM);
+        let mut p = ParamSet::new(T, vec![("X".into(), 1.0)], RetryPolicy::PARAM);
         let (r, sent) = run_scripted(&mut p, Duration::from_millis(10), |_, _| vec![]);
         let e = r.unwrap_err().to_string();
         assert!(
             e.contains("reading parameter X: no answer"),
             "a silence is a timeout: {e}"
         );
-        assert_eq!(sent.len(), 1 + Retry::PARAM.max_retries as usize);
+        assert_eq!(sent.len(), 1 + RetryPolicy::PARAM.max_retries as usize);
     }
 }

@@ -48,7 +48,7 @@ impl StageTimes {
 
 /// One flight in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FlownTest {
+pub struct ReportedFlight {
     /// The candidate flown.
     pub candidate: crate::campaign::candidate::CandidateId,
     /// Which flight of the candidate, from 0 (left out when 0).
@@ -99,7 +99,7 @@ pub struct Report {
     /// The flight budget.
     pub budget: usize,
     /// Every flight, in flight order.
-    pub flights: Vec<FlownTest>,
+    pub flights: Vec<ReportedFlight>,
     /// Every test that failed at least once, best first: the confirmed ones (reported as `test_N.yaml`) and
     /// the others.
     pub tests: Vec<TestVerdict>,

@@ -18,7 +18,7 @@ use crate::judge::{Judge, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
-pub use crate::campaign::report::document::{FlownTest, Report, StageTimes};
+pub use crate::campaign::report::document::{Report, ReportedFlight, StageTimes};
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each test to write, best first, then
 /// report.json and report.md (and `unconfirmed.json` with `--confirm` above 1 or tests not written), for the campaign `input` that
@@ -37,7 +37,7 @@ pub fn write_outputs(
     let mut tests = verdicts(records, cfg.confirm);
     let expected_2026 = expected_score::aim(input.folder, records, &mut tests);
     let reported = write_failing_tests(input, &mut tests)?;
-    let flights: Vec<FlownTest> = records.iter().map(|r| flown_test(r, &reported)).collect();
+    let flights: Vec<ReportedFlight> = records.iter().map(|r| reported_flight(r, &reported)).collect();
     let mut tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
     user_report::write_unconfirmed(input, &mut tests, spelling(input))?;
     let mut suite = summary(records, &tests, cfg.screen);
@@ -129,9 +129,9 @@ fn spelling(input: &CampaignInput) -> Spelling {
 }
 
 /// One flight in the report; `reported` names the failing tests written.
-fn flown_test(r: &FlightRecord, reported: &[(CandidateId, String)]) -> FlownTest {
+fn reported_flight(r: &FlightRecord, reported: &[(CandidateId, String)]) -> ReportedFlight {
     let d = r.min_distance.unwrap_or(f64::INFINITY);
-    FlownTest {
+    ReportedFlight {
         candidate: r.candidate,
         attempt: r.attempt,
         predicted_min_distance: r.predicted_min_distance,

@@ -3,7 +3,7 @@ use std::path::{Path, PathBuf};
 use super::*;
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::flight_status::FlightStatus;
-use crate::campaign::report::outputs::{FlownTest, Report, StageTimes};
+use crate::campaign::report::outputs::{Report, ReportedFlight, StageTimes};
 use crate::campaign::report::suite::summary;
 use crate::campaign::report::verdicts::verdicts;
 use crate::campaign::store::journal::{FlightRecord, test_record};
@@ -134,7 +134,7 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
 #[test]
 fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
     let mut r = report(&[flight(0, 0, 2.5)], 1, 1);
-    r.flights.push(FlownTest {
+    r.flights.push(ReportedFlight {
         candidate: CandidateId(0),
         attempt: 0,
         predicted_min_distance: 1.0,

@@ -3,7 +3,7 @@
 
 use crate::campaign::screen::screener::Screener;
 use crate::lfs::ensemble::{EnsembleParams, run_ensemble};
-use crate::lfs::sim::{SimConfig, Status, simulate};
+use crate::lfs::sim::{SimConfig, SimStatus, simulate};
 use crate::model::TestCase;
 
 /// Predicted distance when a simulation cannot judge anything (kept finite so journals stay valid JSON).
@@ -25,7 +25,7 @@ impl Screener for LfsScreener {
                 let d = r.distance.map_or(NO_PREDICTION_M, |d| d.min_distance);
                 // A flight that never lands would run into the competition's timeout, and its score shrinks
                 // with flight time: rank it as the full timeout.
-                let t = if r.status == Status::Landed || r.status == Status::Collision {
+                let t = if r.status == SimStatus::Landed || r.status == SimStatus::Collision {
                     r.flight_time_s
                 } else {
                     self.config.timeout_s

@@ -36,7 +36,7 @@ use plan::Plan;
 
 /// Arguments of `generate`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
+pub struct GenerateArgs {
     /// The case study YAML (mission, params, commands).
     #[arg(value_name = "CASE")]
     case: Option<PathBuf>,
@@ -98,7 +98,7 @@ pub struct Args {
     settings: CampaignFlags,
 }
 
-pub fn run(args: Args, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
+pub fn run(args: GenerateArgs, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     let plan = plan::plan(&args, matches)?;
     let cfg = &plan.cfg;
     if args.resume.is_some()

@@ -14,7 +14,7 @@ use prgenuav::campaign::settings::{Given, Loaded, Requested, check_unstored, fin
 use prgenuav::campaign::setup::fleet::{AtOnce, split};
 use prgenuav::campaign::setup::{self, Ask};
 
-use super::Args;
+use super::GenerateArgs;
 use super::resume::Request;
 use crate::cli::values::name_of;
 
@@ -31,7 +31,7 @@ pub struct Plan {
 }
 
 /// Reads the TOML file and lays the flags over it; `--resume` then compares, a new campaign builds.
-pub fn plan(args: &Args, matches: &ArgMatches) -> anyhow::Result<Plan> {
+pub fn plan(args: &GenerateArgs, matches: &ArgMatches) -> anyhow::Result<Plan> {
     let file = Loaded::read(args.config.as_deref()).map_err(anyhow::Error::msg)?;
     let request = request(args, matches, &file)?;
     let req = &request.req;
@@ -79,7 +79,7 @@ fn given(m: &ArgMatches, id: &str) -> bool {
 }
 
 /// The settings asked for: the flags laid over the file, and which stored settings the command line gave.
-fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request> {
+fn request(args: &GenerateArgs, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request> {
     let mut req = lay_over(file, &args.settings.given).map_err(anyhow::Error::msg)?;
     let switches = ["keep_ulog"];
     for (id, flag, key) in [
@@ -106,7 +106,7 @@ fn request(args: &Args, m: &ArgMatches, file: &Loaded) -> anyhow::Result<Request
 }
 
 /// The campaign's settings: what was asked for, the library's defaults for the rest.
-pub(super) fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) -> CampaignConfig {
+pub(super) fn build(case: PathBuf, budget: usize, args: &GenerateArgs, req: &Requested) -> CampaignConfig {
     let ask = Ask {
         case,
         budget,
@@ -128,7 +128,7 @@ pub(super) fn build(case: PathBuf, budget: usize, args: &Args, req: &Requested) 
 }
 
 /// A new campaign: CASE and BUDGET required, every setting checked before anything is sampled or flown.
-fn fresh(args: &Args, req: &Requested) -> anyhow::Result<CampaignConfig> {
+fn fresh(args: &GenerateArgs, req: &Requested) -> anyhow::Result<CampaignConfig> {
     let (Some(case), Some(budget)) = (args.case.clone(), args.budget) else {
         bail!("give CASE.yaml and BUDGET, or --resume FOLDER");
     };

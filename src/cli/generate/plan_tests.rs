@@ -4,13 +4,13 @@ use clap::FromArgMatches;
 
 use prgenuav::campaign::settings::{Loaded, Requested, example_toml};
 
-use super::{Args, build, request};
+use super::{GenerateArgs, build, request};
 use prgenuav::campaign::setup::resume::show;
 
-fn requested(argv: &[&str], file: &Loaded) -> (Args, Requested) {
+fn requested(argv: &[&str], file: &Loaded) -> (GenerateArgs, Requested) {
     let m = crate::cli::command().try_get_matches_from(argv).unwrap();
     let m = m.subcommand_matches("generate").unwrap();
-    let args = Args::from_arg_matches(m).unwrap();
+    let args = GenerateArgs::from_arg_matches(m).unwrap();
     let req = request(&args, m, file).unwrap().req;
     (args, req)
 }

@@ -9,7 +9,7 @@ use prgenuav::campaign::run::CampaignConfig;
 use prgenuav::campaign::settings::Requested;
 use prgenuav::campaign::setup::resume::{check_resume, load_stored};
 
-use super::Args;
+use super::GenerateArgs;
 
 /// What the command line and the TOML file ask for, and whether `--out` was given.
 pub(super) struct Request {
@@ -20,7 +20,7 @@ pub(super) struct Request {
 /// A resumed campaign: its stored settings, once every setting asked for agrees with them.
 pub(super) fn resumed(
     folder: &Path,
-    args: &Args,
+    args: &GenerateArgs,
     request: &Request,
     build: &dyn Fn(PathBuf, usize) -> CampaignConfig,
 ) -> anyhow::Result<CampaignConfig> {

@@ -8,11 +8,11 @@ use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Tem
 use prgenuav::campaign::run::CampaignConfig;
 use prgenuav::model::Spelling as ModelSpelling;
 
-use super::Args;
+use super::GenerateArgs;
 use prgenuav::campaign::settings::keys::flags::{JOB_TIMEOUT, JOBS};
 
 /// The runner's settings, checked before the campaign claims its folder (`campaign_folder` is set then).
-pub fn runner_settings(cfg: &CampaignConfig, args: &Args) -> anyhow::Result<Option<RunnerSettings>> {
+pub fn runner_settings(cfg: &CampaignConfig, args: &GenerateArgs) -> anyhow::Result<Option<RunnerSettings>> {
     let Some(text) = &cfg.runner else {
         if args.job_timeout.is_some() || args.runner_cancel.is_some() {
             bail!("--job-timeout and --runner-cancel go with --runner");

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use super::calibration::{brier, roc_auc};
 use super::ensemble::{Ensemble, EnsembleError, EnsembleParams, run_ensemble};
-use crate::lfs::sim::{SimConfig, Status, simulate_parts};
+use crate::lfs::sim::{SimConfig, SimStatus, simulate_parts};
 
 pub use super::recorded::{DEFAULT_HEIGHT_M, FidelityError, FlightCase, competition_params, load_dir, load_flight};
 use crate::model::competition::FAIL_BELOW_M;
@@ -31,7 +31,7 @@ pub struct CaseResult {
     /// Predicted minimum distance (same definition), metres; `None` if the simulation could not run.
     pub predicted: Option<f64>,
     /// How the simulated flight ended.
-    pub status: Option<Status>,
+    pub status: Option<SimStatus>,
     /// |predicted - real|, metres.
     pub abs_error: Option<f64>,
     /// Probability of "below 1.5 m" (tier's definition) from the ensemble, when one ran.

@@ -62,7 +62,7 @@ fn evaluates_a_real_case_end_to_end() {
     let case = load_flight(flight).unwrap().unwrap();
     let report = evaluate(std::slice::from_ref(&case), vec![], &SimConfig::default(), 2);
     let r = &report.cases[0];
-    assert_eq!(r.status, Some(Status::Landed));
+    assert_eq!(r.status, Some(SimStatus::Landed));
     let p = r.predicted.unwrap();
     assert!((0.0..20.0).contains(&p), "{p}");
     assert_eq!(report.mae, r.abs_error);
