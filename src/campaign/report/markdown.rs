@@ -97,7 +97,7 @@ fn summary_table(md: &mut String, r: &Report) {
 fn confirm_rows(md: &mut String, s: &SuiteSummary) {
     let _ = writeln!(
         md,
-        "| tests that failed at least once (confirmed: more than half of up to {} flights failed) | {} |",
+        "| tests that failed at least once (each flown up to {} times) | {} |",
         s.confirm, s.failed_once
     );
     let _ = writeln!(
