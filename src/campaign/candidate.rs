@@ -127,34 +127,3 @@ pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRec
     let (c, r) = (&candidate.obstacles, &record.obstacles);
     c.len() == r.len() && c.iter().zip(r).all(|(a, b)| same(a, b))
 }
-
-/// Refuses journal records, among those whose candidate index is in `drawn`, that this campaign never drew
-/// (no such entry of `candidates`) or drew with other obstacles: a record of another campaign (another seed
-/// or case) would otherwise be counted as this campaign's flight.
-pub fn check_journaled_as_drawn(
-    records: &[super::store::journal::FlightRecord],
-    candidates: &[Candidate],
-    drawn: std::ops::Range<CandidateId>,
-    journal: &std::path::Path,
-) -> Result<(), String> {
-    for r in records.iter().filter(|r| drawn.contains(&r.candidate)) {
-        let Some(c) = candidates.get(r.candidate.index()) else {
-            return Err(format!(
-                "{}: candidate {} is journaled but this campaign never drew it (it drew {}): the record comes \
-                 from another campaign; remove its line or restore the journal, then resume",
-                journal.display(),
-                r.candidate,
-                candidates.len()
-            ));
-        };
-        if !drawn_as(c, r) {
-            return Err(format!(
-                "{}: the record of candidate {} has other obstacles than this campaign draws for it: it comes \
-                 from another campaign (seed or case); remove its line or restore the journal, then resume",
-                journal.display(),
-                r.candidate
-            ));
-        }
-    }
-    Ok(())
-}

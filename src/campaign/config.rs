@@ -6,6 +6,7 @@ use std::sync::atomic::AtomicBool;
 use serde::{Deserialize, Serialize};
 
 use super::screen::screener::{Progress, Screener};
+use super::settings::{Flight, Learning, Mock, Screening};
 use crate::generator::{GenerateError, GeneratorConfig};
 use crate::judge::Judge;
 use crate::model::{ModelError, TestCase};
@@ -133,8 +134,10 @@ pub struct Px4Backend {
     pub keep_ulog: bool,
 }
 
+// A key absent from campaign.json means the setting's default where the default has never changed: the
+// declaration's ([`super::settings`]), so it is written once.
 fn default_min_diversity() -> f64 {
-    0.8
+    Learning::default().min_diversity()
 }
 
 fn judge_before_editions() -> Judge {
@@ -142,11 +145,11 @@ fn judge_before_editions() -> Judge {
 }
 
 fn default_flight_timeout_s() -> f64 {
-    crate::bridge::FlyOptions::default().timeout_s
+    Flight::default().timeout_s()
 }
 
 fn default_screen() -> bool {
-    true
+    Screening::default().screen()
 }
 
 fn default_mode() -> String {
@@ -154,15 +157,13 @@ fn default_mode() -> String {
 }
 
 fn default_motion() -> String {
-    "px4".into()
+    Screening::default().motion()
 }
 
-/// Fitted against the recorded competition flights: any pose age only adds clearance, so none is modelled
-/// (docs/design-constants.md#mock-pose-latency).
-pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
+pub use super::settings::keys::{DEFAULT_MOCK_LATENCY_MS, MAX_BUDGET, MAX_CANDIDATES};
 
 fn default_mock_latency_ms() -> f64 {
-    DEFAULT_MOCK_LATENCY_MS
+    Mock::default().latency_ms()
 }
 
 fn profile_before_profiles() -> String {
@@ -180,14 +181,6 @@ impl CampaignConfig {
         self.hfs == ["mock"] && self.mock_lockstep
     }
 }
-
-/// The largest budget accepted. A campaign keeps its journal in memory (about 1 KB a flight) and the report
-/// compares failing tests pairwise, so 10,000 flights stay small; on the mock they take about 5 hours.
-pub const MAX_BUDGET: usize = 10_000;
-
-/// The most candidates accepted. Each is screened by a full low-fidelity flight (about 0.2 s of one core), so
-/// 100,000 are hours of screening; they are held as a few hundred bytes each.
-pub const MAX_CANDIDATES: usize = 100_000;
 
 /// Checks the campaign's counts before anything is drawn: a count out of range is refused, naming the limit.
 pub fn check_counts(budget: usize, candidates: usize) -> Result<(), CampaignError> {

@@ -1,22 +1,20 @@
 //! The campaign's orchestrator: sample candidates, screen them with the LFS, fly the most promising within the
-//! budget (in learning rounds, [`super::plan::rounds`], or in one pass, [`super::plan::single_pass`]), then report the
-//! failing ones best first. Resumable from its folder.
+//! budget (in rounds, [`super::plan::rounds`]: learning, or one round without), then report the failing ones best
+//! first. Resumable from its folder.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS, check_counts};
-use super::fly::stage::{FlightStage, fly_interrupted};
 use super::fly::vehicle::Vehicle;
 use super::learn::calibration::Learnt;
 use super::plan::rounds::run_rounds;
-use super::plan::single_pass::run_static;
 pub use super::report::outputs::Report;
 use super::report::outputs::{StageTimes, write_outputs};
 pub use super::screen::screener::{Progress, Screener};
 use super::store::folder::FolderLock;
-use super::store::journal::{FlightRecord, Journal, flights_charged};
+use super::store::journal::{FlightRecord, Journal};
 use super::store::journal_check::{arena_size_m, check_loaded};
 use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
@@ -52,29 +50,9 @@ pub fn run_campaign(
         cancel,
     };
     let mut stages = StageTimes::default();
-    let done = journal.charged();
-    let charged = flights_charged(&done);
-    let first = FlightStage {
-        case: &case,
-        candidates: &[],
-        folder,
-        progress,
-        cancel,
-        done: &done,
-        confirm: cfg.confirm,
-        waves: cfg.repeatable_vehicles(),
-    };
-    if cfg.learn && cfg.screen {
-        // The replayed rounds fly the interrupted flights again where their plan has them.
-        return match run_rounds(&input, &mut vehicles, &mut journal, &mut stages) {
-            Ok((learnt, drawn)) => finish(&input, &journal, drawn, stages, Some(&learnt)),
-            Err(e) => report_if_stopped(e, &input, &journal, stages),
-        };
-    }
-    let flown = fly_interrupted(&first, &mut vehicles, &mut journal, cfg.budget.saturating_sub(charged))
-        .and_then(|_| run_static(&input, &mut vehicles, &mut journal, &mut stages));
-    match flown {
-        Ok(drawn) => finish(&input, &journal, drawn, stages, None),
+    // A resume replays the plan: the journaled flights are taken where it has them, the rest are flown.
+    match run_rounds(&input, &mut vehicles, &mut journal, &mut stages) {
+        Ok((learnt, drawn)) => finish(&input, &journal, drawn, stages, learnt.as_ref()),
         Err(e) => report_if_stopped(e, &input, &journal, stages),
     }
 }
@@ -173,7 +151,7 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, Cam
 /// `campaign.json` as the campaign's first run wrote it, never rewritten.
 pub const FIRST_SETTINGS_FILE: &str = "campaign.first.json";
 
-/// Both campaigns end the same way: the journal's flights written out as tests and reports.
+/// A campaign ends with the journal's flights written out as tests and reports.
 fn finish(
     input: &CampaignInput,
     journal: &Journal,

@@ -423,3 +423,46 @@ fn a_run_reads_the_journal_file_once() {
         assert_eq!(flown.lock().unwrap().len(), 6, "learn {}", cfg.learn);
     }
 }
+
+/// A change to a journal line.
+type Edit = dyn Fn(&mut serde_json::Value);
+
+/// `dir`'s journal with its first line changed by `edit`.
+fn edit_first_line(dir: &Path, edit: impl Fn(&mut serde_json::Value)) {
+    let path = dir.join("journal.jsonl");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut first: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    edit(&mut first);
+    lines[0] = first.to_string();
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+}
+
+/// A draw no flight shapes (the first round's; every candidate of a campaign that does not learn) must give the
+/// journaled obstacles: a line with others comes from another campaign and stops the resume before anything
+/// flies, learning or not. So does a candidate index a campaign that does not learn never draws.
+#[test]
+fn a_journal_line_another_campaign_wrote_stops_the_resume_learning_or_not() {
+    let moved = |r: &mut serde_json::Value| {
+        let x = r["obstacles"][0]["position"]["x"].as_f64().unwrap();
+        r["obstacles"][0]["position"]["x"] = (x + 0.5).into();
+    };
+    let beyond = |r: &mut serde_json::Value| r["candidate"] = 999.into();
+    let cases: [(CampaignConfig, &Edit); 3] = [(config(4), &moved), (adapted(16), &moved), (config(4), &beyond)];
+    for (cfg, edit) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let flown = Arc::new(Mutex::new(Vec::new()));
+        run_with(&cfg, dir.path(), vehicle(&flown, Some(2))).unwrap();
+        let before = flown.lock().unwrap().len();
+        edit_first_line(dir.path(), edit);
+        let e = run_with(&cfg, dir.path(), vehicle(&flown, None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("another campaign") && e.contains("journal.jsonl"),
+            "learn {}: {e}",
+            cfg.learn
+        );
+        assert_eq!(flown.lock().unwrap().len(), before, "nothing flies");
+    }
+}

@@ -209,7 +209,7 @@ fn ctrl_c_charges_nothing_for_flights_in_the_air_and_resume_flies_them_first() {
 
     let (code, stdout, stderr) = prgenuav(&["generate", "--resume", folder.to_str().unwrap()]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stderr.contains("flying first the"), "{stderr}");
+    assert!(stderr.contains("interrupted last time (candidates"), "{stderr}");
     let all = records(&folder);
     let charged: Vec<&Value> = all.iter().filter(|r| r["status"] != "interrupted").collect();
     assert_eq!(

@@ -22,6 +22,7 @@ mod layering;
 mod lfs;
 mod missions;
 mod pinned;
+mod pinned_static;
 mod pty;
 mod px4_campaign;
 mod px4_cp;

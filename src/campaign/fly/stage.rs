@@ -1,5 +1,5 @@
-//! The flight stage: the tests waiting for confirmation, then a ranking, flown on the vehicles within the
-//! budget, each flight journaled.
+//! The flight stage: the tests waiting for confirmation, then a ranking, as jobs for the fleet; the flights'
+//! progress lines.
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -7,11 +7,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use crate::campaign::candidate::{Candidate, CandidateId, Screened};
 use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::pending;
-use crate::campaign::fly::fleet::{FleetSetup, run_fleet};
-use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle};
+use crate::campaign::fly::vehicle::Job;
 use crate::campaign::screen::screener::Progress;
-use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
-use crate::campaign::store::replay::Replay;
+use crate::campaign::store::journal::{FlightRecord, flights_charged};
 use crate::model::TestCase;
 
 /// What the flight stage reads.
@@ -33,33 +31,6 @@ pub struct FlightStage<'a> {
     pub confirm: usize,
     /// Fly in waves, so repeatable vehicles repeat the campaign ([`crate::campaign::fly::fleet::FleetSetup::waves`]).
     pub waves: bool,
-}
-
-/// Flies the tests waiting for confirmation (longest waiting first), then `ranked` in order, on `vehicles`
-/// within `remaining` flights, journaling each; returns the flights made, as the journal reads them back, in
-/// its order, and how busy the vehicles were. A failing flight's test is flown again before the next new candidate (see [`crate::campaign::fly::fleet::fly_all`]).
-/// A journal error stops the campaign; so does a fleet with no vehicle left (every one dropped, in this call or
-/// an earlier round's), keeping the flights journaled so far for `--resume`: a campaign that lost every vehicle
-/// must not end as a clean run that found no failing test.
-pub fn fly_ranked(
-    ctx: &FlightStage,
-    ranked: Vec<Screened>,
-    vehicles: &mut Vec<Box<dyn Vehicle>>,
-    journal: &mut Journal,
-    remaining: usize,
-) -> Result<(Vec<FlightRecord>, FleetUse), CampaignError> {
-    let jobs = stage_jobs(ctx, ranked, &[]);
-    if jobs.is_empty() || remaining == 0 {
-        return Ok((Vec::new(), FleetUse::default()));
-    }
-    if vehicles.is_empty() {
-        return Err(no_vehicle_left(ctx.folder, &[]));
-    }
-    let outcome = fly_stage(ctx, "fly", jobs, vehicles, journal, remaining)?;
-    if vehicles.is_empty() {
-        return Err(no_vehicle_left(ctx.folder, &outcome.dropped));
-    }
-    Ok((outcome.records, outcome.fleet))
 }
 
 /// A fleet with no vehicle left stops the campaign in `folder`, keeping the flights journaled so far for
@@ -128,69 +99,6 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[CandidateId]
         }
     });
     again.chain(fresh).collect()
-}
-
-/// On resume, flies the flights the user interrupted before anything else (they were the most promising
-/// candidates when they took off), within what the budget has left; returns how many were flown.
-pub fn fly_interrupted(
-    ctx: &FlightStage,
-    vehicles: &mut Vec<Box<dyn Vehicle>>,
-    journal: &mut Journal,
-    budget_left: usize,
-) -> Result<usize, CampaignError> {
-    let pending = journal.pending_interrupted();
-    if pending.is_empty() || budget_left == 0 || vehicles.is_empty() {
-        return Ok(0);
-    }
-    ctx.progress.note(&format!(
-        "resuming: flying first the {} flight(s) interrupted last time (candidates {})",
-        pending.len(),
-        pending
-            .iter()
-            .map(|r| r.candidate.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    ));
-    let jobs: Vec<Job> = pending
-        .into_iter()
-        .map(|r| Job {
-            confirm: ctx.confirm,
-            ..Job::new(screened_as_flown(&r), ctx.case.with_obstacles(r.obstacles.clone()))
-        })
-        .collect();
-    Ok(fly_stage(ctx, "fly interrupted", jobs, vehicles, journal, budget_left)?.flown)
-}
-
-/// Flies `jobs` within `budget` on the fleet, announcing each flight under stage `name` and the vehicles
-/// dropped; a journal error stops the campaign.
-fn fly_stage(
-    ctx: &FlightStage,
-    name: &str,
-    jobs: Vec<Job>,
-    vehicles: &mut Vec<Box<dyn Vehicle>>,
-    journal: &mut Journal,
-    budget: usize,
-) -> Result<PoolOutcome, CampaignError> {
-    let progress = ctx.progress;
-    progress.stage(name, jobs.len());
-    let count = FlightCount::default();
-    let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, true);
-    let setup = FleetSetup {
-        folder: ctx.folder,
-        journal,
-        cancel: ctx.cancel,
-        on_flight: &on_flight,
-        waves: ctx.waves,
-        replay: Replay::none(),
-    };
-    let outcome = run_fleet(vehicles, setup, |fleet| fleet.push(0, jobs, budget)).1;
-    for d in &outcome.dropped {
-        progress.note(&format!("dropped {d}"));
-    }
-    if let Some(e) = outcome.errors.first() {
-        return Err(CampaignError::Config(format!("journal: {e}")));
-    }
-    Ok(outcome)
 }
 
 /// The prediction a test was first flown with, for its later flights' records.

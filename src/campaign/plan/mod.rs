@@ -7,4 +7,3 @@ pub mod expected_points;
 pub mod neighbours;
 pub mod rank;
 pub mod rounds;
-pub mod single_pass;

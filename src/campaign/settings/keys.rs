@@ -8,6 +8,15 @@ use crate::model::Range;
 
 /// The largest speed-up of simulated time: beyond it a vehicle's physics step outruns any link.
 pub const MAX_TIME_SCALE: f64 = 1000.0;
+/// The largest budget accepted. A campaign keeps its journal in memory (about 1 KB a flight) and the report
+/// compares failing tests pairwise, so 10,000 flights stay small; on the mock they take about 5 hours.
+pub const MAX_BUDGET: usize = 10_000;
+/// The most candidates accepted. Each is screened by a full low-fidelity flight (about 0.2 s of one core), so
+/// 100,000 are hours of screening; they are held as a few hundred bytes each.
+pub const MAX_CANDIDATES: usize = 100_000;
+/// Fitted against the recorded competition flights: any pose age only adds clearance, so none is modelled
+/// (docs/design-constants.md#mock-pose-latency).
+pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
 /// Embedded mock autopilots per core, at most: each simulates and judges a flight on the campaign's threads.
 pub const MOCKS_PER_CORE: usize = 8;
 
@@ -182,5 +191,5 @@ pub mod flags {
         "PX4 instances (docs/px4.md)",
     );
     /// BUDGET.
-    pub const BUDGET: Limit = Limit::count(1, crate::campaign::config::MAX_BUDGET, "flights");
+    pub const BUDGET: Limit = Limit::count(1, super::MAX_BUDGET, "flights");
 }

@@ -1,8 +1,7 @@
 //! The declaration of the settings of a campaign's run: screening, the embedded mocks, every flight, learning.
 
-use super::keys::{MAX_TIME_SCALE, MOCKS_PER_CORE, section};
+use super::keys::{DEFAULT_MOCK_LATENCY_MS, MAX_CANDIDATES, MAX_TIME_SCALE, MOCKS_PER_CORE, section};
 use super::{DefaultValue, Flag, FlagText, Setting};
-use crate::campaign::config::MAX_CANDIDATES;
 use crate::campaign::fly::mock_profile::DEFAULT_PROFILE;
 use crate::lfs::eval::ensemble::MAX_MEMBERS;
 use crate::model::Limit;
@@ -76,7 +75,7 @@ section! {
             help: "The mock holds its clock until each avoidance answer, so flights do not depend on the CPU. \
                    `false` lets the clocks run free, as on a real vehicle (use a low speed, e.g. 20, with it).",
         },
-        latency_ms: f64 = [value crate::campaign::config::DEFAULT_MOCK_LATENCY_MS] {
+        latency_ms: f64 = [value DEFAULT_MOCK_LATENCY_MS] {
             flag: Some(Flag::value("--mock-latency", "MS")),
             stored: "mock_latency_ms",
             range: Some(Limit::within(0.0, 1000.0, "ms")),

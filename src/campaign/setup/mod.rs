@@ -3,6 +3,7 @@
 //! [`crate::campaign::run::run_campaign`] gets the same campaign as the command line from the same request.
 
 pub mod fleet;
+pub mod resume;
 
 use std::path::PathBuf;
 

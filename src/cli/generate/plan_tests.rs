@@ -5,7 +5,7 @@ use clap::FromArgMatches;
 use prgenuav::campaign::settings::{Loaded, Requested, example_toml};
 
 use super::{Args, build, request};
-use crate::cli::generate::resume::show;
+use prgenuav::campaign::setup::resume::show;
 
 fn requested(argv: &[&str], file: &Loaded) -> (Args, Requested) {
     let m = crate::cli::command().try_get_matches_from(argv).unwrap();

@@ -83,6 +83,16 @@ impl Fleet<'_> {
     /// out (`why`).
     fn give_back(&self, index: usize, job: Job, why: &str, busy_s: f64) {
         let cancelled = self.cancel.load(Ordering::Relaxed);
+        // Why it was dropped is recorded before it stops counting as alive: a campaign woken by the count
+        // names the reason in its no-vehicle error.
+        if !cancelled {
+            self.outcome
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .dropped
+                .push(why.to_string());
+            self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
+        }
         let mut l = self.lock();
         l.use_.busy_s += busy_s;
         l.last_landing = Some(Instant::now());
@@ -96,14 +106,6 @@ impl Fleet<'_> {
         }
         drop(l);
         self.changed.notify_all();
-        if !cancelled {
-            self.outcome
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .dropped
-                .push(why.to_string());
-            self.dead.lock().unwrap_or_else(|p| p.into_inner()).push(index);
-        }
     }
 
     /// Moves an interrupted flight's partial trajectory aside (`candidate_N.interrupted.csv`), so flying the

@@ -1,4 +1,4 @@
-//! The learning campaign: flights in [`ROUNDS`] rounds (and up to [`EXTRA_ROUNDS`] more while near-duplicates
+//! The campaign's one pipeline. Learning, it flies in [`ROUNDS`] rounds (and up to [`EXTRA_ROUNDS`] more while near-duplicates
 //! left budget unflown). Each round is a pipeline over the campaign's [`Candidate`]s: draw ([`crate::campaign::plan::draw`]),
 //! screen, learn and rank, fly, then learn from the new flights ([`crate::campaign::learn::refit`]). Before a round ranks,
 //! the LFS is calibrated on every flight so far ([`crate::campaign::learn::calibration`]), its predictions are moved towards the
@@ -22,6 +22,11 @@
 //! are not new tests: the rounds learn from each test once, at the mean of its flights
 //! ([`crate::campaign::fly::confirm::as_learnt`]), and fly the tests waiting for confirmation before the round's
 //! new candidates, within the round's budget.
+//!
+//! A campaign that does not learn (`--no-learn`, `--no-screen`) is the same pipeline with learning off: one
+//! planned round that draws every candidate from the generator's uniform distribution, screens them into
+//! `screening.json` (or predicts 0 m for each without screening, so the flights follow the draw), ranks them
+//! with the LFS's own predictions and flies the budget; it writes no `learnt.json`.
 
 use std::collections::VecDeque;
 use std::path::Path;
@@ -39,6 +44,7 @@ use crate::campaign::learn::failure_counts::{arm_counts, counted_failures};
 use crate::campaign::learn::refit::Learning;
 use crate::campaign::learn::surrogate::Surrogate;
 use crate::campaign::report::outputs::StageTimes;
+use crate::campaign::screen::screener::Progress;
 use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
 use crate::campaign::store::replay::Replay;
 use crate::generator::Generator;
@@ -66,7 +72,8 @@ pub fn load_prior(folder: &Path) -> Result<Learnt, CampaignError> {
     Ok(learnt)
 }
 
-/// Runs every round on one [`Fleet`]; returns what was learnt and the number of candidates drawn.
+/// Runs every round on one [`Fleet`]; returns what was learnt (nothing without learning) and the number of
+/// candidates drawn.
 ///
 /// With `overlap`, round `r + 1` is drawn, screened and ranked from the flights of the rounds before `r` while
 /// round `r` flies (one round of lag in what it learns from), so the vehicles do not wait on the LFS; without
@@ -76,8 +83,9 @@ pub fn run_rounds(
     vehicles: &mut Vec<Box<dyn Vehicle>>,
     journal: &mut Journal,
     stages: &mut StageTimes,
-) -> Result<(Learnt, usize), CampaignError> {
+) -> Result<(Option<Learnt>, usize), CampaignError> {
     let count = FlightCount::default();
+    note_interrupted(input.progress, journal);
     let resumed = journal.charged();
     let mut campaign = Rounds::start(input, &count, &resumed)?;
     let replay = Replay::new(&resumed, input.cfg.budget);
@@ -100,6 +108,9 @@ pub fn run_rounds(
         flown
     });
     stages.add_fleet(outcome.fleet);
+    for d in &outcome.dropped {
+        progress.note(&format!("dropped {d}"));
+    }
     if let Some(e) = outcome.errors.first() {
         return Err(CampaignError::Config(format!("journal: {e}")));
     }
@@ -107,9 +118,25 @@ pub fn run_rounds(
     campaign.finish()
 }
 
-/// The learning campaign between rounds.
+/// Tells the user which flights the last run left in the air: the replayed plan flies them again.
+fn note_interrupted(progress: &dyn Progress, journal: &Journal) {
+    let pending = journal.pending_interrupted();
+    if pending.is_empty() {
+        return;
+    }
+    let ids: Vec<String> = pending.iter().map(|r| r.candidate.to_string()).collect();
+    progress.note(&format!(
+        "resuming: the {} flight(s) interrupted last time (candidates {}) are flown again where the plan has them",
+        pending.len(),
+        ids.join(", ")
+    ));
+}
+
+/// The campaign between rounds.
 struct Rounds<'a> {
     input: &'a CampaignInput<'a>,
+    /// Whether the rounds learn (calibrate, adapt): off, the campaign is one round ranked by the LFS alone.
+    learning: bool,
     /// The generator with the campaign's settings and seed.
     base: Generator,
     /// The calibration before any flight of this campaign (the prior's, carried).
@@ -165,6 +192,8 @@ struct Ranking {
     ranked: Vec<Screened>,
     /// Flights left in the round's share of the budget.
     remaining: usize,
+    /// Unflown candidates predicted below the threshold.
+    below: usize,
     /// Share of the flights offered to the children.
     share: f64,
     bias_m: f64,
@@ -179,7 +208,11 @@ impl<'a> Rounds<'a> {
         resumed: &[FlightRecord],
     ) -> Result<Self, CampaignError> {
         let cfg = input.cfg;
-        let prior = cfg.prior.as_deref().map(load_prior).transpose()?;
+        let learning = cfg.learn && cfg.screen;
+        // Without learning the one round draws from the uniform distribution and ranks by the LFS alone.
+        let prior = (cfg.prior.as_deref().filter(|_| learning))
+            .map(load_prior)
+            .transpose()?;
         let start_calibration = prior
             .as_ref()
             .map_or_else(Calibration::default, |p| p.calibration.carried());
@@ -191,6 +224,7 @@ impl<'a> Rounds<'a> {
         note_resuming(input.progress, resumed, cfg.budget, how);
         Ok(Self {
             input,
+            learning,
             base: Generator::new(input.case, cfg.generator.clone(), cfg.seed)?,
             calibration: start_calibration.clone(),
             start_calibration,
@@ -211,9 +245,11 @@ impl<'a> Rounds<'a> {
     fn fly_rounds(&mut self, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let cfg = self.input.cfg;
         let lag = usize::from(cfg.overlap);
-        for index in 0..ROUNDS + EXTRA_ROUNDS {
+        let planned = self.planned_rounds();
+        let extra = if self.learning { EXTRA_ROUNDS } else { 0 };
+        for index in 0..planned + extra {
             // Past the planned rounds only while the near-duplicate filter left budget unflown.
-            if index >= ROUNDS && self.promised() >= cfg.budget {
+            if index >= planned && self.promised() >= cfg.budget {
                 break;
             }
             if self.input.cancel.load(Ordering::Relaxed) {
@@ -234,7 +270,7 @@ impl<'a> Rounds<'a> {
     /// Round `index`: draw, screen and rank (from the flights learnt so far), then push its flights.
     fn plan(&mut self, index: usize, fleet: &Fleet, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let round = self.draw(index, stages)?;
-        self.set_aside_diverged(&round, fleet);
+        self.check_drawn(&round, fleet)?;
         self.screen(&round, stages)?;
         let (busy, aside) = (fleet.busy(), fleet.set_aside());
         let ranking = self.rank(&round, (&busy, &aside), self.promised(), stages)?;
@@ -282,14 +318,24 @@ impl<'a> Rounds<'a> {
         let flights = flights_charged(&flown);
         self.flights.extend(flown);
         self.journal = as_learnt(&self.flights);
-        self.log_round(&pushed.round, flights, pushed.share, pushed.bias_m);
-        self.learn(flights < pushed.remaining, stages);
+        if self.learning {
+            self.log_round(&pushed.round, flights, pushed.share, pushed.bias_m);
+            self.learn(flights < pushed.remaining, stages);
+        }
         Ok(())
     }
 
+    /// The rounds planned: one without learning.
+    fn planned_rounds(&self) -> usize {
+        if self.learning { ROUNDS } else { 1 }
+    }
+
     /// What the campaign learnt, also written to `learnt.json` (a later campaign's `--prior`).
-    fn finish(self) -> Result<(Learnt, usize), CampaignError> {
+    fn finish(self) -> Result<(Option<Learnt>, usize), CampaignError> {
         let (done, drawn) = (&self.journal, &self.candidates);
+        if !self.learning {
+            return Ok((None, drawn.len()));
+        }
         let child_of = |lineage| move |c| is_child(drawn, c, lineage);
         let any_child = |c: CandidateId| drawn.get(c.index()).is_some_and(|x| x.parents.is_some());
         let close = |c: CandidateId| drawn.get(c.index()).is_some_and(|x| x.close);
@@ -305,7 +351,7 @@ impl<'a> Rounds<'a> {
             drawn_close: arm_counts(done, close).0,
         };
         write_json(&self.input.folder.join("learnt.json"), &learnt, true)?;
-        Ok((learnt, drawn.len()))
+        Ok((Some(learnt), drawn.len()))
     }
 }
 mod resume;

@@ -24,15 +24,16 @@ impl Rounds<'_> {
     /// children around the parents on top (as many as the round's own draws, at most [`neighbours::CHILDREN`]).
     pub(super) fn draw(&mut self, index: usize, stages: &mut StageTimes) -> Result<Round, CampaignError> {
         let cfg = self.input.cfg;
-        let own = if index < ROUNDS {
-            cfg.candidates * (index + 1) / ROUNDS - cfg.candidates * index / ROUNDS
+        let rounds = self.planned_rounds();
+        let own = if index < rounds {
+            cfg.candidates * (index + 1) / rounds - cfg.candidates * index / rounds
         } else {
-            cfg.candidates.div_ceil(ROUNDS)
+            cfg.candidates.div_ceil(rounds)
         };
         let t = Instant::now();
         // Below the diversity floor the children go on: the guard admits only those that do not lower it, so
         // the failures keep getting children for the rest of the campaign.
-        let (around, lineage) = if cfg.adapt {
+        let (around, lineage) = if self.adapts() {
             neighbours::parents(
                 &self.journal,
                 |c| self.candidates.get(c.index()).map(|x| x.unit),
@@ -51,7 +52,7 @@ impl Rounds<'_> {
         let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage))
             .0
             .rate();
-        let planned = cfg.budget * (index + 1).min(ROUNDS) / ROUNDS;
+        let planned = cfg.budget * (index + 1).min(rounds) / rounds;
         let later = cfg.budget - planned;
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
         // diversity can afford it), and keep their expected diversity above the floor.
@@ -92,12 +93,28 @@ impl Rounds<'_> {
         }
     }
 
-    /// Screens the round's candidates (cached per round, with the distribution and the parents they came from).
+    /// Whether the rounds move the generator towards failures.
+    pub(super) fn adapts(&self) -> bool {
+        self.learning && self.input.cfg.adapt
+    }
+
+    /// Screens the round's candidates (cached per round, with the distribution and the parents they came from;
+    /// without learning in `screening.json`). Without screening each is "predicted" at 0 m, so the ranking
+    /// keeps the order they were drawn in.
     pub(super) fn screen(&mut self, round: &Round, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let t = Instant::now();
         let range = round.first..round.first + round.drawn as u64;
-        let cache = format!("screening_round{}.json", round.index);
-        let screened = screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?;
+        let cache = if self.learning {
+            format!("screening_round{}.json", round.index)
+        } else {
+            "screening.json".to_string()
+        };
+        let screened = if self.input.cfg.screen {
+            screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?
+        } else {
+            let unscreened = |i| Screened::point(CandidateId(i), 0.0, 0.0, "unscreened".into());
+            range.map(unscreened).collect()
+        };
         for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
             c.screened = Some(s);
         }
@@ -117,6 +134,31 @@ impl Rounds<'_> {
         stages: &mut StageTimes,
     ) -> Result<Ranking, CampaignError> {
         let cfg = self.input.cfg;
+        let flown: Vec<CandidateId> = (self.journal.iter().map(|r| r.candidate))
+            .chain(busy.iter().map(|(c, _)| *c))
+            .chain(aside.iter().copied())
+            .collect();
+        let mut fresh = self.predict(&flown, stages);
+        let remaining = round.planned.saturating_sub(committed);
+        if cfg.screen {
+            stages.ensemble_s += run_ensemble(&self.stage(), &mut fresh, cfg, remaining)?;
+        }
+        let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
+        Ok(Ranking {
+            ranked,
+            remaining,
+            below: fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count(),
+            share,
+            bias_m: self.calibration.bias_m(),
+        })
+    }
+
+    /// The unflown candidates (not in `flown`) with their predictions: learning, the LFS's calibrated and moved
+    /// towards the flights near them (learnt from every flight so far); else the LFS's own.
+    fn predict(&mut self, flown: &[CandidateId], stages: &mut StageTimes) -> Vec<Screened> {
+        if !self.learning {
+            return unflown(&self.candidates, flown).cloned().collect();
+        }
         let t = Instant::now();
         let taught = match self.carried.take() {
             Some((at, l)) if at == self.flights.len() => l,
@@ -124,11 +166,7 @@ impl Rounds<'_> {
         };
         self.calibration = taught.calibration.clone();
         self.surrogate = taught.kernel;
-        let flown: Vec<CandidateId> = (self.journal.iter().map(|r| r.candidate))
-            .chain(busy.iter().map(|(c, _)| *c))
-            .chain(aside.iter().copied())
-            .collect();
-        let mut fresh: Vec<Screened> = unflown(&self.candidates, &flown)
+        let fresh = unflown(&self.candidates, flown)
             .map(|s| Screened {
                 min_distance: taught.predict(s, &self.candidates),
                 raw_min_distance: Some(s.min_distance),
@@ -136,15 +174,7 @@ impl Rounds<'_> {
             })
             .collect();
         stages.learn_s += t.elapsed().as_secs_f64();
-        let remaining = round.planned.saturating_sub(committed);
-        stages.ensemble_s += run_ensemble(&self.stage(), &mut fresh, cfg, remaining)?;
-        let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
-        Ok(Ranking {
-            ranked,
-            remaining,
-            share,
-            bias_m: self.calibration.bias_m(),
-        })
+        fresh
     }
 
     /// The round's flights among `fresh`: with `adapt`, a share for the children that follows their failure
@@ -165,7 +195,7 @@ impl Rounds<'_> {
             Lineage::Failures => local_flight_share(near_flown, other_flown),
             Lineage::NearMisses => NEAR_MISS_FLIGHT_SHARE,
         };
-        if !cfg.adapt {
+        if !self.adapts() {
             return (rank_unflown(fresh, &seen, &self.candidates, cfg, remaining), share);
         }
         let mut guard = DiversityGuard::for_round(&self.journal, FAIL_BELOW_M, cfg, round.later);
@@ -182,6 +212,10 @@ impl Rounds<'_> {
     }
 
     pub(super) fn note(&self, round: &Round, ranking: &Ranking) {
+        if !self.learning {
+            self.note_single(ranking);
+            return;
+        }
         self.input.progress.note(&format!(
             "round {} of {ROUNDS}: {} ({} near the {}), LFS bias {:+.2} m learnt from {}{}; flying {}",
             round.index + 1,
@@ -241,5 +275,25 @@ impl Rounds<'_> {
         }
         self.carried = Some((self.flights.len(), taught));
         stages.learn_s += t.elapsed().as_secs_f64();
+    }
+
+    /// The one round of a campaign that does not learn; said before the flights start when the ranking cannot
+    /// fill the budget, so the user need not wait for it.
+    fn note_single(&self, ranking: &Ranking) {
+        let (cfg, progress) = (self.input.cfg, self.input.progress);
+        let (flying, remaining, below) = (ranking.ranked.len(), ranking.remaining, ranking.below);
+        progress.note(&format!(
+            "{below} of {} candidates predicted below {} m; flying {flying}",
+            cfg.candidates, cfg.threshold_m
+        ));
+        if flying < remaining {
+            progress.warn(&format!(
+                "{} of the {remaining} flights left in the budget will go unspent: {below} candidate(s) are \
+                 predicted below --threshold {} m (or too close to one kept); raise --threshold or --candidates to \
+                 use the budget",
+                remaining - flying,
+                cfg.threshold_m
+            ));
+        }
     }
 }
