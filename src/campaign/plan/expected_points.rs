@@ -97,20 +97,51 @@ impl PointsEstimate {
     }
 }
 
+/// The three weights of the blend, in flights; [`Weights::CHOSEN`] is what the campaign uses, other values
+/// are for fitting them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Weights {
+    /// The calibrated prediction's weight, pseudo-flights.
+    pub prior_flights: f64,
+    /// One neighbour flight's weight.
+    pub neighbour_weight: f64,
+    /// The neighbours' flights together weigh at most this.
+    pub max_neighbour_flights: f64,
+}
+
+impl Weights {
+    /// [`PRIOR_FLIGHTS`], [`NEIGHBOUR_WEIGHT`], [`MAX_NEIGHBOUR_FLIGHTS`].
+    pub const CHOSEN: Weights = Weights {
+        prior_flights: PRIOR_FLIGHTS,
+        neighbour_weight: NEIGHBOUR_WEIGHT,
+        max_neighbour_flights: MAX_NEIGHBOUR_FLIGHTS,
+    };
+}
+
 /// The pseudo-counts of `e`: prior, own flights and down-weighted neighbours.
 pub fn pseudo_counts(e: &Evidence) -> Bands {
+    pseudo_counts_with(e, &Weights::CHOSEN)
+}
+
+/// [`pseudo_counts`] under weights `w`.
+pub fn pseudo_counts_with(e: &Evidence, w: &Weights) -> Bands {
     let neighbour_flights: f64 = e.neighbours.iter().sum();
-    let w = if neighbour_flights > 0.0 {
-        NEIGHBOUR_WEIGHT.min(MAX_NEIGHBOUR_FLIGHTS / neighbour_flights)
+    let nw = if neighbour_flights > 0.0 {
+        w.neighbour_weight.min(w.max_neighbour_flights / neighbour_flights)
     } else {
         0.0
     };
-    std::array::from_fn(|i| e.own[i] + w * e.neighbours[i] + e.prior.map_or(0.0, |p| PRIOR_FLIGHTS * p[i]))
+    std::array::from_fn(|i| e.own[i] + nw * e.neighbours[i] + e.prior.map_or(0.0, |p| w.prior_flights * p[i]))
 }
 
 /// The estimate from `e`. Without any evidence: 0 points expected, anything from 0 to 5 possible.
 pub fn estimate(e: &Evidence) -> PointsEstimate {
-    let alpha = pseudo_counts(e);
+    estimate_with(e, &Weights::CHOSEN)
+}
+
+/// [`estimate`] under weights `w`.
+pub fn estimate_with(e: &Evidence, w: &Weights) -> PointsEstimate {
+    let alpha = pseudo_counts_with(e, w);
     let total: f64 = alpha.iter().sum();
     if total <= 0.0 {
         return PointsEstimate {

@@ -1,0 +1,104 @@
+//! Chooses the expected-points constants (`src/campaign/plan/expected_points.rs`: the prior's weight, a
+//! neighbour flight's weight and the neighbours' cap) by cross-validation with folds by obstacle set, on
+//! tests flown many times: each test's first K flights (K = 1-3, what a campaign has) are shown, the mean
+//! points of its next 5 flights (what the 2026 judge scores) are predicted.
+//!
+//! ```sh
+//! cargo run --example fit_expected -- export CAMPAIGN TESTS     # every flown candidate as TESTS/test_<id>.yaml
+//! prgenuav evaluate TESTS --runs 8                              # 3 shown + 5 judged flights per test
+//! cargo run --example fit_expected -- collect CAMPAIGN TESTS/<ts>/evaluation/report.json DATA.json
+//! cargo run --example fit_expected -- cv DATA.json [DATA.json ...]
+//! ```
+//!
+//! `collect` keeps what the fit reads (per test: obstacles, the campaign's prediction, the evaluated
+//! distances), small enough for `tests/data/expected-points/`.
+
+#[path = "common/expected_cv.rs"]
+mod expected_cv;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use prgenuav::campaign::store::journal::Journal;
+use prgenuav::model::{Spelling, TestCase};
+
+use expected_cv::{Case, DataFile};
+
+/// Writes every candidate the campaign in `campaign` flew as `out/test_<candidate>.yaml`.
+fn export(campaign: &Path, out: &Path) -> anyhow::Result<()> {
+    let settings: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(campaign.join("campaign.json"))?)?;
+    let case = settings["case"].as_str().context("campaign.json: no case")?;
+    let case = TestCase::load(Path::new(case))?.with_absolute_references()?;
+    std::fs::create_dir_all(out)?;
+    let mut written = 0;
+    for r in Journal::read(&campaign.join("journal.jsonl"))? {
+        let path = out.join(format!("test_{}.yaml", r.candidate.0));
+        if r.attempt == 0 && !path.exists() {
+            case.with_obstacles(r.obstacles.clone()).save(&path, Spelling::New)?;
+            written += 1;
+        }
+    }
+    println!("{written} tests written to {}", out.display());
+    Ok(())
+}
+
+/// The candidate id of a `test_<id>.yaml` path.
+fn candidate_of(test: &str) -> Option<u64> {
+    Path::new(test)
+        .file_name()?
+        .to_str()?
+        .strip_prefix("test_")?
+        .strip_suffix(".yaml")?
+        .parse()
+        .ok()
+}
+
+/// Joins the campaign's journal (obstacles, prediction of each candidate's first flight) with an evaluation
+/// of its exported tests (the flown distances, in run order) into `out`.
+fn collect(campaign: &Path, report: &Path, out: &Path) -> anyhow::Result<()> {
+    let mut cases: BTreeMap<u64, Case> = BTreeMap::new();
+    for r in Journal::read(&campaign.join("journal.jsonl"))? {
+        if r.attempt == 0 {
+            let case = Case {
+                candidate: r.candidate.0,
+                obstacles: r.obstacles,
+                predicted_m: r.predicted_min_distance,
+                runs: Vec::new(),
+            };
+            cases.insert(r.candidate.0, case);
+        }
+    }
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report)?)?;
+    for t in json["tests"].as_array().context("report.json: no tests[]")? {
+        let id = t["test"]
+            .as_str()
+            .and_then(candidate_of)
+            .context("a test not named test_<id>.yaml")?;
+        let case = cases
+            .get_mut(&id)
+            .with_context(|| format!("test_{id}.yaml: not in the journal"))?;
+        let runs = t["runs"].as_array().context("a test without runs[]")?;
+        case.runs = runs.iter().filter_map(|r| r["min_distance"].as_f64()).collect();
+    }
+    let data = DataFile {
+        source: format!("{} + {}", campaign.display(), report.display()),
+        cases: cases.into_values().filter(|c| !c.runs.is_empty()).collect(),
+    };
+    prgenuav::io::write_atomic(out, serde_json::to_string_pretty(&data)?.as_bytes())?;
+    println!("{} tests with runs written to {}", data.cases.len(), out.display());
+    Ok(())
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let path = |i: usize| args.get(i).map(PathBuf::from);
+    match (args.first().map(String::as_str), path(1), path(2), path(3)) {
+        (Some("export"), Some(campaign), Some(out), None) => export(&campaign, &out),
+        (Some("collect"), Some(campaign), Some(report), Some(out)) => collect(&campaign, &report, &out),
+        (Some("cv"), Some(_), ..) => expected_cv::run(&args[1..]),
+        _ => anyhow::bail!(
+            "usage: fit_expected export CAMPAIGN TESTS | collect CAMPAIGN REPORT.json DATA.json | cv DATA.json..."
+        ),
+    }
+}
