@@ -6,17 +6,18 @@
 //! ```sh
 //! cargo run --example fit_expected -- export CAMPAIGN TESTS     # every flown candidate as TESTS/test_<id>.yaml
 //! prgenuav evaluate TESTS --runs 8                              # 3 shown + 5 judged flights per test
-//! cargo run --example fit_expected -- collect CAMPAIGN TESTS/<ts>/evaluation/report.json DATA.json
+//! cargo run --example fit_expected -- collect CAMPAIGN DATA.json TESTS/evaluation/report.json [REPORT.json...]
 //! cargo run --example fit_expected -- cv DATA.json [DATA.json ...]
 //! ```
 //!
-//! `collect` keeps what the fit reads (per test: obstacles, the campaign's prediction, the evaluated
+//! `collect` also takes evaluations of the tests the campaign wrote (`evaluate CAMPAIGN --runs 8`). It keeps
+//! what the fit reads (per test: obstacles, the campaign's prediction, the evaluated
 //! distances), small enough for `tests/data/expected-points/`.
 
 #[path = "common/expected_cv.rs"]
 mod expected_cv;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -43,10 +44,13 @@ fn export(campaign: &Path, out: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The candidate id of a `test_<id>.yaml` path.
-fn candidate_of(test: &str) -> Option<u64> {
-    Path::new(test)
-        .file_name()?
+/// The candidate id of a test YAML: a `test_<id>.yaml` written by `export`, or a test the campaign wrote
+/// (found by its file name relative to the campaign folder in the campaign's report.json).
+fn candidate_of(test: &Path, campaign: &Path, written: &HashMap<String, u64>) -> Option<u64> {
+    if let Ok(inside) = test.strip_prefix(campaign) {
+        return written.get(inside.to_str()?).copied();
+    }
+    test.file_name()?
         .to_str()?
         .strip_prefix("test_")?
         .strip_suffix(".yaml")?
@@ -54,9 +58,23 @@ fn candidate_of(test: &str) -> Option<u64> {
         .ok()
 }
 
-/// Joins the campaign's journal (obstacles, prediction of each candidate's first flight) with an evaluation
-/// of its exported tests (the flown distances, in run order) into `out`.
-fn collect(campaign: &Path, report: &Path, out: &Path) -> anyhow::Result<()> {
+/// The tests the campaign wrote, by file name: `reported_as` of its report.json's tests.
+fn written_tests(campaign: &Path) -> anyhow::Result<HashMap<String, u64>> {
+    let Ok(text) = std::fs::read_to_string(campaign.join("report.json")) else {
+        return Ok(HashMap::new());
+    };
+    let json: serde_json::Value = serde_json::from_str(&text)?;
+    let tests = json["tests"].as_array().map(Vec::as_slice).unwrap_or_default();
+    Ok(tests
+        .iter()
+        .filter_map(|t| Some((t["reported_as"].as_str()?.to_string(), t["candidate"].as_u64()?)))
+        .collect())
+}
+
+/// Joins the campaign's journal (obstacles, prediction of each candidate's first flight) with evaluations of
+/// its tests (the flown distances, in run order; a test in several evaluations gets their runs one after
+/// the other) into `out`.
+fn collect(campaign: &Path, out: &Path, reports: &[PathBuf]) -> anyhow::Result<()> {
     let mut cases: BTreeMap<u64, Case> = BTreeMap::new();
     for r in Journal::read(&campaign.join("journal.jsonl"))? {
         if r.attempt == 0 {
@@ -69,23 +87,25 @@ fn collect(campaign: &Path, report: &Path, out: &Path) -> anyhow::Result<()> {
             cases.insert(r.candidate.0, case);
         }
     }
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report)?)?;
-    for t in json["tests"].as_array().context("report.json: no tests[]")? {
-        let id = t["test"]
-            .as_str()
-            .and_then(candidate_of)
-            .context("a test not named test_<id>.yaml")?;
-        let case = cases
-            .get_mut(&id)
-            .with_context(|| format!("test_{id}.yaml: not in the journal"))?;
-        let runs = t["runs"].as_array().context("a test without runs[]")?;
-        case.runs = runs.iter().filter_map(|r| r["min_distance"].as_f64()).collect();
+    let written = written_tests(campaign)?;
+    for report in reports {
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report)?)?;
+        for t in json["tests"].as_array().context("report.json: no tests[]")? {
+            let test = Path::new(t["test"].as_str().context("a test without its YAML")?);
+            let id = candidate_of(test, campaign, &written)
+                .with_context(|| format!("{}: not a test of the campaign", test.display()))?;
+            let case = cases
+                .get_mut(&id)
+                .with_context(|| format!("candidate {id}: not in the journal"))?;
+            let runs = t["runs"].as_array().context("a test without runs[]")?;
+            case.runs.extend(runs.iter().filter_map(|r| r["min_distance"].as_f64()));
+        }
     }
     let data = DataFile {
-        source: format!("{} + {}", campaign.display(), report.display()),
+        source: format!("{} + {reports:?}", campaign.display()),
         cases: cases.into_values().filter(|c| !c.runs.is_empty()).collect(),
     };
-    prgenuav::io::write_atomic(out, serde_json::to_string_pretty(&data)?.as_bytes())?;
+    prgenuav::io::write_json(out, &data, true)?;
     println!("{} tests with runs written to {}", data.cases.len(), out.display());
     Ok(())
 }
@@ -95,10 +115,13 @@ fn main() -> anyhow::Result<()> {
     let path = |i: usize| args.get(i).map(PathBuf::from);
     match (args.first().map(String::as_str), path(1), path(2), path(3)) {
         (Some("export"), Some(campaign), Some(out), None) => export(&campaign, &out),
-        (Some("collect"), Some(campaign), Some(report), Some(out)) => collect(&campaign, &report, &out),
+        (Some("collect"), Some(campaign), Some(out), Some(_)) => {
+            let reports: Vec<PathBuf> = args[3..].iter().map(PathBuf::from).collect();
+            collect(&campaign, &out, &reports)
+        }
         (Some("cv"), Some(_), ..) => expected_cv::run(&args[1..]),
         _ => anyhow::bail!(
-            "usage: fit_expected export CAMPAIGN TESTS | collect CAMPAIGN REPORT.json DATA.json | cv DATA.json..."
+            "usage: fit_expected export CAMPAIGN TESTS | collect CAMPAIGN DATA.json REPORT.json... | cv DATA.json..."
         ),
     }
 }

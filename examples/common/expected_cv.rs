@@ -43,7 +43,7 @@ const JUDGED: usize = 5;
 const SHOWN: [usize; 3] = [1, 2, 3];
 const FOLDS: usize = 5;
 const SEED: u64 = 0;
-const PRIORS: [f64; 6] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0];
+const PRIORS: [f64; 7] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 const NEIGHBOURS: [f64; 5] = [0.0, 0.1, 0.25, 0.5, 1.0];
 const CAPS: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 
@@ -156,7 +156,7 @@ fn items(file: &DataFile, k: usize, fold_of: &HashMap<String, usize>) -> Vec<Ite
 
 /// The grid point with the lowest mean absolute error on the written tests among `items` (the first such
 /// point in grid order on a tie).
-fn best<'a>(items: &[&'a Item], grid: &[Weights]) -> Weights {
+fn best(items: &[&Item], grid: &[Weights]) -> Weights {
     let mut best = (f64::INFINITY, Weights::CHOSEN);
     for w in grid {
         let s = score(items.iter().copied().filter(|i| i.failed), w);
@@ -239,19 +239,19 @@ pub fn run(paths: &[String]) -> anyhow::Result<()> {
     println!("\n| weights | MAE written | coverage | bias | n | MAE all | coverage | n |");
     println!("|---|---|---|---|---|---|---|---|");
     println!("{}", line("**cross-validated choice**", cv_written, cv_all));
-    let row = |w: &Weights| {
+    let row = |w: &Weights, note: &str| {
         let s = |f: fn(&Item) -> bool| score(items.iter().filter(|i| f(i)), w);
-        line(&show(w), s(|i| i.failed), s(|_| true))
+        line(&format!("{}{note}", show(w)), s(|i| i.failed), s(|_| true))
     };
-    println!("{} (chosen on all, in-sample)", row(&whole));
-    println!("{} (current)", row(&Weights::CHOSEN));
+    println!("{}", row(&whole, " (chosen on all folds, in-sample)"));
+    println!("{}", row(&Weights::CHOSEN, " (current)"));
     let mut ranked: Vec<(f64, Weights)> = (grid.iter())
         .map(|w| (score(items.iter().filter(|i| i.failed), w).mae, *w))
         .collect();
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     println!("\nin-sample, best 12 and worst 3 of {} grid points:", grid.len());
     for (_, w) in ranked.iter().take(12).chain(ranked.iter().rev().take(3).rev()) {
-        println!("{}", row(w));
+        println!("{}", row(w, ""));
     }
     println!("\nper shown flights, current / chosen on all (MAE written, coverage, n):");
     for k in SHOWN {
