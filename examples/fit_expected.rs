@@ -44,23 +44,22 @@ fn export(campaign: &Path, out: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The candidate id of a test YAML: a `test_<id>.yaml` written by `export`, or a test the campaign wrote
-/// (found by its file name relative to the campaign folder in the campaign's report.json).
-fn candidate_of(test: &Path, campaign: &Path, written: &HashMap<String, u64>) -> Option<u64> {
-    if let Ok(inside) = test.strip_prefix(campaign) {
-        return written.get(inside.to_str()?).copied();
+/// The candidate id of a test YAML: a test a campaign wrote (its folder's report.json names it), or a
+/// `test_<id>.yaml` written by `export`.
+fn candidate_of(test: &Path) -> anyhow::Result<Option<u64>> {
+    let name = test.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let written = written_tests(test.parent().unwrap_or(Path::new(".")))?;
+    if !written.is_empty() {
+        return Ok(written.get(name).copied());
     }
-    test.file_name()?
-        .to_str()?
-        .strip_prefix("test_")?
-        .strip_suffix(".yaml")?
-        .parse()
-        .ok()
+    Ok(name
+        .strip_prefix("test_")
+        .and_then(|n| n.strip_suffix(".yaml")?.parse().ok()))
 }
 
-/// The tests the campaign wrote, by file name: `reported_as` of its report.json's tests.
-fn written_tests(campaign: &Path) -> anyhow::Result<HashMap<String, u64>> {
-    let Ok(text) = std::fs::read_to_string(campaign.join("report.json")) else {
+/// The tests a campaign wrote, by file name: `reported_as` of its report.json's tests (none without one).
+fn written_tests(folder: &Path) -> anyhow::Result<HashMap<String, u64>> {
+    let Ok(text) = std::fs::read_to_string(folder.join("report.json")) else {
         return Ok(HashMap::new());
     };
     let json: serde_json::Value = serde_json::from_str(&text)?;
@@ -87,13 +86,12 @@ fn collect(campaign: &Path, out: &Path, reports: &[PathBuf]) -> anyhow::Result<(
             cases.insert(r.candidate.0, case);
         }
     }
-    let written = written_tests(campaign)?;
     for report in reports {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report)?)?;
-        for t in json["tests"].as_array().context("report.json: no tests[]")? {
+        let tests = json["tests"].as_array().context("report.json: no tests[]")?;
+        for t in tests {
             let test = Path::new(t["test"].as_str().context("a test without its YAML")?);
-            let id = candidate_of(test, campaign, &written)
-                .with_context(|| format!("{}: not a test of the campaign", test.display()))?;
+            let id = candidate_of(test)?.with_context(|| format!("{}: not a test of the campaign", test.display()))?;
             let case = cases
                 .get_mut(&id)
                 .with_context(|| format!("candidate {id}: not in the journal"))?;

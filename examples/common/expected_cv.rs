@@ -46,6 +46,12 @@ const SEED: u64 = 0;
 const PRIORS: [f64; 7] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 const NEIGHBOURS: [f64; 5] = [0.0, 0.1, 0.25, 0.5, 1.0];
 const CAPS: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
+/// The weights set from first principles before this fit, for comparison.
+const FIRST_PRINCIPLES: Weights = Weights {
+    prior_flights: 1.0,
+    neighbour_weight: 0.25,
+    max_neighbour_flights: 1.0,
+};
 
 /// One prediction to score: a test with `k` shown flights.
 struct Item {
@@ -245,6 +251,7 @@ pub fn run(paths: &[String]) -> anyhow::Result<()> {
     };
     println!("{}", row(&whole, " (chosen on all folds, in-sample)"));
     println!("{}", row(&Weights::CHOSEN, " (current)"));
+    println!("{}", row(&FIRST_PRINCIPLES, " (first principles)"));
     let mut ranked: Vec<(f64, Weights)> = (grid.iter())
         .map(|w| (score(items.iter().filter(|i| i.failed), w).mae, *w))
         .collect();
@@ -253,10 +260,10 @@ pub fn run(paths: &[String]) -> anyhow::Result<()> {
     for (_, w) in ranked.iter().take(12).chain(ranked.iter().rev().take(3).rev()) {
         println!("{}", row(w, ""));
     }
-    println!("\nper shown flights, current / chosen on all (MAE written, coverage, n):");
+    println!("\nper shown flights, first principles / chosen on all (MAE written, coverage, n):");
     for k in SHOWN {
         let s = |w: &Weights| score(items.iter().filter(|i| i.failed && i.k == k), w);
-        let (a, b) = (s(&Weights::CHOSEN), s(&whole));
+        let (a, b) = (s(&FIRST_PRINCIPLES), s(&whole));
         println!(
             "k {k}: {:.3} {:.2} / {:.3} {:.2} (n {})",
             a.mae, a.coverage, b.mae, b.coverage, a.n
