@@ -17,8 +17,7 @@ use crate::judge::points;
 pub const BAND_POINTS: [f64; 4] = [5.0, 2.0, 1.0, 0.0];
 
 /// Weight of the calibrated LFS prediction, pseudo-flights. This and the two neighbour weights were chosen
-/// together by cross-validation with folds by obstacle set on tests flown 8-18 times
-/// (docs/design-constants.md#expected-points-weights).
+/// together by cross-validation with folds by obstacle set (docs/design-constants.md#expected-points-weights).
 pub const PRIOR_FLIGHTS: f64 = 4.0;
 
 /// Weight of one neighbour flight, in own flights.
