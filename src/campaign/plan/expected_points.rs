@@ -7,7 +7,7 @@
 //! a neighbour (a test overlapping it) counts [`NEIGHBOUR_WEIGHT`], all neighbours together at most
 //! [`MAX_NEIGHBOUR_FLIGHTS`]. Expected points = sum of band share x band points; the interval is the 10-90 %
 //! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points). How the constants were
-//! chosen: docs/campaign.md#expected-2026-points.
+//! chosen: docs/design-constants.md#expected-points-weights.
 
 use serde::Serialize;
 
@@ -16,16 +16,16 @@ use crate::judge::points;
 /// The points of each band, best first.
 pub const BAND_POINTS: [f64; 4] = [5.0, 2.0, 1.0, 0.0];
 
-/// Weight of the calibrated LFS prediction, pseudo-flights: the prior weight the LFS's bias calibration
-/// chose by cross-validation ([`crate::campaign::learn::calibration::DEFAULT_PRIOR_FLIGHTS`]).
-pub const PRIOR_FLIGHTS: f64 = crate::campaign::learn::calibration::DEFAULT_PRIOR_FLIGHTS;
+/// Weight of the calibrated LFS prediction, pseudo-flights. This and the two neighbour weights were chosen
+/// together by cross-validation with folds by obstacle set (docs/design-constants.md#expected-points-weights).
+pub const PRIOR_FLIGHTS: f64 = 4.0;
 
 /// Weight of one neighbour flight, in own flights.
-pub const NEIGHBOUR_WEIGHT: f64 = 0.25;
+pub const NEIGHBOUR_WEIGHT: f64 = 1.0;
 
 /// All neighbour flights together count for at most this many own flights: a place flown often must not
 /// drown the test's own flights.
-pub const MAX_NEIGHBOUR_FLIGHTS: f64 = 1.0;
+pub const MAX_NEIGHBOUR_FLIGHTS: f64 = 4.0;
 
 /// Fewer residuals than this give no spread: the prediction is then left out (no calibration).
 pub const MIN_RESIDUALS: usize = 3;
@@ -97,20 +97,51 @@ impl PointsEstimate {
     }
 }
 
+/// The three weights of the blend, in flights; [`Weights::CHOSEN`] is what the campaign uses, other values
+/// are for fitting them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Weights {
+    /// The calibrated prediction's weight, pseudo-flights.
+    pub prior_flights: f64,
+    /// One neighbour flight's weight.
+    pub neighbour_weight: f64,
+    /// The neighbours' flights together weigh at most this.
+    pub max_neighbour_flights: f64,
+}
+
+impl Weights {
+    /// [`PRIOR_FLIGHTS`], [`NEIGHBOUR_WEIGHT`], [`MAX_NEIGHBOUR_FLIGHTS`].
+    pub const CHOSEN: Weights = Weights {
+        prior_flights: PRIOR_FLIGHTS,
+        neighbour_weight: NEIGHBOUR_WEIGHT,
+        max_neighbour_flights: MAX_NEIGHBOUR_FLIGHTS,
+    };
+}
+
 /// The pseudo-counts of `e`: prior, own flights and down-weighted neighbours.
 pub fn pseudo_counts(e: &Evidence) -> Bands {
+    pseudo_counts_with(e, &Weights::CHOSEN)
+}
+
+/// [`pseudo_counts`] under weights `w`.
+pub fn pseudo_counts_with(e: &Evidence, w: &Weights) -> Bands {
     let neighbour_flights: f64 = e.neighbours.iter().sum();
-    let w = if neighbour_flights > 0.0 {
-        NEIGHBOUR_WEIGHT.min(MAX_NEIGHBOUR_FLIGHTS / neighbour_flights)
+    let nw = if neighbour_flights > 0.0 {
+        w.neighbour_weight.min(w.max_neighbour_flights / neighbour_flights)
     } else {
         0.0
     };
-    std::array::from_fn(|i| e.own[i] + w * e.neighbours[i] + e.prior.map_or(0.0, |p| PRIOR_FLIGHTS * p[i]))
+    std::array::from_fn(|i| e.own[i] + nw * e.neighbours[i] + e.prior.map_or(0.0, |p| w.prior_flights * p[i]))
 }
 
 /// The estimate from `e`. Without any evidence: 0 points expected, anything from 0 to 5 possible.
 pub fn estimate(e: &Evidence) -> PointsEstimate {
-    let alpha = pseudo_counts(e);
+    estimate_with(e, &Weights::CHOSEN)
+}
+
+/// [`estimate`] under weights `w`.
+pub fn estimate_with(e: &Evidence, w: &Weights) -> PointsEstimate {
+    let alpha = pseudo_counts_with(e, w);
     let total: f64 = alpha.iter().sum();
     if total <= 0.0 {
         return PointsEstimate {
@@ -170,7 +201,7 @@ mod tests {
         assert_eq!((alone.mean, alone.low, alone.high), (5.0, 5.0, 5.0));
         let prior = Some([0.0, 0.0, 0.0, 1.0]);
         let e = estimate(&evidence(&own, &[], prior));
-        assert!((e.mean - 5.0 * 5.0 / 6.0).abs() < 1e-12, "{e:?}");
+        assert!((e.mean - 5.0 * 5.0 / (5.0 + PRIOR_FLIGHTS)).abs() < 1e-12, "{e:?}");
         assert!(e.earns() && e.high <= 5.0 && e.low < e.mean);
     }
 
@@ -188,16 +219,25 @@ mod tests {
     }
 
     #[test]
-    fn neighbours_count_less_than_own_flights_and_never_drown_them() {
+    fn neighbours_weigh_as_chosen_and_a_crowd_of_them_is_capped() {
         let own = estimate(&evidence(&[3.0], &[], None));
         assert_eq!(own.mean, 0.0);
         let near = estimate(&evidence(&[3.0], &[0.1], None));
-        assert!((near.mean - 5.0 * 0.25 / 1.25).abs() < 1e-12, "{near:?}");
+        let w = NEIGHBOUR_WEIGHT;
+        assert!((near.mean - 5.0 * w / (1.0 + w)).abs() < 1e-12, "{near:?}");
         let crowd = estimate(&evidence(&[3.0], &[0.1; 40], None));
+        let cap = MAX_NEIGHBOUR_FLIGHTS;
         assert!(
-            (crowd.mean - 2.5).abs() < 1e-12,
-            "40 neighbours weigh one flight: {crowd:?}"
+            (crowd.mean - 5.0 * cap / (1.0 + cap)).abs() < 1e-12,
+            "40 neighbours weigh {cap} flights: {crowd:?}"
         );
+        let weights = Weights {
+            neighbour_weight: 0.25,
+            max_neighbour_flights: 1.0,
+            ..Weights::CHOSEN
+        };
+        let capped = estimate_with(&evidence(&[3.0], &[0.1; 40], None), &weights);
+        assert!((capped.mean - 2.5).abs() < 1e-12, "{capped:?}");
     }
 
     #[test]

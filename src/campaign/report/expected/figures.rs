@@ -29,6 +29,9 @@ pub struct SuiteExpectation {
     pub near_duplicates: usize,
     /// The DTW distance below which two average trajectories are too similar (`evaluate`'s default), m.
     pub similar_below_m: f64,
+    /// The guard's threshold: a test whose flown average lies closer than this to a better written test's is
+    /// set aside, m.
+    pub guard_below_m: f64,
     /// Sum of the written tests' expected scores.
     pub total_score: f64,
     /// The sum at their 10 % bounds.

@@ -3,8 +3,9 @@
 //! footprints overlap it by IoU >= [`NEIGHBOUR_IOU`]) and the calibrated prediction; the tests rank by their
 //! expected 2026 score (expected points per expected minute, x 10 / obstacles²). Written are those that
 //! failed at least once and whose 10 % bound of expected points is above zero, less the near-duplicate
-//! trajectories of better written tests ([`crate::campaign::report::expected::trajectory_guard`]). The suite's
-//! expected 2026 score is the sum of the written tests' expected scores times the expected `sim_pen`.
+//! trajectories of better written tests, with a margin over the judge's threshold
+//! ([`crate::campaign::report::expected::trajectory_guard`]). The suite's expected 2026 score is the sum of
+//! the written tests' expected scores times the expected `sim_pen`.
 
 use std::cmp::Ordering;
 use std::path::Path;
@@ -14,7 +15,7 @@ use crate::campaign::evaluation::SIMILAR_BELOW_M;
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
 use crate::campaign::plan::expected_points::{Evidence, counts, estimate, prior_bands};
 pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
-use crate::campaign::report::expected::trajectory_guard::{flown_average, near_duplicates, sim_pen};
+use crate::campaign::report::expected::trajectory_guard::{flown_average, guard_below, near_duplicates, sim_pen};
 use crate::campaign::report::suite::DISTINCT_IOU;
 use crate::campaign::report::verdicts::TestVerdict;
 use crate::campaign::store::journal::FlightRecord;
@@ -48,7 +49,7 @@ pub fn aim(
             earning.push(i);
         }
     }
-    let duplicates = near_duplicates(&averages, SIMILAR_BELOW_M);
+    let duplicates = near_duplicates(&averages, guard_below(SIMILAR_BELOW_M));
     for (&i, dup) in earning.iter().zip(&duplicates) {
         if let Some(k) = dup {
             tests[i].0.confirmed = false;
@@ -81,6 +82,7 @@ fn suite<'a>(tests: impl Iterator<Item = &'a TestVerdict>, near_duplicates: usiz
         tests: written.len(),
         near_duplicates,
         similar_below_m: SIMILAR_BELOW_M,
+        guard_below_m: guard_below(SIMILAR_BELOW_M),
         total_score,
         total_low,
         total_high,
@@ -181,8 +183,8 @@ pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
     );
     let _ = writeln!(
         md,
-        "| tests set aside as near-duplicate trajectories (DTW < {} m to a better written test) | {} |",
-        e.similar_below_m, e.near_duplicates
+        "| tests set aside as near-duplicate trajectories (DTW < {:.0} m to a better written test) | {} |",
+        e.guard_below_m, e.near_duplicates
     );
 }
 

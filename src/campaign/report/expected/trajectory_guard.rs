@@ -1,7 +1,8 @@
 //! Keeps the written suite free of near-duplicate trajectories, as the 2026 judge sees them: each test's
 //! flown flights are averaged the way `evaluate` averages them (origin aligned, 0.5 s bins, soft-DTW
-//! barycenter, landing cut) and a test whose average lies within `--similar-below` (DTW on x, y, z) of a
-//! better written test's is set aside: the judge would count it as too similar and cut the whole suite.
+//! barycenter, landing cut) and a test whose average lies within [`GUARD_MARGIN`] x `--similar-below` (DTW
+//! on x, y, z) of a better written test's is set aside: the judge would count it as too similar and cut the
+//! whole suite.
 
 use std::path::Path;
 
@@ -9,6 +10,16 @@ use crate::campaign::store::journal::FlightRecord;
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::judge::similarity::{average, path_distance, prepare};
 use crate::model::Trajectory;
+
+/// The guard's threshold over the judge's: averages of a campaign's 1-3 flights per test can lie further
+/// apart than the judge's 5-flight averages of the same pair, so a pair passes only this far beyond the
+/// judge's threshold. Chosen from how the two distances differ (docs/design-constants.md#trajectory-guard-margin).
+pub const GUARD_MARGIN: f64 = 1.4;
+
+/// The DTW distance below which the guard sets a test aside when the judge's threshold is `similar_below_m`.
+pub fn guard_below(similar_below_m: f64) -> f64 {
+    similar_below_m * GUARD_MARGIN
+}
 
 /// The average of the flights `records` whose trajectories (relative to `folder`) can be read; `None` when
 /// none can.
@@ -97,6 +108,18 @@ mod tests {
         assert_eq!(dup, [None, Some(0)]);
         let averages: Vec<Trajectory> = [a.clone(), a].into_iter().flatten().collect();
         assert_eq!(sim_pen(&averages, 75.0), 0.5);
+    }
+
+    #[test]
+    fn a_pair_just_beyond_the_judges_threshold_is_set_aside_by_the_margin() {
+        let judge = 75.0;
+        let (a, b) = (path(0.0), path(6.0));
+        let d = path_distance(&a, &b).expect("both have samples");
+        assert!(judge < d && d < guard_below(judge), "{d}");
+        let averages = [average(&[prepare(&a)]), average(&[prepare(&b)])];
+        assert_eq!(near_duplicates(&averages, guard_below(judge)), [None, Some(0)]);
+        let flat: Vec<Trajectory> = averages.into_iter().flatten().collect();
+        assert_eq!(sim_pen(&flat, judge), 1.0, "the judge would not count them now");
     }
 
     #[test]
