@@ -279,13 +279,20 @@ fn a_runner_campaign_journals_each_collision_prevention_verdict() {
         let said = std::fs::read_to_string(job.join("prgenuav-job.stdout")).unwrap();
         let said: serde_json::Value = serde_json::from_str(&said).unwrap_or_else(|e| panic!("{e}: {said}"));
         let cp = &said["collision_prevention"];
-        let cp_dist = cp["cp_dist_m"].as_f64().unwrap_or_else(|| panic!("the job's CP verdict: {said}"));
-        let centre = r.closest_centre_m.unwrap_or_else(|| panic!("closest centre journaled: {r:?}"));
+        let cp_dist = cp["cp_dist_m"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("the job's CP verdict: {said}"));
+        let centre = r
+            .closest_centre_m
+            .unwrap_or_else(|| panic!("closest centre journaled: {r:?}"));
         assert_eq!(r.inside_cp_dist, Some(centre < cp_dist), "{r:?}");
         // Measured again here on the trajectory the job left: what the job itself measured, within the
         // origin alignment both distances are judged in.
         let theirs = cp["closest_centre_m"].as_f64().unwrap();
-        assert!((centre - theirs).abs() < 0.1, "journaled {centre}, the job said {theirs}");
+        assert!(
+            (centre - theirs).abs() < 0.1,
+            "journaled {centre}, the job said {theirs}"
+        );
     }
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap()).unwrap();

@@ -93,7 +93,9 @@ pub fn read_back(
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
         (None, Some(r)) if !r.status.completed() && problems.is_empty() => Ok(Readback {
             flown: Flown {
-                cp: r.cp_dist_m().map(|d| cp_verdict(&Trajectory { samples: Vec::new() }, obstacles, d)),
+                cp: r
+                    .cp_dist_m()
+                    .map(|d| cp_verdict(&Trajectory { samples: Vec::new() }, obstacles, d)),
                 status: r.status,
                 min_distance: None,
                 min_distance_raw: None,

@@ -247,7 +247,11 @@ fn a_collision_prevention_report_gets_its_verdict_measured_here() {
     // The pass runs 3 m from the centre line of a 2 m wide box: 2 m from its side.
     assert!((centre - 2.0).abs() < 0.01, "{cp:?}");
     assert_eq!((cp.cp_dist_m, cp.inside_cp_dist), (2.5, Some(true)));
-    let cp = read(tmp.path(), report(r#"{"cp_dist_m": 1.5}"#).as_bytes()).unwrap().flown.cp.unwrap();
+    let cp = read(tmp.path(), report(r#"{"cp_dist_m": 1.5}"#).as_bytes())
+        .unwrap()
+        .flown
+        .cp
+        .unwrap();
     assert_eq!(cp.inside_cp_dist, Some(false));
     // Another mode's report, or a block without a usable CP_DIST, has no verdict; the flight is still read.
     for said in [
@@ -263,5 +267,8 @@ fn a_collision_prevention_report_gets_its_verdict_measured_here() {
     let rejected = r#"{"status": "rejected", "collision_prevention": {"cp_dist_m": 2.0}}"#;
     let empty = tempfile::tempdir().unwrap();
     let cp = read(empty.path(), rejected.as_bytes()).unwrap().flown.cp.unwrap();
-    assert_eq!((cp.cp_dist_m, cp.closest_centre_m, cp.inside_cp_dist), (2.0, None, None));
+    assert_eq!(
+        (cp.cp_dist_m, cp.closest_centre_m, cp.inside_cp_dist),
+        (2.0, None, None)
+    );
 }
