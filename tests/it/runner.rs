@@ -251,7 +251,7 @@ fn a_runner_campaign_journals_each_collision_prevention_verdict() {
     let (code, stdout, stderr) = prgenuav(&[
         "generate",
         "missions/mission2.yaml",
-        "2",
+        "1",
         "--mode",
         "collision-prevention",
         "--seed",
