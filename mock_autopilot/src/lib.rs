@@ -44,6 +44,7 @@ pub mod release;
 pub mod safety;
 pub mod scenarios;
 pub mod server;
+pub mod status_text;
 pub mod stick_lockstep;
 pub mod sticks;
 pub mod telemetry;

@@ -7,9 +7,7 @@
 use std::time::Duration;
 
 use mavlink::MavHeader;
-use mavlink::dialects::common::{
-    MavLandedState, MavMessage, MavMissionResult, MavMissionType, MavSeverity, MavState, STATUSTEXT_DATA,
-};
+use mavlink::dialects::common::{MavLandedState, MavMessage, MavMissionResult, MavMissionType, MavSeverity, MavState};
 
 use crate::avoidance::Avoidance;
 use crate::dynamics::{Body, Limits, Ned, Setpoint, Tuning};
@@ -146,6 +144,8 @@ pub struct Vehicle {
     pub(crate) streams: Streams,
     reached: Option<(u16, u8, Duration)>,
     pub(crate) outbox: Vec<MavMessage>,
+    /// The id of the last chunked STATUSTEXT.
+    text_id: u16,
     pub(crate) crashed: bool,
     pub(crate) failsafe: bool,
     pub(crate) fail_arm: bool,
@@ -198,6 +198,7 @@ impl Vehicle {
             streams: Streams::default(),
             reached: None,
             outbox: Vec::new(),
+            text_id: 0,
             crashed: false,
             failsafe: false,
             fail_arm: cfg.fail_arm,
@@ -272,16 +273,9 @@ impl Vehicle {
     }
 
     pub(crate) fn text(&mut self, severity: MavSeverity, text: &str) {
-        let mut end = text.len().min(50);
-        while !text.is_char_boundary(end) {
-            end -= 1;
-        }
-        self.outbox.push(MavMessage::STATUSTEXT(STATUSTEXT_DATA {
-            severity,
-            text: text[..end].into(),
-            id: 0,
-            chunk_seq: 0,
-        }));
+        self.text_id = self.text_id.wrapping_add(1).max(1);
+        let parts = crate::status_text::chunks(severity, text, self.text_id);
+        self.outbox.extend(parts.into_iter().map(MavMessage::STATUSTEXT));
     }
 
     /// EXTENDED_SYS_STATE landed state.

@@ -38,7 +38,7 @@ pub(super) fn start(bin: &Path, instance: u8) -> Px4Sitl {
 }
 
 /// Mission `n` with generated obstacles (seed 1, test `k`).
-fn generated(n: u32, k: u64) -> TestCase {
+pub(super) fn generated(n: u32, k: u64) -> TestCase {
     let c = case(n);
     let g = Generator::new(&c, GeneratorConfig::default(), 1).expect("generator");
     c.with_obstacles(g.sample(k).expect("sample").obstacles.to_vec())

@@ -235,3 +235,72 @@ fn bad_runner_settings_are_refused_before_anything_runs() {
     }
     assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "nothing written");
 }
+
+/// A Collision Prevention campaign whose flights are `prgenuav fly --json` jobs (on a mock autopilot): each
+/// flight's verdict (closest centre, inside `CP_DIST`) is journaled as the embedded backends journal it,
+/// measured on the trajectory the job left.
+#[test]
+fn a_runner_campaign_journals_each_collision_prevention_verdict() {
+    let out = tempfile::tempdir().unwrap();
+    let job = format!(
+        "{} {} {} {{test}} {{dir}} --mode collision-prevention",
+        repo().join("tests/data/slurm/fly-on-mock").display(),
+        Path::new(env!("CARGO_BIN_EXE_prgenuav")).display(),
+        super::slurm::mock_autopilot().display()
+    );
+    let (code, stdout, stderr) = prgenuav(&[
+        "generate",
+        "missions/mission2.yaml",
+        "1",
+        "--mode",
+        "collision-prevention",
+        "--seed",
+        "0",
+        "--runner",
+        &job,
+        "--job-timeout",
+        "300",
+        "--out",
+        out.path().to_str().unwrap(),
+        "--json",
+        "--no-learn",
+        "--candidates",
+        "6",
+        "--ensemble",
+        "0",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let folder = output_folder(&stdout);
+    let records = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
+    assert!(!records.is_empty(), "nothing flown: {stderr}");
+    for r in &records {
+        assert!(r.vehicle.starts_with("runner#"), "{r:?}");
+        let job = folder.join("jobs").join(format!("candidate_{}", r.candidate));
+        let said = std::fs::read_to_string(job.join("prgenuav-job.stdout")).unwrap();
+        let said: serde_json::Value = serde_json::from_str(&said).unwrap_or_else(|e| panic!("{e}: {said}"));
+        let cp = &said["collision_prevention"];
+        let cp_dist = cp["cp_dist_m"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("the job's CP verdict: {said}"));
+        let centre = r
+            .closest_centre_m
+            .unwrap_or_else(|| panic!("closest centre journaled: {r:?}"));
+        assert_eq!(r.inside_cp_dist, Some(centre < cp_dist), "{r:?}");
+        // Measured again here on the trajectory the job left: what the job itself measured, within the
+        // origin alignment both distances are judged in.
+        let theirs = cp["closest_centre_m"].as_f64().unwrap();
+        assert!(
+            (centre - theirs).abs() < 0.1,
+            "journaled {centre}, the job said {theirs}"
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("report.json")).unwrap()).unwrap();
+    let flights: u64 = report["collision_prevention"]
+        .as_array()
+        .expect("a CP verdict per test")
+        .iter()
+        .map(|t| t["flights"].as_u64().unwrap())
+        .sum();
+    assert_eq!(flights as usize, records.len());
+}

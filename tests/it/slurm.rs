@@ -117,7 +117,7 @@ impl Drop for Cluster {
 }
 
 /// `mock-autopilot` beside the `prgenuav` under test, built if missing.
-fn mock_autopilot() -> PathBuf {
+pub(super) fn mock_autopilot() -> PathBuf {
     let path = Path::new(env!("CARGO_BIN_EXE_prgenuav")).with_file_name("mock-autopilot");
     if !path.is_file() {
         run_ok(Command::new(env!("CARGO")).args(["build", "-p", "mock_autopilot", "--bin", "mock-autopilot"]));

@@ -119,6 +119,7 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
     if let Some(w) = s.companion.warning() {
         s.warnings.push(w);
     }
+    s.view.flush_texts();
     let mut warnings = std::mem::take(&mut s.view.warnings);
     warnings.append(&mut s.warnings);
     let mut reason = stop.reason;

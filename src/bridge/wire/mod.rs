@@ -16,6 +16,7 @@ pub mod params;
 pub mod plan_items;
 pub mod pose;
 pub mod tcp_in;
+pub mod text_chunks;
 pub mod udp_in;
 pub mod url;
 pub mod vehicle;

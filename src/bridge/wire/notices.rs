@@ -12,6 +12,10 @@ use tokio::task::JoinHandle;
 
 use super::clock::VehicleClock;
 use super::link::Inbound;
+use super::text_chunks::{Chunk, FIELD_CHARS, Joiner};
+
+/// How long (vehicle time) a STATUSTEXT chunk waits for the next one before it is kept as it is.
+const CHUNK_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// One STATUSTEXT of severity WARNING or worse.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -129,23 +133,50 @@ pub fn spawn_collector(
     sink: Option<NoticeSink>,
 ) -> JoinHandle<()> {
     tokio::spawn(async move {
+        let mut joiner = Joiner::default();
+        let keep = |(severity, text): (MavSeverity, String)| {
+            let Some(severity) = severity_word(severity) else {
+                return;
+            };
+            let m = VehicleMessage {
+                t_s: clock.now().as_secs_f64(),
+                severity,
+                text: text.trim_end().to_string(),
+            };
+            tell(sink.as_ref(), &Notice::Vehicle(m.clone()));
+            out.lock().unwrap_or_else(|p| p.into_inner()).push(m);
+        };
         loop {
-            match rx.recv().await {
+            // A text waiting for its next chunk is kept as it is when none comes in time.
+            let next = if joiner.waiting() {
+                match tokio::time::timeout(clock.wall(CHUNK_WAIT), rx.recv()).await {
+                    Ok(r) => r,
+                    Err(_) => {
+                        joiner.flush().into_iter().for_each(keep);
+                        continue;
+                    }
+                }
+            } else {
+                rx.recv().await
+            };
+            match next {
                 Ok(inb) => {
                     let MavMessage::STATUSTEXT(t) = &inb.msg else { continue };
-                    let (Some(severity), Ok(text)) = (severity_word(t.severity), t.text.to_str()) else {
-                        continue;
+                    let Ok(text) = t.text.to_str() else { continue };
+                    let chunk = Chunk {
+                        severity: t.severity,
+                        id: t.id,
+                        seq: t.chunk_seq,
+                        text,
+                        full: text.len() == FIELD_CHARS,
                     };
-                    let m = VehicleMessage {
-                        t_s: clock.now().as_secs_f64(),
-                        severity,
-                        text: text.trim_end().to_string(),
-                    };
-                    tell(sink.as_ref(), &Notice::Vehicle(m.clone()));
-                    out.lock().unwrap_or_else(|p| p.into_inner()).push(m);
+                    joiner.feed(chunk).into_iter().for_each(keep);
                 }
                 Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => return,
+                Err(broadcast::error::RecvError::Closed) => {
+                    joiner.flush().into_iter().for_each(keep);
+                    return;
+                }
             }
         }
     })

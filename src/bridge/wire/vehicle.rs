@@ -8,6 +8,7 @@ use mavlink::dialects::common::{MavAutopilot, MavLandedState, MavMessage, MavMod
 
 use super::geo_view::GeoView;
 use super::pose::PoseNed;
+use super::text_chunks::{Chunk, FIELD_CHARS, Joiner};
 
 /// PX4 main mode AUTO.
 pub const PX4_MAIN_AUTO: u8 = 4;
@@ -37,11 +38,12 @@ pub struct VehicleView {
     pub reached: Option<u16>,
     /// The vehicle's boot clock went backwards: it rebooted.
     pub rebooted: bool,
-    /// STATUSTEXTs of severity warning or worse, in order.
+    /// STATUSTEXTs of severity warning or worse, in order (a chunked one once whole).
     pub warnings: Vec<String>,
     /// Where the vehicle is placed on Earth (home, EKF origin, global position).
     pub geo: GeoView,
     max_boot_ms: u32,
+    texts: Joiner,
 }
 
 impl VehicleView {
@@ -104,13 +106,34 @@ impl VehicleView {
             MavMessage::MISSION_ITEM_REACHED(r) => {
                 self.reached = Some(self.reached.map_or(r.seq, |s| s.max(r.seq)));
             }
-            MavMessage::STATUSTEXT(t) if t.severity as u8 <= MavSeverity::MAV_SEVERITY_WARNING as u8 => {
-                // PX4 ends a text it also sends as an event with a tab (QGC's marker), e.g. "Failsafe activated\t".
-                if let Ok(s) = t.text.to_str() {
-                    self.warnings.push(s.trim_end().to_string());
+            MavMessage::STATUSTEXT(t) => {
+                if let Ok(text) = t.text.to_str() {
+                    let chunk = Chunk {
+                        severity: t.severity,
+                        id: t.id,
+                        seq: t.chunk_seq,
+                        text,
+                        full: text.len() == FIELD_CHARS,
+                    };
+                    let whole = self.texts.feed(chunk);
+                    whole.into_iter().for_each(|w| self.keep_text(w));
                 }
             }
             _ => {}
+        }
+    }
+
+    /// A STATUSTEXT chunk still waiting for the rest of its text goes to the warnings as it is.
+    pub fn flush_texts(&mut self) {
+        if let Some(w) = self.texts.flush() {
+            self.keep_text(w);
+        }
+    }
+
+    fn keep_text(&mut self, (severity, text): (MavSeverity, String)) {
+        if severity as u8 <= MavSeverity::MAV_SEVERITY_WARNING as u8 {
+            // PX4 ends a text it also sends as an event with a tab (QGC's marker), e.g. "Failsafe activated\t".
+            self.warnings.push(text.trim_end().to_string());
         }
     }
 
@@ -210,6 +233,24 @@ mod tests {
             v.update(&msg, Duration::ZERO);
         }
         assert_eq!(v.warnings, ["Failsafe activated", "Preflight Fail: Geofence violation"]);
+    }
+
+    #[test]
+    fn a_warning_sent_in_chunks_is_one_warning() {
+        let mut v = VehicleView::default();
+        let long = "Arming denied: Resolve system health failures first";
+        let chunks = mock_autopilot::status_text::chunks(MavSeverity::MAV_SEVERITY_WARNING, long, 12);
+        assert_eq!(chunks.len(), 2, "sent as PX4 sends it");
+        for c in chunks {
+            v.update(&MavMessage::STATUSTEXT(c), Duration::ZERO);
+        }
+        assert_eq!(v.warnings, [long]);
+        // A text whose last chunk never came is kept as far as it came.
+        let cut = &mock_autopilot::status_text::chunks(MavSeverity::MAV_SEVERITY_WARNING, long, 13)[0];
+        v.update(&MavMessage::STATUSTEXT(cut.clone()), Duration::ZERO);
+        assert_eq!(v.warnings.len(), 1, "still waiting for its end");
+        v.flush_texts();
+        assert_eq!(v.warnings[1], &long[..FIELD_CHARS]);
     }
 
     #[test]

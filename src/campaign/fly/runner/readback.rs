@@ -9,6 +9,7 @@ use serde::Deserialize;
 
 use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::Flown;
+use crate::judge::cp_verdict::{CpVerdict, cp_verdict};
 use crate::judge::{Judge, judge_flight};
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
 use crate::model::{Obstacle, Trajectory, load_ulog_trajectory};
@@ -33,6 +34,18 @@ struct FlyReport {
     warnings: Vec<String>,
     #[serde(default)]
     flight_time_s: Option<f64>,
+    /// A Collision Prevention flight's verdict; only its `CP_DIST` is read (the rest is measured again here).
+    /// Loose, so a malformed block costs the verdict and not the report.
+    #[serde(default)]
+    collision_prevention: Option<serde_json::Value>,
+}
+
+impl FlyReport {
+    /// The `CP_DIST` the job flew, if it was a Collision Prevention flight and says a usable one.
+    fn cp_dist_m(&self) -> Option<f64> {
+        let d = self.collision_prevention.as_ref()?.get("cp_dist_m")?.as_f64()?;
+        (d.is_finite() && d > 0.0).then_some(d)
+    }
 }
 
 /// A job's flight as read back.
@@ -80,13 +93,15 @@ pub fn read_back(
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
         (None, Some(r)) if !r.status.completed() && problems.is_empty() => Ok(Readback {
             flown: Flown {
+                cp: r
+                    .cp_dist_m()
+                    .map(|d| cp_verdict(&Trajectory { samples: Vec::new() }, obstacles, d)),
                 status: r.status,
                 min_distance: None,
                 min_distance_raw: None,
                 flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
                 warnings: r.warnings,
                 reason: r.reason,
-                cp: None,
             },
             trajectory: None,
             source: None,
@@ -177,6 +192,12 @@ fn looks_like_trajectory(text: &str) -> bool {
 /// The flight judged from its trajectory; the fly report, if any, gives the ending and warnings.
 fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[Obstacle], judge: Judge) -> Readback {
     let verdict = judge_flight(&t, obstacles, judge);
+    let aligned = t.origin_aligned();
+    // Measured on the trajectory judged here, in the same frame as the judged distance.
+    let cp: Option<CpVerdict> = report
+        .as_ref()
+        .and_then(FlyReport::cp_dist_m)
+        .map(|d| cp_verdict(&aligned, obstacles, d));
     let reported = report.is_some();
     let (mut status, mut reason, warnings, time) = match report {
         Some(r) => (r.status, r.reason, r.warnings, r.flight_time_s),
@@ -200,9 +221,9 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
             flight_time_s: time.filter(|t| t.is_finite()).unwrap_or_else(|| t.duration_s()),
             warnings,
             reason,
-            cp: None,
+            cp,
         },
-        trajectory: Some(t.origin_aligned()),
+        trajectory: Some(aligned),
         source: Some(path),
         reported,
     }

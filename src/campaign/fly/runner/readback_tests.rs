@@ -234,3 +234,41 @@ fn links_fifos_and_huge_files_in_a_job_folder_are_not_read() {
     assert!(e.contains("no trajectory"), "a link leading out is not followed: {e}");
     assert!(t0.elapsed() < Duration::from_secs(5), "a FIFO never blocks");
 }
+
+#[test]
+fn a_collision_prevention_report_gets_its_verdict_measured_here() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("t.ulg"), ulog(&pass())).unwrap();
+    let report = |cp: &str| format!(r#"{{"status": "landed", "collision_prevention": {cp}}}"#);
+    // The report's own numbers are not taken: the closest centre is measured on the trajectory read back.
+    let said = report(r#"{"cp_dist_m": 2.5, "closest_centre_m": 99.0, "inside_cp_dist": false}"#);
+    let cp = read(tmp.path(), said.as_bytes()).unwrap().flown.cp.unwrap();
+    let centre = cp.closest_centre_m.unwrap();
+    // The pass runs 3 m from the centre line of a 2 m wide box: 2 m from its side.
+    assert!((centre - 2.0).abs() < 0.01, "{cp:?}");
+    assert_eq!((cp.cp_dist_m, cp.inside_cp_dist), (2.5, Some(true)));
+    let cp = read(tmp.path(), report(r#"{"cp_dist_m": 1.5}"#).as_bytes())
+        .unwrap()
+        .flown
+        .cp
+        .unwrap();
+    assert_eq!(cp.inside_cp_dist, Some(false));
+    // Another mode's report, or a block without a usable CP_DIST, has no verdict; the flight is still read.
+    for said in [
+        r#"{"status": "landed"}"#.to_string(),
+        report("null"),
+        report(r#"{"cp_dist_m": "two"}"#),
+        report(r#"{"cp_dist_m": -1}"#),
+    ] {
+        let b = read(tmp.path(), said.as_bytes()).unwrap();
+        assert!(b.reported && b.flown.cp.is_none(), "{said}: {:?}", b.flown.cp);
+    }
+    // A rejected CP flight keeps its CP_DIST and has no closest centre.
+    let rejected = r#"{"status": "rejected", "collision_prevention": {"cp_dist_m": 2.0}}"#;
+    let empty = tempfile::tempdir().unwrap();
+    let cp = read(empty.path(), rejected.as_bytes()).unwrap().flown.cp.unwrap();
+    assert_eq!(
+        (cp.cp_dist_m, cp.closest_centre_m, cp.inside_cp_dist),
+        (2.0, None, None)
+    );
+}
