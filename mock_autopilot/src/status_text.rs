@@ -7,7 +7,7 @@ use mavlink::dialects::common::{MavSeverity, STATUSTEXT_DATA};
 /// Bytes of one STATUSTEXT's text field.
 pub const FIELD_BYTES: usize = 50;
 /// Chunks of one text at most (PX4's own messages need two or three).
-const MAX_CHUNKS: usize = 8;
+pub const MAX_CHUNKS: usize = 8;
 
 /// `text` as STATUSTEXT messages; `id` (non-zero) marks the chunks of a long one. Cut at a character
 /// boundary, and after [`MAX_CHUNKS`] chunks.
