@@ -72,18 +72,6 @@ pub fn px4_sitl_bin() -> PathBuf {
     }
 }
 
-/// The PX4 v1.16 SITL binary the version conformance tests fly (`PX4_SITL_BIN_V116`, a v1.16.x build's
-/// `bin/px4`); like [`px4_sitl_bin`], a test that needs it fails without it, naming the variable.
-pub fn px4_sitl_bin_v116() -> PathBuf {
-    match std::env::var_os("PX4_SITL_BIN_V116") {
-        Some(p) if !p.is_empty() => PathBuf::from(p),
-        _ => panic!(
-            "this test flies PX4 v1.16 SITL: set PX4_SITL_BIN_V116=/path/to/PX4-Autopilot-v1.16/build/\
-             px4_sitl_default/bin/px4 (a PX4 v1.16.x SITL you built; docs/px4-versions.md)"
-        ),
-    }
-}
-
 /// The build folder of [`px4_sitl_bin`] (`BUILD/bin/px4`).
 pub fn px4_sitl_build() -> PathBuf {
     let bin = px4_sitl_bin();

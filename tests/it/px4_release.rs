@@ -1,4 +1,4 @@
-//! What the per-release PX4 conformance tests share (`px4_v115.rs`, `px4_v117.rs`): the build from its own
+//! What the per-release PX4 conformance tests share (`px4_v115.rs`, `px4_v116.rs`, `px4_v117.rs`, `px4_cp.rs`): the build from its own
 //! environment variable, checked to be that release; a claimed instance slot, so a conformance run does not
 //! take the ports of another flight on the machine; and a Collision Prevention flight of a mission's test.
 

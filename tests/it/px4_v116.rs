@@ -7,21 +7,12 @@
 
 use std::path::PathBuf;
 
-use super::px4_sitl::{all_modes, build_of};
-use super::px4_sitl_bin_v116;
+use super::px4_release::release_bin;
+use super::px4_sitl::all_modes;
 
 /// `PX4_SITL_BIN_V116`, checked to be a v1.16 build (so the avoidance refusal is exercised).
 fn v116() -> PathBuf {
-    let bin = px4_sitl_bin_v116();
-    let build = build_of(&bin);
-    assert_eq!(
-        (build.release.major, build.release.minor),
-        (1, 16),
-        "PX4_SITL_BIN_V116={}: PX4 {}, not v1.16",
-        bin.display(),
-        build.version
-    );
-    bin
+    release_bin("PX4_SITL_BIN_V116", 16)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

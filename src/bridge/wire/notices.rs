@@ -12,7 +12,7 @@ use tokio::task::JoinHandle;
 
 use super::clock::VehicleClock;
 use super::link::Inbound;
-use super::text_chunks::{Chunk, FIELD_CHARS, Joiner};
+use super::text_chunks::{Chunk, Joiner};
 
 /// How long (vehicle time) a STATUSTEXT chunk waits for the next one before it is kept as it is.
 const CHUNK_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
@@ -162,14 +162,7 @@ pub fn spawn_collector(
             match next {
                 Ok(inb) => {
                     let MavMessage::STATUSTEXT(t) = &inb.msg else { continue };
-                    let Ok(text) = t.text.to_str() else { continue };
-                    let chunk = Chunk {
-                        severity: t.severity,
-                        id: t.id,
-                        seq: t.chunk_seq,
-                        text,
-                        full: text.len() == FIELD_CHARS,
-                    };
+                    let Some(chunk) = Chunk::of(t) else { continue };
                     joiner.feed(chunk).into_iter().for_each(keep);
                 }
                 Err(broadcast::error::RecvError::Lagged(_)) => {}

@@ -3,7 +3,7 @@
 //! refusals that way ("Arming denied: Resolve system health failures first"); read one message at a time, they
 //! would be two warnings cut mid-word. This joins them back.
 
-use mavlink::dialects::common::MavSeverity;
+use mavlink::dialects::common::{MavSeverity, STATUSTEXT_DATA};
 
 /// Characters of one STATUSTEXT's text field.
 pub const FIELD_CHARS: usize = 50;
@@ -23,6 +23,20 @@ pub struct Chunk<'a> {
     pub text: &'a str,
     /// Whether the text filled the field (no NUL): more chunks may follow.
     pub full: bool,
+}
+
+impl<'a> Chunk<'a> {
+    /// The chunk a received STATUSTEXT carries; `None` when its text is not UTF-8.
+    pub fn of(t: &'a STATUSTEXT_DATA) -> Option<Self> {
+        let text = t.text.to_str().ok()?;
+        Some(Chunk {
+            severity: t.severity,
+            id: t.id,
+            seq: t.chunk_seq,
+            text,
+            full: text.len() == FIELD_CHARS,
+        })
+    }
 }
 
 /// A text being joined.

@@ -8,7 +8,7 @@ use mavlink::dialects::common::{MavAutopilot, MavLandedState, MavMessage, MavMod
 
 use super::geo_view::GeoView;
 use super::pose::PoseNed;
-use super::text_chunks::{Chunk, FIELD_CHARS, Joiner};
+use super::text_chunks::{Chunk, Joiner};
 
 /// PX4 main mode AUTO.
 pub const PX4_MAIN_AUTO: u8 = 4;
@@ -107,14 +107,7 @@ impl VehicleView {
                 self.reached = Some(self.reached.map_or(r.seq, |s| s.max(r.seq)));
             }
             MavMessage::STATUSTEXT(t) => {
-                if let Ok(text) = t.text.to_str() {
-                    let chunk = Chunk {
-                        severity: t.severity,
-                        id: t.id,
-                        seq: t.chunk_seq,
-                        text,
-                        full: text.len() == FIELD_CHARS,
-                    };
+                if let Some(chunk) = Chunk::of(t) {
                     let whole = self.texts.feed(chunk);
                     whole.into_iter().for_each(|w| self.keep_text(w));
                 }
@@ -163,6 +156,7 @@ impl VehicleView {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bridge::wire::text_chunks::FIELD_CHARS;
     use mavlink::dialects::common::{
         EXTENDED_SYS_STATE_DATA, HEARTBEAT_DATA, LOCAL_POSITION_NED_DATA, MavState, MavType, MavVtolState,
         STATUSTEXT_DATA,
