@@ -159,7 +159,9 @@ fn finish(
     stages: StageTimes,
     learning: Option<&Learnt>,
 ) -> Result<Report, CampaignError> {
-    Ok(write_outputs(input, drawn, journal, stages, learning)?)
+    // A campaign that does not screen drew its candidates but screened none of them.
+    let screened = if input.cfg.screen { drawn } else { 0 };
+    Ok(write_outputs(input, screened, journal, stages, learning)?)
 }
 
 #[cfg(test)]

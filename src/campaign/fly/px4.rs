@@ -185,17 +185,16 @@ impl Px4Vehicle {
     }
 }
 
-/// A fresh instance at the test's home that never became ready to arm (`rejected`) failed on PX4's side, or on
-/// the machine's (a starved instance that is late with its home position), not on the test's: the flight is
-/// retried on a fresh instance like a failed boot, and never charged to the budget.
+/// A fresh instance at the test's home that never became ready to arm (`rejected`), or that went silent while
+/// still running (`link_lost`: a starved instance stops answering commands, even the arming one), failed on
+/// PX4's side or the machine's, not on the test's: the flight is retried on a fresh instance like a failed
+/// boot, and never charged to the budget.
 fn never_ready(f: Flown, instance: u8) -> Attempt {
-    if f.status == FlightStatus::Rejected {
-        Attempt::Failed(format!(
-            "PX4 instance {instance} was never ready to fly: {}",
-            f.reason.as_deref().unwrap_or("no reason given")
-        ))
-    } else {
-        Attempt::Flew(f)
+    let why = f.reason.as_deref().unwrap_or("no reason given");
+    match f.status {
+        FlightStatus::Rejected => Attempt::Failed(format!("PX4 instance {instance} was never ready to fly: {why}")),
+        FlightStatus::LinkLost => Attempt::Failed(format!("PX4 instance {instance} went silent: {why}")),
+        _ => Attempt::Flew(f),
     }
 }
 
@@ -314,7 +313,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_fresh_instance_that_never_arms_is_a_backend_failure_and_a_flown_one_is_not() {
+    fn a_fresh_instance_that_never_arms_or_goes_silent_is_a_backend_failure_and_a_flown_one_is_not() {
         let f = |status: FlightStatus| Flown {
             status,
             min_distance: None,
@@ -327,6 +326,14 @@ mod tests {
         match never_ready(f(FlightStatus::Rejected), 3) {
             Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
             _ => panic!("a rejected flight on a fresh instance must be retried, not journaled as flown"),
+        }
+        let silent = Flown {
+            reason: Some("arming: no answer from the vehicle after 10 retries".into()),
+            ..f(FlightStatus::LinkLost)
+        };
+        match never_ready(silent, 1) {
+            Attempt::Failed(why) => assert!(why.contains("went silent") && why.contains("arming"), "{why}"),
+            _ => panic!("a fresh instance that stops answering must be retried, not charged as a flight"),
         }
         for status in [FlightStatus::Landed, FlightStatus::Collision, FlightStatus::Timeout] {
             assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");

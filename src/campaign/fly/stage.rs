@@ -147,14 +147,19 @@ pub(in crate::campaign) fn announce(
     if tick {
         progress.tick(in_stage);
     }
+    // An unscreened candidate carries a zero prediction of zero seconds; a simulated flight always lasts.
+    let predicted = if r.predicted_flight_time_s > 0.0 {
+        format!("predicted {:.2} m", r.predicted_min_distance)
+    } else {
+        "not screened".into()
+    };
     progress.note(&format!(
-        "flight {n}: candidate {}{} predicted {:.2} m, flew {} ({})",
+        "flight {n}: candidate {}{} {predicted}, flew {} ({})",
         r.candidate,
         match r.attempt {
             0 => String::new(),
             a => format!(" (its flight {})", a + 1),
         },
-        r.predicted_min_distance,
         r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
         r.status
     ));

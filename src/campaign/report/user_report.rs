@@ -221,12 +221,15 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
         String::new()
     };
     let figures = format!(
-        "{} ({} distinct at IoU {}{three}) of {} ({} screened), failure score {:.2}, diversity {}",
+        "{} ({} distinct at IoU {}{three}) of {} ({}), failure score {:.2}, diversity {}",
         plural(s.failing, "failing test"),
         s.distinct_failing,
         super::suite::DISTINCT_IOU,
         plural(s.flown, "flight"),
-        plural(s.candidates_screened, "candidate"),
+        match s.candidates_screened {
+            0 => "none screened".to_string(),
+            n => format!("{} screened", plural(n, "candidate")),
+        },
         s.failure_score,
         s.diversity.map_or("n/a".into(), |d| format!("{d:.3}"))
     );

@@ -282,10 +282,17 @@ impl Rounds<'_> {
     fn note_single(&self, ranking: &Ranking) {
         let (cfg, progress) = (self.input.cfg, self.input.progress);
         let (flying, remaining, below) = (ranking.ranked.len(), ranking.remaining, ranking.below);
-        progress.note(&format!(
-            "{below} of {} candidates predicted below {} m; flying {flying}",
-            cfg.candidates, cfg.threshold_m
-        ));
+        progress.note(&if cfg.screen {
+            format!(
+                "{below} of {} candidates predicted below {} m; flying {flying}",
+                cfg.candidates, cfg.threshold_m
+            )
+        } else {
+            format!(
+                "{} candidates drawn, not screened (--no-screen); flying {flying} in the order drawn",
+                cfg.candidates
+            )
+        });
         if flying < remaining {
             progress.warn(&format!(
                 "{} of the {remaining} flights left in the budget will go unspent: {below} candidate(s) are \
