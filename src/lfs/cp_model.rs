@@ -27,7 +27,9 @@ pub struct CpSimConfig {
     pub limits: Px4Limits,
     /// MPC_XY_MAN_EXPO.
     pub xy_expo: f64,
-    /// Lag from the velocity setpoint to the vehicle's velocity, seconds.
+    /// Lag from the velocity setpoint to the vehicle's velocity, seconds: lumps PX4's tilt and velocity
+    /// control, and is what carries the vehicle past `CP_DIST` when Collision Prevention brakes. Chosen by
+    /// cross-validation on PX4 v1.16.2 flights (docs/collision-prevention.md, `examples/cp_fidelity.rs`).
     pub vel_tau_s: f64,
     /// MPC_Z_VEL_MAX_UP, MPC_Z_VEL_MAX_DN, MPC_LAND_SPEED, m/s.
     pub z_up_m_s: f64,
@@ -49,7 +51,7 @@ impl Default for CpSimConfig {
             pilot: PilotParams::default(),
             limits: Px4Limits::default(),
             xy_expo: 0.6,
-            vel_tau_s: 0.3,
+            vel_tau_s: 0.8,
             z_up_m_s: 3.0,
             z_down_m_s: 1.5,
             land_m_s: 0.7,
