@@ -29,7 +29,7 @@ pub struct Candidate {
     /// A child admitted closer to a flown test than `max_iou` by the diversity guard.
     pub close: bool,
     /// The LFS's prediction, once screened.
-    pub screened: Option<Screened>,
+    pub prediction: Option<LfsPrediction>,
 }
 
 impl Candidate {
@@ -40,7 +40,7 @@ impl Candidate {
             unit,
             parents: None,
             close: false,
-            screened: None,
+            prediction: None,
         }
     }
 
@@ -62,15 +62,15 @@ pub fn unit_of(candidates: &[Candidate], c: CandidateId) -> Option<[f64; DIMS]> 
 }
 
 /// The screened candidates of `candidates` not among `flown` (flown, queued or set aside), in draw order.
-pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> impl Iterator<Item = &'a Screened> {
+pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> impl Iterator<Item = &'a LfsPrediction> {
     (candidates.iter())
-        .filter_map(|c| c.screened.as_ref())
+        .filter_map(|c| c.prediction.as_ref())
         .filter(|s| !flown.contains(&s.candidate))
 }
 
 /// What the low-fidelity simulator predicted for one candidate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Screened {
+pub struct LfsPrediction {
     /// The candidate.
     pub candidate: CandidateId,
     /// Predicted minimum distance (competition definition), metres.
@@ -90,10 +90,10 @@ pub struct Screened {
     pub raw_min_distance: Option<f64>,
 }
 
-impl Screened {
+impl LfsPrediction {
     /// A point prediction without an ensemble.
     pub fn point(candidate: CandidateId, min_distance: f64, flight_time_s: f64, status: String) -> Self {
-        Screened {
+        LfsPrediction {
             candidate,
             min_distance,
             flight_time_s,

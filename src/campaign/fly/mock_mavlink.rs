@@ -49,8 +49,10 @@ pub(in crate::campaign) fn flown(report: FlightReport) -> Flown {
         flight_time_s: report.flight_time_s,
         warnings: report.warnings,
         reason: report.reason,
-        cp: report.collision_prevention,
+        closest_centre_m: None,
+        inside_cp_dist: None,
     }
+    .with_cp(report.collision_prevention)
 }
 
 /// A MAVLink vehicle at a fixed address.

@@ -4,14 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::campaign::candidate::Screened;
+use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::confirm::Tally;
 use crate::campaign::store::journal::FlightRecord;
 use crate::judge::cp_verdict::CpVerdict;
 use crate::model::TestCase;
 
-/// How one flight ended, as the vehicle's side reports it.
+/// How one flight ended, as the vehicle's side reports it; its flight record keeps it as it is.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flown {
     /// How it ended.
@@ -26,21 +26,43 @@ pub struct Flown {
     pub warnings: Vec<String>,
     /// Why the flight stopped, in words, when it did not land.
     pub reason: Option<String>,
-    /// The Collision Prevention verdict of a flight in that mode.
-    pub cp: Option<CpVerdict>,
+    /// A Collision Prevention flight: the closest the vehicle's centre came to a box, metres (absent in other
+    /// modes, and in journals written before it was kept).
+    pub closest_centre_m: Option<f64>,
+    /// A Collision Prevention flight: whether the vehicle came inside `CP_DIST`.
+    pub inside_cp_dist: Option<bool>,
 }
 
 impl Flown {
-    /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
-    pub fn unflown(status: FlightStatus, reason: String) -> Self {
+    /// A flight that ended `status` with nothing measured: no distance, no time, no reason given.
+    pub fn ended(status: FlightStatus) -> Self {
         Flown {
             status,
             min_distance: None,
             min_distance_raw: None,
             flight_time_s: 0.0,
             warnings: Vec::new(),
+            reason: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
+        }
+    }
+
+    /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
+    pub fn unflown(status: FlightStatus, reason: String) -> Self {
+        Flown {
             reason: Some(reason),
-            cp: None,
+            ..Flown::ended(status)
+        }
+    }
+
+    /// This outcome with the Collision Prevention verdict `cp` of a flight in that mode (its `CP_DIST` is
+    /// not kept: the journal never held it).
+    pub fn with_cp(self, cp: Option<CpVerdict>) -> Self {
+        Flown {
+            closest_centre_m: cp.and_then(|v| v.closest_centre_m),
+            inside_cp_dist: cp.and_then(|v| v.inside_cp_dist),
+            ..self
         }
     }
 }
@@ -69,8 +91,8 @@ pub trait Vehicle: Send {
 /// One flight to make.
 #[derive(Debug, Clone)]
 pub struct Job {
-    /// The candidate as screened.
-    pub screened: Screened,
+    /// The candidate's prediction, carried into its flight record.
+    pub prediction: LfsPrediction,
     /// The test to fly.
     pub test: TestCase,
     /// The test's flights before this one (none for a new candidate).
@@ -85,9 +107,9 @@ pub struct Job {
 
 impl Job {
     /// The first flight of a candidate, not flown again (`--confirm 1`).
-    pub fn new(screened: Screened, test: TestCase) -> Self {
+    pub fn new(prediction: LfsPrediction, test: TestCase) -> Self {
         Self {
-            screened,
+            prediction,
             test,
             tally: Tally::default(),
             confirm: 1,
@@ -142,7 +164,7 @@ pub(in crate::campaign) fn interrupted_if_cancelled(mut flown: Flown, cancel: &A
 }
 
 impl Job {
-    /// The journal record of this job flown by `vehicle`.
+    /// The journal record of this job flown by `vehicle`: its prediction and the vehicle's outcome as they are.
     pub(in crate::campaign) fn record(
         self,
         flown: Flown,
@@ -151,24 +173,14 @@ impl Job {
         wall_s: f64,
     ) -> FlightRecord {
         FlightRecord {
-            candidate: self.screened.candidate,
+            candidate: self.prediction.candidate,
             attempt: self.tally.next_attempt,
             obstacles: self.test.obstacles,
-            predicted_min_distance: self.screened.min_distance,
-            predicted_flight_time_s: self.screened.flight_time_s,
-            predicted_p_fail: self.screened.p_fail,
-            predicted_raw_min_distance: self.screened.raw_min_distance,
-            min_distance: flown.min_distance,
-            min_distance_raw: flown.min_distance_raw,
-            status: flown.status,
-            flight_time_s: flown.flight_time_s,
-            warnings: flown.warnings,
-            reason: flown.reason,
+            prediction: self.prediction,
+            flown,
             vehicle,
             trajectory,
             wall_s,
-            closest_centre_m: flown.cp.and_then(|v| v.closest_centre_m),
-            inside_cp_dist: flown.cp.and_then(|v| v.inside_cp_dist),
         }
     }
 }

@@ -120,10 +120,8 @@ proptest! {
 }
 
 fn interrupted_line(candidate: u64) -> String {
-    let r = FlightRecord {
-        status: FlightStatus::Interrupted,
-        ..record(candidate)
-    };
+    let mut r = record(candidate);
+    r.flown.status = FlightStatus::Interrupted;
     serde_json::to_string(&r).unwrap() + "\n"
 }
 
@@ -159,11 +157,8 @@ fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
 fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load() {
     // A line as journals were written before the Collision Prevention verdict was kept.
     let old = r#"{"candidate":2,"obstacles":[],"predicted_min_distance":1.8,"predicted_flight_time_s":50.0,"min_distance":1.2,"min_distance_raw":1.2,"status":"landed","flight_time_s":40.0,"vehicle":"mock#0","trajectory":"flights/candidate_2.csv","wall_s":1.1}"#;
-    let cp = FlightRecord {
-        closest_centre_m: Some(1.35),
-        inside_cp_dist: Some(true),
-        ..record(3)
-    };
+    let mut cp = record(3);
+    (cp.flown.closest_centre_m, cp.flown.inside_cp_dist) = (Some(1.35), Some(true));
     let line = serde_json::to_string(&cp).unwrap();
     assert!(
         line.contains(r#""closest_centre_m":1.35,"inside_cp_dist":true"#),
@@ -175,15 +170,11 @@ fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load(
     );
     let (_d, path) = journal(format!("{old}\n{line}\n").as_bytes());
     let read = Journal::read(&path).unwrap();
-    assert_eq!((read[0].closest_centre_m, read[0].inside_cp_dist), (None, None));
-    assert_eq!(
-        (read[1].closest_centre_m, read[1].inside_cp_dist),
-        (Some(1.35), Some(true))
-    );
-    let bad = FlightRecord {
-        closest_centre_m: Some(-0.5),
-        ..cp
-    };
+    let cp_of = |r: &FlightRecord| (r.flown.closest_centre_m, r.flown.inside_cp_dist);
+    assert_eq!(cp_of(&read[0]), (None, None));
+    assert_eq!(cp_of(&read[1]), (Some(1.35), Some(true)));
+    let mut bad = cp;
+    bad.flown.closest_centre_m = Some(-0.5);
     let e = crate::campaign::store::journal_check::check_record(&bad, 100.0).unwrap_err();
     assert!(e.contains("closest_centre_m") && e.contains("outside"), "{e}");
 }

@@ -93,15 +93,10 @@ pub fn read_back(
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
         (None, Some(r)) if !r.status.completed() && problems.is_empty() => Ok(Readback {
             flown: Flown {
-                cp: r
-                    .cp_dist_m()
-                    .map(|d| cp_verdict(&Trajectory { samples: Vec::new() }, obstacles, d)),
-                status: r.status,
-                min_distance: None,
-                min_distance_raw: None,
                 flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
                 warnings: r.warnings,
                 reason: r.reason,
+                ..Flown::ended(r.status)
             },
             trajectory: None,
             source: None,
@@ -221,7 +216,8 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
             flight_time_s: time.filter(|t| t.is_finite()).unwrap_or_else(|| t.duration_s()),
             warnings,
             reason,
-            cp,
+            closest_centre_m: cp.and_then(|v| v.closest_centre_m),
+            inside_cp_dist: cp.and_then(|v| v.inside_cp_dist),
         },
         trajectory: Some(aligned),
         source: Some(path),
