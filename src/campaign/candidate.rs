@@ -28,7 +28,7 @@ pub struct Candidate {
     pub parents: Option<Lineage>,
     /// A child admitted closer to a flown test than `max_iou` by the diversity guard.
     pub close: bool,
-    /// The LFS's prediction, once screened.
+    /// The LFS's prediction, once screened: carried whole into its job and flight record.
     pub prediction: Option<LfsPrediction>,
 }
 
@@ -68,7 +68,8 @@ pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> imp
         .filter(|s| !flown.contains(&s.candidate))
 }
 
-/// What the low-fidelity simulator predicted for one candidate.
+/// What the low-fidelity simulator predicted for one candidate: one value from its screening to its flight
+/// records (`screening.json` keeps it in this shape).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LfsPrediction {
     /// The candidate.
@@ -114,8 +115,8 @@ impl LfsPrediction {
 /// How far a journaled obstacle may lie from the one drawn (metres or degrees): a JSON round trip, not a change.
 const SAME_OBSTACLE_TOLERANCE: f64 = 1e-6;
 
-/// Whether `record` is a flight of `candidate` as drawn (the same obstacles, up to a JSON round trip).
-pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRecord) -> bool {
+/// Whether `obstacles` (a journaled flight's) are `candidate`'s as drawn, up to a JSON round trip.
+pub fn drawn_as(candidate: &Candidate, obstacles: &[Obstacle]) -> bool {
     let values = |o: &Obstacle| {
         let (s, p) = (&o.size, &o.position);
         [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
@@ -124,6 +125,6 @@ pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRec
         let (a, b) = (values(a), values(b));
         a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= SAME_OBSTACLE_TOLERANCE)
     };
-    let (c, r) = (&candidate.obstacles, &record.obstacles);
+    let (c, r) = (&candidate.obstacles, obstacles);
     c.len() == r.len() && c.iter().zip(r).all(|(a, b)| same(a, b))
 }

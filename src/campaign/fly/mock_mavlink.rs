@@ -43,14 +43,12 @@ pub(in crate::campaign) fn fly_blocking(
 
 pub(in crate::campaign) fn flown(report: FlightReport) -> Flown {
     Flown {
-        status: report.status.into(),
         min_distance: report.min_distance,
         min_distance_raw: report.min_distance_raw,
         flight_time_s: report.flight_time_s,
         warnings: report.warnings,
         reason: report.reason,
-        closest_centre_m: None,
-        inside_cp_dist: None,
+        ..Flown::ended(report.status.into())
     }
     .with_cp(report.collision_prevention)
 }

@@ -12,8 +12,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::candidate_id::CandidateId;
-use crate::campaign::flight_status::FlightStatus;
-use crate::campaign::fly::vehicle::Flown;
+use crate::campaign::flight_status::{FlightStatus, Flown};
 use crate::campaign::store::journal::{FlightRecord, is_first};
 use crate::model::Obstacle;
 

@@ -178,3 +178,29 @@ fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load(
     let e = crate::campaign::store::journal_check::check_record(&bad, 100.0).unwrap_err();
     assert!(e.contains("closest_centre_m") && e.contains("outside"), "{e}");
 }
+
+#[test]
+fn a_record_with_every_field_is_written_as_the_journal_line_always_was() {
+    let mut r = record(4);
+    r.attempt = 2;
+    r.obstacles.clear();
+    r.prediction = LfsPrediction {
+        p_fail: Some(0.25),
+        raw_min_distance: Some(0.75),
+        // Not journaled: the line has no place for them.
+        expected_points: Some(3.0),
+        ..LfsPrediction::point(CandidateId(4), 0.5, 40.0, "landed".into())
+    };
+    r.flown.status = FlightStatus::Collision;
+    (r.flown.warnings, r.flown.reason) = (vec!["w".into()], Some("r".into()));
+    (r.flown.closest_centre_m, r.flown.inside_cp_dist) = (Some(1.5), Some(true));
+    let line = r#"{"candidate":4,"attempt":2,"obstacles":[],"predicted_min_distance":0.5,"predicted_flight_time_s":40.0,"predicted_p_fail":0.25,"predicted_raw_min_distance":0.75,"min_distance":1.0,"min_distance_raw":0.9,"status":"collision","flight_time_s":41.0,"warnings":["w"],"reason":"r","vehicle":"mock","trajectory":"flights/candidate_1.csv","wall_s":0.3,"closest_centre_m":1.5,"inside_cp_dist":true}"#;
+    assert_eq!(serde_json::to_string(&r).unwrap(), line);
+    let back: FlightRecord = serde_json::from_str(line).unwrap();
+    assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    assert_eq!(
+        (back.prediction.status.as_str(), back.prediction.expected_points),
+        ("", None)
+    );
+    assert_eq!(back, Journal::read_back(&r));
+}

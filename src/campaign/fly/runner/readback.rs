@@ -210,15 +210,14 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
     }
     Readback {
         flown: Flown {
-            status,
             min_distance: verdict.as_ref().map(|v| v.min_distance),
             min_distance_raw: verdict.as_ref().map(|v| v.min_distance_raw),
             flight_time_s: time.filter(|t| t.is_finite()).unwrap_or_else(|| t.duration_s()),
             warnings,
             reason,
-            closest_centre_m: cp.and_then(|v| v.closest_centre_m),
-            inside_cp_dist: cp.and_then(|v| v.inside_cp_dist),
-        },
+            ..Flown::ended(status)
+        }
+        .with_cp(cp),
         trajectory: Some(aligned),
         source: Some(path),
         reported,
