@@ -14,7 +14,7 @@ use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_cappe
 use crate::model::{ModelError, Obstacle};
 
 /// One finished flight: the candidate's prediction and the vehicle's outcome as they are, with where and how
-/// long it flew. Written as one journal line ([`super::journal_line`] spells its shape).
+/// long it flew. Written as one journal line (`store/journal_line.rs` spells its shape).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlightRecord {
     /// The candidate flown.
