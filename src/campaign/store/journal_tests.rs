@@ -204,3 +204,20 @@ fn a_record_with_every_field_is_written_as_the_journal_line_always_was() {
     );
     assert_eq!(back, Journal::read_back(&r));
 }
+
+#[test]
+fn journals_written_before_read_and_write_back_byte_for_byte() {
+    let recorded = [
+        "tests/data/pinned/mission2-seed2-budget6.jsonl",
+        "tests/data/pinned/static-no-learn-seed3-budget4.jsonl",
+        "tests/data/pinned/static-no-screen-seed3-budget4.jsonl",
+        "tests/data/static-killed/journal.jsonl",
+    ];
+    for path in recorded {
+        let text = std::fs::read_to_string(path).unwrap();
+        for line in text.lines().filter(|l| !l.trim().is_empty()) {
+            let r: FlightRecord = serde_json::from_str(line).unwrap();
+            assert_eq!(serde_json::to_string(&r).unwrap(), line, "{path}");
+        }
+    }
+}
