@@ -6,6 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::flight_status::FlightStatus;
+// What `Vehicle::fly` returns, defined beside `FlightStatus`: the journal holds it without importing `fly`.
 pub use crate::campaign::flight_status::Flown;
 use crate::campaign::fly::confirm::Tally;
 use crate::campaign::store::journal::FlightRecord;
