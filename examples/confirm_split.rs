@@ -36,8 +36,8 @@ fn confirmations(records: &[FlightRecord]) -> Vec<(f64, bool, usize)> {
         .values()
         .filter_map(|flights| {
             let first = flights.iter().find(|r| r.attempt == 0)?;
-            let d1 = first.min_distance.filter(|_| failed(first.min_distance))?;
-            let fails = flights.iter().filter(|r| failed(r.min_distance)).count();
+            let d1 = first.flown.min_distance.filter(|_| failed(first.flown.min_distance))?;
+            let fails = flights.iter().filter(|r| failed(r.flown.min_distance)).count();
             // Settled only: a test whose third flight never came (budget spent) says nothing.
             let settled = fails >= 2 || flights.len() - fails >= 2;
             settled.then_some((d1, fails >= 2, flights.len() - 1))
@@ -61,15 +61,15 @@ fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
     let mut residuals: Vec<f64> = Vec::new();
     let mut out = Vec::new();
     for r in records.iter().filter(|r| r.attempt == 0) {
-        let Some(flown) = r.min_distance else { continue };
+        let Some(flown) = r.flown.min_distance else { continue };
         let n = residuals.len() as f64;
         let bias = residuals.iter().sum::<f64>() / (n + 3.0);
         let var = (3.0 * 0.09 + residuals.iter().map(|x| (x - bias).powi(2)).sum::<f64>()) / (n + 3.0);
-        let q = phi((FAIL_M - (r.predicted_min_distance + bias)) / var.sqrt());
-        if let Some(p) = r.predicted_p_fail {
+        let q = phi((FAIL_M - (r.prediction.min_distance + bias)) / var.sqrt());
+        if let Some(p) = r.prediction.p_fail {
             out.push((q, p, flown < FAIL_M));
         }
-        residuals.push(flown - r.predicted_min_distance);
+        residuals.push(flown - r.prediction.min_distance);
     }
     out
 }
@@ -77,10 +77,13 @@ fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
 /// Spearman of the campaign's prediction and of the raw LFS against the flown distance, over `first`.
 fn print_ranking(folder: &std::path::Path, first: &[&FlightRecord]) {
     let pairs = |p: &dyn Fn(&FlightRecord) -> Option<f64>| -> Vec<(f64, f64)> {
-        first.iter().filter_map(|r| Some((p(r)?, r.min_distance?))).collect()
+        first
+            .iter()
+            .filter_map(|r| Some((p(r)?, r.flown.min_distance?)))
+            .collect()
     };
-    let ranked = aggregate(&pairs(&|r| Some(r.predicted_min_distance)));
-    let raw = aggregate(&pairs(&|r| r.predicted_raw_min_distance));
+    let ranked = aggregate(&pairs(&|r| Some(r.prediction.min_distance)));
+    let raw = aggregate(&pairs(&|r| r.prediction.raw_min_distance));
     let show = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.3}"));
     println!(
         "{}: {} first flights; Spearman against the flown distance: the campaign's prediction {}, the raw LFS {}",
@@ -105,7 +108,7 @@ fn main() -> anyhow::Result<()> {
         let first: Vec<&FlightRecord> = records.iter().filter(|r| r.attempt == 0).collect();
         print_ranking(folder, &first);
         fresh += first.len();
-        fresh_failed += first.iter().filter(|r| failed(r.min_distance)).count();
+        fresh_failed += first.iter().filter(|r| failed(r.flown.min_distance)).count();
         tests.extend(confirmations(&records));
         probs.extend(probabilities(&records));
     }

@@ -80,7 +80,7 @@ fn collect(campaign: &Path, out: &Path, reports: &[PathBuf]) -> anyhow::Result<(
             let case = Case {
                 candidate: r.candidate.0,
                 obstacles: r.obstacles,
-                predicted_m: r.predicted_min_distance,
+                predicted_m: r.prediction.min_distance,
                 runs: Vec::new(),
             };
             cases.insert(r.candidate.0, case);

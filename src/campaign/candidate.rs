@@ -28,8 +28,8 @@ pub struct Candidate {
     pub parents: Option<Lineage>,
     /// A child admitted closer to a flown test than `max_iou` by the diversity guard.
     pub close: bool,
-    /// The LFS's prediction, once screened.
-    pub screened: Option<Screened>,
+    /// The LFS's prediction, once screened: carried whole into its job and flight record.
+    pub prediction: Option<LfsPrediction>,
 }
 
 impl Candidate {
@@ -40,7 +40,7 @@ impl Candidate {
             unit,
             parents: None,
             close: false,
-            screened: None,
+            prediction: None,
         }
     }
 
@@ -62,15 +62,16 @@ pub fn unit_of(candidates: &[Candidate], c: CandidateId) -> Option<[f64; DIMS]> 
 }
 
 /// The screened candidates of `candidates` not among `flown` (flown, queued or set aside), in draw order.
-pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> impl Iterator<Item = &'a Screened> {
+pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> impl Iterator<Item = &'a LfsPrediction> {
     (candidates.iter())
-        .filter_map(|c| c.screened.as_ref())
+        .filter_map(|c| c.prediction.as_ref())
         .filter(|s| !flown.contains(&s.candidate))
 }
 
-/// What the low-fidelity simulator predicted for one candidate.
+/// What the low-fidelity simulator predicted for one candidate: one value from its screening to its flight
+/// records (`screening.json` keeps it in this shape).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Screened {
+pub struct LfsPrediction {
     /// The candidate.
     pub candidate: CandidateId,
     /// Predicted minimum distance (competition definition), metres.
@@ -90,10 +91,10 @@ pub struct Screened {
     pub raw_min_distance: Option<f64>,
 }
 
-impl Screened {
+impl LfsPrediction {
     /// A point prediction without an ensemble.
     pub fn point(candidate: CandidateId, min_distance: f64, flight_time_s: f64, status: String) -> Self {
-        Screened {
+        LfsPrediction {
             candidate,
             min_distance,
             flight_time_s,
@@ -114,8 +115,8 @@ impl Screened {
 /// How far a journaled obstacle may lie from the one drawn (metres or degrees): a JSON round trip, not a change.
 const SAME_OBSTACLE_TOLERANCE: f64 = 1e-6;
 
-/// Whether `record` is a flight of `candidate` as drawn (the same obstacles, up to a JSON round trip).
-pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRecord) -> bool {
+/// Whether `obstacles` (a journaled flight's) are `candidate`'s as drawn, up to a JSON round trip.
+pub fn drawn_as(candidate: &Candidate, obstacles: &[Obstacle]) -> bool {
     let values = |o: &Obstacle| {
         let (s, p) = (&o.size, &o.position);
         [s.l, s.w, s.h, p.x, p.y, p.z, p.r]
@@ -124,6 +125,6 @@ pub fn drawn_as(candidate: &Candidate, record: &super::store::journal::FlightRec
         let (a, b) = (values(a), values(b));
         a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= SAME_OBSTACLE_TOLERANCE)
     };
-    let (c, r) = (&candidate.obstacles, &record.obstacles);
+    let (c, r) = (&candidate.obstacles, obstacles);
     c.len() == r.len() && c.iter().zip(r).all(|(a, b)| same(a, b))
 }

@@ -1,11 +1,13 @@
-//! How a campaign's flight ended, one type from the vehicle's report to the journal and back. The serde names
-//! are the journal's strings, so journals written before read as they were.
+//! How a campaign's flight ended, one type from the vehicle's report to the journal and back, and the
+//! vehicle's whole outcome of a flight ([`Flown`]). The serde names are the journal's strings, so journals
+//! written before read as they were.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
 use crate::bridge::session::report::Status;
+use crate::judge::cp_verdict::CpVerdict;
 
 /// How a flight ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -80,6 +82,62 @@ impl From<Status> for FlightStatus {
             Status::LinkLost => Self::LinkLost,
             Status::Aborted => Self::Aborted,
             Status::Rejected => Self::Rejected,
+        }
+    }
+}
+
+/// How one flight ended, as the vehicle's side reports it; its flight record keeps it as it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Flown {
+    /// How it ended.
+    pub status: FlightStatus,
+    /// The competition's minimum distance, metres, if anything was recorded.
+    pub min_distance: Option<f64>,
+    /// The un-binned minimum distance, metres.
+    pub min_distance_raw: Option<f64>,
+    /// Flight time, seconds.
+    pub flight_time_s: f64,
+    /// What the flight side warned about (e.g. the avoidance planner falling behind).
+    pub warnings: Vec<String>,
+    /// Why the flight stopped, in words, when it did not land.
+    pub reason: Option<String>,
+    /// A Collision Prevention flight: the closest the vehicle's centre came to a box, metres (absent in other
+    /// modes, and in journals written before it was kept).
+    pub closest_centre_m: Option<f64>,
+    /// A Collision Prevention flight: whether the vehicle came inside `CP_DIST`.
+    pub inside_cp_dist: Option<bool>,
+}
+
+impl Flown {
+    /// A flight that ended `status` with nothing measured: no distance, no time, no reason given.
+    pub fn ended(status: FlightStatus) -> Self {
+        Flown {
+            status,
+            min_distance: None,
+            min_distance_raw: None,
+            flight_time_s: 0.0,
+            warnings: Vec::new(),
+            reason: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
+        }
+    }
+
+    /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
+    pub fn unflown(status: FlightStatus, reason: String) -> Self {
+        Flown {
+            reason: Some(reason),
+            ..Flown::ended(status)
+        }
+    }
+
+    /// This outcome with the Collision Prevention verdict `cp` of a flight in that mode (its `CP_DIST` is
+    /// not kept: the journal never held it).
+    pub fn with_cp(self, cp: Option<CpVerdict>) -> Self {
+        Flown {
+            closest_centre_m: cp.and_then(|v| v.closest_centre_m),
+            inside_cp_dist: cp.and_then(|v| v.inside_cp_dist),
+            ..self
         }
     }
 }

@@ -53,7 +53,7 @@ fn flaky(flown: &Arc<Mutex<Vec<(u64, u32)>>>, stop_at_failure: bool) -> Vec<Box<
 fn per_test(journal: &[FlightRecord]) -> Vec<(u64, usize, usize)> {
     let mut out: Vec<(u64, usize, usize)> = Vec::new();
     for r in journal {
-        let fail = usize::from(r.min_distance.unwrap() < 1.5);
+        let fail = usize::from(r.flown.min_distance.unwrap() < 1.5);
         match out.iter_mut().find(|t| t.0 == r.candidate.0) {
             Some(t) => (t.1, t.2) = (t.1 + 1, t.2 + fail),
             None => out.push((r.candidate.0, 1, fail)),
@@ -152,7 +152,7 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
             let mut means: BTreeMap<u64, (f64, f64)> = BTreeMap::new();
             for rec in &journal {
                 let e = means.entry(rec.candidate.0).or_default();
-                *e = (e.0 + rec.min_distance.unwrap(), e.1 + 1.0);
+                *e = (e.0 + rec.flown.min_distance.unwrap(), e.1 + 1.0);
             }
             let failing = means.values().filter(|(sum, n)| sum / n < 1.5).count();
             assert_eq!(
@@ -165,7 +165,7 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
         let flown = flown.lock().unwrap().clone();
         let journal = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
         for w in journal.windows(2) {
-            if w[0].min_distance.unwrap() < 1.5 && w[0].attempt == 0 {
+            if w[0].flown.min_distance.unwrap() < 1.5 && w[0].attempt == 0 {
                 assert_eq!(
                     (w[1].candidate, w[1].attempt),
                     (w[0].candidate, 1),
@@ -190,7 +190,7 @@ fn a_resumed_campaign_flies_the_pending_confirmation_first() {
         let cut = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
         let last = cut.last().unwrap();
         assert!(
-            last.min_distance.unwrap() < 1.5 && last.attempt == 0,
+            last.flown.min_distance.unwrap() < 1.5 && last.attempt == 0,
             "killed after a first failure"
         );
         let before = flown.lock().unwrap().len();
@@ -226,8 +226,8 @@ fn flights_in(dir: &Path) -> Vec<(u64, u32, i64, FlightStatus)> {
         .unwrap()
         .into_iter()
         .map(|r| {
-            let mm = (r.min_distance.unwrap() * 1000.0).round() as i64;
-            (r.candidate.0, r.attempt, mm, r.status)
+            let mm = (r.flown.min_distance.unwrap() * 1000.0).round() as i64;
+            (r.candidate.0, r.attempt, mm, r.flown.status)
         })
         .collect();
     all.sort();
@@ -314,7 +314,7 @@ fn a_resume_whose_rounds_come_out_otherwise_keeps_the_journaled_flights_and_flie
     // other children, so later journaled candidates no longer match their draws.
     let kept = 12;
     let mut cut = journal[..kept].to_vec();
-    cut[0].min_distance = cut[0].min_distance.map(|d| d + 5.0);
+    cut[0].flown.min_distance = cut[0].flown.min_distance.map(|d| d + 5.0);
     let dir = killed_after(whole.path(), &cut);
     let flown = Arc::new(Mutex::new(Vec::new()));
     let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();

@@ -46,7 +46,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     let failing: Vec<Vec<crate::model::Obstacle>> = Journal::read(&dir.path().join("journal.jsonl"))
         .unwrap()
         .into_iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < 1.5))
+        .filter(|r| r.flown.min_distance.is_some_and(|d| d < 1.5))
         .map(|r| r.obstacles)
         .collect();
     let d = crate::judge::diversity(&failing);

@@ -57,7 +57,8 @@ fn landed(d: f64) -> Flown {
         flight_time_s: 40.0,
         warnings: Vec::new(),
         reason: None,
-        cp: None,
+        closest_centre_m: None,
+        inside_cp_dist: None,
     }
 }
 

@@ -195,10 +195,10 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
     let quiet = args.quiet || args.json;
     let on_flight = move |r: &FlightRecord| {
         if !quiet {
-            let d = r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"));
+            let d = r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m"));
             eprintln!(
                 "flight candidate {}: {} {d} ({:.0} s)",
-                r.candidate, r.status, r.flight_time_s
+                r.candidate, r.flown.status, r.flown.flight_time_s
             );
         }
     };

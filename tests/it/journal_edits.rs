@@ -2,10 +2,11 @@
 //! consistent folder (every record believable, each flight once, the file ending on a whole line) or is
 //! refused with an error naming the journal.
 
-use prgenuav::campaign::candidate::CandidateId;
+use prgenuav::campaign::candidate::{CandidateId, LfsPrediction};
 use std::path::{Path, PathBuf};
 
 use prgenuav::campaign::flight_status::FlightStatus;
+use prgenuav::campaign::fly::vehicle::Flown;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::campaign::store::journal_check::{check_journal, check_record, is_inside};
 use proptest::prelude::*;
@@ -19,21 +20,19 @@ fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
         candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
-        predicted_min_distance: 1.0,
-        predicted_flight_time_s: 60.0,
-        predicted_p_fail: Some(0.5),
-        predicted_raw_min_distance: None,
-        min_distance: Some(0.8 + candidate as f64),
-        min_distance_raw: Some(0.7 + candidate as f64),
-        status,
-        flight_time_s: 61.0,
-        warnings: Vec::new(),
-        reason: None,
+        prediction: LfsPrediction {
+            p_fail: Some(0.5),
+            ..LfsPrediction::point(CandidateId(candidate), 1.0, 60.0, String::new())
+        },
+        flown: Flown {
+            min_distance: Some(0.8 + candidate as f64),
+            min_distance_raw: Some(0.7 + candidate as f64),
+            flight_time_s: 61.0,
+            ..Flown::ended(status)
+        },
         vehicle: "mock".into(),
         trajectory: PathBuf::from(format!("flights/candidate_{candidate}.csv")),
         wall_s: 2.0,
-        closest_centre_m: None,
-        inside_cp_dist: None,
     }
 }
 

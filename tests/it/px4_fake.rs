@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
-use prgenuav::campaign::candidate::Screened;
+use prgenuav::campaign::candidate::LfsPrediction;
 use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::fleet::fly_all;
 use prgenuav::campaign::fly::px4::{Px4Settings, Px4Vehicle};
@@ -130,7 +130,7 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
     let jobs: Vec<Job> = (0..3)
         .map(|i| {
             Job::new(
-                Screened::point(CandidateId(i), 1.0, 40.0, "landed".into()),
+                LfsPrediction::point(CandidateId(i), 1.0, 40.0, "landed".into()),
                 base.clone(),
             )
         })
@@ -146,7 +146,7 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
         &|_| {},
     );
     let all = Journal::read_all(&path).unwrap();
-    let statuses: Vec<FlightStatus> = all.iter().map(|r| r.status).collect();
+    let statuses: Vec<FlightStatus> = all.iter().map(|r| r.flown.status).collect();
     // Budget 1: the backend failure leaves it unspent, so the next job is tried, and drops the vehicle.
     assert_eq!(statuses, vec![FlightStatus::BackendFailed]);
     assert_eq!((out.flown, out.records.len()), (0, 0), "nothing charged");
@@ -180,7 +180,7 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert_eq!(all.len(), 1);
     // The lowest instance slot free on this machine (another PX4 may hold slot 0).
-    assert_eq!(all[0].status, FlightStatus::BackendFailed);
+    assert_eq!(all[0].flown.status, FlightStatus::BackendFailed);
     assert!(all[0].vehicle.starts_with("px4-sih#"), "{}", all[0].vehicle);
     assert!(folder.join("flights/candidate_0.px4.log").is_file());
     let stored: serde_json::Value =

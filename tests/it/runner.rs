@@ -95,8 +95,8 @@ fn a_campaign_flies_through_aerialist_with_the_docker_agent() {
     let recorded = load_ulog_trajectory(&repo().join("tests/data/aerialist-standin/flight.ulg")).unwrap();
     for r in &records {
         assert!(r.vehicle.starts_with("runner#"), "{}", r.vehicle);
-        assert!(["landed", "collision"].contains(&r.status.as_str()), "{r:?}");
-        assert!(r.min_distance.is_some());
+        assert!(["landed", "collision"].contains(&r.flown.status.as_str()), "{r:?}");
+        assert!(r.flown.min_distance.is_some());
         // The judged trajectory is the recorded flight's, origin-aligned, in the campaign's CSV.
         let t = Trajectory::load_csv(&folder.join(&r.trajectory)).unwrap();
         assert_eq!(t.samples.len(), recorded.samples.len());
@@ -151,8 +151,8 @@ fn the_kubernetes_agent_needs_a_path_and_leaves_its_logs_in_tmp() {
     let (_, stdout, _) = run(&bare);
     let folder = output_folder(&stdout);
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
-    assert_eq!(all[0].status, FlightStatus::BackendFailed, "{all:?}");
-    let reason = all[0].reason.as_deref().unwrap();
+    assert_eq!(all[0].flown.status, FlightStatus::BackendFailed, "{all:?}");
+    let reason = all[0].flown.reason.as_deref().unwrap();
     assert!(
         reason.contains("exited with code 1") && reason.contains("endswith"),
         "{reason}"
@@ -188,11 +188,16 @@ fn a_broken_runner_is_dropped_after_two_failed_flights_and_nothing_is_charged() 
     let folder = std::fs::read_dir(out.path()).unwrap().next().unwrap().unwrap().path();
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert!(
-        all.len() == 1 && all[0].status == FlightStatus::BackendFailed,
+        all.len() == 1 && all[0].flown.status == FlightStatus::BackendFailed,
         "the first failed flight is journaled, the second given back with the runner: {all:?}"
     );
     assert!(
-        all[0].reason.as_deref().unwrap().contains("cannot reach the cluster"),
+        all[0]
+            .flown
+            .reason
+            .as_deref()
+            .unwrap()
+            .contains("cannot reach the cluster"),
         "{all:?}"
     );
     assert!(
@@ -283,9 +288,10 @@ fn a_runner_campaign_journals_each_collision_prevention_verdict() {
             .as_f64()
             .unwrap_or_else(|| panic!("the job's CP verdict: {said}"));
         let centre = r
+            .flown
             .closest_centre_m
             .unwrap_or_else(|| panic!("closest centre journaled: {r:?}"));
-        assert_eq!(r.inside_cp_dist, Some(centre < cp_dist), "{r:?}");
+        assert_eq!(r.flown.inside_cp_dist, Some(centre < cp_dist), "{r:?}");
         // Measured again here on the trajectory the job left: what the job itself measured, within the
         // origin alignment both distances are judged in.
         let theirs = cp["closest_centre_m"].as_f64().unwrap();

@@ -165,8 +165,11 @@ fn campaign_on(backend: &[&str], flights: usize, vehicle: &str, conf: &Path, out
     let records = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert_eq!(records.len(), flights, "{records:?}\n{stderr}");
     for r in &records {
-        assert!(["landed", "collision"].contains(&r.status.as_str()), "{r:?}");
-        assert!(r.min_distance.is_some() && r.vehicle.starts_with(vehicle), "{r:?}");
+        assert!(["landed", "collision"].contains(&r.flown.status.as_str()), "{r:?}");
+        assert!(
+            r.flown.min_distance.is_some() && r.vehicle.starts_with(vehicle),
+            "{r:?}"
+        );
     }
     (folder, records.iter().map(|r| r.wall_s).collect())
 }

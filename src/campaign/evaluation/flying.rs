@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 
 use super::folder::{load_tests, write_averages};
 use super::suite::{Evaluation, FlownTest, evaluate_suite};
-use crate::campaign::candidate::{CandidateId, Screened};
+use crate::campaign::candidate::{CandidateId, LfsPrediction};
 use crate::campaign::config::CampaignError;
 use crate::campaign::fly::fleet::fly_all;
 use crate::campaign::fly::vehicle::{Job, PoolOutcome, Vehicle};
@@ -144,7 +144,7 @@ fn missing_jobs(tests: &[(PathBuf, TestCase)], done: &[FlightRecord], runs: usiz
             if done.iter().any(|r| r.candidate == candidate) {
                 continue;
             }
-            let unpredicted = Screened::point(candidate, 0.0, 0.0, "not predicted".into());
+            let unpredicted = LfsPrediction::point(candidate, 0.0, 0.0, "not predicted".into());
             jobs.push(Job::new(unpredicted, test.clone()));
         }
     }
@@ -173,7 +173,7 @@ fn flown_tests(
                     file.display(),
                     run_of(r).1,
                     path.display(),
-                    r.status
+                    r.flown.status
                 ),
             }
         }

@@ -32,7 +32,7 @@ impl Tally {
     pub fn with(self, record: &FlightRecord) -> Self {
         Self {
             flights: self.flights + 1,
-            failures: self.failures + usize::from(failed(record.min_distance)),
+            failures: self.failures + usize::from(failed(record.flown.min_distance)),
             next_attempt: self.next_attempt.max(record.attempt + 1),
         }
     }
@@ -99,17 +99,17 @@ pub fn first_flights(records: &[FlightRecord]) -> Vec<FlightRecord> {
 pub fn as_learnt(records: &[FlightRecord]) -> Vec<FlightRecord> {
     let mut sums: BTreeMap<CandidateId, (f64, f64, usize)> = BTreeMap::new();
     for r in records.iter().filter(|r| r.charged()) {
-        if let Some(d) = r.min_distance {
+        if let Some(d) = r.flown.min_distance {
             let e = sums.entry(r.candidate).or_default();
-            *e = (e.0 + d, e.1 + r.min_distance_raw.unwrap_or(d), e.2 + 1);
+            *e = (e.0 + d, e.1 + r.flown.min_distance_raw.unwrap_or(d), e.2 + 1);
         }
     }
     first_flights(records)
         .into_iter()
         .map(|mut r| {
             if let Some(&(sum, raw, n)) = sums.get(&r.candidate).filter(|s| s.2 > 1) {
-                r.min_distance = Some(sum / n as f64);
-                r.min_distance_raw = Some(raw / n as f64);
+                r.flown.min_distance = Some(sum / n as f64);
+                r.flown.min_distance_raw = Some(raw / n as f64);
             }
             r
         })
@@ -122,13 +122,13 @@ pub fn failed_again(records: &[FlightRecord]) -> (usize, usize) {
     let first_failed: BTreeMap<CandidateId, bool> = records
         .iter()
         .filter(|r| r.attempt == 0)
-        .map(|r| (r.candidate, failed(r.min_distance)))
+        .map(|r| (r.candidate, failed(r.flown.min_distance)))
         .collect();
     records
         .iter()
         .filter(|r| r.attempt == 1 && first_failed.get(&r.candidate) == Some(&true))
         .fold((0, 0), |(again, of), r| {
-            (again + usize::from(failed(r.min_distance)), of + 1)
+            (again + usize::from(failed(r.flown.min_distance)), of + 1)
         })
 }
 
@@ -157,7 +157,7 @@ mod tests {
     #[test]
     fn the_campaign_learns_each_test_once_at_its_flights_mean() {
         let mut interrupted = flight(2, 2, 0.1);
-        interrupted.status = crate::campaign::flight_status::FlightStatus::Interrupted;
+        interrupted.flown.status = crate::campaign::flight_status::FlightStatus::Interrupted;
         let records = vec![
             flight(1, 0, 1.3),
             flight(2, 0, 1.2),
@@ -170,7 +170,7 @@ mod tests {
         let learnt = as_learnt(&records);
         let got: Vec<(u64, f64)> = learnt
             .iter()
-            .map(|r| (r.candidate.0, r.min_distance.unwrap_or(-1.0)))
+            .map(|r| (r.candidate.0, r.flown.min_distance.unwrap_or(-1.0)))
             .collect();
         // Test 1 confirmed (mean 1.35 m); test 2 refuted (1.2, 1.7, 1.8: 1.567 m, the interrupted flight not
         // counted); test 3 flown once, unchanged.

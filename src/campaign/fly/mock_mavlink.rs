@@ -43,14 +43,14 @@ pub(in crate::campaign) fn fly_blocking(
 
 pub(in crate::campaign) fn flown(report: FlightReport) -> Flown {
     Flown {
-        status: report.status.into(),
         min_distance: report.min_distance,
         min_distance_raw: report.min_distance_raw,
         flight_time_s: report.flight_time_s,
         warnings: report.warnings,
         reason: report.reason,
-        cp: report.collision_prevention,
+        ..Flown::ended(report.status.into())
     }
+    .with_cp(report.collision_prevention)
 }
 
 /// A MAVLink vehicle at a fixed address.

@@ -321,7 +321,8 @@ mod tests {
             flight_time_s: 0.0,
             warnings: Vec::new(),
             reason: Some("not ready to arm within 60 s (missing: home position)".into()),
-            cp: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         };
         match never_ready(f(FlightStatus::Rejected), 3) {
             Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
@@ -370,7 +371,8 @@ mod tests {
             flight_time_s: 1.0,
             warnings: Vec::new(),
             reason: Some("still flying".into()),
-            cp: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         };
         let f = pointing_to_console(f, &Ok("flights/candidate_4.px4.log".into()));
         assert_eq!(

@@ -91,7 +91,7 @@ pub(in crate::campaign) fn rejected_in_a_row(history: &[FlightRecord], vehicle: 
         .iter()
         .rev()
         .filter(|r| r.vehicle == vehicle)
-        .take_while(|r| r.status == FlightStatus::Rejected)
+        .take_while(|r| r.flown.status == FlightStatus::Rejected)
         .count()
 }
 
@@ -138,7 +138,8 @@ mod tests {
             flight_time_s: 60.0,
             warnings: Vec::new(),
             reason: None,
-            cp: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         }
     }
 

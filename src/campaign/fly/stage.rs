@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::campaign::candidate::{Candidate, CandidateId, Screened};
+use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction};
 use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::pending;
 use crate::campaign::fly::vehicle::Job;
@@ -79,7 +79,7 @@ impl<'a> FlightStage<'a> {
 
 /// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
 /// or in the air already, left out), then `ranked` in order.
-pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[CandidateId]) -> Vec<Job> {
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<LfsPrediction>, busy: &[CandidateId]) -> Vec<Job> {
     let again = pending(ctx.done, ctx.confirm)
         .into_iter()
         .filter(|(_, first)| !busy.contains(&first.candidate))
@@ -87,7 +87,7 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[CandidateId]
             tally,
             confirm: ctx.confirm,
             ..Job::new(
-                screened_as_flown(first),
+                first.prediction.clone(),
                 ctx.case.with_obstacles(first.obstacles.clone()),
             )
         });
@@ -99,20 +99,6 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Screened>, busy: &[CandidateId]
         }
     });
     again.chain(fresh).collect()
-}
-
-/// The prediction a test was first flown with, for its later flights' records.
-fn screened_as_flown(first: &FlightRecord) -> Screened {
-    Screened {
-        p_fail: first.predicted_p_fail,
-        raw_min_distance: first.predicted_raw_min_distance,
-        ..Screened::point(
-            first.candidate,
-            first.predicted_min_distance,
-            first.predicted_flight_time_s,
-            "landed".into(),
-        )
-    }
 }
 
 /// Counts a campaign's flights for its progress lines: each flight's number in the campaign, and in the flight
@@ -148,8 +134,8 @@ pub(in crate::campaign) fn announce(
         progress.tick(in_stage);
     }
     // An unscreened candidate carries a zero prediction of zero seconds; a simulated flight always lasts.
-    let predicted = if r.predicted_flight_time_s > 0.0 {
-        format!("predicted {:.2} m", r.predicted_min_distance)
+    let predicted = if r.prediction.flight_time_s > 0.0 {
+        format!("predicted {:.2} m", r.prediction.min_distance)
     } else {
         "not screened".into()
     };
@@ -160,10 +146,10 @@ pub(in crate::campaign) fn announce(
             0 => String::new(),
             a => format!(" (its flight {})", a + 1),
         },
-        r.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
-        r.status
+        r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
+        r.flown.status
     ));
-    for w in &r.warnings {
+    for w in &r.flown.warnings {
         progress.note(&format!("  warning: {w}"));
     }
 }

@@ -4,46 +4,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::campaign::candidate::Screened;
+use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::flight_status::FlightStatus;
+// What `Vehicle::fly` returns, defined beside `FlightStatus`: the journal holds it without importing `fly`.
+pub use crate::campaign::flight_status::Flown;
 use crate::campaign::fly::confirm::Tally;
 use crate::campaign::store::journal::FlightRecord;
-use crate::judge::cp_verdict::CpVerdict;
 use crate::model::TestCase;
-
-/// How one flight ended, as the vehicle's side reports it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Flown {
-    /// How it ended.
-    pub status: FlightStatus,
-    /// The competition's minimum distance, metres, if anything was recorded.
-    pub min_distance: Option<f64>,
-    /// The un-binned minimum distance, metres.
-    pub min_distance_raw: Option<f64>,
-    /// Flight time, seconds.
-    pub flight_time_s: f64,
-    /// What the flight side warned about (e.g. the avoidance planner falling behind).
-    pub warnings: Vec<String>,
-    /// Why the flight stopped, in words, when it did not land.
-    pub reason: Option<String>,
-    /// The Collision Prevention verdict of a flight in that mode.
-    pub cp: Option<CpVerdict>,
-}
-
-impl Flown {
-    /// A flight that never flew (stopped before take-off, or its backend failed): `status` and why.
-    pub fn unflown(status: FlightStatus, reason: String) -> Self {
-        Flown {
-            status,
-            min_distance: None,
-            min_distance_raw: None,
-            flight_time_s: 0.0,
-            warnings: Vec::new(),
-            reason: Some(reason),
-            cp: None,
-        }
-    }
-}
 
 /// Why a vehicle could not fly.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -69,8 +36,8 @@ pub trait Vehicle: Send {
 /// One flight to make.
 #[derive(Debug, Clone)]
 pub struct Job {
-    /// The candidate as screened.
-    pub screened: Screened,
+    /// The candidate's prediction, carried into its flight record.
+    pub prediction: LfsPrediction,
     /// The test to fly.
     pub test: TestCase,
     /// The test's flights before this one (none for a new candidate).
@@ -85,9 +52,9 @@ pub struct Job {
 
 impl Job {
     /// The first flight of a candidate, not flown again (`--confirm 1`).
-    pub fn new(screened: Screened, test: TestCase) -> Self {
+    pub fn new(prediction: LfsPrediction, test: TestCase) -> Self {
         Self {
-            screened,
+            prediction,
             test,
             tally: Tally::default(),
             confirm: 1,
@@ -142,7 +109,7 @@ pub(in crate::campaign) fn interrupted_if_cancelled(mut flown: Flown, cancel: &A
 }
 
 impl Job {
-    /// The journal record of this job flown by `vehicle`.
+    /// The journal record of this job flown by `vehicle`: its prediction and the vehicle's outcome as they are.
     pub(in crate::campaign) fn record(
         self,
         flown: Flown,
@@ -151,24 +118,14 @@ impl Job {
         wall_s: f64,
     ) -> FlightRecord {
         FlightRecord {
-            candidate: self.screened.candidate,
+            candidate: self.prediction.candidate,
             attempt: self.tally.next_attempt,
             obstacles: self.test.obstacles,
-            predicted_min_distance: self.screened.min_distance,
-            predicted_flight_time_s: self.screened.flight_time_s,
-            predicted_p_fail: self.screened.p_fail,
-            predicted_raw_min_distance: self.screened.raw_min_distance,
-            min_distance: flown.min_distance,
-            min_distance_raw: flown.min_distance_raw,
-            status: flown.status,
-            flight_time_s: flown.flight_time_s,
-            warnings: flown.warnings,
-            reason: flown.reason,
+            prediction: self.prediction,
+            flown,
             vehicle,
             trajectory,
             wall_s,
-            closest_centre_m: flown.cp.and_then(|v| v.closest_centre_m),
-            inside_cp_dist: flown.cp.and_then(|v| v.inside_cp_dist),
         }
     }
 }

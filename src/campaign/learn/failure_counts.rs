@@ -66,7 +66,7 @@ impl FailureCounts {
 pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(CandidateId) -> bool) -> (BinCount, BinCount) {
     let (mut near, mut other) = (BinCount::default(), BinCount::default());
     for r in done {
-        if let Some(d) = r.min_distance {
+        if let Some(d) = r.flown.min_distance {
             let arm = if is_arm(r.candidate) { &mut near } else { &mut other };
             arm.flights += 1;
             arm.failures += u32::from(d < FAIL_BELOW_M);
@@ -80,7 +80,7 @@ pub fn arm_counts(done: &[FlightRecord], is_arm: impl Fn(CandidateId) -> bool) -
 pub fn counted_failures(done: &[FlightRecord], candidates: &[Candidate]) -> FailureCounts {
     let mut m = FailureCounts::default();
     for r in done {
-        if let (Some(u), Some(flown)) = (unit_of(candidates, r.candidate), r.min_distance) {
+        if let (Some(u), Some(flown)) = (unit_of(candidates, r.candidate), r.flown.min_distance) {
             m.observe(&u, flown < FAIL_BELOW_M);
         }
     }

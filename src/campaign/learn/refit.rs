@@ -8,7 +8,7 @@
 //! theirs and keeps [`UNIFORM_FLOOR`] of uniform mass. It backs off ([`BACKOFF`]) when the failing tests grow
 //! alike or a round could not fill its share of the budget.
 
-use crate::campaign::candidate::{Candidate, Screened, unit_of};
+use crate::campaign::candidate::{Candidate, LfsPrediction, unit_of};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::learn::calibration::Calibration;
 use crate::campaign::learn::surrogate::{KernelPoint, Surrogate};
@@ -36,7 +36,7 @@ pub const BACKOFF: (f64, f64) = (0.3, 0.5);
 pub fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
     let mut c = prior.clone();
     for r in done {
-        if let (Some(raw), Some(flown)) = (r.predicted_raw_min_distance, r.min_distance) {
+        if let (Some(raw), Some(flown)) = (r.prediction.raw_min_distance, r.flown.min_distance) {
             c.observe(raw, flown);
         }
     }
@@ -66,8 +66,8 @@ impl Learning {
             .filter_map(|r| {
                 Some(KernelPoint {
                     unit: unit_of(candidates, r.candidate)?,
-                    lfs_m: calibration.predict(r.predicted_raw_min_distance?),
-                    flown_m: r.min_distance.filter(|d| d.is_finite())?,
+                    lfs_m: calibration.predict(r.prediction.raw_min_distance?),
+                    flown_m: r.flown.min_distance.filter(|d| d.is_finite())?,
                 })
             })
             .collect();
@@ -80,7 +80,7 @@ impl Learning {
     }
 
     /// What a round ranks a screened candidate by: the calibrated LFS, moved towards the flights near it.
-    pub fn predict(&self, s: &Screened, candidates: &[Candidate]) -> f64 {
+    pub fn predict(&self, s: &LfsPrediction, candidates: &[Candidate]) -> f64 {
         let lfs = self.calibration.predict(s.min_distance);
         match (&self.kernel, unit_of(candidates, s.candidate)) {
             (Some(k), Some(u)) => k.predict(&u, lfs, &self.points),
@@ -101,7 +101,7 @@ pub fn refit(
 ) -> DrawDistribution {
     let failing: Vec<Vec<Obstacle>> = done
         .iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
+        .filter(|r| r.flown.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
         .map(|r| r.obstacles.clone())
         .collect();
     let below_floor = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
@@ -111,20 +111,20 @@ pub fn refit(
     } else {
         (FIT_RATE, UNIFORM_FLOOR)
     };
-    let screened: Vec<&Screened> = candidates.iter().filter_map(|c| c.screened.as_ref()).collect();
-    let predict = |s: &Screened| taught.predict(s, candidates);
+    let screened: Vec<&LfsPrediction> = candidates.iter().filter_map(|c| c.prediction.as_ref()).collect();
+    let predict = |s: &LfsPrediction| taught.predict(s, candidates);
     distribution.fitted(&elites(&screened, done, candidates, predict), rate, floor)
 }
 
 /// The elites: the best share of the screened candidates by `predict`, and the closest quarter of the flights
 /// with every flown failure.
 pub fn elites(
-    screened: &[&Screened],
+    screened: &[&LfsPrediction],
     done: &[FlightRecord],
     candidates: &[Candidate],
-    predict: impl Fn(&Screened) -> f64,
+    predict: impl Fn(&LfsPrediction) -> f64,
 ) -> Vec<([f64; DIMS], f64)> {
-    let mut order: Vec<(&Screened, f64)> = screened.iter().map(|s| (*s, predict(s))).collect();
+    let mut order: Vec<(&LfsPrediction, f64)> = screened.iter().map(|s| (*s, predict(s))).collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
     let take = ((order.len() as f64 * ELITE_SHARE).ceil() as usize).max(1);
     let mut out: Vec<([f64; DIMS], f64)> = order
@@ -133,7 +133,7 @@ pub fn elites(
         .filter_map(|(s, _)| unit_of(candidates, s.candidate).map(|u| (u, 1.0)))
         .collect();
     // The flights are the truth: the closest quarter of them (and every failure) weigh more than a prediction.
-    let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.min_distance?))).collect();
+    let mut flown: Vec<(&FlightRecord, f64)> = done.iter().filter_map(|r| Some((r, r.flown.min_distance?))).collect();
     flown.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.candidate.cmp(&b.0.candidate)));
     let closest = flown.len().div_ceil(4);
     for (k, (r, d)) in flown.iter().enumerate() {
@@ -161,12 +161,12 @@ mod tests {
         let c = calibrated(&Calibration::with_prior(0.0, 1.0), &done);
         // (0 + 1.0 + 0.2) / (1 + 2)
         assert!((c.bias_m() - 0.4).abs() < 1e-12);
-        let screened: Vec<Screened> = (0..10)
-            .map(|i| Screened::point(CandidateId(i), i as f64, 60.0, "landed".into()))
+        let screened: Vec<LfsPrediction> = (0..10)
+            .map(|i| LfsPrediction::point(CandidateId(i), i as f64, 60.0, "landed".into()))
             .collect();
         let units: Vec<[f64; DIMS]> = (0..10).map(|i| [i as f64 / 10.0; DIMS]).collect();
         let candidates: Vec<Candidate> = units.iter().map(|u| Candidate::drawn(Vec::new(), *u)).collect();
-        let screened: Vec<&Screened> = screened.iter().collect();
+        let screened: Vec<&LfsPrediction> = screened.iter().collect();
         let e = elites(&screened, &done, &candidates, |s| c.predict(s.min_distance));
         // The best 10 % (candidate 0), then the closest quarter of the flights, which is also the one failure
         // (candidate 1, 1.2 m), at the flights' weight.

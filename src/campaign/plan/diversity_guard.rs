@@ -76,7 +76,7 @@ impl DiversityGuard {
             floor,
             last_close: false,
         };
-        for r in done.iter().filter(|r| r.min_distance.is_some_and(|d| d < fail_m)) {
+        for r in done.iter().filter(|r| r.flown.min_distance.is_some_and(|d| d < fail_m)) {
             let p = prints(&r.obstacles);
             let pairs = rule.pairs_with(&p, 1.0);
             rule.add(p, 1.0, pairs);
@@ -168,10 +168,10 @@ impl DiversityGuard {
 /// [`MIN_FAILING_FOR_DIVERSITY`] failing tests on the failing tests' own if higher: the failures to come cluster
 /// like those so far (docs/design-constants.md#failures-to-come).
 pub fn projection(done: &[FlightRecord], fail_m: f64, later: usize) -> (f64, f64) {
-    let distances: Vec<f64> = done.iter().filter_map(|r| r.min_distance).collect();
+    let distances: Vec<f64> = done.iter().filter_map(|r| r.flown.min_distance).collect();
     let failing: Vec<Vec<Obstacle>> = done
         .iter()
-        .filter(|r| r.min_distance.is_some_and(|d| d < fail_m))
+        .filter(|r| r.flown.min_distance.is_some_and(|d| d < fail_m))
         .map(|r| r.obstacles.clone())
         .collect();
     let rate = if distances.is_empty() {
@@ -262,7 +262,7 @@ mod tests {
         // 1 of 4 flights failed (one not landed does not count); tests at 0, 2 (IoU 1/3 of 0), 40 and 80.
         let mut done = vec![flown(0.0, 1.0), flown(2.0, 2.0), flown(40.0, 2.0), flown(80.0, 3.0)];
         let mut lost = flown(120.0, 1.0);
-        lost.min_distance = None;
+        lost.flown.min_distance = None;
         done.push(lost);
         let (failures, mean_iou) = projection(&done, 1.5, 40);
         assert!((failures - 10.0).abs() < 1e-12, "{failures}");

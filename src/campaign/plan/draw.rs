@@ -54,7 +54,7 @@ pub fn draw(
             unit: p.draw.unit,
             parents: from_box.then_some(plan.lineage),
             close: from_box && guard.last_was_close(),
-            screened: None,
+            prediction: None,
         });
     }
     Ok(drawn)

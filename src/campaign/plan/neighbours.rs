@@ -7,7 +7,7 @@
 //! close to a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]);
 //! the near-duplicate filter would drop most of them before flight otherwise.
 
-use crate::campaign::candidate::{Candidate, CandidateId, Lineage, Screened};
+use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction, Lineage};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::learn::failure_counts::BinCount;
 pub use crate::campaign::plan::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
@@ -54,7 +54,7 @@ pub fn parents(
 ) -> (Vec<Neighbourhood>, Lineage) {
     let mut flown: Vec<(f64, CandidateId, [f64; DIMS])> = done
         .iter()
-        .filter_map(|r| Some((r.min_distance?, r.candidate, unit_of(r.candidate)?)))
+        .filter_map(|r| Some((r.flown.min_distance?, r.candidate, unit_of(r.candidate)?)))
         .filter(|(d, _, _)| *d < fail_m + NEAR_MISS_M)
         .collect();
     flown.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -100,18 +100,19 @@ pub fn local_flight_share(local: BinCount, histogram: BinCount) -> f64 {
 /// each flight admitted by `guard` (distinct from the round's others, keeping the failing tests' expected
 /// diversity) with its arm's failure rate (`rates`: neighbours, others).
 pub fn rank_split(
-    fresh: &[Screened],
+    fresh: &[LfsPrediction],
     is_local: impl Fn(CandidateId) -> bool,
     share: f64,
     (done, candidates): (&[FlightRecord], &[Candidate]),
     cfg: &CampaignConfig,
     remaining: usize,
     (guard, (near_rate, other_rate)): (&mut DiversityGuard, (f64, f64)),
-) -> Vec<Screened> {
-    let (near, other): (Vec<Screened>, Vec<Screened>) = fresh.iter().cloned().partition(|s| is_local(s.candidate));
+) -> Vec<LfsPrediction> {
+    let (near, other): (Vec<LfsPrediction>, Vec<LfsPrediction>) =
+        fresh.iter().cloned().partition(|s| is_local(s.candidate));
     let quota = ((remaining as f64 * share).round() as usize).min(remaining);
     let near = rank_unflown_within(&near, done, candidates, cfg, usize::MAX, child_max_iou(cfg));
-    let mut chosen: Vec<Screened> = Vec::new();
+    let mut chosen: Vec<LfsPrediction> = Vec::new();
     let mut later = Vec::new();
     for s in near {
         if chosen.len() < quota && guard.admit(&candidates[s.candidate.index()].obstacles, near_rate) {

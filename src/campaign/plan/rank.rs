@@ -2,7 +2,7 @@
 //! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
 //! tests skipped.
 
-pub use crate::campaign::candidate::Screened;
+pub use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::candidate::{Candidate, CandidateId};
 use crate::campaign::config::CampaignConfig;
 use crate::campaign::store::journal::FlightRecord;
@@ -15,22 +15,22 @@ use crate::model::Obstacle;
 ///
 /// `footprints(candidate)` gives a candidate's obstacle footprints.
 pub fn rank(
-    screened: &[Screened],
+    screened: &[LfsPrediction],
     threshold_m: f64,
     max_iou: f64,
     limit: usize,
     footprints: impl Fn(CandidateId) -> Vec<Footprint>,
-) -> Vec<Screened> {
-    let mut order: Vec<&Screened> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
+) -> Vec<LfsPrediction> {
+    let mut order: Vec<&LfsPrediction> = screened.iter().filter(|s| s.min_distance < threshold_m).collect();
     order.sort_by(|a, b| {
-        let rate = |s: &Screened| s.points_per_minute().map_or(f64::INFINITY, |r| -r);
+        let rate = |s: &LfsPrediction| s.points_per_minute().map_or(f64::INFINITY, |r| -r);
         rate(a)
             .total_cmp(&rate(b))
             .then(a.min_distance.total_cmp(&b.min_distance))
             .then(a.flight_time_s.total_cmp(&b.flight_time_s))
             .then(a.candidate.cmp(&b.candidate))
     });
-    let mut chosen: Vec<(Screened, Vec<Footprint>)> = Vec::new();
+    let mut chosen: Vec<(LfsPrediction, Vec<Footprint>)> = Vec::new();
     for s in order {
         if chosen.len() >= limit {
             break;
@@ -53,25 +53,25 @@ pub(in crate::campaign) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: 
 /// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
 /// most `remaining`.
 pub fn rank_unflown(
-    fresh: &[Screened],
+    fresh: &[LfsPrediction],
     done: &[FlightRecord],
     candidates: &[Candidate],
     cfg: &CampaignConfig,
     remaining: usize,
-) -> Vec<Screened> {
+) -> Vec<LfsPrediction> {
     rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
 }
 
 /// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
 /// failing flights admitted by [`crate::campaign::plan::diversity_guard`]); among themselves they still obey `max_iou`.
 pub fn rank_unflown_within(
-    fresh: &[Screened],
+    fresh: &[LfsPrediction],
     done: &[FlightRecord],
     candidates: &[Candidate],
     cfg: &CampaignConfig,
     remaining: usize,
     flown_max_iou: f64,
-) -> Vec<Screened> {
+) -> Vec<LfsPrediction> {
     let footprints = |c: CandidateId| {
         candidates[c.index()]
             .obstacles
@@ -93,12 +93,12 @@ pub fn rank_unflown_within(
 mod tests {
     use super::*;
 
-    fn s(candidate: u64, d: f64, t: f64) -> Screened {
-        Screened::point(CandidateId(candidate), d, t, "landed".into())
+    fn s(candidate: u64, d: f64, t: f64) -> LfsPrediction {
+        LfsPrediction::point(CandidateId(candidate), d, t, "landed".into())
     }
 
-    fn with_points(candidate: u64, d: f64, t: f64, points: f64) -> Screened {
-        Screened {
+    fn with_points(candidate: u64, d: f64, t: f64, points: f64) -> LfsPrediction {
+        LfsPrediction {
             expected_points: Some(points),
             p_fail: Some(points.min(1.0)),
             ..s(candidate, d, t)

@@ -47,7 +47,10 @@ pub fn summarise(records: &[FlightRecord]) -> Vec<BackendSummary> {
             BackendSummary {
                 backend: name.to_string(),
                 flights: walls.len(),
-                failed_jobs: mine.iter().filter(|r| r.status == FlightStatus::BackendFailed).count(),
+                failed_jobs: mine
+                    .iter()
+                    .filter(|r| r.flown.status == FlightStatus::BackendFailed)
+                    .count(),
                 median_wall_s: median(&walls),
             }
         })
@@ -82,28 +85,22 @@ pub fn markdown(md: &mut String, backends: &[BackendSummary]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::candidate::CandidateId;
+    use crate::campaign::candidate::{CandidateId, LfsPrediction};
+    use crate::campaign::fly::vehicle::Flown;
 
     fn record(vehicle: &str, status: FlightStatus, wall_s: f64) -> FlightRecord {
         FlightRecord {
             candidate: CandidateId(0),
             obstacles: Vec::new(),
-            predicted_min_distance: 1.0,
-            predicted_flight_time_s: 1.0,
-            predicted_p_fail: None,
-            predicted_raw_min_distance: None,
-            min_distance: None,
-            min_distance_raw: None,
-            status,
-            flight_time_s: 1.0,
-            warnings: Vec::new(),
-            reason: None,
+            prediction: LfsPrediction::point(CandidateId(0), 1.0, 1.0, String::new()),
+            flown: Flown {
+                flight_time_s: 1.0,
+                ..Flown::ended(status)
+            },
             vehicle: vehicle.into(),
             trajectory: "x.csv".into(),
             wall_s,
             attempt: 0,
-            closest_centre_m: None,
-            inside_cp_dist: None,
         }
     }
 

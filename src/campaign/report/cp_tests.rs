@@ -30,7 +30,7 @@ pub struct CpTest {
 /// the closest centre; empty in the other modes.
 pub fn cp_tests(records: &[FlightRecord]) -> Vec<CpTest> {
     let mut by_test: BTreeMap<CandidateId, CpTest> = BTreeMap::new();
-    for r in records.iter().filter(|r| r.inside_cp_dist.is_some()) {
+    for r in records.iter().filter(|r| r.flown.inside_cp_dist.is_some()) {
         let t = by_test.entry(r.candidate).or_insert(CpTest {
             candidate: r.candidate,
             flights: 0,
@@ -39,9 +39,9 @@ pub fn cp_tests(records: &[FlightRecord]) -> Vec<CpTest> {
             closest_centre_m: None,
         });
         t.flights += 1;
-        t.inside_cp_dist += usize::from(r.inside_cp_dist == Some(true));
-        t.below_threshold += usize::from(failed(r.min_distance));
-        if let Some(c) = r.closest_centre_m.filter(|c| c.is_finite()) {
+        t.inside_cp_dist += usize::from(r.flown.inside_cp_dist == Some(true));
+        t.below_threshold += usize::from(failed(r.flown.min_distance));
+        if let Some(c) = r.flown.closest_centre_m.filter(|c| c.is_finite()) {
             t.closest_centre_m = Some(t.closest_centre_m.map_or(c, |m| m.min(c)));
         }
     }
@@ -86,11 +86,9 @@ mod tests {
     use crate::campaign::store::journal::test_record;
 
     fn cp_flight(candidate: u64, d: f64, centre: f64) -> FlightRecord {
-        FlightRecord {
-            closest_centre_m: Some(centre),
-            inside_cp_dist: Some(centre < 2.0),
-            ..test_record(candidate, 1.0, Some(d))
-        }
+        let mut r = test_record(candidate, 1.0, Some(d));
+        (r.flown.closest_centre_m, r.flown.inside_cp_dist) = (Some(centre), Some(centre < 2.0));
+        r
     }
 
     #[test]

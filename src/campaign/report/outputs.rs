@@ -108,7 +108,7 @@ fn write_failing_tests(
         }
         let title = format!(
             "{name}: flew {}",
-            r.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
+            r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
         );
         let lfs = input.screener.path(&test);
         let svg = plot(&test, lfs.as_ref(), flown.as_ref(), &title, input.cfg.judge);
@@ -130,27 +130,27 @@ fn spelling(input: &CampaignInput) -> Spelling {
 
 /// One flight in the report; `reported` names the failing tests written.
 fn reported_flight(r: &FlightRecord, reported: &[(CandidateId, String)]) -> ReportedFlight {
-    let d = r.min_distance.unwrap_or(f64::INFINITY);
+    let d = r.flown.min_distance.unwrap_or(f64::INFINITY);
     ReportedFlight {
         candidate: r.candidate,
         attempt: r.attempt,
-        predicted_min_distance: r.predicted_min_distance,
-        predicted_p_fail: r.predicted_p_fail,
-        min_distance: r.min_distance,
-        min_distance_raw: r.min_distance_raw,
-        status: r.status,
-        reason: r.reason.clone(),
-        flight_time_s: r.flight_time_s,
+        predicted_min_distance: r.prediction.min_distance,
+        predicted_p_fail: r.prediction.p_fail,
+        min_distance: r.flown.min_distance,
+        min_distance_raw: r.flown.min_distance_raw,
+        status: r.flown.status,
+        reason: r.flown.reason.clone(),
+        flight_time_s: r.flown.flight_time_s,
         points: points(d),
-        test_score: if r.min_distance.is_some() {
-            test_score(&[d], &[r.flight_time_s], r.obstacles.len())
+        test_score: if r.flown.min_distance.is_some() {
+            test_score(&[d], &[r.flown.flight_time_s], r.obstacles.len())
         } else {
             0.0
         },
         reported_as: reported.iter().find(|(c, _)| *c == r.candidate).map(|(_, n)| n.clone()),
         vehicle: r.vehicle.clone(),
-        closest_centre_m: r.closest_centre_m,
-        inside_cp_dist: r.inside_cp_dist,
+        closest_centre_m: r.flown.closest_centre_m,
+        inside_cp_dist: r.flown.inside_cp_dist,
     }
 }
 

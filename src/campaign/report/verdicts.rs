@@ -71,14 +71,14 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
         let first_flight = flights[0].0;
         let mut flights: Vec<&FlightRecord> = flights.into_iter().map(|(_, r)| r).collect();
         let best = (0..flights.len())
-            .filter(|&i| failed(flights[i].min_distance))
+            .filter(|&i| failed(flights[i].flown.min_distance))
             .min_by(|&a, &b| better_failure(flights[a], flights[b]))
             .unwrap_or(0);
         let best_flight = flights.remove(best);
         flights.insert(0, best_flight);
         let (distances, times): (Vec<f64>, Vec<f64>) = flights
             .iter()
-            .filter_map(|r| Some((r.min_distance?, r.flight_time_s)))
+            .filter_map(|r| Some((r.flown.min_distance?, r.flown.flight_time_s)))
             .unzip();
         let (low, high) = wilson_interval(tally.failures, tally.flights, Z90);
         let verdict = TestVerdict {
@@ -91,7 +91,7 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             failure_rate_high: high,
             confirmed: tally.confirmed(confirm),
             settled: !tally.wants_another(confirm),
-            best_min_distance: best_flight.min_distance.unwrap_or(f64::INFINITY),
+            best_min_distance: best_flight.flown.min_distance.unwrap_or(f64::INFINITY),
             test_score: test_score(&distances, &times, best_flight.obstacles.len()),
             trajectories: flights.iter().map(|r| r.trajectory.clone()).collect(),
             reported_as: None,
@@ -107,8 +107,9 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
 
 /// The smaller flown distance first, then the shorter flight.
 fn better_failure(a: &FlightRecord, b: &FlightRecord) -> Ordering {
-    let d = |r: &FlightRecord| r.min_distance.unwrap_or(f64::INFINITY);
-    d(a).total_cmp(&d(b)).then(a.flight_time_s.total_cmp(&b.flight_time_s))
+    let d = |r: &FlightRecord| r.flown.min_distance.unwrap_or(f64::INFINITY);
+    d(a).total_cmp(&d(b))
+        .then(a.flown.flight_time_s.total_cmp(&b.flown.flight_time_s))
 }
 
 /// Best first: the surest failure (highest Wilson lower bound of the failure rate, then the highest rate), then
@@ -179,12 +180,13 @@ mod tests {
     use crate::campaign::store::journal::test_record;
 
     fn flight(candidate: u64, attempt: u32, d: f64, time_s: f64) -> FlightRecord {
-        FlightRecord {
+        let mut r = FlightRecord {
             attempt,
-            flight_time_s: time_s,
             trajectory: format!("c{candidate}_{attempt}.csv").into(),
             ..test_record(candidate, 1.0, Some(d))
-        }
+        };
+        r.flown.flight_time_s = time_s;
+        r
     }
 
     #[test]

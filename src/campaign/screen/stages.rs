@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::candidate::{Candidate, CandidateId, Screened};
+use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction};
 use crate::campaign::config::{CampaignConfig, CampaignError};
 use crate::campaign::screen::parallel::{available_threads, parallel_map};
 use crate::campaign::screen::screener::{Progress, Screener};
@@ -43,7 +43,7 @@ struct ScreenCache {
     distribution: DrawDistribution,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     around: Vec<Neighbourhood>,
-    screened: Vec<Screened>,
+    screened: Vec<LfsPrediction>,
 }
 
 /// Screens candidates `range` on every core; cached in `folder/cache_name` (reused only for the same
@@ -54,7 +54,7 @@ pub fn screen_all(
     cache_name: &str,
     distribution: &DrawDistribution,
     around: &[Neighbourhood],
-) -> Result<Vec<Screened>, CampaignError> {
+) -> Result<Vec<LfsPrediction>, CampaignError> {
     let cache = ctx.folder.join(cache_name);
     let want = (range.end - range.start) as usize;
     if let Ok(text) = std::fs::read_to_string(&cache) {
@@ -64,7 +64,7 @@ pub fn screen_all(
             .map(|c| c.screened)
             // A bare list is a cache of the uniform distribution with no parents: accepted so such folders resume.
             .or_else(|| {
-                serde_json::from_str::<Vec<Screened>>(&text)
+                serde_json::from_str::<Vec<LfsPrediction>>(&text)
                     .ok()
                     .filter(|_| distribution.is_uniform() && around.is_empty())
             });
@@ -87,10 +87,10 @@ pub fn screen_all(
         |&i| {
             let test = ctx.case.with_obstacles(ctx.candidates[i as usize].obstacles.clone());
             let (min_distance, flight_time_s, status) = ctx.screener.screen(&test);
-            Screened::point(CandidateId(i), min_distance, flight_time_s, status)
+            LfsPrediction::point(CandidateId(i), min_distance, flight_time_s, status)
         },
     );
-    let screened: Vec<Screened> = results.into_iter().flatten().collect();
+    let screened: Vec<LfsPrediction> = results.into_iter().flatten().collect();
     if screened.len() < want {
         return Err(CampaignError::Config("interrupted during screening".into()));
     }
@@ -108,7 +108,7 @@ pub fn screen_all(
 /// seeds depend on the campaign's seed and the candidate only.
 pub fn ensemble_shortlist(
     ctx: &Stage,
-    fresh: &[Screened],
+    fresh: &[LfsPrediction],
     cfg: &CampaignConfig,
     shortlist: usize,
 ) -> Result<BTreeMap<u64, Vec<f64>>, CampaignError> {
@@ -117,7 +117,7 @@ pub fn ensemble_shortlist(
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
-    let mut order: Vec<&Screened> = fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).collect();
+    let mut order: Vec<&LfsPrediction> = fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).collect();
     order.sort_by(|a, b| {
         a.min_distance
             .total_cmp(&b.min_distance)
@@ -162,7 +162,7 @@ pub fn ensemble_shortlist(
 /// returns the seconds it took.
 pub fn run_ensemble(
     ctx: &Stage,
-    fresh: &mut [Screened],
+    fresh: &mut [LfsPrediction],
     cfg: &CampaignConfig,
     remaining: usize,
 ) -> Result<f64, CampaignError> {
@@ -179,7 +179,7 @@ pub fn run_ensemble(
 /// Sets `p_fail` and expected points of every candidate with members, each member moved as far as the
 /// candidate's prediction was moved from the LFS's own (`min_distance - raw_min_distance`: the online
 /// calibration and the flights' surrogate; 0 without learning).
-pub fn apply_ensemble(fresh: &mut [Screened], members: &BTreeMap<u64, Vec<f64>>, params: &EnsembleParams) {
+pub fn apply_ensemble(fresh: &mut [LfsPrediction], members: &BTreeMap<u64, Vec<f64>>, params: &EnsembleParams) {
     for s in fresh.iter_mut() {
         if let Some(m) = members.get(&s.candidate.0) {
             let shift = s.raw_min_distance.map_or(0.0, |raw| s.min_distance - raw);

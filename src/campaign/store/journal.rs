@@ -6,62 +6,35 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-
+use crate::campaign::candidate::LfsPrediction;
 use crate::campaign::candidate_id::CandidateId;
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::flight_status::{FlightStatus, Flown};
 use crate::io::write_atomic;
 use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};
 
-/// One finished flight.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// One finished flight: the candidate's prediction and the vehicle's outcome as they are, with where and how
+/// long it flew. Written as one journal line (`store/journal_line.rs` spells its shape).
+#[derive(Debug, Clone, PartialEq)]
 pub struct FlightRecord {
     /// The candidate flown.
     pub candidate: CandidateId,
     /// Which flight of the candidate this is, from 0: a failing test is flown again to confirm it
-    /// (`--confirm`). Left out when 0, so journals without re-flights read and write as before.
-    #[serde(default, skip_serializing_if = "is_first")]
+    /// (`--confirm`). Left out of the line when 0, so journals without re-flights read and write as before.
     pub attempt: u32,
     /// Its obstacles.
     pub obstacles: Vec<Obstacle>,
-    /// The LFS's predicted minimum distance, metres.
-    pub predicted_min_distance: f64,
-    /// The LFS's predicted flight time, seconds.
-    pub predicted_flight_time_s: f64,
-    /// The LFS ensemble's probability of a flight below 1.5 m (absent without an ensemble).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub predicted_p_fail: Option<f64>,
-    /// The LFS's own prediction when `predicted_min_distance` is calibrated (a learning campaign), metres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub predicted_raw_min_distance: Option<f64>,
-    /// The flown minimum distance (competition definition), metres; `None` if nothing usable was recorded.
-    pub min_distance: Option<f64>,
-    /// The flown un-binned minimum distance, metres.
-    pub min_distance_raw: Option<f64>,
-    /// How the flight ended.
-    pub status: FlightStatus,
-    /// Flight time, seconds.
-    pub flight_time_s: f64,
-    /// Warnings of the flight side (e.g. the avoidance planner falling behind).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub warnings: Vec<String>,
-    /// Why the flight stopped, in words, when it did not land (optional: journals without it still resume).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reason: Option<String>,
+    /// The prediction it was flown on. Read back from the journal it has the journaled fields (distance,
+    /// flight time, failure probability, the LFS's own distance), not the LFS's status or expected points.
+    pub prediction: LfsPrediction,
+    /// How the flight ended, as the vehicle reported it.
+    pub flown: Flown,
     /// The vehicle (MAVLink URL or `mock`) that flew it.
     pub vehicle: String,
     /// The trajectory CSV, relative to the campaign folder.
     pub trajectory: PathBuf,
     /// Wall-clock seconds the flight took.
     pub wall_s: f64,
-    /// A Collision Prevention flight: the closest the vehicle's centre came to a box, metres (absent in other
-    /// modes and in journals written before it was kept).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub closest_centre_m: Option<f64>,
-    /// A Collision Prevention flight: whether the vehicle came inside `CP_DIST`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub inside_cp_dist: Option<bool>,
 }
 
 impl FlightRecord {
@@ -72,28 +45,18 @@ impl FlightRecord {
                 candidate: *candidate,
                 attempt: 0,
                 obstacles: obstacles.clone(),
-                predicted_min_distance: f64::NAN,
-                predicted_flight_time_s: 0.0,
-                predicted_p_fail: None,
-                predicted_raw_min_distance: None,
-                min_distance: None,
-                min_distance_raw: None,
-                status: FlightStatus::Queued,
-                flight_time_s: 0.0,
-                warnings: Vec::new(),
-                reason: None,
+                prediction: LfsPrediction::point(*candidate, f64::NAN, 0.0, String::new()),
+                flown: Flown::ended(FlightStatus::Queued),
                 vehicle: String::new(),
                 trajectory: PathBuf::new(),
                 wall_s: 0.0,
-                closest_centre_m: None,
-                inside_cp_dist: None,
             })
             .collect()
     }
 
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
-        self.status.charged()
+        self.flown.status.charged()
     }
 }
 
@@ -189,7 +152,7 @@ impl Journal {
         let mut pending: Vec<FlightRecord> = Vec::new();
         for r in all
             .into_iter()
-            .filter(|r| r.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
+            .filter(|r| r.flown.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
         {
             pending.retain(|p| p.candidate != r.candidate);
             pending.push(r);
@@ -343,21 +306,19 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
-        predicted_min_distance: raw,
-        predicted_flight_time_s: 60.0,
-        predicted_p_fail: None,
-        predicted_raw_min_distance: Some(raw),
-        min_distance: flown,
-        min_distance_raw: flown,
-        status: FlightStatus::Landed,
-        flight_time_s: 60.0,
-        warnings: Vec::new(),
-        reason: None,
+        prediction: LfsPrediction {
+            raw_min_distance: Some(raw),
+            ..LfsPrediction::point(CandidateId(candidate), raw, 60.0, String::new())
+        },
+        flown: Flown {
+            min_distance: flown,
+            min_distance_raw: flown,
+            flight_time_s: 60.0,
+            ..Flown::ended(FlightStatus::Landed)
+        },
         vehicle: "x".into(),
         trajectory: "t.csv".into(),
         wall_s: 1.0,
-        closest_centre_m: None,
-        inside_cp_dist: None,
     }
 }
 
@@ -371,21 +332,16 @@ mod tests {
             candidate: CandidateId(candidate),
             attempt: 0,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
-            predicted_min_distance: 0.5,
-            predicted_flight_time_s: 40.0,
-            predicted_p_fail: None,
-            predicted_raw_min_distance: None,
-            min_distance: Some(1.0),
-            min_distance_raw: Some(0.9),
-            status: FlightStatus::Landed,
-            flight_time_s: 41.0,
-            warnings: Vec::new(),
-            reason: None,
+            prediction: LfsPrediction::point(CandidateId(candidate), 0.5, 40.0, String::new()),
+            flown: Flown {
+                min_distance: Some(1.0),
+                min_distance_raw: Some(0.9),
+                flight_time_s: 41.0,
+                ..Flown::ended(FlightStatus::Landed)
+            },
             vehicle: "mock".into(),
             trajectory: "flights/candidate_1.csv".into(),
             wall_s: 0.3,
-            closest_centre_m: None,
-            inside_cp_dist: None,
         }
     }
 
@@ -412,11 +368,15 @@ mod tests {
     fn a_stop_reason_is_kept_and_older_lines_read_without_one() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("journal.jsonl");
+        let base = record(2);
         let stopped = FlightRecord {
-            status: FlightStatus::LinkLost,
-            reason: Some("no MISSION_ACK within 1.0 s".into()),
-            min_distance: None,
-            ..record(2)
+            flown: Flown {
+                status: FlightStatus::LinkLost,
+                reason: Some("no MISSION_ACK within 1.0 s".into()),
+                min_distance: None,
+                ..base.flown.clone()
+            },
+            ..base
         };
         let mut j = Journal::open(&path).unwrap();
         j.append(&stopped).unwrap();
@@ -425,7 +385,7 @@ mod tests {
         let old = serde_json::to_string(&record(1)).unwrap();
         assert!(!old.contains("reason"), "{old}");
         std::fs::write(&path, format!("{old}\n")).unwrap();
-        assert_eq!(Journal::read(&path).unwrap()[0].reason, None);
+        assert_eq!(Journal::read(&path).unwrap()[0].flown.reason, None);
     }
 
     #[test]

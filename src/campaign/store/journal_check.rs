@@ -67,9 +67,9 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
         ));
     }
     for (field, d) in [
-        ("min_distance", record.min_distance),
-        ("min_distance_raw", record.min_distance_raw),
-        ("closest_centre_m", record.closest_centre_m),
+        ("min_distance", record.flown.min_distance),
+        ("min_distance_raw", record.flown.min_distance_raw),
+        ("closest_centre_m", record.flown.closest_centre_m),
     ] {
         if let Some(d) = d
             && !(d.is_finite() && (0.0..=size_m).contains(&d))
@@ -80,13 +80,13 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
             ));
         }
     }
-    let times = [("flight_time_s", record.flight_time_s), ("wall_s", record.wall_s)];
+    let times = [("flight_time_s", record.flown.flight_time_s), ("wall_s", record.wall_s)];
     for (field, t) in times {
         if !(t.is_finite() && (0.0..=MAX_FLIGHT_TIME_S).contains(&t)) {
             return Err(format!("{field} {} s is outside [0, {MAX_FLIGHT_TIME_S}] s", number(t)));
         }
     }
-    if let Some(p) = record.predicted_p_fail
+    if let Some(p) = record.prediction.p_fail
         && !(0.0..=1.0).contains(&p)
     {
         return Err(format!(
@@ -153,10 +153,8 @@ mod tests {
             let e = check_record(&test_record(1, 1.0, Some(d)), 100.0).unwrap_err();
             assert!(e.contains("min_distance") && e.contains("outside [0, 100.0]"), "{e}");
         }
-        let slow = FlightRecord {
-            flight_time_s: -3.0,
-            ..ok.clone()
-        };
+        let mut slow = ok.clone();
+        slow.flown.flight_time_s = -3.0;
         assert!(check_record(&slow, 100.0).unwrap_err().contains("flight_time_s"));
         let away = FlightRecord {
             trajectory: "../../../../etc/hosts".into(),

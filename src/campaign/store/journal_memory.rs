@@ -55,8 +55,8 @@ impl Journal {
             .map(|r| r.candidate)
             .collect();
         let mut pending: Vec<FlightRecord> = Vec::new();
-        for r in
-            (self.records.iter()).filter(|r| r.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
+        for r in (self.records.iter())
+            .filter(|r| r.flown.status == FlightStatus::Interrupted && !charged.contains(&r.candidate))
         {
             pending.retain(|p| p.candidate != r.candidate);
             pending.push(r.clone());

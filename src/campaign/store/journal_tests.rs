@@ -120,10 +120,8 @@ proptest! {
 }
 
 fn interrupted_line(candidate: u64) -> String {
-    let r = FlightRecord {
-        status: FlightStatus::Interrupted,
-        ..record(candidate)
-    };
+    let mut r = record(candidate);
+    r.flown.status = FlightStatus::Interrupted;
     serde_json::to_string(&r).unwrap() + "\n"
 }
 
@@ -159,11 +157,8 @@ fn interrupted_flights_are_not_charged_and_are_pending_until_flown() {
 fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load() {
     // A line as journals were written before the Collision Prevention verdict was kept.
     let old = r#"{"candidate":2,"obstacles":[],"predicted_min_distance":1.8,"predicted_flight_time_s":50.0,"min_distance":1.2,"min_distance_raw":1.2,"status":"landed","flight_time_s":40.0,"vehicle":"mock#0","trajectory":"flights/candidate_2.csv","wall_s":1.1}"#;
-    let cp = FlightRecord {
-        closest_centre_m: Some(1.35),
-        inside_cp_dist: Some(true),
-        ..record(3)
-    };
+    let mut cp = record(3);
+    (cp.flown.closest_centre_m, cp.flown.inside_cp_dist) = (Some(1.35), Some(true));
     let line = serde_json::to_string(&cp).unwrap();
     assert!(
         line.contains(r#""closest_centre_m":1.35,"inside_cp_dist":true"#),
@@ -175,15 +170,54 @@ fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load(
     );
     let (_d, path) = journal(format!("{old}\n{line}\n").as_bytes());
     let read = Journal::read(&path).unwrap();
-    assert_eq!((read[0].closest_centre_m, read[0].inside_cp_dist), (None, None));
-    assert_eq!(
-        (read[1].closest_centre_m, read[1].inside_cp_dist),
-        (Some(1.35), Some(true))
-    );
-    let bad = FlightRecord {
-        closest_centre_m: Some(-0.5),
-        ..cp
-    };
+    let cp_of = |r: &FlightRecord| (r.flown.closest_centre_m, r.flown.inside_cp_dist);
+    assert_eq!(cp_of(&read[0]), (None, None));
+    assert_eq!(cp_of(&read[1]), (Some(1.35), Some(true)));
+    let mut bad = cp;
+    bad.flown.closest_centre_m = Some(-0.5);
     let e = crate::campaign::store::journal_check::check_record(&bad, 100.0).unwrap_err();
     assert!(e.contains("closest_centre_m") && e.contains("outside"), "{e}");
+}
+
+#[test]
+fn a_record_with_every_field_is_written_as_the_journal_line_always_was() {
+    let mut r = record(4);
+    r.attempt = 2;
+    r.obstacles.clear();
+    r.prediction = LfsPrediction {
+        p_fail: Some(0.25),
+        raw_min_distance: Some(0.75),
+        // Not journaled: the line has no place for them.
+        expected_points: Some(3.0),
+        ..LfsPrediction::point(CandidateId(4), 0.5, 40.0, "landed".into())
+    };
+    r.flown.status = FlightStatus::Collision;
+    (r.flown.warnings, r.flown.reason) = (vec!["w".into()], Some("r".into()));
+    (r.flown.closest_centre_m, r.flown.inside_cp_dist) = (Some(1.5), Some(true));
+    let line = r#"{"candidate":4,"attempt":2,"obstacles":[],"predicted_min_distance":0.5,"predicted_flight_time_s":40.0,"predicted_p_fail":0.25,"predicted_raw_min_distance":0.75,"min_distance":1.0,"min_distance_raw":0.9,"status":"collision","flight_time_s":41.0,"warnings":["w"],"reason":"r","vehicle":"mock","trajectory":"flights/candidate_1.csv","wall_s":0.3,"closest_centre_m":1.5,"inside_cp_dist":true}"#;
+    assert_eq!(serde_json::to_string(&r).unwrap(), line);
+    let back: FlightRecord = serde_json::from_str(line).unwrap();
+    assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    assert_eq!(
+        (back.prediction.status.as_str(), back.prediction.expected_points),
+        ("", None)
+    );
+    assert_eq!(back, Journal::read_back(&r));
+}
+
+#[test]
+fn journals_written_before_read_and_write_back_byte_for_byte() {
+    let recorded = [
+        "tests/data/pinned/mission2-seed2-budget6.jsonl",
+        "tests/data/pinned/static-no-learn-seed3-budget4.jsonl",
+        "tests/data/pinned/static-no-screen-seed3-budget4.jsonl",
+        "tests/data/static-killed/journal.jsonl",
+    ];
+    for path in recorded {
+        let text = std::fs::read_to_string(path).unwrap();
+        for line in text.lines().filter(|l| !l.trim().is_empty()) {
+            let r: FlightRecord = serde_json::from_str(line).unwrap();
+            assert_eq!(serde_json::to_string(&r).unwrap(), line, "{path}");
+        }
+    }
 }

@@ -110,13 +110,13 @@ impl Replay {
 }
 
 fn key(job: &Job) -> (CandidateId, u32) {
-    (job.screened.candidate, job.tally.next_attempt)
+    (job.prediction.candidate, job.tally.next_attempt)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::candidate::Screened;
+    use crate::campaign::candidate::LfsPrediction;
     use crate::model::TestCase;
 
     fn record(candidate: u64, attempt: u32, status: &str) -> FlightRecord {
@@ -130,7 +130,10 @@ mod tests {
 
     fn job(candidate: u64) -> Job {
         let case = TestCase::load(std::path::Path::new("missions/mission2.yaml")).unwrap();
-        Job::new(Screened::point(CandidateId(candidate), 1.0, 1.0, "landed".into()), case)
+        Job::new(
+            LfsPrediction::point(CandidateId(candidate), 1.0, 1.0, "landed".into()),
+            case,
+        )
     }
 
     #[test]
@@ -144,9 +147,9 @@ mod tests {
         assert_eq!(replay.pending(), 2);
         let mut queue: VecDeque<Job> = [3, 5, 7].into_iter().map(job).collect();
         let (first, r) = replay.take_next(&mut queue).unwrap();
-        assert_eq!((first.screened.candidate.0, r.candidate.0), (7, 7));
+        assert_eq!((first.prediction.candidate.0, r.candidate.0), (7, 7));
         let (second, _) = replay.take_next(&mut queue).unwrap();
-        assert_eq!(second.screened.candidate.0, 5);
+        assert_eq!(second.prediction.candidate.0, 5);
         assert!(
             replay.take_next(&mut queue).is_none(),
             "the interrupted flight is flown, not replayed"

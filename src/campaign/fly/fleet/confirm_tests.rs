@@ -37,7 +37,8 @@ impl Vehicle for Scripted {
             flight_time_s: 40.0,
             warnings: Vec::new(),
             reason: None,
-            cp: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         })
     }
 }
@@ -70,7 +71,7 @@ fn confirm_run(script: Vec<Vec<f64>>, k: usize, budget: usize) -> Run {
     let records = Journal::read(&path).unwrap();
     assert_eq!(out.records, records);
     let got = (records.iter())
-        .map(|r| (r.candidate.0, r.attempt, r.min_distance.unwrap() < 1.5))
+        .map(|r| (r.candidate.0, r.attempt, r.flown.min_distance.unwrap() < 1.5))
         .collect();
     let flown = flown.lock().unwrap().clone();
     (got, flown)
@@ -163,7 +164,7 @@ fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, 
         fleet.wait_round(0)
     });
     (records.iter())
-        .map(|r| (r.candidate.0, r.attempt, r.min_distance.unwrap()))
+        .map(|r| (r.candidate.0, r.attempt, r.flown.min_distance.unwrap()))
         .collect()
 }
 

@@ -1,7 +1,7 @@
 //! The fleet: budgets, dropped vehicles, rejections and re-flights, on scripted vehicles.
 
 use super::*;
-use crate::campaign::candidate::{CandidateId, Screened};
+use crate::campaign::candidate::{CandidateId, LfsPrediction};
 use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::*;
 use crate::campaign::store::journal::Journal;
@@ -38,7 +38,8 @@ impl Vehicle for Fake {
                 flight_time_s: 0.0,
                 warnings: Vec::new(),
                 reason: Some("not ready to arm: no valid data from Compass 0".into()),
-                cp: None,
+                closest_centre_m: None,
+                inside_cp_dist: None,
             });
         }
         if !self.reachable {
@@ -69,7 +70,8 @@ impl Vehicle for Fake {
             flight_time_s: 40.0,
             warnings: Vec::new(),
             reason: None,
-            cp: None,
+            closest_centre_m: None,
+            inside_cp_dist: None,
         })
     }
 }
@@ -113,7 +115,7 @@ pub(in crate::campaign) fn jobs(n: u64) -> Vec<Job> {
     (0..n)
         .map(|i| {
             Job::new(
-                Screened::point(CandidateId(i), 0.5, 40.0, "landed".into()),
+                LfsPrediction::point(CandidateId(i), 0.5, 40.0, "landed".into()),
                 base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
             )
         })
@@ -224,7 +226,10 @@ fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_els
     assert!(out.dropped[0].contains("rejected 2 flights in a row") && out.dropped[0].contains("Compass"));
     assert_eq!((fleet.len(), fleet[0].name()), (1, "ok".to_string()));
     // One rejection is journaled, the second's job is flown by "ok": the budget is spent on 4 flights.
-    let rejected: Vec<_> = records.iter().filter(|r| r.status == FlightStatus::Rejected).collect();
+    let rejected: Vec<_> = records
+        .iter()
+        .filter(|r| r.flown.status == FlightStatus::Rejected)
+        .collect();
     assert_eq!((records.len(), rejected.len(), out.flown), (5, 1, 5));
     let mut ids: Vec<u64> = records.iter().map(|r| r.candidate.0).collect();
     ids.sort();
@@ -271,7 +276,7 @@ fn rejections_in_a_row_count_across_rounds() {
         second.dropped
     );
     let records = Journal::read(&path).unwrap();
-    let statuses: Vec<&str> = records.iter().map(|r| r.status.as_str()).collect();
+    let statuses: Vec<&str> = records.iter().map(|r| r.flown.status.as_str()).collect();
     assert_eq!(statuses, vec!["rejected", "landed", "landed"]);
 }
 

@@ -93,15 +93,10 @@ pub fn read_back(
         // A flight that ended without a measurement (rejected, link lost) is a result, not a job failure.
         (None, Some(r)) if !r.status.completed() && problems.is_empty() => Ok(Readback {
             flown: Flown {
-                cp: r
-                    .cp_dist_m()
-                    .map(|d| cp_verdict(&Trajectory { samples: Vec::new() }, obstacles, d)),
-                status: r.status,
-                min_distance: None,
-                min_distance_raw: None,
                 flight_time_s: r.flight_time_s.filter(|t| t.is_finite()).unwrap_or(0.0),
                 warnings: r.warnings,
                 reason: r.reason,
+                ..Flown::ended(r.status)
             },
             trajectory: None,
             source: None,
@@ -215,14 +210,14 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
     }
     Readback {
         flown: Flown {
-            status,
             min_distance: verdict.as_ref().map(|v| v.min_distance),
             min_distance_raw: verdict.as_ref().map(|v| v.min_distance_raw),
             flight_time_s: time.filter(|t| t.is_finite()).unwrap_or_else(|| t.duration_s()),
             warnings,
             reason,
-            cp,
-        },
+            ..Flown::ended(status)
+        }
+        .with_cp(cp),
         trajectory: Some(aligned),
         source: Some(path),
         reported,

@@ -242,16 +242,14 @@ fn a_collision_prevention_report_gets_its_verdict_measured_here() {
     let report = |cp: &str| format!(r#"{{"status": "landed", "collision_prevention": {cp}}}"#);
     // The report's own numbers are not taken: the closest centre is measured on the trajectory read back.
     let said = report(r#"{"cp_dist_m": 2.5, "closest_centre_m": 99.0, "inside_cp_dist": false}"#);
-    let cp = read(tmp.path(), said.as_bytes()).unwrap().flown.cp.unwrap();
+    let cp = read(tmp.path(), said.as_bytes()).unwrap().flown;
     let centre = cp.closest_centre_m.unwrap();
-    // The pass runs 3 m from the centre line of a 2 m wide box: 2 m from its side.
+    // The pass runs 3 m from the centre line of a 2 m wide box: 2 m from its side, inside a CP_DIST of 2.5 m.
     assert!((centre - 2.0).abs() < 0.01, "{cp:?}");
-    assert_eq!((cp.cp_dist_m, cp.inside_cp_dist), (2.5, Some(true)));
+    assert_eq!(cp.inside_cp_dist, Some(true));
     let cp = read(tmp.path(), report(r#"{"cp_dist_m": 1.5}"#).as_bytes())
         .unwrap()
-        .flown
-        .cp
-        .unwrap();
+        .flown;
     assert_eq!(cp.inside_cp_dist, Some(false));
     // Another mode's report, or a block without a usable CP_DIST, has no verdict; the flight is still read.
     for said in [
@@ -261,14 +259,15 @@ fn a_collision_prevention_report_gets_its_verdict_measured_here() {
         report(r#"{"cp_dist_m": -1}"#),
     ] {
         let b = read(tmp.path(), said.as_bytes()).unwrap();
-        assert!(b.reported && b.flown.cp.is_none(), "{said}: {:?}", b.flown.cp);
+        let cp = (b.flown.closest_centre_m, b.flown.inside_cp_dist);
+        assert!(b.reported && cp == (None, None), "{said}: {cp:?}");
     }
-    // A rejected CP flight keeps its CP_DIST and has no closest centre.
+    // A rejected CP flight has no closest centre.
     let rejected = r#"{"status": "rejected", "collision_prevention": {"cp_dist_m": 2.0}}"#;
     let empty = tempfile::tempdir().unwrap();
-    let cp = read(empty.path(), rejected.as_bytes()).unwrap().flown.cp.unwrap();
+    let f = read(empty.path(), rejected.as_bytes()).unwrap().flown;
     assert_eq!(
-        (cp.cp_dist_m, cp.closest_centre_m, cp.inside_cp_dist),
-        (2.0, None, None)
+        (f.status, f.closest_centre_m, f.inside_cp_dist),
+        (FlightStatus::Rejected, None, None)
     );
 }

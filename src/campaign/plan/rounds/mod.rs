@@ -33,7 +33,7 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use crate::campaign::candidate::{Candidate, CandidateId, Lineage, Screened, is_child};
+use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction, Lineage, is_child};
 use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::as_learnt;
 use crate::campaign::fly::fleet::{Fleet, FleetSetup, run_fleet};
@@ -189,7 +189,7 @@ struct Round {
 
 /// A round's ranking and what it was made with.
 struct Ranking {
-    ranked: Vec<Screened>,
+    ranked: Vec<LfsPrediction>,
     /// Flights left in the round's share of the budget.
     remaining: usize,
     /// Unflown candidates predicted below the threshold.

@@ -25,7 +25,9 @@ impl Rounds<'_> {
         };
         let drawn = &self.candidates;
         let diverged = fleet.set_aside_diverged(range, |r| {
-            drawn.get(r.candidate.index()).is_some_and(|c| drawn_as(c, r))
+            drawn
+                .get(r.candidate.index())
+                .is_some_and(|c| drawn_as(c, &r.obstacles))
         });
         if diverged.is_empty() {
             return Ok(());

@@ -2,7 +2,7 @@
 //! campaign learnt so far and choose the flights, then learn from the flights that landed.
 
 use super::{ROUNDS, Ranking, Round, Rounds};
-use crate::campaign::candidate::{CandidateId, Lineage, Screened, is_child, unflown};
+use crate::campaign::candidate::{CandidateId, LfsPrediction, Lineage, is_child, unflown};
 use crate::campaign::config::CampaignError;
 use crate::campaign::learn::calibration::RoundLog;
 use crate::campaign::learn::failure_counts::arm_counts;
@@ -112,11 +112,11 @@ impl Rounds<'_> {
         let screened = if self.input.cfg.screen {
             screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?
         } else {
-            let unscreened = |i| Screened::point(CandidateId(i), 0.0, 0.0, "unscreened".into());
+            let unscreened = |i| LfsPrediction::point(CandidateId(i), 0.0, 0.0, "unscreened".into());
             range.map(unscreened).collect()
         };
         for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
-            c.screened = Some(s);
+            c.prediction = Some(s);
         }
         stages.screen_s += t.elapsed().as_secs_f64();
         Ok(())
@@ -155,7 +155,7 @@ impl Rounds<'_> {
 
     /// The unflown candidates (not in `flown`) with their predictions: learning, the LFS's calibrated and moved
     /// towards the flights near them (learnt from every flight so far); else the LFS's own.
-    fn predict(&mut self, flown: &[CandidateId], stages: &mut StageTimes) -> Vec<Screened> {
+    fn predict(&mut self, flown: &[CandidateId], stages: &mut StageTimes) -> Vec<LfsPrediction> {
         if !self.learning {
             return unflown(&self.candidates, flown).cloned().collect();
         }
@@ -167,7 +167,7 @@ impl Rounds<'_> {
         self.calibration = taught.calibration.clone();
         self.surrogate = taught.kernel;
         let fresh = unflown(&self.candidates, flown)
-            .map(|s| Screened {
+            .map(|s| LfsPrediction {
                 min_distance: taught.predict(s, &self.candidates),
                 raw_min_distance: Some(s.min_distance),
                 ..s.clone()
@@ -183,10 +183,10 @@ impl Rounds<'_> {
     pub(super) fn choose(
         &self,
         round: &Round,
-        fresh: &[Screened],
+        fresh: &[LfsPrediction],
         remaining: usize,
         queued: &[FlightRecord],
-    ) -> (Vec<Screened>, f64) {
+    ) -> (Vec<LfsPrediction>, f64) {
         let seen: Vec<FlightRecord> = self.journal.iter().chain(queued).cloned().collect();
         let cfg = self.input.cfg;
         let is_arm = |c| is_child(&self.candidates, c, round.lineage);

@@ -109,8 +109,8 @@ impl<'a> Flights<'a> {
     /// The campaign's charged flights.
     pub fn new(records: &'a [FlightRecord]) -> Self {
         let residuals = (records.iter())
-            .filter(|r| r.predicted_min_distance.is_finite())
-            .filter_map(|r| Some((r.candidate, r.min_distance? - r.predicted_min_distance)))
+            .filter(|r| r.prediction.min_distance.is_finite())
+            .filter_map(|r| Some((r.candidate, r.flown.min_distance? - r.prediction.min_distance)))
             .map(|(c, e)| (c, e.clamp(-MAX_RESIDUAL_M, MAX_RESIDUAL_M)))
             .collect();
         Self {
@@ -127,14 +127,14 @@ impl<'a> Flights<'a> {
         let mine = prints(obstacles);
         let neighbours = (self.records.iter().zip(&self.prints))
             .filter(|(r, p)| r.candidate != candidate && union_iou(&mine, p) >= NEIGHBOUR_IOU)
-            .filter_map(|(r, _)| r.min_distance);
+            .filter_map(|(r, _)| r.flown.min_distance);
         let residuals: Vec<f64> = (self.residuals.iter())
             .filter(|(c, _)| *c != candidate)
             .map(|(_, e)| *e)
             .collect();
-        let predicted = (own.iter().min_by_key(|r| r.attempt)).map_or(f64::NAN, |r| r.predicted_min_distance);
+        let predicted = (own.iter().min_by_key(|r| r.attempt)).map_or(f64::NAN, |r| r.prediction.min_distance);
         Evidence {
-            own: counts(own.iter().filter_map(|r| r.min_distance)),
+            own: counts(own.iter().filter_map(|r| r.flown.min_distance)),
             neighbours: counts(neighbours),
             prior: prior_bands(predicted, &residuals),
         }
@@ -144,11 +144,11 @@ impl<'a> Flights<'a> {
     pub fn expectation(&self, t: &TestVerdict, own: &[&FlightRecord]) -> TestExpectation {
         let points = estimate(&self.evidence(t.candidate, &t.obstacles, own));
         let flown: Vec<f64> = (own.iter())
-            .filter(|r| r.min_distance.is_some())
-            .map(|r| r.flight_time_s)
+            .filter(|r| r.flown.min_distance.is_some())
+            .map(|r| r.flown.flight_time_s)
             .collect();
         let seconds = if flown.is_empty() {
-            own.first().map_or(0.0, |r| r.predicted_flight_time_s)
+            own.first().map_or(0.0, |r| r.prediction.flight_time_s)
         } else {
             flown.iter().sum::<f64>() / flown.len() as f64
         };

@@ -6,16 +6,17 @@ use crate::campaign::store::journal::test_record;
 /// metres in `time_s`; its trajectory is not on disk.
 fn flight(candidate: u64, attempt: u32, d: f64, time_s: f64) -> FlightRecord {
     let x = candidate as f64 * 30.0;
-    FlightRecord {
+    let mut r = FlightRecord {
         attempt,
         obstacles: vec![
             Obstacle::new(4.0, 4.0, 20.0, x, 10.0, 0.0),
             Obstacle::new(4.0, 4.0, 20.0, x, 30.0, 0.0),
         ],
-        flight_time_s: time_s,
         trajectory: format!("flights/c{candidate}_{attempt}.csv").into(),
         ..test_record(candidate, d, Some(d))
-    }
+    };
+    r.flown.flight_time_s = time_s;
+    r
 }
 
 fn aimed(records: &[FlightRecord]) -> (Vec<TestVerdict>, SuiteExpectation) {
@@ -28,9 +29,9 @@ fn aimed(records: &[FlightRecord]) -> (Vec<TestVerdict>, SuiteExpectation) {
 #[test]
 fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
     // 3 was predicted to pass.
-    let predicted_pass = |r: FlightRecord| FlightRecord {
-        predicted_min_distance: 2.0,
-        ..r
+    let predicted_pass = |mut r: FlightRecord| {
+        r.prediction.min_distance = 2.0;
+        r
     };
     let records = [
         // 1: two 2-point flights in 2 minutes; 2: one 5-point flight in 1 minute; 3: one 1-point flight of
@@ -76,10 +77,9 @@ fn the_calibrated_prediction_and_neighbours_move_the_estimate() {
     // Three other tests whose flights came 2 m further than predicted: the prior expects a pass.
     let mut records = vec![alone[0].clone()];
     for c in 2..5 {
-        records.push(FlightRecord {
-            predicted_min_distance: 1.0,
-            ..flight(c, 0, 3.0, 60.0)
-        });
+        let mut r = flight(c, 0, 3.0, 60.0);
+        r.prediction.min_distance = 1.0;
+        records.push(r);
     }
     let (tests, _) = aimed(&records);
     let t = tests.iter().find(|t| t.candidate.0 == 1).expect("test 1");

@@ -26,7 +26,7 @@ pub fn guard_below(similar_below_m: f64) -> f64 {
 pub fn flown_average(folder: &Path, records: &[&FlightRecord]) -> Option<Trajectory> {
     let flights: Vec<Trajectory> = records
         .iter()
-        .filter(|r| r.min_distance.is_some())
+        .filter(|r| r.flown.min_distance.is_some())
         .filter_map(|r| {
             let text = String::from_utf8(inside_bytes(folder, &r.trajectory)?).ok()?;
             Trajectory::parse_csv(&text, &r.trajectory).ok()
