@@ -10,7 +10,8 @@
 //!   first, then the in-sample one and the constant each fold chose.
 //! - `... -- collect OUT.jsonl FOLDER...`: builds the data file from `generate` output folders (their
 //!   `campaign.json` and `journal.jsonl`; flights that did not run to their end are left out) and from
-//!   `fly --json` outputs `X.json` of `sample` tests `X.yaml`.
+//!   `fly --json` outputs `X.json` of `sample` tests `X.yaml`. `--draws NAME` before folders labels their
+//!   tests NAME instead of `screened` / `no-screen`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -319,7 +320,13 @@ fn fly_row(json: &Path) -> anyhow::Result<Row> {
 
 fn collect(out: &Path, folders: &[String]) -> anyhow::Result<()> {
     let mut lines = Vec::new();
-    for folder in folders {
+    let mut label: Option<String> = None;
+    let mut args = folders.iter();
+    while let Some(folder) = args.next() {
+        if folder == "--draws" {
+            label = Some(args.next().context("--draws NAME")?.clone());
+            continue;
+        }
         if folder.ends_with(".json") {
             lines.push(serde_json::to_string(&fly_row(Path::new(folder))?)?);
             continue;
@@ -342,7 +349,7 @@ fn collect(out: &Path, folders: &[String]) -> anyhow::Result<()> {
         for l in journal.into_iter().filter(ran) {
             let row = tests.entry(l.candidate).or_insert_with(|| Row {
                 mission,
-                draws: if screened { "screened" } else { "no-screen" }.into(),
+                draws: (label.clone()).unwrap_or_else(|| if screened { "screened" } else { "no-screen" }.into()),
                 obstacles: l.obstacles.clone(),
                 flights: Vec::new(),
             });
