@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use prgenuav::lfs::cp_model::{CpSimConfig, simulate_cp};
 use prgenuav::lfs::cp_params::CpParams;
+use prgenuav::lfs::cv::{Truth, choose};
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::competition::FAIL_BELOW_M;
 use prgenuav::model::{Obstacle, TestCase};
@@ -195,10 +196,6 @@ fn show(x: Option<f64>) -> String {
     x.map_or("-".into(), |x| format!("{x:.2}"))
 }
 
-fn mae(p: &[(f64, f64)]) -> f64 {
-    aggregate(p).mae.unwrap_or(f64::INFINITY)
-}
-
 /// K folds by obstacle set: each fold's lag is the one with the smallest MAE on the other folds; the
 /// held-out errors of all folds make the cross-validated MAE.
 fn cross_validate(rows: &[Row], k: usize, seed: u64) -> anyhow::Result<()> {
@@ -239,27 +236,34 @@ fn cross_validate(rows: &[Row], k: usize, seed: u64) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The held-out `(predicted, flown)` pairs of `k` folds (`fold[i]` is row i's), each fold predicted with the
-/// grid's lag of smallest MAE on the other folds; and the lags chosen.
+/// The held-out predictions of `k` folds (`fold[i]` is row i's), each fold predicted with the grid's lag of
+/// smallest MAE on the other folds (`lfs::cv::choose`, as the motion models are cross-validated); and the
+/// lags chosen.
 fn fold_out(
     rows: &[Row],
     fold: &[usize],
     k: usize,
     grid: &[Vec<Option<f64>>],
 ) -> anyhow::Result<(Vec<Option<f64>>, Vec<f64>)> {
-    let all: Vec<&Row> = rows.iter().collect();
+    let truth: Vec<Truth> = (rows.iter())
+        .map(|r| Truth {
+            real: r.first().unwrap_or(f64::NAN),
+            tier: r.mission.to_string(),
+        })
+        .collect();
+    // A test without a measured first flight predicts nothing it could be scored on.
+    let grid: Vec<Vec<Option<f64>>> = (grid.iter())
+        .map(|ps| {
+            ps.iter()
+                .zip(rows)
+                .map(|(p, r)| p.filter(|_| r.first().is_some()))
+                .collect()
+        })
+        .collect();
     let mut held_out = vec![None; rows.len()];
     let mut chosen = Vec::new();
     for f in 0..k {
-        let training = |ps: &[Option<f64>]| -> Vec<Option<f64>> {
-            ps.iter()
-                .zip(fold)
-                .map(|(p, g)| if *g == f { None } else { *p })
-                .collect()
-        };
-        let best = (0..TAU_GRID.len())
-            .min_by(|a, b| mae(&pairs(&all, &training(&grid[*a]))).total_cmp(&mae(&pairs(&all, &training(&grid[*b])))))
-            .context("an empty grid")?;
+        let best = choose(&grid, &truth, |i| fold[i] != f).context("no lag predicts the training folds")?;
         chosen.push(TAU_GRID[best]);
         for (i, g) in fold.iter().enumerate() {
             if *g == f {

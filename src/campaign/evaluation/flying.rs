@@ -144,8 +144,7 @@ fn missing_jobs(tests: &[(PathBuf, TestCase)], done: &[FlightRecord], runs: usiz
             if done.iter().any(|r| r.candidate == candidate) {
                 continue;
             }
-            let unpredicted = LfsPrediction::point(candidate, 0.0, 0.0, "not predicted".into());
-            jobs.push(Job::new(unpredicted, test.clone()));
+            jobs.push(Job::new(LfsPrediction::none(candidate, "not predicted"), test.clone()));
         }
     }
     jobs

@@ -314,15 +314,8 @@ mod tests {
 
     #[test]
     fn a_fresh_instance_that_never_arms_or_goes_silent_is_a_backend_failure_and_a_flown_one_is_not() {
-        let f = |status: FlightStatus| Flown {
-            status,
-            min_distance: None,
-            min_distance_raw: None,
-            flight_time_s: 0.0,
-            warnings: Vec::new(),
-            reason: Some("not ready to arm within 60 s (missing: home position)".into()),
-            closest_centre_m: None,
-            inside_cp_dist: None,
+        let f = |status: FlightStatus| {
+            Flown::unflown(status, "not ready to arm within 60 s (missing: home position)".into())
         };
         match never_ready(f(FlightStatus::Rejected), 3) {
             Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),

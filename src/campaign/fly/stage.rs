@@ -133,8 +133,7 @@ pub(in crate::campaign) fn announce(
     if tick {
         progress.tick(in_stage);
     }
-    // An unscreened candidate carries a zero prediction of zero seconds; a simulated flight always lasts.
-    let predicted = if r.prediction.flight_time_s > 0.0 {
+    let predicted = if r.prediction.is_made() {
         format!("predicted {:.2} m", r.prediction.min_distance)
     } else {
         "not screened".into()

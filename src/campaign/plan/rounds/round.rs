@@ -112,8 +112,9 @@ impl Rounds<'_> {
         let screened = if self.input.cfg.screen {
             screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?
         } else {
-            let unscreened = |i| LfsPrediction::point(CandidateId(i), 0.0, 0.0, "unscreened".into());
-            range.map(unscreened).collect()
+            range
+                .map(|i| LfsPrediction::none(CandidateId(i), "unscreened"))
+                .collect()
         };
         for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
             c.prediction = Some(s);
