@@ -64,29 +64,33 @@ struct Item {
     target: f64,
 }
 
-/// Mean absolute error, coverage of the 10-90 % interval and mean signed error over some items.
+/// Mean absolute error, coverage of the 10-90 % intervals (of the expected points; of the judge's 5-flight
+/// mean) and mean signed error over some items.
 #[derive(Debug, Clone, Copy, Default)]
 struct Score {
     n: usize,
     mae: f64,
     coverage: f64,
+    judged_coverage: f64,
     bias: f64,
 }
 
 fn score<'a>(items: impl Iterator<Item = &'a Item>, w: &Weights) -> Score {
-    let (mut n, mut abs, mut inside, mut signed) = (0, 0.0, 0, 0.0);
+    let (mut n, mut abs, mut inside, mut judged, mut signed) = (0, 0.0, 0, 0, 0.0);
     for it in items {
         let e = estimate_with(&it.evidence, w);
         n += 1;
         abs += (e.mean - it.target).abs();
         signed += e.mean - it.target;
         inside += usize::from(e.low - 1e-9 <= it.target && it.target <= e.high + 1e-9);
+        judged += usize::from(e.judged_low - 1e-9 <= it.target && it.target <= e.judged_high + 1e-9);
     }
     let per = |x: f64| if n == 0 { f64::NAN } else { x / n as f64 };
     Score {
         n,
         mae: per(abs),
         coverage: per(inside as f64),
+        judged_coverage: per(judged as f64),
         bias: per(signed),
     }
 }
@@ -182,8 +186,16 @@ fn show(w: &Weights) -> String {
 
 fn line(label: &str, written: Score, all: Score) -> String {
     format!(
-        "| {label} | {:.3} | {:.2} | {:+.3} | {} | {:.3} | {:.2} | {} |",
-        written.mae, written.coverage, written.bias, written.n, all.mae, all.coverage, all.n
+        "| {label} | {:.3} | {:.2} | {:.2} | {:+.3} | {} | {:.3} | {:.2} | {:.2} | {} |",
+        written.mae,
+        written.coverage,
+        written.judged_coverage,
+        written.bias,
+        written.n,
+        all.mae,
+        all.coverage,
+        all.judged_coverage,
+        all.n
     )
 }
 
@@ -208,6 +220,7 @@ fn cross_validate(items: &[Item], grid: &[Weights]) -> (Score, Score, Vec<Weight
             n,
             mae: mean(|s| s.mae),
             coverage: mean(|s| s.coverage),
+            judged_coverage: mean(|s| s.judged_coverage),
             bias: mean(|s| s.bias),
         }
     };
@@ -242,8 +255,8 @@ pub fn run(paths: &[String]) -> anyhow::Result<()> {
     let all_refs: Vec<&Item> = items.iter().collect();
     let whole = best(&all_refs, &grid);
     println!("all folds chose {}", show(&whole));
-    println!("\n| weights | MAE written | coverage | bias | n | MAE all | coverage | n |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("\n| weights | MAE written | coverage | judged coverage | bias | n | MAE all | coverage | judged | n |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     println!("{}", line("**cross-validated choice**", cv_written, cv_all));
     let row = |w: &Weights, note: &str| {
         let s = |f: fn(&Item) -> bool| score(items.iter().filter(|i| f(i)), w);

@@ -7,12 +7,13 @@ mod build;
 mod console;
 pub mod slot;
 mod spawn;
+mod workdir;
 
 use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 pub use build::{ModeUnsupported, NotABuild, Px4Build, VERSION_HEADER};
 use console::{CONSOLE_LINES, Console};
@@ -180,12 +181,11 @@ impl Px4Sitl {
                 etc: etc.display().to_string(),
             });
         }
-        let dir = work_dir(spec.instance);
         let spawn_err = |source| SitlError::Spawn {
             bin: spec.bin.display().to_string(),
             source,
         };
-        std::fs::create_dir_all(&dir).map_err(spawn_err)?;
+        let dir = workdir::create(spec.instance).map_err(spawn_err)?;
         let mut child = match spawn::command(spec, &etc, &dir).spawn() {
             Ok(c) => c,
             Err(e) => {
@@ -312,12 +312,6 @@ fn etc_dir(bin: &Path) -> PathBuf {
     bin.parent()
         .and_then(Path::parent)
         .map_or_else(|| PathBuf::from("etc"), |b| b.join("etc"))
-}
-
-/// A fresh private working directory (PX4 keeps its parameters and logs there).
-fn work_dir(instance: u8) -> PathBuf {
-    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-    std::env::temp_dir().join(format!("prgenuav-px4-{}-{instance}-{nanos}", std::process::id()))
 }
 
 #[cfg(test)]

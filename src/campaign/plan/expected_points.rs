@@ -6,15 +6,17 @@
 //! shares from the campaign's residual spread), each of the test's own flights counts one, and each flight of
 //! a neighbour (a test overlapping it) counts [`NEIGHBOUR_WEIGHT`], all neighbours together at most
 //! [`MAX_NEIGHBOUR_FLIGHTS`]. Expected points = sum of band share x band points; the interval is the 10-90 %
-//! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points). How the constants were
+//! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points): how sure the campaign is
+//! of the average, which decides whether a test is written. What the judge's 5 flights will average scatters
+//! more ([`crate::campaign::plan::judged_mean`]); that is the interval reported. How the constants were
 //! chosen: docs/design-constants.md#expected-points-weights.
 
 use serde::Serialize;
 
+use crate::campaign::plan::judged_mean::judged_mean;
 use crate::judge::points;
 
-/// The points of each band, best first.
-pub const BAND_POINTS: [f64; 4] = [5.0, 2.0, 1.0, 0.0];
+pub use crate::campaign::plan::judged_mean::{BAND_POINTS, Bands};
 
 /// Weight of the calibrated LFS prediction, pseudo-flights. This and the two neighbour weights were chosen
 /// together by cross-validation with folds by obstacle set (docs/design-constants.md#expected-points-weights).
@@ -32,9 +34,6 @@ pub const MIN_RESIDUALS: usize = 3;
 
 /// The standard normal's 90 % quantile: the interval is 10-90 %.
 pub const Z80: f64 = 1.281_551_565_545;
-
-/// Flights (or pseudo-flights) per band, in [`BAND_POINTS`] order.
-pub type Bands = [f64; 4];
 
 /// The band of a flight's points.
 pub fn band(flight_points: u32) -> usize {
@@ -77,15 +76,22 @@ pub struct Evidence {
     pub prior: Option<Bands>,
 }
 
-/// The expected points of one flight of a test, with its 10-90 % interval.
+/// The expected points of one flight of a test, with the 10-90 % interval of that expectation and of the
+/// judge's mean of 5 flights.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PointsEstimate {
     /// Expected points of a flight (= expected mean points over 5 flights).
     pub mean: f64,
-    /// 10 % bound.
+    /// 10 % bound of the expected points.
     pub low: f64,
-    /// 90 % bound.
+    /// 90 % bound of the expected points.
     pub high: f64,
+    /// 10 % quantile of the mean points the judge's 5 flights will give.
+    pub judged_low: f64,
+    /// 90 % quantile of the judge's mean points.
+    pub judged_high: f64,
+    /// Standard deviation of the judge's mean points.
+    pub judged_sd: f64,
     /// What the estimate weighs, in flights (prior, own and neighbours').
     pub weight: f64,
 }
@@ -143,11 +149,15 @@ pub fn estimate(e: &Evidence) -> PointsEstimate {
 pub fn estimate_with(e: &Evidence, w: &Weights) -> PointsEstimate {
     let alpha = pseudo_counts_with(e, w);
     let total: f64 = alpha.iter().sum();
+    let judged = judged_mean(&alpha);
     if total <= 0.0 {
         return PointsEstimate {
             mean: 0.0,
             low: 0.0,
             high: BAND_POINTS[0],
+            judged_low: judged.low,
+            judged_high: judged.high,
+            judged_sd: judged.sd,
             weight: 0.0,
         };
     }
@@ -160,6 +170,9 @@ pub fn estimate_with(e: &Evidence, w: &Weights) -> PointsEstimate {
         mean,
         low: (mean - Z80 * sd).clamp(0.0, BAND_POINTS[0]),
         high: (mean + Z80 * sd).clamp(0.0, BAND_POINTS[0]),
+        judged_low: judged.low,
+        judged_high: judged.high,
+        judged_sd: judged.sd,
         weight: total,
     }
 }

@@ -4,6 +4,7 @@
 pub mod diversity_guard;
 pub mod draw;
 pub mod expected_points;
+pub mod judged_mean;
 pub mod neighbours;
 pub mod rank;
 pub mod rounds;

@@ -259,7 +259,7 @@ fn how_sure(e: Option<&super::expected::figures::SuiteExpectation>, others: usiz
     };
     format!(
         "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
-         expected 2026 score {:.2} (10-90 %: {:.2}-{:.2}){others}.",
+         expected 2026 score {:.2} (the judge's 5 flights per test, 10-90 %: {:.2}-{:.2}){others}.",
         e.final_score, e.final_low, e.final_high
     )
 }

@@ -141,9 +141,9 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
     let _ = writeln!(
         md,
         "| candidate | failed / flights | failure rate (90 % interval) | best flown m | expected points (10-90 %) | \
-         expected score | verdict |"
+         the judge's 5-flight mean (10-90 %) | expected score | verdict |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for t in tests {
         let file = t.reported_as.as_deref().unwrap_or_default();
         let verdict = match (t.confirmed, &t.near_duplicate_of, t.settled) {
@@ -152,16 +152,17 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
             (false, None, true) => format!("unconfirmed: {file}"),
             (false, None, false) => format!("unconfirmed (budget spent before its confirmation): {file}"),
         };
-        let (points, score) = t.expected.map_or(("n/a".into(), "n/a".into()), |e| {
+        let (points, judged, score) = t.expected.map_or(("n/a".into(), "n/a".into(), "n/a".into()), |e| {
             let p = e.points;
             (
                 format!("{:.2} ({:.2}-{:.2})", p.mean, p.low, p.high),
+                format!("{:.1}-{:.1}", p.judged_low, p.judged_high),
                 format!("{:.3}", e.score),
             )
         });
         let _ = writeln!(
             md,
-            "| {} | {} / {} | {:.2} ({:.2}-{:.2}) | {:.3} | {points} | {score} | {verdict} |",
+            "| {} | {} / {} | {:.2} ({:.2}-{:.2}) | {:.3} | {points} | {judged} | {score} | {verdict} |",
             t.candidate,
             t.failures,
             t.flights,

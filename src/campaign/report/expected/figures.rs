@@ -8,16 +8,18 @@ use crate::campaign::plan::expected_points::PointsEstimate;
 /// A test's expected 2026 figures.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TestExpectation {
-    /// Expected points of a flight, with its 10-90 % interval.
+    /// Expected points of a flight, with the 10-90 % intervals of that expectation and of the judge's mean.
     pub points: PointsEstimate,
     /// Expected flight time, minutes: its flown flights' mean (the prediction when none has a distance).
     pub minutes: f64,
     /// Expected 2026 test score: expected points x 10 / (obstacles² x minutes).
     pub score: f64,
-    /// The score at the points' 10 % bound.
+    /// The score at the 10 % quantile of the judge's mean points.
     pub score_low: f64,
-    /// The score at the points' 90 % bound.
+    /// The score at their 90 % quantile.
     pub score_high: f64,
+    /// Standard deviation of the score the judge will give.
+    pub score_sd: f64,
 }
 
 /// The written suite's expected 2026 score.
@@ -34,9 +36,10 @@ pub struct SuiteExpectation {
     pub guard_below_m: f64,
     /// Sum of the written tests' expected scores.
     pub total_score: f64,
-    /// The sum at their 10 % bounds.
+    /// 10 % quantile of the sum the judge will give: the tests scatter independently, so the sum's standard
+    /// deviation is the root of their variances' sum (normal approximation, at least 0).
     pub total_low: f64,
-    /// The sum at their 90 % bounds.
+    /// Its 90 % quantile.
     pub total_high: f64,
     /// The similarity penalty of the written tests' flown averages.
     pub sim_pen: f64,

@@ -5,7 +5,8 @@
 //! failed at least once and whose 10 % bound of expected points is above zero, less the near-duplicate
 //! trajectories of better written tests, with a margin over the judge's threshold
 //! ([`crate::campaign::report::expected::trajectory_guard`]). The suite's expected 2026 score is the sum of
-//! the written tests' expected scores times the expected `sim_pen`.
+//! the written tests' expected scores times the expected `sim_pen`; its interval is where the judge's score
+//! of 5 flights per test will fall.
 
 use std::cmp::Ordering;
 use std::path::Path;
@@ -13,7 +14,7 @@ use std::path::Path;
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::evaluation::SIMILAR_BELOW_M;
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
-use crate::campaign::plan::expected_points::{Evidence, counts, estimate, prior_bands};
+use crate::campaign::plan::expected_points::{Evidence, Z80, counts, estimate, prior_bands};
 pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
 use crate::campaign::report::expected::trajectory_guard::{flown_average, guard_below, near_duplicates, sim_pen};
 use crate::campaign::report::suite::DISTINCT_IOU;
@@ -77,7 +78,9 @@ fn better(a: &TestVerdict, b: &TestVerdict) -> Ordering {
 fn suite<'a>(tests: impl Iterator<Item = &'a TestVerdict>, near_duplicates: usize, pen: f64) -> SuiteExpectation {
     let written: Vec<TestExpectation> = tests.filter(|t| t.confirmed).filter_map(|t| t.expected).collect();
     let sum = |f: fn(&TestExpectation) -> f64| written.iter().map(f).sum::<f64>() + 0.0;
-    let (total_score, total_low, total_high) = (sum(|e| e.score), sum(|e| e.score_low), sum(|e| e.score_high));
+    let total_score = sum(|e| e.score);
+    let sd = sum(|e| e.score_sd * e.score_sd).sqrt();
+    let (total_low, total_high) = ((total_score - Z80 * sd).max(0.0), total_score + Z80 * sd);
     SuiteExpectation {
         tests: written.len(),
         near_duplicates,
@@ -165,8 +168,9 @@ impl<'a> Flights<'a> {
             points,
             minutes,
             score: score(points.mean),
-            score_low: score(points.low),
-            score_high: score(points.high),
+            score_low: score(points.judged_low),
+            score_high: score(points.judged_high),
+            score_sd: score(points.judged_sd),
         }
     }
 }
@@ -177,7 +181,8 @@ pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
     let Some(e) = e else { return };
     let _ = writeln!(
         md,
-        "| expected 2026 score of the written tests (10-90 %): sum of expected test scores x sim_pen | {:.3} \
+        "| expected 2026 score of the written tests (10-90 % of the judge's 5 flights each): sum of expected test \
+         scores x sim_pen | {:.3} \
          ({:.3}-{:.3}) = {:.3} x {:.3} |",
         e.final_score, e.final_low, e.final_high, e.total_score, e.sim_pen
     );

@@ -60,6 +60,13 @@ fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
     assert_eq!(suite.sim_pen, 1.0, "no trajectory on disk: nothing to compare");
     assert_eq!(suite.final_score, suite.total_score);
     assert!(suite.final_low <= suite.final_score && suite.final_score <= suite.final_high);
+    // The tests scatter independently: the suite's interval is narrower than its tests' bounds summed.
+    let sd = (e[0].score_sd.powi(2) + e[1].score_sd.powi(2)).sqrt();
+    assert!(
+        (suite.total_high - suite.total_score - Z80 * sd).abs() < 1e-9,
+        "{suite:?}"
+    );
+    assert!(suite.total_high - suite.total_low < e[0].score_high - e[0].score_low + e[1].score_high - e[1].score_low);
 }
 
 #[test]
