@@ -17,6 +17,7 @@ use mavlink::dialects::common::{
 use tokio::sync::broadcast;
 use tokio::task::JoinHandle;
 
+use super::answers::AnswerCounts;
 use super::pose_history::PoseHistory;
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
@@ -202,19 +203,22 @@ pub struct CompanionStats {
 }
 
 impl CompanionStats {
-    /// A report warning when more than 1 % of the answers were mirrored (the very first answer, before any
-    /// plan exists, is always mirrored and not worth a warning).
+    /// The answers sent so far (`None`: none, e.g. no companion ran).
+    pub fn counts(&self) -> Option<AnswerCounts> {
+        let c = AnswerCounts {
+            planned: self.planned.load(Ordering::Relaxed),
+            mirrored: self.mirrored.load(Ordering::Relaxed),
+        };
+        (c.total() > 0).then_some(c)
+    }
+
+    /// A report warning when the flight was starved ([`AnswerCounts::starved`]).
     pub fn warning(&self) -> Option<String> {
-        let (planned, mirrored) = (
-            self.planned.load(Ordering::Relaxed),
-            self.mirrored.load(Ordering::Relaxed),
-        );
-        (mirrored > 1 && mirrored * 100 > planned + mirrored).then(|| {
-            format!(
-                "{mirrored} of {} avoidance answers mirrored PX4's own setpoint (no plan in time): lower the time scale if this is more than a few",
-                planned + mirrored
-            )
-        })
+        let c = self.counts().filter(AnswerCounts::starved)?;
+        Some(format!(
+            "{}: the machine did not keep up (fewer instances, or a lower speed factor)",
+            c.describe()
+        ))
     }
 }
 

@@ -2,6 +2,7 @@
 //! offboard pilot, both steered by the LFS planner over the virtual boxes in the test's frame, and the LFS
 //! prediction reported beside the flight. Talks to the vehicle only through [`super::wire`].
 
+pub mod answers;
 pub mod avoidance;
 pub mod cp_feed;
 pub mod frame;

@@ -126,6 +126,10 @@ pub struct FlightReport {
     /// Collision Prevention flights: `CP_DIST` and whether the vehicle came inside it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub collision_prevention: Option<crate::judge::cp_verdict::CpVerdict>,
+    /// Avoidance flights: the companion's answers, planned and mirrored (a starved flight mirrored more than
+    /// 1 %).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub companion_answers: Option<crate::bridge::companion::answers::AnswerCounts>,
     /// The vehicle that flew, as it identified itself (`null`: none answered).
     pub vehicle: Option<VehicleIdentity>,
     /// Positions recorded.
@@ -214,6 +218,7 @@ impl FlightReport {
             companion_timing: end.companion_timing,
             planner_cruise_m_s: end.planner_cruise_m_s,
             collision_prevention: None,
+            companion_answers: None,
             vehicle: end.vehicle,
             samples: trajectory.samples.len(),
             trajectory,

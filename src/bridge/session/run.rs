@@ -160,6 +160,7 @@ fn report(mut s: Session<'_>, stop: Stop, mut recorder: Recorder, clock: Option<
     );
     report.collision_prevention =
         cp_dist.map(|c| crate::judge::cp_verdict::cp_verdict(&report.trajectory, &s.test.obstacles, c.dist_m));
+    report.companion_answers = s.companion.counts();
     report
 }
 

@@ -13,6 +13,7 @@ use std::time::Duration;
 
 use tokio::runtime::Handle;
 
+use crate::bridge::companion::answers::AnswerCounts;
 use crate::bridge::sitl::slot::{self, Slot};
 use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
 use crate::bridge::{FlyMode, FlyOptions};
@@ -175,6 +176,7 @@ impl Px4Vehicle {
         push_lines(log, &px4.console_tail(usize::MAX));
         drop(px4);
         match (result, died) {
+            (Ok(r), _) if let Some(why) = starved(r.companion_answers, self.instance) => Attempt::Failed(why),
             (Ok(r), _) if r.status.completed() => Attempt::Flew(flown(r)),
             (_, Some(status)) => {
                 Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance))
@@ -183,6 +185,16 @@ impl Px4Vehicle {
             (Ok(r), None) => never_ready(flown(r), self.instance),
         }
     }
+}
+
+/// A flight whose avoidance companion fell behind ([`AnswerCounts::starved`]) flew PX4's own setpoint
+/// instead of avoiding: the machine's failure, not the test's, so it is retried like a silent instance.
+fn starved(answers: Option<AnswerCounts>, instance: u8) -> Option<String> {
+    let c = answers.filter(AnswerCounts::starved)?;
+    Some(format!(
+        "PX4 instance {instance}: {}: the machine did not keep up, so the flight did not test the avoidance",
+        c.describe()
+    ))
 }
 
 /// A fresh instance at the test's home that never became ready to arm (`rejected`), or that went silent while
@@ -332,6 +344,19 @@ mod tests {
         for status in [FlightStatus::Landed, FlightStatus::Collision, FlightStatus::Timeout] {
             assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");
         }
+    }
+
+    #[test]
+    fn a_flight_whose_companion_fell_behind_is_a_backend_failure() {
+        let answers = |planned, mirrored| Some(AnswerCounts { planned, mirrored });
+        let why = starved(answers(1569, 146), 2).expect("9 % mirrored is starved");
+        assert!(why.contains("instance 2") && why.contains("146 of 1715"), "{why}");
+        assert_eq!(
+            starved(answers(4400, 1), 2),
+            None,
+            "only the answer before the first plan"
+        );
+        assert_eq!(starved(None, 2), None, "no companion (Collision Prevention, mission)");
     }
 
     #[test]
