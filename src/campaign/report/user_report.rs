@@ -188,9 +188,14 @@ fn only_unconfirmed(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines
     ));
 }
 
-/// The verdict when no flight failed.
+/// The verdict when no flight failed, or none was flown at all.
 fn none_failed(r: &View, lines: &mut Vec<String>) {
     let s = &r.suite;
+    if s.flown == 0 {
+        lines.push("Nothing was flown to its end: no flight was charged to the budget (the warnings say why).".into());
+        lines.push("Next: fix what the warnings name, then run it again.".into());
+        return;
+    }
     let closest = (r.flights.iter()).map(|f| f.flown_m).fold(f64::INFINITY, f64::min);
     let closest = if closest.is_finite() {
         format!(" (the closest came to {closest:.2} m)")

@@ -160,6 +160,17 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
 }
 
 #[test]
+fn a_campaign_that_flew_nothing_says_so_rather_than_no_failure() {
+    let r = report(&[], 1, 2);
+    let v = verdict(&r.view(), Path::new("f")).join("\n");
+    assert!(
+        v.contains("Nothing was flown to its end") && v.contains("warnings"),
+        "{v}"
+    );
+    assert!(!v.contains("No failure"), "{v}");
+}
+
+#[test]
 fn plurals_and_quoting() {
     assert_eq!(plural(1, "test"), "1 test");
     assert_eq!(plural(0, "test"), "0 tests");
