@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::generator::{Generator, GeneratorConfig};
-use prgenuav::model::TestCase;
+use prgenuav::model::{Spelling, TestCase};
 
 use super::{case, px4_sitl_bin};
 
@@ -88,14 +88,47 @@ fn assert_landed_at_the_land_point(px4: &Px4Sitl, r: &FlightReport, test: &TestC
             .skip(samples.len().saturating_sub(5))
             .map(|p| format!("t {:.2} s ({:.2}, {:.2}, {:.2})", p.t_s, p.x, p.y, p.z))
             .collect();
+        let kept = keep_evidence(px4, r, test, what);
         panic!(
             "{what}: {problem}\nreason: {:?}\nvehicle messages: {:?}\nlast positions (test frame, NED): {}\n\
-             PX4 console (last 60 lines):\n{}",
+             kept: {kept}\nPX4 console (last 60 lines):\n{}",
             r.reason,
             r.warnings,
             last.join("; "),
             px4.console_tail(60).join("\n")
         );
+    }
+}
+
+/// Keeps what a failed flight leaves (the test, its trajectory, PX4's ULogs and console) in a folder under
+/// cargo's temp dir for integration tests, which outlives the instance's own working folder; says where.
+fn keep_evidence(px4: &Px4Sitl, r: &FlightReport, test: &TestCase, what: &str) -> String {
+    let name: String = what
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '-' })
+        .collect();
+    let stamp = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("px4-failed/{name}-{stamp}"));
+    let kept = std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(dir.join("trajectory.csv"), r.trajectory.to_csv()))
+        .and_then(|()| std::fs::write(dir.join("console.txt"), px4.console_tail(usize::MAX).join("\n")))
+        .map_err(|e| e.to_string())
+        .and_then(|()| {
+            test.save(&dir.join("test.yaml"), Spelling::New)
+                .map_err(|e| e.to_string())
+        })
+        .and_then(|()| {
+            px4.ulogs().iter().enumerate().try_for_each(|(i, u)| {
+                std::fs::copy(u, dir.join(format!("flight-{i}.ulg")))
+                    .map(drop)
+                    .map_err(|e| e.to_string())
+            })
+        });
+    match kept {
+        Ok(()) => dir.display().to_string(),
+        Err(e) => format!("nothing ({}: {e})", dir.display()),
     }
 }
 

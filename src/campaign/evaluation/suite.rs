@@ -235,7 +235,8 @@ fn figures_2025(tests: &[FlownTest], evaluated: &[TestEvaluation]) -> Figures202
     let obstacles: Vec<Vec<_>> = failing.iter().map(|&i| tests[i].test.obstacles.clone()).collect();
     Figures2025 {
         failing: failing.len(),
-        failure_score: failing.iter().map(|&i| evaluated[i].score).sum(),
+        // + 0.0: an empty f64 sum is -0.0, printed "-0.000".
+        failure_score: failing.iter().map(|&i| evaluated[i].score).sum::<f64>() + 0.0,
         diversity: diversity(&obstacles),
     }
 }

@@ -92,6 +92,15 @@ fn a_test_without_flights_is_not_evaluated_and_has_no_average() {
     assert!(e.pairs.is_empty());
     assert_eq!(e.tests[1].score, 0.0);
     assert_eq!(e.sim_pen, 1.0);
+    // Nothing failed: a failure score of +0, printed "0.000", not "-0.000".
+    let far = flown("far.yaml", vec![wall()], vec![flight(-30.0, 30.0)]);
+    let (e, _) = evaluate_suite(&[far], Judge::E2026, 50.0).unwrap();
+    assert_eq!(e.figures_2025.failing, 0);
+    assert!(
+        e.figures_2025.failure_score.is_sign_positive(),
+        "{}",
+        e.figures_2025.failure_score
+    );
 }
 
 #[test]

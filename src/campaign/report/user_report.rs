@@ -150,7 +150,8 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
         s.distinct_failing,
         plural(s.flown, "flight")
     ));
-    lines.push(how_sure(s.expected_2026.as_ref(), unconfirmed.len()));
+    let (unsure, copies) = set_aside(unconfirmed.iter().copied());
+    lines.push(how_sure(s.expected_2026.as_ref(), unsure, copies));
     lines.push(format!(
         "Next: open test_0.svg, or fly it again: prgenuav fly {}",
         folder.join("test_0.yaml").display()
@@ -240,27 +241,39 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
     );
     let v = verdict(r, folder);
     let next = v.last().cloned().unwrap_or_default();
-    let unconfirmed = r.tests.iter().filter(|t| !t.confirmed).count();
+    let (unsure, copies) = set_aside(r.tests.iter().filter(|t| !t.confirmed));
     let meaning = if s.failing == 0 {
         format!("{} {next}", v[0])
     } else {
-        let sure = how_sure(s.expected_2026.as_ref(), unconfirmed);
+        let sure = how_sure(s.expected_2026.as_ref(), unsure, copies);
         format!("{sure} {next}").trim_start().to_string()
     };
     vec![figures, meaning, format!("output folder: {}", folder.display())]
 }
 
-/// How sure the written tests are, in one sentence; `others`: the tests that failed but were not written.
-fn how_sure(e: Option<&super::expected::figures::SuiteExpectation>, others: usize) -> String {
+/// How many of the failing tests not written lacked evidence, and how many fly like a better written test.
+fn set_aside<'a>(unwritten: impl Iterator<Item = &'a TestVerdict>) -> (usize, usize) {
+    unwritten.fold((0, 0), |(unsure, copies), t| match t.near_duplicate_of {
+        Some(_) => (unsure, copies + 1),
+        None => (unsure + 1, copies),
+    })
+}
+
+/// How sure the written tests are, in one sentence; `unsure`: the tests that failed but were not written
+/// for want of evidence, `copies`: those set aside because they fly like a better written test.
+fn how_sure(e: Option<&super::expected::figures::SuiteExpectation>, unsure: usize, copies: usize) -> String {
     let Some(e) = e else {
         return "Each written test failed at least once.".into();
     };
-    let others = match others {
-        0 => String::new(),
-        n => format!(
-            "; {} failed but not surely enough, or copy a better test's trajectory ({UNCONFIRMED_DIR}/)",
-            plural(n, "more test")
-        ),
+    let unsure_part = (unsure > 0).then(|| format!("{} failed but not surely enough", plural(unsure, "more test")));
+    let copies_part = (copies > 0).then(|| {
+        let verb = if copies == 1 { "flies" } else { "fly" };
+        format!("{} {verb} like a better written test", plural(copies, "failing test"))
+    });
+    let others: Vec<String> = [unsure_part, copies_part].into_iter().flatten().collect();
+    let others = match others.is_empty() {
+        true => String::new(),
+        false => format!("; {} ({UNCONFIRMED_DIR}/)", others.join(", ")),
     };
     format!(
         "Written by expected 2026 points: each is expected to earn points (the 10 % bound above zero); \
@@ -335,10 +348,13 @@ fn tests_section(md: &mut String, r: &View) {
         );
         for t in unconfirmed {
             let yaml = t.reported_as.as_deref().unwrap_or("?");
-            let why = if t.settled {
-                "did not hold"
-            } else {
-                "budget spent before its confirmation"
+            let why = match (&t.near_duplicate_of, t.settled) {
+                (Some(better), _) => format!(
+                    "flies like the better {better}: their flown averages lie {:.0} m apart (DTW)",
+                    t.near_duplicate_dtw_m.unwrap_or(f64::NAN)
+                ),
+                (None, true) => "did not hold".to_string(),
+                (None, false) => "budget spent before its confirmation".to_string(),
             };
             let _ = writeln!(
                 md,

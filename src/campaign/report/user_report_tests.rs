@@ -132,6 +132,45 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
 }
 
 #[test]
+fn a_test_set_aside_for_flying_like_a_better_one_is_named_so() {
+    let records = [
+        flight(1, 0, 0.5),
+        flight(1, 1, 0.7),
+        flight(2, 0, 1.0),
+        flight(2, 1, 3.0),
+        flight(2, 2, 3.0),
+        flight(2, 3, 3.0),
+        flight(2, 4, 3.0),
+        flight(3, 0, 0.6),
+        flight(3, 1, 0.8),
+    ];
+    let mut r = report(&records, 5, 9);
+    // The guard's verdict needs flown trajectories; here it is set by hand on the second 2-of-2 test.
+    let copy = r.tests.iter_mut().find(|t| t.candidate.0 == 3).expect("test 3");
+    copy.confirmed = false;
+    copy.near_duplicate_of = Some("test_0.yaml".into());
+    copy.near_duplicate_dtw_m = Some(62.3);
+    copy.reported_as = Some("unconfirmed/test_1.yaml".into());
+    let v = verdict(&r.view(), Path::new("f"));
+    assert!(
+        v[1].ends_with("; 1 failing test flies like a better written test (unconfirmed/)."),
+        "{v:?}"
+    );
+    let e = r.suite.expected_2026.as_ref();
+    let both = super::how_sure(e, 1, 2);
+    assert!(
+        both.contains("; 1 more test failed but not surely enough, 2 failing tests fly like a better written test"),
+        "{both}"
+    );
+    let mut md = String::new();
+    opening(&mut md, &r.view(), &r.folder);
+    assert!(
+        md.contains("[unconfirmed/test_1.yaml](unconfirmed/test_1.yaml): 0.60 m, failed 2 of 2 flights (flies like the better test_0.yaml: their flown averages lie 62 m apart (DTW))"),
+        "{md}"
+    );
+}
+
+#[test]
 fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
     let mut r = report(&[flight(0, 0, 2.5)], 1, 1);
     r.flights.push(ReportedFlight {

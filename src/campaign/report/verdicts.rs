@@ -51,6 +51,9 @@ pub struct TestVerdict {
     /// The better written test whose flown trajectory it copies (`test_K.yaml`): set aside, not written.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub near_duplicate_of: Option<String>,
+    /// The DTW distance between its flown average and that test's (metres, x, y, z).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_duplicate_dtw_m: Option<f64>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
     pub first_flight: usize,
@@ -97,6 +100,7 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             reported_as: None,
             expected: None,
             near_duplicate_of: None,
+            near_duplicate_dtw_m: None,
             first_flight,
         };
         out.push((verdict, flights));
@@ -148,7 +152,10 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
         let file = t.reported_as.as_deref().unwrap_or_default();
         let verdict = match (t.confirmed, &t.near_duplicate_of, t.settled) {
             (true, _, _) => file.to_string(),
-            (false, Some(better), _) => format!("near-duplicate of {better}: {file}"),
+            (false, Some(better), _) => format!(
+                "near-duplicate of {better} (DTW {:.0} m): {file}",
+                t.near_duplicate_dtw_m.unwrap_or(f64::NAN)
+            ),
             (false, None, true) => format!("unconfirmed: {file}"),
             (false, None, false) => format!("unconfirmed (budget spent before its confirmation): {file}"),
         };

@@ -32,7 +32,8 @@ pub struct SuiteExpectation {
     /// The DTW distance below which two average trajectories are too similar (`evaluate`'s default), m.
     pub similar_below_m: f64,
     /// The guard's threshold: a test whose flown average lies closer than this to a better written test's is
-    /// set aside, m.
+    /// more likely than not too similar for the judge, and set aside, m. Further ones are written when they
+    /// raise the expected score.
     pub guard_below_m: f64,
     /// Sum of the written tests' expected scores.
     pub total_score: f64,
@@ -41,7 +42,8 @@ pub struct SuiteExpectation {
     pub total_low: f64,
     /// Its 90 % quantile.
     pub total_high: f64,
-    /// The similarity penalty of the written tests' flown averages.
+    /// The expected similarity penalty of the written tests: 1 - the sum of their chances of being found too
+    /// similar to a better one / tests.
     pub sim_pen: f64,
     /// total_score x sim_pen: the expected 2026 score.
     pub final_score: f64,

@@ -2,11 +2,11 @@
 //! ([`crate::campaign::plan::expected_points`]) from its own flights, its neighbours' (the flown tests whose
 //! footprints overlap it by IoU >= [`NEIGHBOUR_IOU`]) and the calibrated prediction; the tests rank by their
 //! expected 2026 score (expected points per expected minute, x 10 / obstacles²). Written are those that
-//! failed at least once and whose 10 % bound of expected points is above zero, less the near-duplicate
-//! trajectories of better written tests, with a margin over the judge's threshold
-//! ([`crate::campaign::report::expected::trajectory_guard`]). The suite's expected 2026 score is the sum of
-//! the written tests' expected scores times the expected `sim_pen`; its interval is where the judge's score
-//! of 5 flights per test will fall.
+//! failed at least once and whose 10 % bound of expected points is above zero, less those whose flown
+//! trajectory likely copies a better written test's or would cost the suite more through `sim_pen` than it
+//! adds ([`crate::campaign::report::expected::trajectory_guard`]). The suite's expected 2026 score is the sum
+//! of the written tests' expected scores times the expected `sim_pen`; its interval is where the judge's
+//! score of 5 flights per test will fall.
 
 use std::cmp::Ordering;
 use std::path::Path;
@@ -16,13 +16,15 @@ use crate::campaign::evaluation::SIMILAR_BELOW_M;
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
 use crate::campaign::plan::expected_points::{Evidence, Z80, counts, estimate, prior_bands};
 pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
-use crate::campaign::report::expected::trajectory_guard::{flown_average, guard_below, near_duplicates, sim_pen};
+use crate::campaign::report::expected::trajectory_guard::{
+    Guarded, choose, expected_sim_pen, flown_average, guard_below,
+};
 use crate::campaign::report::suite::DISTINCT_IOU;
 use crate::campaign::report::verdicts::TestVerdict;
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
+use crate::model::Obstacle;
 use crate::model::competition::TEST_SCORE_SCALE;
-use crate::model::{Obstacle, Trajectory};
 
 /// Flown tests overlapping a test by at least this footprint IoU are its neighbours: the campaign's own
 /// near-duplicate rule, so a neighbour is a test it would not fly as new.
@@ -41,31 +43,29 @@ pub fn aim(
         t.expected = Some(flights.expectation(t, own));
     }
     tests.sort_by(|a, b| better(&a.0, &b.0));
-    let mut averages = Vec::new();
+    let mut candidates = Vec::new();
     let mut earning = Vec::new();
     for (i, (t, own)) in tests.iter_mut().enumerate() {
         t.confirmed = t.failures > 0 && t.expected.is_some_and(|e| e.points.earns());
         if t.confirmed {
-            averages.push(flown_average(folder, own));
+            candidates.push((flown_average(folder, own), t.expected.map_or(0.0, |e| e.score)));
             earning.push(i);
         }
     }
-    let duplicates = near_duplicates(&averages, guard_below(SIMILAR_BELOW_M));
-    for (&i, dup) in earning.iter().zip(&duplicates) {
-        if let Some(k) = dup {
-            tests[i].0.confirmed = false;
-            tests[i].0.near_duplicate_of = Some(format!("test_{k}.yaml"));
+    let verdicts = choose(&candidates, SIMILAR_BELOW_M);
+    let mut kept_names = Vec::new();
+    for (&i, verdict) in earning.iter().zip(&verdicts) {
+        match *verdict {
+            Guarded::Kept { .. } => kept_names.push(i),
+            Guarded::Copies { kept, dtw_m } => {
+                tests[i].0.confirmed = false;
+                tests[i].0.near_duplicate_of = Some(format!("test_{kept}.yaml"));
+                tests[i].0.near_duplicate_dtw_m = Some(dtw_m);
+            }
         }
     }
-    let kept: Vec<Trajectory> = (averages.into_iter().zip(&duplicates))
-        .filter(|(_, d)| d.is_none())
-        .filter_map(|(a, _)| a)
-        .collect();
-    suite(
-        tests.iter().map(|(t, _)| t),
-        duplicates.iter().flatten().count(),
-        sim_pen(&kept, SIMILAR_BELOW_M),
-    )
+    let set_aside = verdicts.len() - kept_names.len();
+    suite(tests.iter().map(|(t, _)| t), set_aside, expected_sim_pen(&verdicts))
 }
 
 /// Best first: the higher expected score, then the candidate index.
@@ -188,7 +188,8 @@ pub fn markdown_rows(md: &mut String, e: Option<&SuiteExpectation>) {
     );
     let _ = writeln!(
         md,
-        "| tests set aside as near-duplicate trajectories (DTW < {:.0} m to a better written test) | {} |",
+        "| tests set aside as near-duplicate trajectories (more likely than not similar for the judge: DTW < {:.0} \
+         m to a better written test; or costing more through sim_pen than they add) | {} |",
         e.guard_below_m, e.near_duplicates
     );
 }

@@ -1,8 +1,10 @@
 //! Keeps the written suite free of near-duplicate trajectories, as the 2026 judge sees them: each test's
 //! flown flights are averaged the way `evaluate` averages them (origin aligned, 0.5 s bins, soft-DTW
-//! barycenter, landing cut) and a test whose average lies within [`GUARD_MARGIN`] x `--similar-below` (DTW
-//! on x, y, z) of a better written test's is set aside: the judge would count it as too similar and cut the
-//! whole suite.
+//! barycenter, landing cut) and compared (DTW on x, y, z) with the better tests already written. The
+//! campaign's averages rest on 1-3 flights, the judge's on 5 fresh ones, so a campaign distance only gives
+//! the chance that the judge finds the pair too similar ([`flag_probability`]). A test is written when that
+//! chance is at most [`MAX_FLAG_PROBABILITY`] and it raises the suite's expected 2026 score, its own expected
+//! score against the share of the suite's `sim_pen` it may cost ([`choose`]).
 
 use std::path::Path;
 
@@ -11,14 +13,42 @@ use crate::campaign::store::journal_check::inside_bytes;
 use crate::judge::similarity::{average, path_distance, prepare};
 use crate::model::Trajectory;
 
-/// The guard's threshold over the judge's: averages of a campaign's 1-3 flights per test can lie further
-/// apart than the judge's 5-flight averages of the same pair, so a pair passes only this far beyond the
-/// judge's threshold. Chosen from how the two distances differ (docs/design-constants.md#trajectory-guard-margin).
-pub const GUARD_MARGIN: f64 = 1.4;
+/// Median of the judge's over the campaign's DTW distance of the same pair of tests. With
+/// [`RATIO_LOG_SD`], a log-normal fitted to the quantiles measured on the mock
+/// (docs/design-constants.md#trajectory-guard).
+pub const RATIO_MEDIAN: f64 = 0.95;
 
-/// The DTW distance below which the guard sets a test aside when the judge's threshold is `similar_below_m`.
+/// Standard deviation of the ratio's logarithm.
+pub const RATIO_LOG_SD: f64 = 0.2;
+
+/// A test the judge more likely than not finds too similar to a better written test is never written: the
+/// suite is kept free of near-duplicates even where a copy of a strong test would pay.
+pub const MAX_FLAG_PROBABILITY: f64 = 0.5;
+
+/// The chance that the judge's 5-flight averages of a pair lie closer than `similar_below_m` when the
+/// campaign's averages lie `campaign_m` apart (DTW, metres).
+pub fn flag_probability(campaign_m: f64, similar_below_m: f64) -> f64 {
+    if campaign_m.is_nan() || campaign_m <= 0.0 {
+        return 1.0;
+    }
+    normal_cdf(((similar_below_m / campaign_m).ln() - RATIO_MEDIAN.ln()) / RATIO_LOG_SD)
+}
+
+/// The campaign distance below which [`flag_probability`] exceeds [`MAX_FLAG_PROBABILITY`] (metres): the
+/// closest a written test can lie to a better one.
 pub fn guard_below(similar_below_m: f64) -> f64 {
-    similar_below_m * GUARD_MARGIN
+    // The probability is 0.5 where the ratio's median brings the campaign distance to the threshold.
+    similar_below_m / RATIO_MEDIAN
+}
+
+/// Standard normal distribution function (Abramowitz and Stegun 7.1.26, error below 1.5e-7).
+fn normal_cdf(z: f64) -> f64 {
+    let x = z.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly =
+        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erf = 1.0 - poly * (-x * x).exp();
+    if z >= 0.0 { 0.5 * (1.0 + erf) } else { 0.5 * (1.0 - erf) }
 }
 
 /// The average of the flights `records` whose trajectories (relative to `folder`) can be read; `None` when
@@ -40,42 +70,74 @@ pub fn flown_average(folder: &Path, records: &[&FlightRecord]) -> Option<Traject
     average(&flights)
 }
 
-/// For each of `averages` (best first), the index among the kept ones of the better kept test it lies
-/// within `similar_below_m` of (the closest), or `None` when it is kept. A test without an average cannot
-/// be compared and is kept.
-pub fn near_duplicates(averages: &[Option<Trajectory>], similar_below_m: f64) -> Vec<Option<usize>> {
-    let mut kept: Vec<&Trajectory> = Vec::new();
-    let mut out = Vec::with_capacity(averages.len());
-    for a in averages {
-        let Some(a) = a else {
-            out.push(None);
-            continue;
+/// The guard's verdict on one test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Guarded {
+    /// Written.
+    Kept {
+        /// The chance the judge finds it too similar to a better written test.
+        flag_probability: f64,
+    },
+    /// Set aside: it flies like a better kept test.
+    Copies {
+        /// That test's index among the kept ones (0 = the first kept).
+        kept: usize,
+        /// The DTW distance between the two flown averages, metres.
+        dtw_m: f64,
+    },
+}
+
+/// The guard over `tests` (best first: each test's flown average and expected score): walks them in order and
+/// keeps a test when its [`flag_probability`] against the kept ones is at most [`MAX_FLAG_PROBABILITY`] and
+/// the suite's expected score, (sum of scores) x (1 - expected similar tests / tests), does not fall. A test
+/// without an average cannot be compared and is kept.
+pub fn choose(tests: &[(Option<Trajectory>, f64)], similar_below_m: f64) -> Vec<Guarded> {
+    // Each kept average with its index among all kept tests (those without an average count too).
+    let mut kept: Vec<(usize, &Trajectory)> = Vec::new();
+    let (mut total, mut similar, mut n) = (0.0, 0.0, 0.0);
+    let mut out = Vec::with_capacity(tests.len());
+    for (average, score) in tests {
+        let distances: Vec<(usize, f64)> = match average {
+            Some(a) => (kept.iter())
+                .filter_map(|(k, b)| Some((*k, path_distance(a, b)?)))
+                .collect(),
+            None => Vec::new(),
         };
-        let closest = (kept.iter().enumerate())
-            .filter_map(|(k, b)| Some((k, path_distance(a, b)?)))
-            .filter(|(_, d)| *d < similar_below_m)
-            .min_by(|x, y| x.1.total_cmp(&y.1));
+        let apart: f64 = (distances.iter())
+            .map(|(_, d)| 1.0 - flag_probability(*d, similar_below_m))
+            .product();
+        let q = 1.0 - apart;
+        let before = if n > 0.0 { total * (1.0 - similar / n) } else { 0.0 };
+        let after = (total + score) * (1.0 - (similar + q) / (n + 1.0));
+        let closest = distances.iter().copied().min_by(|x, y| x.1.total_cmp(&y.1));
         match closest {
-            Some((k, _)) => out.push(Some(k)),
-            None => {
-                kept.push(a);
-                out.push(None);
+            Some((k, d)) if q > MAX_FLAG_PROBABILITY || after < before => {
+                out.push(Guarded::Copies { kept: k, dtw_m: d })
+            }
+            _ => {
+                if let Some(a) = average {
+                    kept.push((n as usize, a));
+                }
+                (total, similar, n) = (total + score, similar + q, n + 1.0);
+                out.push(Guarded::Kept { flag_probability: q });
             }
         }
     }
     out
 }
 
-/// The 2026 similarity penalty of tests with these averages: 1 - (tests within `similar_below_m` of an
-/// earlier one) / (tests with an average); 1 without any.
-pub fn sim_pen(averages: &[Trajectory], similar_below_m: f64) -> f64 {
-    if averages.is_empty() {
+/// The expected 2026 similarity penalty of the tests `choose` kept: 1 - expected similar tests / tests.
+pub fn expected_sim_pen(verdicts: &[Guarded]) -> f64 {
+    let q: Vec<f64> = (verdicts.iter())
+        .filter_map(|v| match v {
+            Guarded::Kept { flag_probability } => Some(*flag_probability),
+            Guarded::Copies { .. } => None,
+        })
+        .collect();
+    if q.is_empty() {
         return 1.0;
     }
-    let similar = (0..averages.len())
-        .filter(|&j| (0..j).any(|i| path_distance(&averages[i], &averages[j]).is_some_and(|d| d < similar_below_m)))
-        .count();
-    1.0 - similar as f64 / averages.len() as f64
+    1.0 - q.iter().sum::<f64>() / q.len() as f64
 }
 
 #[cfg(test)]
@@ -101,43 +163,70 @@ mod tests {
         Trajectory::new(samples)
     }
 
-    #[test]
-    fn of_two_identical_trajectories_the_second_is_set_aside() {
-        let a = average(&[prepare(&path(0.0))]);
-        let dup = near_duplicates(&[a.clone(), a.clone()], 75.0);
-        assert_eq!(dup, [None, Some(0)]);
-        let averages: Vec<Trajectory> = [a.clone(), a].into_iter().flatten().collect();
-        assert_eq!(sim_pen(&averages, 75.0), 0.5);
+    fn averaged(east: f64) -> Option<Trajectory> {
+        average(&[prepare(&path(east))])
     }
 
     #[test]
-    fn a_pair_just_beyond_the_judges_threshold_is_set_aside_by_the_margin() {
-        let judge = 75.0;
-        let (a, b) = (path(0.0), path(6.0));
-        let d = path_distance(&a, &b).expect("both have samples");
-        assert!(judge < d && d < guard_below(judge), "{d}");
-        let averages = [average(&[prepare(&a)]), average(&[prepare(&b)])];
-        assert_eq!(near_duplicates(&averages, guard_below(judge)), [None, Some(0)]);
-        let flat: Vec<Trajectory> = averages.into_iter().flatten().collect();
-        assert_eq!(sim_pen(&flat, judge), 1.0, "the judge would not count them now");
+    fn the_flag_probability_falls_with_the_campaign_distance() {
+        let p = |d: f64| flag_probability(d, 75.0);
+        assert_eq!((p(0.0), p(f64::NAN)), (1.0, 1.0));
+        assert!((p(guard_below(75.0)) - 0.5).abs() < 1e-6);
+        assert!(p(50.0) > 0.95 && p(150.0) < 0.01, "{} {}", p(50.0), p(150.0));
+        // The log-normal's 10 % quantile: the old fixed margin of 1.4 let pairs through at about this chance.
+        let p10 = RATIO_MEDIAN * (-1.281_551_565_545 * RATIO_LOG_SD).exp();
+        assert!((p(75.0 / p10) - 0.1).abs() < 1e-6);
+        assert!((normal_cdf(0.0) - 0.5).abs() < 1e-9 && (normal_cdf(1.96) - 0.975).abs() < 1e-4);
+        let mut last = 1.0;
+        for d in (10..400).map(f64::from) {
+            assert!(p(d) <= last, "monotone at {d}");
+            last = p(d);
+        }
     }
 
     #[test]
-    fn different_trajectories_are_kept() {
-        let (a, b) = (path(0.0), path(40.0));
-        let d = path_distance(&a, &b).expect("both have samples");
-        assert!(d > 75.0, "{d}");
-        let averages = [average(&[prepare(&a)]), average(&[prepare(&b)])];
-        assert_eq!(near_duplicates(&averages, 75.0), [None, None]);
-        let flat: Vec<Trajectory> = averages.into_iter().flatten().collect();
-        assert_eq!(sim_pen(&flat, 75.0), 1.0);
-        // Set aside against the kept tests only: the third copies the first, not the set-aside second.
-        let three = [Some(a.clone()), Some(a.clone()), Some(b), Some(a)];
-        assert_eq!(near_duplicates(&three, 75.0), [None, Some(0), None, Some(0)]);
-        assert_eq!(
-            near_duplicates(&[None, None], 75.0),
-            [None, None],
-            "nothing to compare: kept"
+    fn an_identical_trajectory_is_set_aside_and_a_different_one_kept() {
+        let (a, b) = (averaged(0.0), averaged(40.0));
+        let d = path_distance(a.as_ref().unwrap(), b.as_ref().unwrap()).expect("both have samples");
+        assert!(flag_probability(d, 75.0) < 0.01, "{d}");
+        let v = choose(&[(a.clone(), 1.0), (a.clone(), 1.0), (b, 1.0), (a, 5.0)], 75.0);
+        assert_eq!(v[0], Guarded::Kept { flag_probability: 0.0 });
+        assert!(
+            matches!(v[1], Guarded::Copies { kept: 0, dtw_m } if dtw_m < 1e-9),
+            "{v:?}"
         );
+        assert!(
+            matches!(v[2], Guarded::Kept { flag_probability } if flag_probability < 0.01),
+            "{v:?}"
+        );
+        // Never written while more likely similar than not, however well it scores.
+        assert!(matches!(v[3], Guarded::Copies { kept: 0, .. }), "{v:?}");
+        assert!(expected_sim_pen(&v) > 0.99);
+    }
+
+    #[test]
+    fn a_test_near_the_threshold_is_written_when_its_score_outweighs_the_risk() {
+        let (a, b) = (averaged(0.0), averaged(8.0));
+        let d = path_distance(a.as_ref().unwrap(), b.as_ref().unwrap()).expect("both have samples");
+        let q = flag_probability(d, 75.0);
+        assert!(0.02 < q && q < MAX_FLAG_PROBABILITY, "{d} m: {q}");
+        let strong = choose(&[(a.clone(), 1.0), (b.clone(), 1.0)], 75.0);
+        assert_eq!(strong[1], Guarded::Kept { flag_probability: q });
+        assert!((expected_sim_pen(&strong) - (1.0 - q / 2.0)).abs() < 1e-12);
+        // A weak one would cost the suite more through sim_pen than it adds.
+        let weak = choose(&[(a, 1.0), (b, 0.01)], 75.0);
+        assert!(matches!(weak[1], Guarded::Copies { kept: 0, .. }), "{weak:?}");
+    }
+
+    #[test]
+    fn a_copy_names_its_test_among_all_kept_ones() {
+        let a = averaged(0.0);
+        let v = choose(&[(None, 1.0), (a.clone(), 1.0), (a, 1.0)], 75.0);
+        assert_eq!(
+            v[2],
+            Guarded::Copies { kept: 1, dtw_m: 0.0 },
+            "the kept test without an average counts"
+        );
+        assert_eq!(choose(&[(None, 1.0), (None, 1.0)], 75.0).len(), 2);
     }
 }
