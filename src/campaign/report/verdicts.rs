@@ -54,6 +54,9 @@ pub struct TestVerdict {
     /// The DTW distance between its flown average and that test's (metres, x, y, z).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub near_duplicate_dtw_m: Option<f64>,
+    /// For a written test: the chance that the judge finds it too similar to a better written test.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub similar_chance: Option<f64>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
     pub first_flight: usize,
@@ -101,6 +104,7 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             expected: None,
             near_duplicate_of: None,
             near_duplicate_dtw_m: None,
+            similar_chance: None,
             first_flight,
         };
         out.push((verdict, flights));

@@ -53,10 +53,13 @@ pub fn aim(
         }
     }
     let verdicts = choose(&candidates, SIMILAR_BELOW_M);
-    let mut kept_names = Vec::new();
+    let mut kept = Vec::new();
     for (&i, verdict) in earning.iter().zip(&verdicts) {
         match *verdict {
-            Guarded::Kept { .. } => kept_names.push(i),
+            Guarded::Kept { flag_probability } => {
+                tests[i].0.similar_chance = Some(flag_probability);
+                kept.push(i);
+            }
             Guarded::Copies { kept, dtw_m } => {
                 tests[i].0.confirmed = false;
                 tests[i].0.near_duplicate_of = Some(format!("test_{kept}.yaml"));
@@ -64,7 +67,7 @@ pub fn aim(
             }
         }
     }
-    let set_aside = verdicts.len() - kept_names.len();
+    let set_aside = verdicts.len() - kept.len();
     suite(tests.iter().map(|(t, _)| t), set_aside, expected_sim_pen(&verdicts))
 }
 

@@ -49,6 +49,12 @@ fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
     let (tests, suite) = aimed(&records);
     let order: Vec<(u64, bool)> = tests.iter().map(|t| (t.candidate.0, t.confirmed)).collect();
     assert_eq!(order, [(2, true), (1, true), (3, false)], "{tests:#?}");
+    assert_eq!(
+        tests[0].similar_chance,
+        Some(0.0),
+        "the best test cannot copy a better one"
+    );
+    assert_eq!(tests[2].similar_chance, None, "not written");
     let e: Vec<TestExpectation> = tests.iter().filter_map(|t| t.expected).collect();
     assert!(e[0].score > e[1].score && e[1].score > e[2].score);
     assert!((e[1].minutes - 2.0).abs() < 1e-12);
@@ -67,6 +73,43 @@ fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
         "{suite:?}"
     );
     assert!(suite.total_high - suite.total_low < e[0].score_high - e[0].score_low + e[1].score_high - e[1].score_low);
+}
+
+#[test]
+fn a_test_flying_the_same_path_as_a_better_one_is_set_aside_with_its_distance() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = crate::model::Trajectory::new(
+        (0..80)
+            .map(|i| crate::model::Sample {
+                t_s: f64::from(i) * 0.5,
+                x: f64::from(i),
+                y: 0.0,
+                z: 10.0,
+                r: None,
+            })
+            .collect(),
+    );
+    std::fs::create_dir_all(dir.path().join("flights")).expect("flights/");
+    let records = [
+        flight(1, 0, 0.5, 60.0),
+        flight(1, 1, 0.6, 60.0),
+        flight(2, 0, 0.7, 60.0),
+        flight(2, 1, 0.8, 60.0),
+    ];
+    for r in &records {
+        std::fs::write(dir.path().join(&r.trajectory), path.to_csv()).expect("csv");
+    }
+    let mut tests = verdicts(&records, 3);
+    let suite = aim(dir.path(), &records, &mut tests);
+    let (best, copy) = (&tests[0].0, &tests[1].0);
+    assert_eq!(
+        (best.candidate.0, best.confirmed, best.similar_chance),
+        (1, true, Some(0.0))
+    );
+    assert!(!copy.confirmed && copy.similar_chance.is_none(), "{copy:?}");
+    assert_eq!(copy.near_duplicate_of.as_deref(), Some("test_0.yaml"));
+    assert!(copy.near_duplicate_dtw_m.is_some_and(|d| d < 1e-9), "{copy:?}");
+    assert_eq!((suite.tests, suite.near_duplicates, suite.sim_pen), (1, 1, 1.0));
 }
 
 #[test]
