@@ -48,8 +48,15 @@ fn the_report_carries_the_expected_2026_score_and_the_written_order_follows_it()
     assert!((num("total_score") - total).abs() < 1e-9, "{e}");
     assert!((num("final_score") - total * num("sim_pen")).abs() < 1e-9, "{e}");
     assert!(num("final_low") <= num("final_score") && num("final_score") <= num("final_high"));
-    assert_eq!(num("sim_pen"), 1.0, "near-duplicates are set aside before the penalty");
+    // The expected penalty: each written test's chance of being found similar to a better one, at most 0.5.
+    let chances: Vec<f64> = (written.iter())
+        .map(|t| t["similar_chance"].as_f64().expect("similar_chance of a written test"))
+        .collect();
+    assert!(chances.iter().all(|q| (0.0..=0.5).contains(q)), "{chances:?}");
+    let expected_pen = 1.0 - chances.iter().sum::<f64>() / chances.len().max(1) as f64;
+    assert!((num("sim_pen") - expected_pen).abs() < 1e-9, "{e}");
     for t in tests.iter().filter(|t| !t["near_duplicate_of"].is_null()) {
+        assert!(t["near_duplicate_dtw_m"].as_f64().is_some_and(|d| d >= 0.0), "{t}");
         let better = t["near_duplicate_of"].as_str().expect("a file name");
         assert!(folder.join(better).is_file(), "{better} is written");
         let kept = t["reported_as"].as_str().expect("kept on disk");

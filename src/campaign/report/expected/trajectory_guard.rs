@@ -37,7 +37,7 @@ pub fn flag_probability(campaign_m: f64, similar_below_m: f64) -> f64 {
 /// The campaign distance below which [`flag_probability`] exceeds [`MAX_FLAG_PROBABILITY`] (metres): the
 /// closest a written test can lie to a better one.
 pub fn guard_below(similar_below_m: f64) -> f64 {
-    // The probability is 0.5 where the ratio's median brings the campaign distance to the threshold.
+    // With the cap at 0.5 this is where the ratio's median brings the campaign distance to the threshold.
     similar_below_m / RATIO_MEDIAN
 }
 
@@ -171,7 +171,8 @@ mod tests {
     fn the_flag_probability_falls_with_the_campaign_distance() {
         let p = |d: f64| flag_probability(d, 75.0);
         assert_eq!((p(0.0), p(f64::NAN)), (1.0, 1.0));
-        assert!((p(guard_below(75.0)) - 0.5).abs() < 1e-6);
+        // guard_below is where the chance crosses the cap (its median form holds for a cap of 0.5).
+        assert!((p(guard_below(75.0)) - MAX_FLAG_PROBABILITY).abs() < 1e-6);
         assert!(p(50.0) > 0.95 && p(150.0) < 0.01, "{} {}", p(50.0), p(150.0));
         // The log-normal's 10 % quantile: the old fixed margin of 1.4 let pairs through at about this chance.
         let p10 = RATIO_MEDIAN * (-1.281_551_565_545 * RATIO_LOG_SD).exp();
