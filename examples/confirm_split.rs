@@ -19,6 +19,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use prgenuav::campaign::fly::confirm::failed;
+use prgenuav::campaign::plan::expected_points::normal_cdf;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::competition::FAIL_BELOW_M as FAIL_M;
@@ -45,16 +46,6 @@ fn confirmations(records: &[FlightRecord]) -> Vec<(f64, bool, usize)> {
         .collect()
 }
 
-/// The standard normal CDF (Abramowitz and Stegun 7.1.26, error below 1.5e-7).
-fn phi(x: f64) -> f64 {
-    let z = x.abs() / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.327_591_1 * z);
-    let poly =
-        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    let erf = 1.0 - poly * (-z * z).exp();
-    0.5 * (1.0 + erf.copysign(x))
-}
-
 /// (normal model's p, ensemble's p, failed) of each first flight with an ensemble prediction, in flight order.
 /// The model's prior: 0 m of extra bias and a 0.3 m spread, each weighing 3 flights.
 fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
@@ -65,7 +56,7 @@ fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
         let n = residuals.len() as f64;
         let bias = residuals.iter().sum::<f64>() / (n + 3.0);
         let var = (3.0 * 0.09 + residuals.iter().map(|x| (x - bias).powi(2)).sum::<f64>()) / (n + 3.0);
-        let q = phi((FAIL_M - (r.prediction.min_distance + bias)) / var.sqrt());
+        let q = normal_cdf((FAIL_M - (r.prediction.min_distance + bias)) / var.sqrt());
         if let Some(p) = r.prediction.p_fail {
             out.push((q, p, flown < FAIL_M));
         }

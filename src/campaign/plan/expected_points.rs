@@ -35,6 +35,16 @@ pub const MIN_RESIDUALS: usize = 3;
 /// The standard normal's 90 % quantile: the interval is 10-90 %.
 pub const Z80: f64 = 1.281_551_565_545;
 
+/// The standard normal distribution function (Abramowitz and Stegun 7.1.26, error below 1.5e-7).
+pub fn normal_cdf(z: f64) -> f64 {
+    let x = z.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly =
+        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erf = 1.0 - poly * (-x * x).exp();
+    0.5 * (1.0 + erf.copysign(z))
+}
+
 /// The band of a flight's points.
 pub fn band(flight_points: u32) -> usize {
     match flight_points {
@@ -251,6 +261,13 @@ mod tests {
         };
         let capped = estimate_with(&evidence(&[3.0], &[0.1; 40], None), &weights);
         assert!((capped.mean - 2.5).abs() < 1e-12, "{capped:?}");
+    }
+
+    #[test]
+    fn the_normal_distribution_function_matches_its_table() {
+        assert!((normal_cdf(0.0) - 0.5).abs() < 1e-9);
+        assert!((normal_cdf(Z80) - 0.9).abs() < 1e-6 && (normal_cdf(-Z80) - 0.1).abs() < 1e-6);
+        assert!((normal_cdf(1.96) - 0.975).abs() < 1e-4);
     }
 
     #[test]

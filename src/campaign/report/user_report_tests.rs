@@ -92,17 +92,18 @@ fn a_failure_too_rare_to_earn_points_says_so_and_what_to_run_next() {
     );
 }
 
+/// Test 1 failed 2 of 2 flights (0.5, 0.7 m); test 2 failed 1 of 5 (1.0 m, then 3.0 m four times).
+fn two_of_two_and_one_of_five() -> Vec<FlightRecord> {
+    let rare = (1..5).map(|a| flight(2, a, 3.0));
+    [flight(1, 0, 0.5), flight(1, 1, 0.7), flight(2, 0, 1.0)]
+        .into_iter()
+        .chain(rare)
+        .collect()
+}
+
 #[test]
 fn confirmed_failures_come_first_with_links_and_the_next_step() {
-    let records = [
-        flight(1, 0, 0.5),
-        flight(1, 1, 0.7),
-        flight(2, 0, 1.0),
-        flight(2, 1, 3.0),
-        flight(2, 2, 3.0),
-        flight(2, 3, 3.0),
-        flight(2, 4, 3.0),
-    ];
+    let records = two_of_two_and_one_of_five();
     let r = report(&records, 5, 7);
     let v = verdict(&r.view(), Path::new("f"));
     assert_eq!(v.len(), 3, "{v:?}");
@@ -133,17 +134,8 @@ fn confirmed_failures_come_first_with_links_and_the_next_step() {
 
 #[test]
 fn a_test_set_aside_for_flying_like_a_better_one_is_named_so() {
-    let records = [
-        flight(1, 0, 0.5),
-        flight(1, 1, 0.7),
-        flight(2, 0, 1.0),
-        flight(2, 1, 3.0),
-        flight(2, 2, 3.0),
-        flight(2, 3, 3.0),
-        flight(2, 4, 3.0),
-        flight(3, 0, 0.6),
-        flight(3, 1, 0.8),
-    ];
+    let mut records = two_of_two_and_one_of_five();
+    records.extend([flight(3, 0, 0.6), flight(3, 1, 0.8)]);
     let mut r = report(&records, 5, 9);
     // The guard's verdict needs flown trajectories; here it is set by hand on the second 2-of-2 test.
     let copy = r.tests.iter_mut().find(|t| t.candidate.0 == 3).expect("test 3");

@@ -8,6 +8,7 @@
 
 use std::path::Path;
 
+use crate::campaign::plan::expected_points::normal_cdf;
 use crate::campaign::store::journal::FlightRecord;
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::judge::similarity::{average, path_distance, prepare};
@@ -39,16 +40,6 @@ pub fn flag_probability(campaign_m: f64, similar_below_m: f64) -> f64 {
 pub fn guard_below(similar_below_m: f64) -> f64 {
     // With the cap at 0.5 this is where the ratio's median brings the campaign distance to the threshold.
     similar_below_m / RATIO_MEDIAN
-}
-
-/// Standard normal distribution function (Abramowitz and Stegun 7.1.26, error below 1.5e-7).
-fn normal_cdf(z: f64) -> f64 {
-    let x = z.abs() / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    let poly =
-        t * (0.254_829_592 + t * (-0.284_496_736 + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    let erf = 1.0 - poly * (-x * x).exp();
-    if z >= 0.0 { 0.5 * (1.0 + erf) } else { 0.5 * (1.0 - erf) }
 }
 
 /// The average of the flights `records` whose trajectories (relative to `folder`) can be read; `None` when
