@@ -7,6 +7,8 @@
 //! ```sh
 //! cargo run --profile test --example guard_campaign -- CAMPAIGN...
 //! ```
+//!
+//! Run it from the directory the evaluations ran in: their reports name flights by the path given then.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

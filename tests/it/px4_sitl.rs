@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
 use prgenuav::generator::{Generator, GeneratorConfig};
-use prgenuav::model::{Spelling, TestCase};
+use prgenuav::model::{Sample, Spelling, TestCase};
 
 use super::{case, px4_sitl_bin};
 
@@ -77,9 +77,11 @@ pub(super) async fn fly_on(px4: &Px4Sitl, test: &TestCase, mode: FlyMode, what: 
 }
 
 /// Landed and disarmed at the mission's land point, judged in the test's frame. Mission mode flies straight
-/// through the boxes the generator put on its path, so it ends `collision` (still landed and disarmed). On a
-/// failure the panic carries the flight's last positions and PX4's console tail, so a rare PX4 outcome can be
-/// explained from the one run that showed it.
+/// through the boxes the generator put on its path, so it ends `collision` (still landed and disarmed); its
+/// landing is PX4's alone, so there the vehicle must pass over the land point at height (see
+/// [`closest_at_height`]) and may then land where PX4 puts it. On a failure the panic carries the flight's
+/// last positions and PX4's console tail, so a rare PX4 outcome can be explained from the one run that showed
+/// it.
 fn assert_landed_at_the_land_point(px4: &Px4Sitl, r: &FlightReport, test: &TestCase, mode: FlyMode, what: &str) {
     if let Err(problem) = landed_at_the_land_point(r, test, mode) {
         let samples = &r.trajectory.samples;
@@ -148,7 +150,20 @@ fn landed_at_the_land_point(r: &FlightReport, test: &TestCase, mode: FlyMode) ->
         return Err("no positions".into());
     };
     let off = (end.x - land.north_m).hypot(end.y - land.east_m);
-    if off >= 3.0 {
+    if mode == FlyMode::Mission {
+        // PX4's mission descent can wander off the land point by itself (docs/validation/px4-conformance.md,
+        // "PX4's mission landing drift"); the bridge's frame is judged on the way there.
+        let over =
+            closest_at_height(&r.trajectory.samples, start.z, land.north_m, land.east_m).ok_or("never climbed 5 m")?;
+        if over >= 3.0 {
+            return Err(format!(
+                "came no closer than {over:.1} m to the land point at height (test frame)"
+            ));
+        }
+        if off >= 3.0 {
+            eprintln!("PX4's own descent ended {off:.1} m from the land point (passed {over:.1} m from it at height)");
+        }
+    } else if off >= 3.0 {
         return Err(format!("ended {off:.1} m from the land point (test frame)"));
     }
     // Heights are PX4's own estimate, which drifts at rest on SIH (-1.2 to +1.2 m seen after a flight): the
@@ -158,6 +173,16 @@ fn landed_at_the_land_point(r: &FlightReport, test: &TestCase, mode: FlyMode) ->
         return Err(format!("ended at height {:.2} m, started at {:.2} m", end.z, start.z));
     }
     Ok(())
+}
+
+/// How close the vehicle came to `(north, east)` while at least 5 m above the flight's start (the missions fly
+/// at 10 m): it passed over the land point before its final descent.
+fn closest_at_height(samples: &[Sample], start_z: f64, north: f64, east: f64) -> Option<f64> {
+    samples
+        .iter()
+        .filter(|p| p.z - start_z >= 5.0)
+        .map(|p| (p.x - north).hypot(p.y - east))
+        .min_by(f64::total_cmp)
 }
 
 /// Every mode on mission `mission`, each on a fresh instance: the release's modes land, the others are refused.
