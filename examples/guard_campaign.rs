@@ -8,7 +8,8 @@
 //! cargo run --profile test --example guard_campaign -- CAMPAIGN...
 //! ```
 //!
-//! Run it from the directory the evaluations ran in: their reports name flights by the path given then.
+//! A report whose flight paths are relative resolves them from the working directory: run it from where that
+//! evaluation ran.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

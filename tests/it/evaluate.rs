@@ -6,7 +6,8 @@ use std::path::Path;
 use prgenuav::model::{Obstacle, Spelling};
 use serde_json::Value;
 
-use super::{case, prgenuav, valid_pair};
+use super::anywhere::prgenuav_in;
+use super::{case, prgenuav, repo, valid_pair};
 
 /// A flight from home north along `x = east_m`, 10 m up, `secs` long, as an Aerialist CSV.
 fn csv_flight(east_m: f64, secs: f64) -> String {
@@ -179,4 +180,37 @@ fn evaluate_flies_each_test_n_times_on_the_mock_and_resumes_without_flying_again
     assert_eq!(vehicles.len(), 6);
     // --jobs sets the embedded mocks as in `generate`: one vehicle flew both new runs.
     assert!(vehicles[4..].iter().all(|v| v == "mock#0"), "{vehicles:?}");
+}
+
+/// A suite named by a relative path: report.json names every file by an absolute path, so it can be read
+/// from any directory.
+#[test]
+fn evaluate_names_its_files_by_absolute_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("suite");
+    std::fs::create_dir(&suite).unwrap();
+    // The tests name their mission files relatively: from the working folder, where they are copied.
+    std::fs::create_dir(dir.path().join("missions")).unwrap();
+    for e in std::fs::read_dir(repo().join("missions")).unwrap().flatten() {
+        std::fs::copy(e.path(), dir.path().join("missions").join(e.file_name())).unwrap();
+    }
+    write_test(&suite, 0, 2, valid_pair());
+    write_test(&suite, 1, 2, vec![Obstacle::new(10.0, 2.0, 20.0, -20.0, 20.0, 0.0)]);
+    let args = ["evaluate", "suite", "--runs", "1", "--quiet", "--jobs", "2"];
+    let (code, _, err) = prgenuav_in(dir.path(), &args);
+    assert_eq!(code, 0, "{err}");
+    let report = std::fs::read_to_string(suite.join("evaluation/report.json")).unwrap();
+    let j = json(&report);
+    let t = &j["tests"][0];
+    let named = [
+        &t["test"],
+        &t["runs"][0]["trajectory"],
+        &t["average_trajectory"],
+        &j["pairs"][0]["a"],
+        &j["pairs"][0]["b"],
+    ];
+    for p in named {
+        let p = Path::new(p.as_str().unwrap());
+        assert!(p.is_absolute() && p.is_file(), "{}", p.display());
+    }
 }

@@ -67,11 +67,17 @@ pub fn evaluate_by_flying(
             setup.runs
         )));
     }
-    let mut tests = load_tests(setup.suite)?;
+    // Absolute, so that the paths report.json names resolve from any directory.
+    let suite = std::path::absolute(setup.suite).map_err(|source| crate::model::ModelError::Io {
+        path: setup.suite.to_path_buf(),
+        action: "cannot resolve",
+        source,
+    })?;
+    let mut tests = load_tests(&suite)?;
     if let Some(n) = setup.top {
         tests.truncate(n.max(1));
     }
-    let folder = setup.suite.join(EVALUATION_DIR);
+    let folder = suite.join(EVALUATION_DIR);
     std::fs::create_dir_all(folder.join("flights")).map_err(|source| crate::model::ModelError::Io {
         path: folder.clone(),
         action: "cannot create",
