@@ -16,6 +16,10 @@ use prgenuav::campaign::store::journal::Journal;
 use prgenuav::judge::points;
 use prgenuav::lfs::fidelity::spearman;
 
+#[path = "common/evaluation_report.rs"]
+mod evaluation_report;
+use evaluation_report::evaluated_tests;
+
 /// One written, evaluated test.
 struct Row {
     /// Expected points per flight (`None` from a campaign that had none).
@@ -49,19 +53,16 @@ fn points_of(v: &[f64]) -> f64 {
 
 /// Judged mean points and run distances by test file name.
 fn judged(folder: &Path) -> anyhow::Result<HashMap<String, (f64, Vec<f64>)>> {
-    let path = folder.join("evaluation/report.json");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let json: serde_json::Value = serde_json::from_str(&text)?;
-    let mut out = HashMap::new();
-    for t in json["tests"].as_array().context("evaluation: no tests[]")? {
-        let name = t["test"].as_str().and_then(|p| Path::new(p).file_name()?.to_str());
+    let tests = evaluated_tests(folder)?.with_context(|| format!("{}: no evaluation", folder.display()))?;
+    let judged = |t: &serde_json::Value| {
         let runs = t["runs"].as_array().map(Vec::as_slice).unwrap_or_default();
         let runs: Vec<f64> = runs.iter().filter_map(|r| r["min_distance"].as_f64()).collect();
-        if let (Some(name), Some(mean)) = (name, t["mean_points"].as_f64()) {
-            out.insert(name.to_string(), (mean, runs));
-        }
-    }
-    Ok(out)
+        Some((t["mean_points"].as_f64()?, runs))
+    };
+    Ok(tests
+        .into_iter()
+        .filter_map(|(name, t)| Some((name, judged(&t)?)))
+        .collect())
 }
 
 /// Each candidate's charged campaign flights' distances.

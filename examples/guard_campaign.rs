@@ -18,6 +18,10 @@ use anyhow::Context;
 use prgenuav::judge::similarity::{average, path_distance, prepare};
 use prgenuav::model::{Trajectory, load_flight};
 
+#[path = "common/evaluation_report.rs"]
+mod evaluation_report;
+use evaluation_report::evaluated_tests;
+
 const SHOWN_BELOW_M: f64 = 200.0;
 
 struct Test {
@@ -38,19 +42,14 @@ fn average_of(files: &[PathBuf]) -> anyhow::Result<Option<Trajectory>> {
 
 /// Each evaluated test's run files, by the test's file name.
 fn evaluated(folder: &Path) -> anyhow::Result<HashMap<String, Vec<PathBuf>>> {
-    let Ok(text) = std::fs::read_to_string(folder.join("evaluation/report.json")) else {
-        return Ok(HashMap::new());
-    };
-    let json: serde_json::Value = serde_json::from_str(&text)?;
-    let tests = json["tests"].as_array().context("evaluation: no tests[]")?;
-    let mut out = HashMap::new();
-    for t in tests {
-        let name = t["test"].as_str().and_then(|p| Path::new(p).file_name()?.to_str());
+    let tests = evaluated_tests(folder)?.unwrap_or_default();
+    let files = |t: &serde_json::Value| -> Vec<PathBuf> {
         let runs = t["runs"].as_array().map(Vec::as_slice).unwrap_or_default();
-        let files = runs.iter().filter_map(|r| r["trajectory"].as_str().map(PathBuf::from));
-        out.insert(name.unwrap_or_default().to_string(), files.collect());
-    }
-    Ok(out)
+        runs.iter()
+            .filter_map(|r| r["trajectory"].as_str().map(PathBuf::from))
+            .collect()
+    };
+    Ok(tests.into_iter().map(|(name, t)| (name, files(&t))).collect())
 }
 
 fn tests_of(folder: &Path) -> anyhow::Result<Vec<Test>> {

@@ -21,7 +21,7 @@ pub fn prgenuav_in(dir: &Path, args: &[&str]) -> (i32, String, String) {
 }
 
 /// A copy of the public missions in `root/missions` (a clone of the repository's layout elsewhere).
-fn copy_missions(root: &Path) -> PathBuf {
+pub fn copy_missions(root: &Path) -> PathBuf {
     let missions = root.join("missions");
     std::fs::create_dir_all(&missions).unwrap();
     for e in std::fs::read_dir(repo().join("missions")).unwrap().flatten() {

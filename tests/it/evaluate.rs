@@ -6,8 +6,8 @@ use std::path::Path;
 use prgenuav::model::{Obstacle, Spelling};
 use serde_json::Value;
 
-use super::anywhere::prgenuav_in;
-use super::{case, prgenuav, repo, valid_pair};
+use super::anywhere::{copy_missions, prgenuav_in};
+use super::{case, prgenuav, valid_pair};
 
 /// A flight from home north along `x = east_m`, 10 m up, `secs` long, as an Aerialist CSV.
 fn csv_flight(east_m: f64, secs: f64) -> String {
@@ -190,10 +190,7 @@ fn evaluate_names_its_files_by_absolute_paths() {
     let suite = dir.path().join("suite");
     std::fs::create_dir(&suite).unwrap();
     // The tests name their mission files relatively: from the working folder, where they are copied.
-    std::fs::create_dir(dir.path().join("missions")).unwrap();
-    for e in std::fs::read_dir(repo().join("missions")).unwrap().flatten() {
-        std::fs::copy(e.path(), dir.path().join("missions").join(e.file_name())).unwrap();
-    }
+    copy_missions(dir.path());
     write_test(&suite, 0, 2, valid_pair());
     write_test(&suite, 1, 2, vec![Obstacle::new(10.0, 2.0, 20.0, -20.0, 20.0, 0.0)]);
     let args = ["evaluate", "suite", "--runs", "1", "--quiet", "--jobs", "2"];

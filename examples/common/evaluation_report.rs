@@ -1,0 +1,22 @@
+//! Reading a campaign folder's `evaluation/report.json` in the examples.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use anyhow::Context;
+
+/// Each evaluated test's JSON (from `evaluation/report.json`) by its YAML's file name; `None` when the folder
+/// has no evaluation.
+pub fn evaluated_tests(folder: &Path) -> anyhow::Result<Option<HashMap<String, serde_json::Value>>> {
+    let path = folder.join("evaluation/report.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(None);
+    };
+    let json: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    let tests = json["tests"].as_array().context("evaluation: no tests[]")?;
+    let named = tests.iter().filter_map(|t| {
+        let name = t["test"].as_str().and_then(|p| Path::new(p).file_name()?.to_str())?;
+        Some((name.to_string(), t.clone()))
+    });
+    Ok(Some(named.collect()))
+}
