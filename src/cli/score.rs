@@ -2,11 +2,11 @@
 //! 2025 figures (any run below 1.5 m fails, footprint diversity) and the 2026 evaluation (mean points,
 //! average trajectories, `sim_pen`, final score).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::values::JudgeEdition;
-use anyhow::bail;
+use anyhow::{Context, bail};
 use prgenuav::campaign::evaluation::{Evaluation, SIMILAR_BELOW_M, evaluate_folder};
 use prgenuav::campaign::report::folder_score::{SuiteScore, score_folder};
 use serde::Serialize;
@@ -16,7 +16,7 @@ use serde::Serialize;
 pub struct ScoreArgs {
     /// Folder with test_N.yaml files and their flights (test_N.csv, test_N.ulg, or runs test_N-K.csv|ulg).
     folder: PathBuf,
-    /// Print the full result as JSON.
+    /// Print the full result as JSON (files named by absolute paths).
     #[arg(long)]
     json: bool,
     /// Judge edition of the distances and points.
@@ -39,8 +39,11 @@ struct Both {
     evaluation_2026: Evaluation,
 }
 
-pub fn run(args: ScoreArgs) -> anyhow::Result<ExitCode> {
+pub fn run(mut args: ScoreArgs) -> anyhow::Result<ExitCode> {
     super::limits::SIMILAR_BELOW.check(args.similar_below)?;
+    // Absolute, as evaluate's report.json: the JSON's paths resolve from any directory.
+    args.folder = absolute(&args.folder)?;
+    args.averages = args.averages.as_deref().map(absolute).transpose()?;
     let suite = score_folder(&args.folder, args.judge.into())?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());
@@ -64,6 +67,10 @@ pub fn run(args: ScoreArgs) -> anyhow::Result<ExitCode> {
     print_2025(&suite);
     print_2026(&evaluation);
     Ok(ExitCode::SUCCESS)
+}
+
+fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
+    std::path::absolute(p).with_context(|| format!("{}: cannot resolve the path", p.display()))
 }
 
 fn print_2025(suite: &SuiteScore) {

@@ -115,6 +115,35 @@ fn score_cli_json_and_errors() {
     assert!(err.contains("test_0.csv"), "{err}");
 }
 
+#[test]
+fn score_json_names_its_files_by_absolute_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("suite");
+    std::fs::create_dir(&suite).unwrap();
+    super::anywhere::copy_missions(dir.path());
+    write_test(&suite, 0, vec![Obstacle::new(2.0, 2.0, 20.0, 4.0, 25.0, 0.0)]);
+    write_test(&suite, 1, vec![Obstacle::new(2.0, 2.0, 20.0, -4.0, 25.0, 0.0)]);
+    std::fs::write(suite.join("test_0.csv"), csv_flight(2.5, 60.0)).unwrap();
+    std::fs::write(suite.join("test_1.csv"), csv_flight(-2.5, 60.0)).unwrap();
+    let args = ["score", "suite", "--json", "--averages", "averages"];
+    let (code, out, err) = super::anywhere::prgenuav_in(dir.path(), &args);
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let e = &j["evaluation_2026"];
+    let t = &e["tests"][0];
+    let named = [
+        &t["test"],
+        &t["runs"][0]["trajectory"],
+        &t["average_trajectory"],
+        &e["pairs"][0]["a"],
+        &e["pairs"][0]["b"],
+    ];
+    for p in named {
+        let p = std::path::Path::new(p.as_str().unwrap());
+        assert!(p.is_absolute() && p.is_file(), "{}", p.display());
+    }
+}
+
 /// A flight whose first row is 0 and the rest epoch microseconds, as a log stitched from two clocks.
 fn mixed_clock_flight() -> String {
     let mut s = String::from("timestamp,x,y,z,r\n0,0,0,0,\n");
