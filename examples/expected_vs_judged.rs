@@ -9,7 +9,7 @@
 //! ```
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
 use prgenuav::campaign::store::journal::Journal;
@@ -18,7 +18,7 @@ use prgenuav::lfs::fidelity::spearman;
 
 #[path = "common/evaluation_report.rs"]
 mod evaluation_report;
-use evaluation_report::evaluated_tests;
+use evaluation_report::{campaign_folders, evaluated_tests};
 
 /// One written, evaluated test.
 struct Row {
@@ -104,8 +104,7 @@ fn rows_of(folder: &Path) -> anyhow::Result<Vec<Row>> {
 }
 
 fn main() -> anyhow::Result<()> {
-    let folders: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
-    anyhow::ensure!(!folders.is_empty(), "usage: expected_vs_judged CAMPAIGN...");
+    let folders = campaign_folders("expected_vs_judged")?;
     let mut all = Vec::new();
     for folder in &folders {
         let rows = rows_of(folder)?;

@@ -20,7 +20,7 @@ use prgenuav::model::{Trajectory, load_flight};
 
 #[path = "common/evaluation_report.rs"]
 mod evaluation_report;
-use evaluation_report::evaluated_tests;
+use evaluation_report::{campaign_folders, evaluated_tests};
 
 const SHOWN_BELOW_M: f64 = 200.0;
 
@@ -79,8 +79,7 @@ fn tests_of(folder: &Path) -> anyhow::Result<Vec<Test>> {
 }
 
 fn main() -> anyhow::Result<()> {
-    let folders: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
-    anyhow::ensure!(!folders.is_empty(), "usage: guard_campaign CAMPAIGN...");
+    let folders = campaign_folders("guard_campaign")?;
     let mut ratios = Vec::new();
     for folder in &folders {
         let tests = tests_of(folder)?;

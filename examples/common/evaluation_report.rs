@@ -1,7 +1,7 @@
-//! Reading a campaign folder's `evaluation/report.json` in the examples.
+//! The examples that read evaluated campaign folders: their arguments and `evaluation/report.json`.
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
@@ -19,4 +19,11 @@ pub fn evaluated_tests(folder: &Path) -> anyhow::Result<Option<HashMap<String, s
         Some((name.to_string(), t.clone()))
     });
     Ok(Some(named.collect()))
+}
+
+/// The campaign folders named on the command line; at least one, or the usage of `example`.
+pub fn campaign_folders(example: &str) -> anyhow::Result<Vec<PathBuf>> {
+    let folders: Vec<PathBuf> = std::env::args().skip(1).map(PathBuf::from).collect();
+    anyhow::ensure!(!folders.is_empty(), "usage: {example} CAMPAIGN...");
+    Ok(folders)
 }

@@ -102,3 +102,11 @@ fn sample_refuses_a_folder_with_files_unless_forced() {
     let left = std::fs::read_dir(tmp.path().join("s")).unwrap().count();
     assert_eq!(left, 1, "the earlier run's test_1 and test_2 are gone");
 }
+
+/// Every path the JSON values `named` hold is absolute and names an existing file.
+pub fn assert_absolute_files(named: &[&serde_json::Value]) {
+    for p in named {
+        let p = Path::new(p.as_str().unwrap());
+        assert!(p.is_absolute() && p.is_file(), "{}", p.display());
+    }
+}

@@ -6,7 +6,7 @@ use std::path::Path;
 use prgenuav::model::{Obstacle, Spelling};
 use serde_json::Value;
 
-use super::anywhere::{copy_missions, prgenuav_in};
+use super::anywhere::{assert_absolute_files, copy_missions, prgenuav_in};
 use super::{case, prgenuav, valid_pair};
 
 /// A flight from home north along `x = east_m`, 10 m up, `secs` long, as an Aerialist CSV.
@@ -199,15 +199,11 @@ fn evaluate_names_its_files_by_absolute_paths() {
     let report = std::fs::read_to_string(suite.join("evaluation/report.json")).unwrap();
     let j = json(&report);
     let t = &j["tests"][0];
-    let named = [
+    assert_absolute_files(&[
         &t["test"],
         &t["runs"][0]["trajectory"],
         &t["average_trajectory"],
         &j["pairs"][0]["a"],
         &j["pairs"][0]["b"],
-    ];
-    for p in named {
-        let p = Path::new(p.as_str().unwrap());
-        assert!(p.is_absolute() && p.is_file(), "{}", p.display());
-    }
+    ]);
 }

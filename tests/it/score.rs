@@ -131,17 +131,13 @@ fn score_json_names_its_files_by_absolute_paths() {
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     let e = &j["evaluation_2026"];
     let t = &e["tests"][0];
-    let named = [
+    super::anywhere::assert_absolute_files(&[
         &t["test"],
         &t["runs"][0]["trajectory"],
         &t["average_trajectory"],
         &e["pairs"][0]["a"],
         &e["pairs"][0]["b"],
-    ];
-    for p in named {
-        let p = std::path::Path::new(p.as_str().unwrap());
-        assert!(p.is_absolute() && p.is_file(), "{}", p.display());
-    }
+    ]);
 }
 
 /// A flight whose first row is 0 and the rest epoch microseconds, as a log stitched from two clocks.
