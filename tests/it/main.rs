@@ -29,6 +29,7 @@ mod px4_cp;
 mod px4_fake;
 mod px4_reference;
 mod px4_release;
+mod px4_repeated;
 mod px4_sitl;
 mod px4_v115;
 mod px4_v116;
