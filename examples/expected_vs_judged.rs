@@ -1,24 +1,34 @@
 //! How well a campaign's figures foretell the judge: for every written test of campaign folders that were
 //! evaluated (`evaluate CAMPAIGN --runs 5`), its expected points, its own campaign flights and its evaluation
 //! flights. Prints each folder's sums and the median gap between a test's evaluation and campaign distances;
-//! then, over all tests, how the campaign's figures rank the judged means (Spearman) and how much a test's
-//! evaluation flights scatter.
+//! then, over all tests, how the campaign's figures rank the judged means (Spearman), how far the expected
+//! points lie from them, and how much a test's evaluation flights scatter.
 //!
 //! ```sh
 //! cargo run --profile test --example expected_vs_judged -- CAMPAIGN...
+//! JUDGED=tests/data/px4-repeated/tests.jsonl,OTHER/evaluation/report.json \
+//!     cargo run --profile test --example expected_vs_judged -- CAMPAIGN...
 //! ```
+//!
+//! Tests are matched to their evaluation by their boxes, so a campaign re-reported on a copy (`generate
+//! --resume`, its tests renamed) is judged by the flights of the original's evaluation. `JUDGED` adds
+//! judged flights from elsewhere: `evaluate`'s `report.json` files, or `tests.jsonl` lines with `obstacles`
+//! and `px4_min_distance`; the first source that has a test wins, then the folder's own evaluation.
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use prgenuav::campaign::store::journal::Journal;
 use prgenuav::judge::points;
 use prgenuav::lfs::fidelity::spearman;
+use prgenuav::model::{Obstacle, TestCase};
 
+// The shared module's `evaluated_tests` matches by file name, for the other examples; this one matches by boxes.
+#[allow(dead_code)]
 #[path = "common/evaluation_report.rs"]
 mod evaluation_report;
-use evaluation_report::{campaign_folders, evaluated_tests};
+use evaluation_report::campaign_folders;
 
 /// One written, evaluated test.
 struct Row {
@@ -51,18 +61,77 @@ fn points_of(v: &[f64]) -> f64 {
     mean(&v.iter().map(|&d| f64::from(points(d))).collect::<Vec<_>>())
 }
 
-/// Judged mean points and run distances by test file name.
-fn judged(folder: &Path) -> anyhow::Result<HashMap<String, (f64, Vec<f64>)>> {
-    let tests = evaluated_tests(folder)?.with_context(|| format!("{}: no evaluation", folder.display()))?;
-    let judged = |t: &serde_json::Value| {
-        let runs = t["runs"].as_array().map(Vec::as_slice).unwrap_or_default();
-        let runs: Vec<f64> = runs.iter().filter_map(|r| r["min_distance"].as_f64()).collect();
-        Some((t["mean_points"].as_f64()?, runs))
+/// Judged flights' distances by the test's boxes (their JSON).
+type Judged = HashMap<String, Vec<f64>>;
+
+fn distances(runs: &serde_json::Value, field: &str) -> Vec<f64> {
+    let runs = runs.as_array().map(Vec::as_slice).unwrap_or_default();
+    runs.iter()
+        .filter_map(|r| r[field].as_f64().or_else(|| r.as_f64()))
+        .collect()
+}
+
+/// The canonical key of a test's boxes (as a test YAML or report.json spells them).
+fn boxes_key(obstacles: &serde_json::Value) -> Option<String> {
+    let boxes: Vec<Obstacle> = serde_json::from_value(obstacles.clone()).ok()?;
+    serde_json::to_string(&boxes).ok()
+}
+
+/// The boxes of an evaluated test's YAML: its path as written, else under a folder above the report (reports
+/// of older versions name it relative to where `evaluate` ran).
+fn test_boxes(test: &str, report: &Path) -> Option<String> {
+    let found = std::iter::once(PathBuf::from(test))
+        .chain(report.ancestors().map(|a| a.join(test)))
+        .find(|p| p.is_file())?;
+    let case = TestCase::load(&found).ok()?;
+    serde_json::to_string(&case.obstacles).ok()
+}
+
+/// Adds the evaluated tests of the `evaluate` report at `path` to `into`.
+fn add_report(path: &Path, into: &mut Judged) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text).with_context(|| path.display().to_string())?;
+    for t in json["tests"].as_array().map(Vec::as_slice).unwrap_or_default() {
+        let runs = distances(&t["runs"], "min_distance");
+        if let (Some(key), false) = (
+            test_boxes(t["test"].as_str().unwrap_or_default(), path),
+            runs.is_empty(),
+        ) {
+            into.entry(key).or_insert(runs);
+        }
+    }
+    Ok(())
+}
+
+/// The judged flights of the `JUDGED` sources, then of `folder`'s own evaluation.
+fn judged(folder: &Path, extra: &Judged) -> anyhow::Result<Judged> {
+    let mut out = extra.clone();
+    let own = folder.join("evaluation/report.json");
+    if own.is_file() {
+        add_report(&own, &mut out)?;
+    }
+    Ok(out)
+}
+
+/// The flights named by the env `JUDGED` (comma-separated files).
+fn extra_judged() -> anyhow::Result<Judged> {
+    let mut out = Judged::new();
+    let Ok(list) = std::env::var("JUDGED") else {
+        return Ok(out);
     };
-    Ok(tests
-        .into_iter()
-        .filter_map(|(name, t)| Some((name, judged(&t)?)))
-        .collect())
+    for path in list.split(',').filter(|p| !p.is_empty()) {
+        if !path.ends_with(".jsonl") {
+            add_report(Path::new(path), &mut out)?;
+            continue;
+        }
+        let text = std::fs::read_to_string(path).with_context(|| format!("JUDGED: reading {path}"))?;
+        for (i, line) in text.lines().enumerate() {
+            let row: serde_json::Value = serde_json::from_str(line).with_context(|| format!("{path}:{}", i + 1))?;
+            let key = boxes_key(&row["obstacles"]).with_context(|| format!("{path}:{}: obstacles", i + 1))?;
+            out.entry(key).or_insert(distances(&row["px4_min_distance"], ""));
+        }
+    }
+    Ok(out)
 }
 
 /// Each candidate's charged campaign flights' distances.
@@ -78,15 +147,20 @@ fn own_flights(folder: &Path) -> anyhow::Result<HashMap<u64, Vec<f64>>> {
     Ok(out)
 }
 
-fn rows_of(folder: &Path) -> anyhow::Result<Vec<Row>> {
+fn rows_of(folder: &Path, extra: &Judged) -> anyhow::Result<Vec<Row>> {
     let text = std::fs::read_to_string(folder.join("report.json"))?;
     let json: serde_json::Value = serde_json::from_str(&text)?;
-    let (judged, own) = (judged(folder)?, own_flights(folder)?);
+    let (judged, own) = (judged(folder, extra)?, own_flights(folder)?);
     let mut out = Vec::new();
     for t in json["tests"].as_array().context("report.json: no tests[]")? {
-        let name = t["reported_as"].as_str().unwrap_or_default();
+        let written = t["reported_as"].as_str().is_some_and(|n| n.starts_with("test_"));
         let own = t["candidate"].as_u64().and_then(|c| own.get(&c).cloned());
-        if let (Some((judged, runs)), Some(own)) = (judged.get(name).cloned(), own) {
+        let runs = boxes_key(&t["obstacles"])
+            .and_then(|k| judged.get(&k))
+            .filter(|_| written)
+            .cloned();
+        if let (Some(runs), Some(own)) = (runs, own) {
+            let judged = points_of(&runs);
             let p = &t["expected"]["points"];
             let expected = p["mean"].as_f64();
             let held = (p["judged_low"].as_f64().zip(p["judged_high"].as_f64()))
@@ -105,9 +179,10 @@ fn rows_of(folder: &Path) -> anyhow::Result<Vec<Row>> {
 
 fn main() -> anyhow::Result<()> {
     let folders = campaign_folders("expected_vs_judged")?;
+    let extra = extra_judged()?;
     let mut all = Vec::new();
     for folder in &folders {
-        let rows = rows_of(folder)?;
+        let rows = rows_of(folder, &extra)?;
         let gap = median(rows.iter().map(|r| mean(&r.runs) - mean(&r.own)).collect());
         let sum = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() + 0.0;
         let held = rows.iter().filter(|r| r.held == Some(true)).count();
@@ -137,12 +212,16 @@ fn main() -> anyhow::Result<()> {
     let judged: Vec<f64> = with.iter().map(|r| r.judged).collect();
     let expected: Vec<f64> = with.iter().filter_map(|r| r.expected).collect();
     let own: Vec<f64> = with.iter().map(|r| points_of(&r.own)).collect();
+    let gaps: Vec<f64> = expected.iter().zip(&judged).map(|(e, j)| e - j).collect();
     println!(
-        "{} tests with expected points: judged mean {:.3}; expected points mean {:.3}, Spearman {}; own flights' points mean {:.3}, Spearman {}",
+        "{} tests with expected points: judged mean {:.3}; expected points mean {:.3}, Spearman {}, MAE {:.3}, \
+         mean error {:+.3}; own flights' points mean {:.3}, Spearman {}",
         with.len(),
         mean(&judged),
         mean(&expected),
         show(spearman(&expected, &judged)),
+        mean(&gaps.iter().map(|g| g.abs()).collect::<Vec<_>>()),
+        mean(&gaps),
         mean(&own),
         show(spearman(&own, &judged))
     );

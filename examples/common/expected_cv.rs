@@ -5,8 +5,7 @@
 use std::collections::HashMap;
 
 use anyhow::Context;
-use prgenuav::campaign::learn::calibration::MAX_RESIDUAL_M;
-use prgenuav::campaign::plan::expected_points::{Evidence, Weights, counts, estimate_with, prior_bands};
+use prgenuav::campaign::plan::expected_points::{Evidence, Weights, counts, estimate_with, skilled_prior};
 use prgenuav::campaign::report::expected::score::NEIGHBOUR_IOU;
 use prgenuav::geometry::{Footprint, union_iou};
 use prgenuav::judge::points;
@@ -43,7 +42,7 @@ const JUDGED: usize = 5;
 const SHOWN: [usize; 3] = [1, 2, 3];
 const FOLDS: usize = 5;
 const SEED: u64 = 0;
-const PRIORS: [f64; 7] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
+const PRIORS: [f64; 9] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
 const NEIGHBOURS: [f64; 5] = [0.0, 0.1, 0.25, 0.5, 1.0];
 const CAPS: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 /// The weights set from first principles before this fit, for comparison.
@@ -131,13 +130,11 @@ fn items(file: &DataFile, k: usize, fold_of: &HashMap<String, usize>) -> Vec<Ite
         .iter()
         .map(|c| c.obstacles.iter().map(Obstacle::footprint).collect())
         .collect();
-    let residual = |c: &Case| -> Vec<f64> {
-        let r = c.runs[..k]
-            .iter()
-            .map(|d| (d - c.predicted_m).clamp(-MAX_RESIDUAL_M, MAX_RESIDUAL_M));
+    let pairs = |c: &Case| -> Vec<(f64, f64)> {
+        let r = c.runs[..k].iter().map(|d| (c.predicted_m, *d));
         r.filter(|_| c.predicted_m.is_finite()).collect()
     };
-    let residuals: Vec<Vec<f64>> = cases.iter().map(|c| residual(c)).collect();
+    let pairs: Vec<Vec<(f64, f64)>> = cases.iter().map(|c| pairs(c)).collect();
     let mut out = Vec::with_capacity(cases.len());
     for (i, c) in cases.iter().enumerate() {
         let others = (0..cases.len()).filter(|&j| j != i);
@@ -145,7 +142,7 @@ fn items(file: &DataFile, k: usize, fold_of: &HashMap<String, usize>) -> Vec<Ite
             .clone()
             .filter(|&j| union_iou(&prints[i], &prints[j]) >= NEIGHBOUR_IOU);
         let neighbours = near.flat_map(|j| cases[j].runs[..k].iter().copied());
-        let other_residuals: Vec<f64> = others.flat_map(|j| residuals[j].iter().copied()).collect();
+        let other_pairs: Vec<(f64, f64)> = others.flat_map(|j| pairs[j].iter().copied()).collect();
         let shown = &c.runs[..k];
         let judged = &c.runs[k..k + JUDGED];
         let key = serde_json::to_string(&c.obstacles).unwrap_or_default();
@@ -156,7 +153,7 @@ fn items(file: &DataFile, k: usize, fold_of: &HashMap<String, usize>) -> Vec<Ite
             evidence: Evidence {
                 own: counts(shown.iter().copied()),
                 neighbours: counts(neighbours),
-                prior: prior_bands(c.predicted_m, &other_residuals),
+                prior: skilled_prior(c.predicted_m, &other_pairs),
             },
             target: judged.iter().map(|&d| f64::from(points(d))).sum::<f64>() / JUDGED as f64,
         });
@@ -272,6 +269,15 @@ pub fn run(paths: &[String]) -> anyhow::Result<()> {
     println!("\nin-sample, best 12 and worst 3 of {} grid points:", grid.len());
     for (_, w) in ranked.iter().take(12).chain(ranked.iter().rev().take(3).rev()) {
         println!("{}", row(w, ""));
+    }
+    println!("\nin-sample, the prior's weight at neighbour 1 / cap 4:");
+    for prior_flights in PRIORS {
+        let w = Weights {
+            prior_flights,
+            neighbour_weight: 1.0,
+            max_neighbour_flights: 4.0,
+        };
+        println!("{}", row(&w, ""));
     }
     println!("\nper shown flights, first principles / chosen on all (MAE written, coverage, n):");
     for k in SHOWN {

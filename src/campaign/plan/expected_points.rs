@@ -13,6 +13,7 @@
 
 use serde::Serialize;
 
+use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
 use crate::campaign::plan::judged_mean::judged_mean;
 use crate::judge::points;
 
@@ -73,6 +74,45 @@ pub fn prior_bands(predicted_m: f64, residuals: &[f64]) -> Option<Bands> {
     }
     let c = counts(residuals.iter().map(|r| (predicted_m + r).max(0.0)));
     Some(c.map(|n| n / residuals.len() as f64))
+}
+
+/// The calibrated prediction's band shares as far as the prediction carries over to this vehicle: `others`
+/// are the other flights' (calibrated prediction, flown distance) pairs, metres, each flown distance clipped to
+/// within [`MAX_RESIDUAL_M`] of its prediction as the calibration clips it. The prediction is first pulled
+/// toward the flights' mean by the least-squares slope of flown on predicted, held to 0-1 ([`skill_slope`]):
+/// at slope 1 this is [`prior_bands`] on the plain residuals, at slope 0 the campaign's base rate, the same
+/// for every test. On a vehicle the LFS does not rank (PX4 SIH: a slope at or below zero in every campaign,
+/// docs/design-constants.md#expected-points-prior) the prior then shrinks toward what flights here do, not
+/// toward what the LFS likes. `None` as [`prior_bands`].
+pub fn skilled_prior(predicted_m: f64, others: &[(f64, f64)]) -> Option<Bands> {
+    let pairs: Vec<(f64, f64)> = (others.iter())
+        .filter(|(p, f)| p.is_finite() && f.is_finite())
+        .map(|&(p, f)| (p, p + (f - p).clamp(-MAX_RESIDUAL_M, MAX_RESIDUAL_M)))
+        .collect();
+    if pairs.len() < MIN_RESIDUALS || !predicted_m.is_finite() {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let mean_p = pairs.iter().map(|x| x.0).sum::<f64>() / n;
+    let mean_f = pairs.iter().map(|x| x.1).sum::<f64>() / n;
+    let slope = skill_slope(&pairs);
+    let line = |p: f64| mean_f + slope * (p - mean_p);
+    let residuals: Vec<f64> = pairs.iter().map(|&(p, f)| f - line(p)).collect();
+    prior_bands(line(predicted_m), &residuals)
+}
+
+/// The least-squares slope of flown on predicted over `pairs`, held to 0-1: 0 when the predictions do not
+/// vary.
+pub fn skill_slope(pairs: &[(f64, f64)]) -> f64 {
+    let n = pairs.len() as f64;
+    if n < 2.0 {
+        return 0.0;
+    }
+    let mean_p = pairs.iter().map(|x| x.0).sum::<f64>() / n;
+    let mean_f = pairs.iter().map(|x| x.1).sum::<f64>() / n;
+    let var: f64 = pairs.iter().map(|x| (x.0 - mean_p).powi(2)).sum();
+    let cov: f64 = pairs.iter().map(|x| (x.0 - mean_p) * (x.1 - mean_f)).sum();
+    if var <= 1e-12 { 0.0 } else { (cov / var).clamp(0.0, 1.0) }
 }
 
 /// What a test's estimate is made of.
@@ -268,6 +308,31 @@ mod tests {
         assert!((normal_cdf(0.0) - 0.5).abs() < 1e-9);
         assert!((normal_cdf(Z80) - 0.9).abs() < 1e-6 && (normal_cdf(-Z80) - 0.1).abs() < 1e-6);
         assert!((normal_cdf(1.96) - 0.975).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_prediction_that_ranks_the_flights_keeps_its_tilt_and_one_that_does_not_gives_the_base_rate() {
+        // Flown = predicted + 0.3 m: slope 1, and the prior equals the plain residuals' prior.
+        let ranked: Vec<(f64, f64)> = [0.2, 0.8, 1.2, 1.6, 2.4].iter().map(|&p| (p, p + 0.3)).collect();
+        assert!((skill_slope(&ranked) - 1.0).abs() < 1e-12);
+        let residuals: Vec<f64> = ranked.iter().map(|(p, f)| f - p).collect();
+        assert_eq!(skilled_prior(0.5, &ranked), prior_bands(0.5, &residuals));
+        assert_ne!(skilled_prior(0.5, &ranked), skilled_prior(2.0, &ranked));
+        // Flown against predicted reversed: slope held at 0, every test gets the flights' own band shares.
+        let reversed: Vec<(f64, f64)> = [(0.5, 2.0), (1.0, 1.2), (1.5, 0.8), (2.0, 0.1)].to_vec();
+        assert_eq!(skill_slope(&reversed), 0.0);
+        let base = Some([0.25, 0.25, 0.25, 0.25]);
+        assert_eq!(skilled_prior(0.1, &reversed), base);
+        assert_eq!(skilled_prior(9.0, &reversed), base);
+        // A flight far off its prediction weighs as the calibration clips it; no spread in the predictions
+        // (the plain draws of --no-screen, all 0) gives slope 0.
+        let clipped = skilled_prior(1.0, &[(1.0, 1.2), (1.0, 40.0), (1.0, 0.9)]).expect("three flights");
+        assert_eq!(
+            clipped,
+            skilled_prior(1.0, &[(1.0, 1.2), (1.0, 4.0), (1.0, 0.9)]).expect("three")
+        );
+        assert_eq!(skill_slope(&[(0.0, 1.0), (0.0, 2.0)]), 0.0);
+        assert_eq!(skilled_prior(1.0, &[(1.0, 1.2), (f64::NAN, 1.0)]), None);
     }
 
     #[test]

@@ -13,8 +13,7 @@ use std::path::Path;
 
 use crate::campaign::candidate::CandidateId;
 use crate::campaign::evaluation::SIMILAR_BELOW_M;
-use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
-use crate::campaign::plan::expected_points::{Evidence, Z80, counts, estimate, prior_bands};
+use crate::campaign::plan::expected_points::{Evidence, Z80, counts, estimate, skilled_prior};
 pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
 use crate::campaign::report::expected::trajectory_guard::{
     Guarded, choose, expected_sim_pen, flown_average, guard_below,
@@ -96,12 +95,12 @@ fn suite<'a>(tests: impl Iterator<Item = &'a TestVerdict>, near_duplicates: usiz
     }
 }
 
-/// What every estimate reads of the campaign's flights, computed once: each flight's footprints, and the
-/// residuals (flown - calibrated prediction, clipped as the calibration clips them).
+/// What every estimate reads of the campaign's flights, computed once: each flight's footprints, and its
+/// (calibrated prediction, flown distance) pair.
 pub struct Flights<'a> {
     records: &'a [FlightRecord],
     prints: Vec<Vec<Footprint>>,
-    residuals: Vec<(CandidateId, f64)>,
+    predicted_flown: Vec<(CandidateId, (f64, f64))>,
 }
 
 fn prints(o: &[Obstacle]) -> Vec<Footprint> {
@@ -111,35 +110,34 @@ fn prints(o: &[Obstacle]) -> Vec<Footprint> {
 impl<'a> Flights<'a> {
     /// The campaign's charged flights.
     pub fn new(records: &'a [FlightRecord]) -> Self {
-        let residuals = (records.iter())
+        let predicted_flown = (records.iter())
             .filter(|r| r.prediction.min_distance.is_finite())
-            .filter_map(|r| Some((r.candidate, r.flown.min_distance? - r.prediction.min_distance)))
-            .map(|(c, e)| (c, e.clamp(-MAX_RESIDUAL_M, MAX_RESIDUAL_M)))
+            .filter_map(|r| Some((r.candidate, (r.prediction.min_distance, r.flown.min_distance?))))
             .collect();
         Self {
             records,
             prints: records.iter().map(|r| prints(&r.obstacles)).collect(),
-            residuals,
+            predicted_flown,
         }
     }
 
     /// What the estimate of `candidate` (with `obstacles` and its flights `own`) rests on. The prior is its
-    /// first flight's prediction, spread by the other tests' residuals (its own would count its flights
-    /// twice).
+    /// first flight's prediction, weighed and spread by the other tests' flights (its own would count its
+    /// flights twice).
     fn evidence(&self, candidate: CandidateId, obstacles: &[Obstacle], own: &[&FlightRecord]) -> Evidence {
         let mine = prints(obstacles);
         let neighbours = (self.records.iter().zip(&self.prints))
             .filter(|(r, p)| r.candidate != candidate && union_iou(&mine, p) >= NEIGHBOUR_IOU)
             .filter_map(|(r, _)| r.flown.min_distance);
-        let residuals: Vec<f64> = (self.residuals.iter())
+        let others: Vec<(f64, f64)> = (self.predicted_flown.iter())
             .filter(|(c, _)| *c != candidate)
-            .map(|(_, e)| *e)
+            .map(|(_, pair)| *pair)
             .collect();
         let predicted = (own.iter().min_by_key(|r| r.attempt)).map_or(f64::NAN, |r| r.prediction.min_distance);
         Evidence {
             own: counts(own.iter().filter_map(|r| r.flown.min_distance)),
             neighbours: counts(neighbours),
-            prior: prior_bands(predicted, &residuals),
+            prior: skilled_prior(predicted, &others),
         }
     }
 
