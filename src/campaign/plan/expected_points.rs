@@ -3,7 +3,8 @@
 //!
 //! Each flight lands in one points band (5, 2, 1 or 0 points). The band probabilities get a Dirichlet-like
 //! pseudo-count blend: the calibrated LFS prediction is a prior of [`PRIOR_FLIGHTS`] pseudo-flights (its band
-//! shares from the campaign's residual spread), each of the test's own flights counts one, and each flight of
+//! shares from the campaign's other flights, tilted by the prediction only as far as it ranks them:
+//! [`skilled_prior`]), each of the test's own flights counts one, and each flight of
 //! a neighbour (a test overlapping it) counts [`NEIGHBOUR_WEIGHT`], all neighbours together at most
 //! [`MAX_NEIGHBOUR_FLIGHTS`]. Expected points = sum of band share x band points; the interval is the 10-90 %
 //! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points): how sure the campaign is
@@ -81,9 +82,9 @@ pub fn prior_bands(predicted_m: f64, residuals: &[f64]) -> Option<Bands> {
 /// within [`MAX_RESIDUAL_M`] of its prediction as the calibration clips it. The prediction is first pulled
 /// toward the flights' mean by the least-squares slope of flown on predicted, held to 0-1 ([`skill_slope`]):
 /// at slope 1 this is [`prior_bands`] on the plain residuals, at slope 0 the campaign's base rate, the same
-/// for every test. On a vehicle the LFS does not rank (PX4 SIH: a slope at or below zero in every campaign,
-/// docs/design-constants.md#expected-points-prior) the prior then shrinks toward what flights here do, not
-/// toward what the LFS likes. `None` as [`prior_bands`].
+/// for every test. On a vehicle the LFS does not rank (PX4 SIH: a slope at or below zero in every budget-100
+/// campaign, docs/design-constants.md#expected-points-prior) the prior then shrinks toward what flights here
+/// do, not toward what the LFS likes. `None` as [`prior_bands`].
 pub fn skilled_prior(predicted_m: f64, others: &[(f64, f64)]) -> Option<Bands> {
     let pairs: Vec<(f64, f64)> = (others.iter())
         .filter(|(p, f)| p.is_finite() && f.is_finite())
