@@ -64,11 +64,11 @@ fn points_of(v: &[f64]) -> f64 {
 /// Judged flights' distances by the test's boxes (their JSON).
 type Judged = HashMap<String, Vec<f64>>;
 
-fn distances(runs: &serde_json::Value, field: &str) -> Vec<f64> {
+/// The numbers of a JSON array: each element itself, or its `field`.
+fn distances(runs: &serde_json::Value, field: Option<&str>) -> Vec<f64> {
     let runs = runs.as_array().map(Vec::as_slice).unwrap_or_default();
-    runs.iter()
-        .filter_map(|r| r[field].as_f64().or_else(|| r.as_f64()))
-        .collect()
+    let value = |r: &serde_json::Value| field.map_or(r.as_f64(), |f| r[f].as_f64());
+    runs.iter().filter_map(value).collect()
 }
 
 /// The canonical key of a test's boxes (as a test YAML or report.json spells them).
@@ -92,7 +92,7 @@ fn add_report(path: &Path, into: &mut Judged) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let json: serde_json::Value = serde_json::from_str(&text).with_context(|| path.display().to_string())?;
     for t in json["tests"].as_array().map(Vec::as_slice).unwrap_or_default() {
-        let runs = distances(&t["runs"], "min_distance");
+        let runs = distances(&t["runs"], Some("min_distance"));
         if let (Some(key), false) = (
             test_boxes(t["test"].as_str().unwrap_or_default(), path),
             runs.is_empty(),
@@ -128,7 +128,7 @@ fn extra_judged() -> anyhow::Result<Judged> {
         for (i, line) in text.lines().enumerate() {
             let row: serde_json::Value = serde_json::from_str(line).with_context(|| format!("{path}:{}", i + 1))?;
             let key = boxes_key(&row["obstacles"]).with_context(|| format!("{path}:{}: obstacles", i + 1))?;
-            out.entry(key).or_insert(distances(&row["px4_min_distance"], ""));
+            out.entry(key).or_insert(distances(&row["px4_min_distance"], None));
         }
     }
     Ok(out)

@@ -93,27 +93,48 @@ pub fn skilled_prior(predicted_m: f64, others: &[(f64, f64)]) -> Option<Bands> {
     if pairs.len() < MIN_RESIDUALS || !predicted_m.is_finite() {
         return None;
     }
-    let n = pairs.len() as f64;
-    let mean_p = pairs.iter().map(|x| x.0).sum::<f64>() / n;
-    let mean_f = pairs.iter().map(|x| x.1).sum::<f64>() / n;
-    let slope = skill_slope(&pairs);
-    let line = |p: f64| mean_f + slope * (p - mean_p);
-    let residuals: Vec<f64> = pairs.iter().map(|&(p, f)| f - line(p)).collect();
-    prior_bands(line(predicted_m), &residuals)
+    let line = SkillLine::fit(&pairs);
+    let residuals: Vec<f64> = pairs.iter().map(|&(p, f)| f - line.at(p)).collect();
+    prior_bands(line.at(predicted_m), &residuals)
 }
 
 /// The least-squares slope of flown on predicted over `pairs`, held to 0-1: 0 when the predictions do not
 /// vary.
 pub fn skill_slope(pairs: &[(f64, f64)]) -> f64 {
-    let n = pairs.len() as f64;
-    if n < 2.0 {
-        return 0.0;
+    SkillLine::fit(pairs).slope
+}
+
+/// Flown against predicted, fitted once: the line through the pairs' means at the held slope.
+struct SkillLine {
+    mean_predicted: f64,
+    mean_flown: f64,
+    slope: f64,
+}
+
+impl SkillLine {
+    fn fit(pairs: &[(f64, f64)]) -> Self {
+        let n = pairs.len().max(1) as f64;
+        let mean_predicted = pairs.iter().map(|x| x.0).sum::<f64>() / n;
+        let mean_flown = pairs.iter().map(|x| x.1).sum::<f64>() / n;
+        let var: f64 = pairs.iter().map(|x| (x.0 - mean_predicted).powi(2)).sum();
+        let cov: f64 = (pairs.iter())
+            .map(|x| (x.0 - mean_predicted) * (x.1 - mean_flown))
+            .sum();
+        let slope = if pairs.len() < 2 || var <= 1e-12 {
+            0.0
+        } else {
+            (cov / var).clamp(0.0, 1.0)
+        };
+        Self {
+            mean_predicted,
+            mean_flown,
+            slope,
+        }
     }
-    let mean_p = pairs.iter().map(|x| x.0).sum::<f64>() / n;
-    let mean_f = pairs.iter().map(|x| x.1).sum::<f64>() / n;
-    let var: f64 = pairs.iter().map(|x| (x.0 - mean_p).powi(2)).sum();
-    let cov: f64 = pairs.iter().map(|x| (x.0 - mean_p) * (x.1 - mean_f)).sum();
-    if var <= 1e-12 { 0.0 } else { (cov / var).clamp(0.0, 1.0) }
+
+    fn at(&self, predicted_m: f64) -> f64 {
+        self.mean_flown + self.slope * (predicted_m - self.mean_predicted)
+    }
 }
 
 /// What a test's estimate is made of.
