@@ -7,8 +7,9 @@
 //! - the embedded mock with the campaign's profile, `MOCK_RUNS` flights each (default 10; 0 skips it).
 //!
 //! Prints, per mission and overall, the Spearman of each against PX4's mean distance and mean points; then,
-//! per mission, what any 10 of these tests could score: the best 10 by their own 10-flight test scores
-//! (hindsight, no similarity penalty), and the ceiling of 10 tests that earn 1 point on every flight at the
+//! per mission, what any 10 of these tests (distinct boxes) could score: the best 10 by their own 10-flight
+//! test scores (hindsight, no similarity penalty); the best 10 by one evaluation's 5 flights, scored by the
+//! other's (what picking by PX4's own flights earns at the next evaluation); and the ceiling of 10 tests that earn 1 point on every flight at the
 //! 10 shortest mean flight times (2 points need a flight below 1 m: their count is printed too).
 //!
 //! `cargo run --release --example surrogate_rank -- [PARALLEL=2]` (about 5 minutes on 2 cores with the mock;
@@ -59,6 +60,10 @@ struct Figures {
     px4_points: f64,
     first_half: (f64, f64),
     second_half: (f64, f64),
+    /// The 2026 test score of each evaluation's 5 flights alone.
+    half_scores: (f64, f64),
+    /// The boxes, as text: one test may stand in two suites.
+    boxes: String,
     lfs_px4: f64,
     lfs_paper: f64,
     mock: (f64, f64),
@@ -78,12 +83,24 @@ fn judged(d: &[f64]) -> (f64, f64) {
     (mean(d), mean(&p))
 }
 
+/// One evaluation's flights: (distances, flight times).
+fn flights_of(row: &Row, k: u8) -> (Vec<f64>, Vec<f64>) {
+    (row.px4_min_distance
+        .iter()
+        .zip(&row.px4_flight_time_s)
+        .zip(&row.evaluation))
+    .filter(|(_, e)| **e == k)
+    .map(|((d, t), _)| (*d, *t))
+    .unzip()
+}
+
 fn half(row: &Row, k: u8) -> (f64, f64) {
-    let d: Vec<f64> = (row.px4_min_distance.iter().zip(&row.evaluation))
-        .filter(|(_, e)| **e == k)
-        .map(|(d, _)| *d)
-        .collect();
-    judged(&d)
+    judged(&flights_of(row, k).0)
+}
+
+fn half_score(row: &Row, k: u8) -> f64 {
+    let (d, t) = flights_of(row, k);
+    test_score(&d, &t, row.obstacles.len())
 }
 
 async fn figures(row: Row, seed: u64, mock_runs: u64) -> anyhow::Result<Figures> {
@@ -111,6 +128,8 @@ async fn figures(row: Row, seed: u64, mock_runs: u64) -> anyhow::Result<Figures>
         px4_points,
         first_half: half(&row, 1),
         second_half: half(&row, 2),
+        half_scores: (half_score(&row, 1), half_score(&row, 2)),
+        boxes: serde_json::to_string(&row.obstacles)?,
         lfs_px4,
         lfs_paper,
         mock: judged(&flown),
@@ -170,30 +189,51 @@ fn main() -> anyhow::Result<()> {
         );
     }
     println!(
-        "\n| mission | flights below 1 m | best 10 in hindsight: total (mean points) | 10 tests at 1 point a flight |"
+        "\n| mission | distinct tests | flights below 1 m | best 10 in hindsight: total (mean points) | best 10 of \
+         one evaluation, scored by the other (1 on 2 / 2 on 1) | 10 tests at 1 point a flight |"
     );
-    println!("|---|---|---|---|");
+    println!("|---|---|---|---|---|---|");
     for mission in [2, 5] {
-        let fs: Vec<&Figures> = all.iter().filter(|f| f.mission == mission).collect();
+        let fs = distinct(all.iter().filter(|f| f.mission == mission).collect());
         println!(
-            "| {mission} | {} of {} | {} | {:.2} |",
+            "| {mission} | {} | {} of {} | {} | {:.2} / {:.2} | {:.2} |",
+            fs.len(),
             fs.iter().map(|f| f.below_1m).sum::<usize>(),
             fs.len() * 10,
             hindsight(&fs),
+            picked_by(&fs, |f| f.half_scores.0, |f| f.half_scores.1),
+            picked_by(&fs, |f| f.half_scores.1, |f| f.half_scores.0),
             one_point_ceiling(&fs)
         );
     }
     Ok(())
 }
 
+/// The tests with distinct boxes, the first of each kept: a test two suites share is one test to pick.
+fn distinct(fs: Vec<&Figures>) -> Vec<&Figures> {
+    let mut seen = std::collections::HashSet::new();
+    fs.into_iter().filter(|f| seen.insert(f.boxes.as_str())).collect()
+}
+
 /// The 10 best tests' total score and their summed mean points.
 fn hindsight(fs: &[&Figures]) -> String {
-    let mut by_score: Vec<&&Figures> = fs.iter().collect();
-    by_score.sort_by(|a, b| b.px4_score.total_cmp(&a.px4_score));
-    let best = &by_score[..by_score.len().min(10)];
+    let best = best_10(fs, |f| f.px4_score);
     let total: f64 = best.iter().map(|f| f.px4_score).sum();
     let points: f64 = best.iter().map(|f| f.px4_points).sum();
     format!("{total:.2} ({points:.1})")
+}
+
+/// The total `scored` gives the 10 best tests by `picked`: a selection by 5 PX4 flights a test, judged on
+/// 5 others, as a campaign that had flown every test 5 times would be judged.
+fn picked_by(fs: &[&Figures], picked: impl Fn(&Figures) -> f64, scored: impl Fn(&Figures) -> f64) -> f64 {
+    best_10(fs, picked).iter().map(|f| scored(f)).sum()
+}
+
+fn best_10<'a>(fs: &[&'a Figures], by: impl Fn(&Figures) -> f64) -> Vec<&'a Figures> {
+    let mut sorted: Vec<&Figures> = fs.to_vec();
+    sorted.sort_by(|a, b| by(b).total_cmp(&by(a)));
+    sorted.truncate(10);
+    sorted
 }
 
 /// The total of 10 tests earning 1 point on every flight, at the 10 shortest mean flight times.
