@@ -60,6 +60,18 @@ pub struct FlightDistance {
     pub closest: ClosestApproach,
     /// Whether the un-binned bare path entered a box (a physical collision, whatever the edition).
     pub collision: bool,
+    /// The box the un-binned path crossed from above with the least clearance, if any. The 2026 edition is
+    /// horizontal only, so it judges such a crossing 0 m however high the vehicle flew.
+    pub passed_over: Option<PassedOver>,
+}
+
+/// A crossing over a box: the path's footprint met the box's, above its top.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PassedOver {
+    /// The obstacle's index.
+    pub obstacle: usize,
+    /// Lowest height of the path over the footprint minus the box's height, metres.
+    pub clearance_m: f64,
 }
 
 /// Judges a recorded log against obstacles, as Aerialist does; `None` without samples or obstacles.
@@ -91,6 +103,7 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
     let closest = closest_approach(judge, obstacles, &raw.samples);
     // A collision is the bare path inside a box, whatever the edition's buffer says.
     let collision = obstacles.iter().any(|o| obstacle_distance(o, &raw.samples) == 0.0);
+    let passed_over = passed_over(obstacles, &raw.samples);
     Some(FlightDistance {
         judge,
         judge_definition: judge.description(),
@@ -99,7 +112,22 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
         per_obstacle,
         closest,
         collision,
+        passed_over,
     })
+}
+
+/// The crossing over a box with the least clearance (`None` without one; entering a box is a collision).
+fn passed_over(obstacles: &[Obstacle], path: &[Sample]) -> Option<PassedOver> {
+    let pts: Vec<P2> = path.iter().map(|s| P2::new(s.x, s.y)).collect();
+    let crossings = obstacles.iter().enumerate().filter_map(|(obstacle, o)| {
+        let f = o.footprint();
+        if f.distance_to_polyline(&pts) != Some(0.0) {
+            return None;
+        }
+        let clearance_m = lowest_over(&f, path)? - o.size.h;
+        (clearance_m > 0.0).then_some(PassedOver { obstacle, clearance_m })
+    });
+    crossings.min_by(|a, b| a.clearance_m.total_cmp(&b.clearance_m))
 }
 
 /// The distance from `obstacle` to `path` by `judge`'s definition.
@@ -282,6 +310,27 @@ mod tests {
         assert!((j.min_distance_raw - 3.0).abs() < 1e-12);
         let crash = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 4.0), (2.0, 20.0, 0.0, 4.0)]);
         assert!(judge_flight(&crash, &[o], Judge::E2025).unwrap().collision);
+    }
+
+    #[test]
+    fn a_crossing_over_a_box_is_named_with_its_clearance_in_either_edition() {
+        let low = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
+        let lower = Obstacle::new(2.0, 2.0, 7.5, 16.0, 0.0, 0.0);
+        let beside = Obstacle::new(2.0, 2.0, 5.0, 10.0, 6.0, 0.0);
+        let over = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 8.0), (2.0, 20.0, 0.0, 8.0)]);
+        for judge in Judge::ALL {
+            let j = judge_flight(&over, &[beside, low, lower], judge).unwrap();
+            let p = j.passed_over.expect("crossed two boxes");
+            assert_eq!(p.obstacle, 2, "{judge}: the crossing with the least clearance");
+            assert!((p.clearance_m - 0.5).abs() < 1e-12, "{judge}: {}", p.clearance_m);
+            assert!(judge_flight(&over, &[beside], judge).unwrap().passed_over.is_none());
+        }
+        let crash = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 4.0), (2.0, 20.0, 0.0, 4.0)]);
+        let j = judge_flight(&crash, &[low], Judge::E2026).unwrap();
+        assert!(
+            j.collision && j.passed_over.is_none(),
+            "entering a box is not crossing it"
+        );
     }
 
     #[test]

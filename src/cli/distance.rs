@@ -56,6 +56,12 @@ pub fn run(args: DistanceArgs) -> anyhow::Result<ExitCode> {
         if verdict.collision {
             println!("collision: the path entered a box");
         }
+        if let Some(o) = verdict.passed_over {
+            println!(
+                "passed over       obstacle {}, {:.2} m above its top (the 2026 judge, horizontal, counts 0 m)",
+                o.obstacle, o.clearance_m
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -196,3 +196,37 @@ fn a_ulog_pausing_over_an_hour_is_refused_naming_the_sample() {
         "{e}"
     );
 }
+
+#[test]
+fn a_px4_flight_over_a_low_box_is_judged_0_m_and_said_to_have_crossed_it() {
+    // A competitor's 10.19 m box under the 10 m flight, flown by PX4 v1.14 SIH with our planner.
+    let case_file = super::repo().join("tests/data/hfs-flights/case_gulicatta_005.json");
+    let case_json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(case_file).unwrap()).unwrap();
+    let boxes: Vec<Obstacle> = (case_json["obstacles"].as_array().unwrap().iter())
+        .map(|o| {
+            let f = |k: &str| o[k].as_f64().unwrap();
+            Obstacle::new(f("l"), f("w"), f("h"), f("x"), f("y"), f("r"))
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    case(1)
+        .with_obstacles(boxes)
+        .save(&dir.path().join("test_0.yaml"), Spelling::Old)
+        .unwrap();
+    let flight = super::repo().join("tests/data/px4-flights/traj/case_gulicatta_005.csv");
+    std::fs::copy(flight, dir.path().join("test_0-0.csv")).unwrap();
+    let (code, out, err) = prgenuav(&["score", dir.path().to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("1 run(s) crossed a box from above, the lowest 2.66 m above its top"),
+        "{out}"
+    );
+    let (_, out, _) = prgenuav(&["score", dir.path().to_str().unwrap(), "--json"]);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let run = &j["evaluation_2026"]["tests"][0]["runs"][0];
+    assert_eq!(
+        (run["min_distance"].as_f64(), run["points"].as_u64()),
+        (Some(0.0), Some(5))
+    );
+    assert_eq!(run["passed_over"]["obstacle"], 1);
+}

@@ -6,6 +6,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::suite::Evaluation;
+use crate::judge::Judge;
 use crate::model::ModelError;
 
 /// `report.json`.
@@ -65,12 +66,16 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
         e.figures_2025.diversity.map_or("n/a".into(), |d| format!("{d:.3}")),
     );
     let _ = writeln!(md, "Judge {}: {}\n", e.judge, e.judge_definition);
+    crossings(&mut md, e);
     md.push_str("| test | runs: distance m (points) | mean points | mean time s | score | similar to |\n|---|---|---|---|---|---|\n");
     for t in &e.tests {
         let runs: Vec<String> = t
             .runs
             .iter()
-            .map(|r| format!("{:.2} ({})", r.min_distance, r.points))
+            .map(|r| match r.passed_over {
+                Some(o) => format!("{:.2} ({}, over obstacle {})", r.min_distance, r.points, o.obstacle),
+                None => format!("{:.2} ({})", r.min_distance, r.points),
+            })
             .collect();
         let similar = t.similar_to.map_or(String::new(), |j| name(&e.tests[j].test));
         let _ = writeln!(
@@ -92,4 +97,29 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
         let _ = writeln!(md, "| {} | {} | {:.1} | {} |", name(&p.a), name(&p.b), p.dtw, p.similar);
     }
     md
+}
+
+/// Says how many runs crossed a box from above, and how the judge scored them (`None` when none did).
+pub fn crossing_note(e: &Evaluation) -> Option<String> {
+    let over: Vec<f64> = (e.tests.iter().flat_map(|t| &t.runs))
+        .filter_map(|r| r.passed_over.map(|o| o.clearance_m))
+        .collect();
+    let lowest = over.iter().copied().reduce(f64::min)?;
+    let rule = match e.judge {
+        Judge::E2026 => "This judge is horizontal only: it scores such a run 0 m, whatever its clearance.",
+        Judge::E2025 => "This judge scores such a run by its height gap.",
+    };
+    Some(format!(
+        "{} run(s) crossed a box from above, the lowest {lowest:.2} m above its top. {rule}",
+        over.len()
+    ))
+}
+
+fn crossings(md: &mut String, e: &Evaluation) {
+    if let Some(note) = crossing_note(e) {
+        let _ = writeln!(
+            md,
+            "**{note}** Such runs are marked \"over obstacle K\" (K as in `report.json`, from 0).\n"
+        );
+    }
 }

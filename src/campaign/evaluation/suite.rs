@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::judge::similarity::{average, path_distance, prepare};
-use crate::judge::{Judge, diversity, judge_flight, points};
+use crate::judge::{Judge, PassedOver, diversity, judge_flight, points};
 use crate::model::competition::{FAIL_BELOW_M, TEST_SCORE_SCALE};
 use crate::model::{ModelError, TestCase, Trajectory};
 
@@ -33,6 +33,8 @@ pub struct Run {
     pub points: u32,
     /// Flight time, seconds.
     pub flight_time_s: f64,
+    /// The box the flight crossed from above, and how high (the 2026 judge scores that crossing 0 m).
+    pub passed_over: Option<PassedOver>,
 }
 
 /// One test's 2026 figures.
@@ -179,6 +181,7 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
             min_distance: verdict.min_distance,
             points: points(verdict.min_distance),
             flight_time_s: flight.duration_s(),
+            passed_over: verdict.passed_over,
         });
     }
     let n = runs.len().max(1) as f64;
