@@ -10,7 +10,8 @@
 //! per mission, what any 10 of these tests (distinct boxes) could score: the best 10 by their own 10-flight
 //! test scores (hindsight, no similarity penalty); the best 10 by one evaluation's 5 flights, scored by the
 //! other's (what picking by PX4's own flights earns at the next evaluation); and the ceiling of 10 tests that earn 1 point on every flight at the
-//! 10 shortest mean flight times (2 points need a flight below 1 m: their count is printed too).
+//! 10 shortest mean flight times (2 points need a flight below 1 m: their count is printed too). Last, each
+//! suite's total in either evaluation against the spread its runs' scatter predicts for the difference.
 //!
 //! `cargo run --release --example surrogate_rank -- [PARALLEL=2]` (about 5 minutes on 2 cores with the mock;
 //! `MOCK_RUNS=0`: the LFS alone, seconds; `MOCK_PROFILE=NAME` or `MOCK_SETTING=...` as in `mock_fit`).
@@ -39,6 +40,7 @@ const DATA: &str = "tests/data/px4-repeated/tests.jsonl";
 #[derive(Debug, Clone, Deserialize)]
 struct Row {
     mission: u32,
+    suite: String,
     obstacles: Vec<Obstacle>,
     /// Every PX4 flight, metres (the 2026 judge), in flight order.
     px4_min_distance: Vec<f64>,
@@ -60,8 +62,11 @@ struct Figures {
     px4_points: f64,
     first_half: (f64, f64),
     second_half: (f64, f64),
+    suite: String,
     /// The 2026 test score of each evaluation's 5 flights alone.
     half_scores: (f64, f64),
+    /// The variance of each of those scores that the runs' own scatter predicts.
+    half_variances: (f64, f64),
     /// The boxes, as text: one test may stand in two suites.
     boxes: String,
     lfs_px4: f64,
@@ -103,6 +108,17 @@ fn half_score(row: &Row, k: u8) -> f64 {
     test_score(&d, &t, row.obstacles.len())
 }
 
+/// The variance of [`half_score`] from the runs: (score per point)² x the points' sample variance / runs.
+fn half_variance(row: &Row, k: u8) -> f64 {
+    let (d, t) = flights_of(row, k);
+    let n = d.len() as f64;
+    let p: Vec<f64> = d.iter().map(|x| f64::from(points(*x))).collect();
+    let m = mean(&p);
+    let var = p.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    let per_point = TEST_SCORE_SCALE / ((row.obstacles.len().pow(2)) as f64 * mean(&t) / 60.0);
+    per_point * per_point * var / n
+}
+
 async fn figures(row: Row, seed: u64, mock_runs: u64) -> anyhow::Result<Figures> {
     let case = TestCase::load(Path::new(&format!("missions/mission{}.yaml", row.mission)))?;
     let test = case.with_obstacles(row.obstacles.clone());
@@ -128,7 +144,9 @@ async fn figures(row: Row, seed: u64, mock_runs: u64) -> anyhow::Result<Figures>
         px4_points,
         first_half: half(&row, 1),
         second_half: half(&row, 2),
+        suite: row.suite.clone(),
         half_scores: (half_score(&row, 1), half_score(&row, 2)),
+        half_variances: (half_variance(&row, 1), half_variance(&row, 2)),
         boxes: serde_json::to_string(&row.obstacles)?,
         lfs_px4,
         lfs_paper,
@@ -206,7 +224,28 @@ fn main() -> anyhow::Result<()> {
             one_point_ceiling(&fs)
         );
     }
+    repeat_table(&all);
     Ok(())
+}
+
+/// Each suite's total in either evaluation, against the spread its runs' own scatter predicts for the
+/// difference (z = difference / that spread).
+fn repeat_table(all: &[Figures]) {
+    println!("\n| suite | evaluation 1 | evaluation 2 | difference | spread the runs predict (sd) | z |");
+    println!("|---|---|---|---|---|---|");
+    let mut suites: Vec<&str> = all.iter().map(|f| f.suite.as_str()).collect();
+    suites.dedup();
+    for suite in suites {
+        let fs: Vec<&Figures> = all.iter().filter(|f| f.suite == suite).collect();
+        let sum = |g: fn(&Figures) -> f64| fs.iter().map(|f| g(f)).sum::<f64>();
+        let (a, b) = (sum(|f| f.half_scores.0), sum(|f| f.half_scores.1));
+        let sd = (sum(|f| f.half_variances.0) + sum(|f| f.half_variances.1)).sqrt();
+        println!(
+            "| {suite} | {a:.2} | {b:.2} | {:+.2} | {sd:.2} | {:+.1} |",
+            b - a,
+            (b - a) / sd
+        );
+    }
 }
 
 /// The tests with distinct boxes, the first of each kept: a test two suites share is one test to pick.
