@@ -60,18 +60,19 @@ pub struct FlightDistance {
     pub closest: ClosestApproach,
     /// Whether the un-binned bare path entered a box (a physical collision, whatever the edition).
     pub collision: bool,
-    /// The box the un-binned path crossed from above with the least clearance, if any. The 2026 edition is
-    /// horizontal only, so it judges such a crossing 0 m however high the vehicle flew.
-    pub passed_over: Option<PassedOver>,
+    /// Set when the vehicle was higher than the box's top at its closest approach (having crossed over
+    /// it, or passed beside it above the top). Both editions then judge a closeness the vehicle never had:
+    /// the 2026 one is horizontal only, the 2025 one counts the height gap only straight over a box.
+    pub above_top: Option<AboveTop>,
 }
 
-/// A crossing over a box: the path's footprint met the box's, above its top.
+/// The vehicle above a box's top where it came closest to the box.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PassedOver {
-    /// The obstacle's index.
+pub struct AboveTop {
+    /// The obstacle's index (from 0, in test order).
     pub obstacle: usize,
-    /// Lowest height of the path over the footprint minus the box's height, metres.
-    pub clearance_m: f64,
+    /// The vehicle's height there minus the box's, metres (positive).
+    pub height_m: f64,
 }
 
 /// Judges a recorded log against obstacles, as Aerialist does; `None` without samples or obstacles.
@@ -103,7 +104,13 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
     let closest = closest_approach(judge, obstacles, &raw.samples);
     // A collision is the bare path inside a box, whatever the edition's buffer says.
     let collision = obstacles.iter().any(|o| obstacle_distance(o, &raw.samples) == 0.0);
-    let passed_over = passed_over(obstacles, &raw.samples);
+    let above_top = (obstacles.get(closest.obstacle))
+        .map(|o| closest.z - o.size.h)
+        .filter(|h| *h > 0.0)
+        .map(|height_m| AboveTop {
+            obstacle: closest.obstacle,
+            height_m,
+        });
     Some(FlightDistance {
         judge,
         judge_definition: judge.description(),
@@ -112,22 +119,8 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
         per_obstacle,
         closest,
         collision,
-        passed_over,
+        above_top,
     })
-}
-
-/// The crossing over a box with the least clearance (`None` without one; entering a box is a collision).
-fn passed_over(obstacles: &[Obstacle], path: &[Sample]) -> Option<PassedOver> {
-    let pts: Vec<P2> = path.iter().map(|s| P2::new(s.x, s.y)).collect();
-    let crossings = obstacles.iter().enumerate().filter_map(|(obstacle, o)| {
-        let f = o.footprint();
-        if f.distance_to_polyline(&pts) != Some(0.0) {
-            return None;
-        }
-        let clearance_m = lowest_over(&f, path)? - o.size.h;
-        (clearance_m > 0.0).then_some(PassedOver { obstacle, clearance_m })
-    });
-    crossings.min_by(|a, b| a.clearance_m.total_cmp(&b.clearance_m))
 }
 
 /// The distance from `obstacle` to `path` by `judge`'s definition.
@@ -313,24 +306,24 @@ mod tests {
     }
 
     #[test]
-    fn a_crossing_over_a_box_is_named_with_its_clearance_in_either_edition() {
+    fn a_closest_approach_above_a_box_top_is_named_with_its_height_in_either_edition() {
         let low = Obstacle::new(2.0, 2.0, 5.0, 10.0, 0.0, 0.0);
-        let lower = Obstacle::new(2.0, 2.0, 7.5, 16.0, 0.0, 0.0);
-        let beside = Obstacle::new(2.0, 2.0, 5.0, 10.0, 6.0, 0.0);
+        let beside = Obstacle::new(2.0, 2.0, 5.0, 10.0, 1.5, 0.0);
+        let far = Obstacle::new(2.0, 2.0, 20.0, 10.0, 30.0, 0.0);
+        let tall = Obstacle::new(2.0, 2.0, 20.0, 10.0, 0.0, 0.0);
         let over = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 8.0), (2.0, 20.0, 0.0, 8.0)]);
         for judge in Judge::ALL {
-            let j = judge_flight(&over, &[beside, low, lower], judge).unwrap();
-            let p = j.passed_over.expect("crossed two boxes");
-            assert_eq!(p.obstacle, 2, "{judge}: the crossing with the least clearance");
-            assert!((p.clearance_m - 0.5).abs() < 1e-12, "{judge}: {}", p.clearance_m);
-            assert!(judge_flight(&over, &[beside], judge).unwrap().passed_over.is_none());
+            // Straight over the low box, or 0.5 m beside the other one: 3 m above either's top.
+            for o in [low, beside] {
+                let j = judge_flight(&over, &[far, o], judge).unwrap();
+                let a = j.above_top.expect("above the top");
+                assert_eq!(a.obstacle, 1, "{judge}");
+                assert!((a.height_m - 3.0).abs() < 1e-9, "{judge}: {}", a.height_m);
+            }
+            // A box taller than the flight: nothing above its top.
+            let j = judge_flight(&over, &[tall], judge).unwrap();
+            assert!(j.above_top.is_none() && j.collision, "{judge}");
         }
-        let crash = path(&[(0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 4.0), (2.0, 20.0, 0.0, 4.0)]);
-        let j = judge_flight(&crash, &[low], Judge::E2026).unwrap();
-        assert!(
-            j.collision && j.passed_over.is_none(),
-            "entering a box is not crossing it"
-        );
     }
 
     #[test]

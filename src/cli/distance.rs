@@ -56,10 +56,10 @@ pub fn run(args: DistanceArgs) -> anyhow::Result<ExitCode> {
         if verdict.collision {
             println!("collision: the path entered a box");
         }
-        if let Some(o) = verdict.passed_over {
+        if let Some(o) = verdict.above_top {
             println!(
-                "passed over       obstacle {}, {:.2} m above its top (the 2026 judge, horizontal, counts 0 m)",
-                o.obstacle, o.clearance_m
+                "above the top     of obstacle {} by {:.2} m at the closest approach (the distance is horizontal)",
+                o.obstacle, o.height_m
             );
         }
     }

@@ -198,7 +198,7 @@ fn a_ulog_pausing_over_an_hour_is_refused_naming_the_sample() {
 }
 
 #[test]
-fn a_px4_flight_over_a_low_box_is_judged_0_m_and_said_to_have_crossed_it() {
+fn a_px4_flight_over_a_low_box_is_judged_0_m_and_said_to_be_above_its_top() {
     // A competitor's 10.19 m box under the 10 m flight, flown by PX4 v1.14 SIH with our planner.
     let case_file = super::repo().join("tests/data/hfs-flights/case_gulicatta_005.json");
     let case_json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(case_file).unwrap()).unwrap();
@@ -218,7 +218,7 @@ fn a_px4_flight_over_a_low_box_is_judged_0_m_and_said_to_have_crossed_it() {
     let (code, out, err) = prgenuav(&["score", dir.path().to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        out.contains("1 run(s) crossed a box from above, the lowest 2.66 m above its top"),
+        out.contains("1 run(s) came closest to a box above its top (the lowest 3.30 m above)"),
         "{out}"
     );
     let (_, out, _) = prgenuav(&["score", dir.path().to_str().unwrap(), "--json"]);
@@ -228,5 +228,5 @@ fn a_px4_flight_over_a_low_box_is_judged_0_m_and_said_to_have_crossed_it() {
         (run["min_distance"].as_f64(), run["points"].as_u64()),
         (Some(0.0), Some(5))
     );
-    assert_eq!(run["passed_over"]["obstacle"], 1);
+    assert_eq!(run["above_top"]["obstacle"], 1);
 }

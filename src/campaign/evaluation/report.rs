@@ -66,14 +66,14 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
         e.figures_2025.diversity.map_or("n/a".into(), |d| format!("{d:.3}")),
     );
     let _ = writeln!(md, "Judge {}: {}\n", e.judge, e.judge_definition);
-    crossings(&mut md, e);
+    above_top(&mut md, e);
     md.push_str("| test | runs: distance m (points) | mean points | mean time s | score | similar to |\n|---|---|---|---|---|---|\n");
     for t in &e.tests {
         let runs: Vec<String> = t
             .runs
             .iter()
-            .map(|r| match r.passed_over {
-                Some(o) => format!("{:.2} ({}, over obstacle {})", r.min_distance, r.points, o.obstacle),
+            .map(|r| match r.above_top {
+                Some(o) => format!("{:.2} ({}, above obstacle {})", r.min_distance, r.points, o.obstacle),
                 None => format!("{:.2} ({})", r.min_distance, r.points),
             })
             .collect();
@@ -99,27 +99,28 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
     md
 }
 
-/// Says how many runs crossed a box from above, and how the judge scored them (`None` when none did).
-pub fn crossing_note(e: &Evaluation) -> Option<String> {
-    let over: Vec<f64> = (e.tests.iter().flat_map(|t| &t.runs))
-        .filter_map(|r| r.passed_over.map(|o| o.clearance_m))
+/// Says how many runs were above a box's top where they came closest to it, and how the judge scored them
+/// (`None` when none were).
+pub fn above_top_note(e: &Evaluation) -> Option<String> {
+    let above: Vec<f64> = (e.tests.iter().flat_map(|t| &t.runs))
+        .filter_map(|r| r.above_top.map(|o| o.height_m))
         .collect();
-    let lowest = over.iter().copied().reduce(f64::min)?;
+    let lowest = above.iter().copied().reduce(f64::min)?;
     let rule = match e.judge {
-        Judge::E2026 => "This judge is horizontal only: it scores such a run 0 m, whatever its clearance.",
-        Judge::E2025 => "This judge scores such a run by its height gap.",
+        Judge::E2026 => "This judge is horizontal only: it scores a run over a box 0 m, whatever its height.",
+        Judge::E2025 => "This judge counts the height gap only straight over a box.",
     };
     Some(format!(
-        "{} run(s) crossed a box from above, the lowest {lowest:.2} m above its top. {rule}",
-        over.len()
+        "{} run(s) came closest to a box above its top (the lowest {lowest:.2} m above). {rule}",
+        above.len()
     ))
 }
 
-fn crossings(md: &mut String, e: &Evaluation) {
-    if let Some(note) = crossing_note(e) {
+fn above_top(md: &mut String, e: &Evaluation) {
+    if let Some(note) = above_top_note(e) {
         let _ = writeln!(
             md,
-            "**{note}** Such runs are marked \"over obstacle K\" (K as in `report.json`, from 0).\n"
+            "**{note}** Such runs are marked \"above obstacle K\" (K as in `report.json`, from 0).\n"
         );
     }
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::judge::similarity::{average, path_distance, prepare};
-use crate::judge::{Judge, PassedOver, diversity, judge_flight, points};
+use crate::judge::{AboveTop, Judge, diversity, judge_flight, points};
 use crate::model::competition::{FAIL_BELOW_M, TEST_SCORE_SCALE};
 use crate::model::{ModelError, TestCase, Trajectory};
 
@@ -33,8 +33,9 @@ pub struct Run {
     pub points: u32,
     /// Flight time, seconds.
     pub flight_time_s: f64,
-    /// The box the flight crossed from above, and how high (the 2026 judge scores that crossing 0 m).
-    pub passed_over: Option<PassedOver>,
+    /// Set when the vehicle was above the box's top at its closest approach: the judge's distance is
+    /// horizontal there (the 2026 judge scores a crossing over a box 0 m).
+    pub above_top: Option<AboveTop>,
 }
 
 /// One test's 2026 figures.
@@ -181,7 +182,7 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
             min_distance: verdict.min_distance,
             points: points(verdict.min_distance),
             flight_time_s: flight.duration_s(),
-            passed_over: verdict.passed_over,
+            above_top: verdict.above_top,
         });
     }
     let n = runs.len().max(1) as f64;

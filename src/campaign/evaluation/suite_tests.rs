@@ -111,29 +111,29 @@ fn a_test_without_obstacles_is_an_error_naming_it() {
 }
 
 #[test]
-fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_why() {
+fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_it_was_above_the_top() {
     // An 8.8 m box under the 10 m flight: the path crosses it 1.2 m above its top.
     let low = Obstacle::new(10.0, 4.0, 8.8, 25.0, 0.0, 0.0);
     let a = flown("a.yaml", vec![low], vec![flight(0.0, 60.0), flight(0.0, 60.0)]);
     let (e, _) = evaluate_suite(std::slice::from_ref(&a), Judge::E2026, 50.0).unwrap();
-    let over = e.tests[0].runs[0].passed_over.expect("crossed from above");
+    let over = e.tests[0].runs[0].above_top.expect("above the top");
     assert_eq!(over.obstacle, 0);
-    assert!((over.clearance_m - 1.2).abs() < 1e-9, "{}", over.clearance_m);
+    assert!((over.height_m - 1.2).abs() < 1e-9, "{}", over.height_m);
     assert_eq!(e.tests[0].runs[0].points, 5);
     let md = super::super::report::markdown(&e, 0);
-    assert!(md.contains("(5, over obstacle 0)"), "{md}");
+    assert!(md.contains("(5, above obstacle 0)"), "{md}");
     assert!(
-        md.contains("2 run(s) crossed a box from above, the lowest 1.20 m"),
+        md.contains("2 run(s) came closest to a box above its top (the lowest 1.20 m above)"),
         "{md}"
     );
     assert!(md.contains("horizontal only"), "{md}");
     // The 2025 edition scores the same runs by their 1.2 m height gap: 1 point each.
     let (e, _) = evaluate_suite(&[a], Judge::E2025, 50.0).unwrap();
     assert_eq!(e.tests[0].runs[1].points, 1);
-    assert!(super::super::report::markdown(&e, 0).contains("by its height gap"));
-    // A flight beside the box crosses nothing, and the report says nothing of crossings.
+    assert!(super::super::report::markdown(&e, 0).contains("height gap only straight over a box"));
+    // A flight beside a box taller than it: nothing above a top, and the report says nothing of it.
     let beside = flown("b.yaml", vec![wall()], vec![flight(-0.5, 60.0)]);
     let (e, _) = evaluate_suite(&[beside], Judge::E2026, 50.0).unwrap();
-    assert!(e.tests[0].runs[0].passed_over.is_none());
-    assert!(!super::super::report::markdown(&e, 0).contains("from above"));
+    assert!(e.tests[0].runs[0].above_top.is_none());
+    assert!(!super::super::report::markdown(&e, 0).contains("above its top"));
 }

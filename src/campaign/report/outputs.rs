@@ -14,7 +14,7 @@ use crate::campaign::report::{backends, expected::score as expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::io::{write_atomic, write_json};
-use crate::judge::{Judge, judge_in_frame, points, test_score};
+use crate::judge::{ClosestApproach, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
@@ -111,7 +111,11 @@ fn write_failing_tests(
             r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m"))
         );
         let lfs = input.screener.path(&test);
-        let svg = plot(&test, lfs.as_ref(), flown.as_ref(), &title, input.cfg.judge);
+        // Flown trajectories are recorded in the test's frame.
+        let judged = (flown.as_ref()).and_then(|t| judge_in_frame(t, &test.obstacles, input.cfg.judge));
+        verdict.above_top = judged.as_ref().and_then(|j| j.above_top);
+        let closest = judged.map(|j| j.closest);
+        let svg = plot(&test, lfs.as_ref(), flown.as_ref(), closest.as_ref(), &title);
         write_atomic(&folder.join(format!("{name}.svg")), svg.as_bytes())?;
         verdict.reported_as = Some(format!("{name}.yaml"));
         reported.push((r.candidate, format!("{name}.yaml")));
@@ -155,7 +159,13 @@ fn reported_flight(r: &FlightRecord, reported: &[(CandidateId, String)]) -> Repo
 }
 
 /// Top-down plot: arena, obstacles, mission, the LFS's path and the flown path with its closest approach.
-fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, title: &str, judge: Judge) -> String {
+fn plot(
+    test: &TestCase,
+    lfs: Option<&Trajectory>,
+    flown: Option<&Trajectory>,
+    closest: Option<&ClosestApproach>,
+    title: &str,
+) -> String {
     let mut p = FlightPlot::new(test);
     p.set_title(title);
     if let Some(t) = lfs {
@@ -163,10 +173,9 @@ fn plot(test: &TestCase, lfs: Option<&Trajectory>, flown: Option<&Trajectory>, t
     }
     if let Some(t) = flown {
         p.add_path(t, PathStyle::Flown, "flown");
-        // Flown trajectories are recorded in the test's frame.
-        if let Some(v) = judge_in_frame(t, &test.obstacles, judge) {
-            p.mark_closest(&v.closest);
-        }
+    }
+    if let Some(c) = closest {
+        p.mark_closest(c);
     }
     p.to_svg()
 }

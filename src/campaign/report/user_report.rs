@@ -150,12 +150,33 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
         s.distinct_failing,
         plural(s.flown, "flight")
     ));
+    if let Some(crossed) = above_top(r) {
+        lines.push(crossed);
+    }
     let (unsure, copies) = set_aside(unconfirmed.iter().copied());
     lines.push(how_sure(s.expected_2026.as_ref(), unsure, copies));
     lines.push(format!(
         "Next: open test_0.svg, or fly it again: prgenuav fly {}",
         folder.join("test_0.yaml").display()
     ));
+}
+
+/// How many written tests came closest to a box while above its top, where the judge's distance is not
+/// the vehicle's (`None` when none did).
+pub fn above_top(r: &View) -> Option<String> {
+    let above: Vec<f64> = (r.tests.iter().filter(|t| t.confirmed))
+        .filter_map(|t| t.above_top.map(|o| o.height_m))
+        .collect();
+    let lowest = above.iter().copied().reduce(f64::min)?;
+    let rule = match r.judge {
+        Judge::E2026 => "the 2026 judge measures horizontally, and scores a crossing over a box 0 m",
+        Judge::E2025 => "the 2025 judge measures horizontally beside a box, and by the height gap over it",
+    };
+    Some(format!(
+        "Of them, {} came closest to a box above its top (the lowest {lowest:.2} m above): {rule}. Boxes \
+         higher than the vehicle climbs (`--height`, default 20 m) rule this out.",
+        plural(above.len(), "test")
+    ))
 }
 
 /// The verdict when tests failed but none was confirmed.
@@ -246,7 +267,8 @@ pub fn stdout_lines(r: &View, folder: &Path) -> Vec<String> {
         format!("{} {next}", v[0])
     } else {
         let sure = how_sure(s.expected_2026.as_ref(), unsure, copies);
-        format!("{sure} {next}").trim_start().to_string()
+        let crossed = above_top(r).map_or(String::new(), |c| format!(" {c}"));
+        format!("{sure}{crossed} {next}").trim_start().to_string()
     };
     vec![figures, meaning, format!("output folder: {}", folder.display())]
 }
@@ -331,9 +353,12 @@ fn tests_section(md: &mut String, r: &View) {
         for t in confirmed {
             let yaml = t.reported_as.as_deref().unwrap_or("?");
             let svg = yaml.replace(".yaml", ".svg");
+            let over = t.above_top.map_or(String::new(), |o| {
+                format!(", {:.2} m above obstacle {}", o.height_m, o.obstacle)
+            });
             let _ = writeln!(
                 md,
-                "| [{yaml}]({yaml}) | {:.2} m | {} / {} | [{svg}]({svg}) |",
+                "| [{yaml}]({yaml}) | {:.2} m{over} | {} / {} | [{svg}]({svg}) |",
                 t.best_min_distance, t.failures, t.flights
             );
         }

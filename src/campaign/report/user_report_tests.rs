@@ -209,3 +209,33 @@ fn plurals_and_quoting() {
     assert_eq!(quote("--seed=3"), "--seed=3");
     assert_eq!(quote("it's"), r"'it'\''s'");
 }
+
+#[test]
+fn a_written_test_that_came_closest_above_a_box_top_is_said_to_have_and_how_high() {
+    let records = two_of_two_and_one_of_five();
+    let mut r = report(&records, 5, 7);
+    let quiet = verdict(&r.view(), Path::new("f")).join("\n");
+    assert!(!quiet.contains("above its top"), "{quiet}");
+    let written = r.tests.iter_mut().find(|t| t.confirmed).expect("a written test");
+    written.above_top = Some(crate::judge::AboveTop {
+        obstacle: 0,
+        height_m: 2.5,
+    });
+    let v = verdict(&r.view(), Path::new("f"));
+    assert_eq!(v.len(), 4, "{v:?}");
+    assert!(
+        v[1].starts_with("Of them, 1 test came closest to a box above its top (the lowest 2.50 m above)")
+            && v[1].contains("scores a crossing over a box 0 m")
+            && v[1].contains("--height"),
+        "{v:?}"
+    );
+    assert!(v[3].ends_with("prgenuav fly f/test_0.yaml"), "{v:?}");
+    let out = stdout_lines(&r.view(), Path::new("f"));
+    assert!(
+        out[1].contains("came closest to a box above its top") && out[1].contains("Next:"),
+        "{out:?}"
+    );
+    let mut md = String::new();
+    opening(&mut md, &r.view(), &r.folder);
+    assert!(md.contains("| 0.50 m, 2.50 m above obstacle 0 |"), "{md}");
+}

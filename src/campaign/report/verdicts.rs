@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::campaign::fly::confirm::{failed, tallies};
 use crate::campaign::report::expected::figures::TestExpectation;
 use crate::campaign::store::journal::FlightRecord;
-use crate::judge::{Z90, test_score, wilson_interval};
+use crate::judge::{AboveTop, Z90, test_score, wilson_interval};
 use crate::model::Obstacle;
 
 /// A flown test that failed at least once.
@@ -57,6 +57,10 @@ pub struct TestVerdict {
     /// For a written test: the chance that the judge finds it too similar to a better written test.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub similar_chance: Option<f64>,
+    /// For a written test: set when its closest failing flight was above the box's top at its closest
+    /// approach. The 2026 judge is horizontal only: it scores a crossing over a box 0 m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub above_top: Option<AboveTop>,
     /// Where its first flight is in the journal (sums over the tests follow the journal, as over flights).
     #[serde(skip)]
     pub first_flight: usize,
@@ -105,6 +109,7 @@ pub fn verdicts(records: &[FlightRecord], confirm: usize) -> Vec<(TestVerdict, V
             near_duplicate_of: None,
             near_duplicate_dtw_m: None,
             similar_chance: None,
+            above_top: None,
             first_flight,
         };
         out.push((verdict, flights));
