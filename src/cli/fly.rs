@@ -331,6 +331,12 @@ fn print_text(report: &FlightReport) {
         println!("vehicle           {v}");
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
+    if let Some(a) = report.above_top {
+        println!(
+            "above the top     of obstacle {} by {:.2} m at the closest approach (the distance is horizontal)",
+            a.obstacle, a.height_m
+        );
+    }
     print_cp(report);
     let model = prediction_model(report.mode);
     println!(

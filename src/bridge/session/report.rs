@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use crate::judge::{ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
+use crate::judge::{AboveTop, ClosestApproach, Judge, ObstacleDistance, judge_in_frame};
 use crate::model::{Obstacle, Trajectory};
 
 use super::clock_watch::ClockReport;
@@ -97,6 +97,8 @@ pub struct FlightReport {
     pub per_obstacle: Vec<ObstacleDistance>,
     /// Where the raw path came closest (the test's frame, x North, y East, z up).
     pub closest_approach: Option<ClosestApproach>,
+    /// Set when the vehicle was above the box's top there: the judged distance is not the vehicle's.
+    pub above_top: Option<AboveTop>,
     /// How the flight ended.
     pub status: Status,
     /// Why, in words, when not `landed`.
@@ -204,6 +206,7 @@ impl FlightReport {
             min_distance_raw: judged.as_ref().map(|j| j.min_distance_raw),
             per_obstacle: judged.as_ref().map(|j| j.per_obstacle.clone()).unwrap_or_default(),
             closest_approach: judged.as_ref().map(|j| j.closest),
+            above_top: judged.as_ref().and_then(|j| j.above_top),
             status,
             reason,
             flight_time_s: trajectory.duration_s(),
@@ -327,5 +330,23 @@ mod tests {
         );
         let empty = FlightReport::judge(Trajectory::default(), &[o], ending(Status::Rejected));
         assert_eq!(empty.min_distance, None);
+    }
+
+    #[test]
+    fn a_flight_over_a_low_box_lands_named_with_its_height_above_the_top() {
+        // The path at 5 m crosses a 3 m box: no collision, 2 m above its top.
+        let o = Obstacle::new(2.0, 2.0, 3.0, 10.0, 0.0, 0.0);
+        let r = FlightReport::judge(line(0.0), &[o], ending(Status::Landed));
+        assert_eq!(r.status, Status::Landed);
+        let a = r.above_top.expect("above the top");
+        assert!(a.obstacle == 0 && (a.height_m - 2.0).abs() < 1e-9, "{a:?}");
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["above_top"]["obstacle"], 0);
+        let beside = Obstacle::new(2.0, 2.0, 10.0, 10.0, 3.0, 0.0);
+        assert!(
+            FlightReport::judge(line(0.0), &[beside], ending(Status::Landed))
+                .above_top
+                .is_none()
+        );
     }
 }
