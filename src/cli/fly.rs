@@ -331,18 +331,30 @@ fn print_text(report: &FlightReport) {
         println!("vehicle           {v}");
     }
     println!("min_distance_raw  {}", m(report.min_distance_raw));
-    if let Some(a) = report.above_top {
-        println!(
-            "above the top     of obstacle {} by {:.2} m at the closest approach (the distance is horizontal)",
-            a.obstacle, a.height_m
-        );
-    }
     print_cp(report);
     let model = prediction_model(report.mode);
     println!(
         "lfs_min_distance  {} (the LFS prediction, {model} motion model)",
         m(report.lfs_min_distance)
     );
+    print_closest(report);
+    println!(
+        "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
+        super::wording::non_negative(report.flight_time_s),
+        report.samples,
+        report.link.packets_received,
+        report.link.retries,
+        if report.fence_uploaded {
+            "on the vehicle"
+        } else {
+            "not uploaded"
+        }
+    );
+    print_notes(report);
+}
+
+/// Each obstacle's distance and where the path came closest, above a box's top or not.
+fn print_closest(report: &FlightReport) {
     for d in &report.per_obstacle {
         println!(
             "  obstacle {}: {:.3} m (raw {:.3} m)",
@@ -359,19 +371,12 @@ fn print_text(report: &FlightReport) {
             c.obstacle
         );
     }
-    println!(
-        "flight            {:.1} s, {} positions; link {} packets, {} retries; fence {}",
-        super::wording::non_negative(report.flight_time_s),
-        report.samples,
-        report.link.packets_received,
-        report.link.retries,
-        if report.fence_uploaded {
-            "on the vehicle"
-        } else {
-            "not uploaded"
-        }
-    );
-    print_notes(report);
+    if let Some(a) = report.above_top {
+        println!(
+            "above the top     of obstacle {} by {:.2} m at the closest approach (the distance is horizontal)",
+            a.obstacle, a.height_m
+        );
+    }
 }
 
 /// A Collision Prevention flight's verdict: `CP_DIST` kept or not, and the competition's points.
