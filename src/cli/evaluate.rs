@@ -232,9 +232,9 @@ fn print_summary(done: &Evaluated, json: bool, started: Instant) -> anyhow::Resu
         return Ok(());
     }
     println!(
-        "final score {:.3} = total {:.3} x sim_pen {:.3} ({} of {} tests similar below DTW {} m); 2025: {} failing, failure score {:.3}",
+        "final score {:.3} = total {} x sim_pen {:.3} ({} of {} tests similar below DTW {} m); 2025: {} failing, failure score {:.3}",
         e.final_score,
-        e.total_score,
+        report::total_with_sd(e),
         e.sim_pen,
         e.similar_tests,
         e.evaluated,

@@ -118,8 +118,13 @@ fn print_2026(e: &Evaluation) {
         "n/a".into()
     };
     println!(
-        "2026: total score {:.3} x sim_pen {:.3} ({} of {} evaluated tests similar below DTW {} m; closest pair {closest} m) = final score {:.3}",
-        e.total_score, e.sim_pen, e.similar_tests, e.evaluated, e.similar_below_m, e.final_score
+        "2026: total score {} x sim_pen {:.3} ({} of {} evaluated tests similar below DTW {} m; closest pair {closest} m) = final score {:.3}",
+        prgenuav::campaign::evaluation::report::total_with_sd(e),
+        e.sim_pen,
+        e.similar_tests,
+        e.evaluated,
+        e.similar_below_m,
+        e.final_score
     );
     if let Some(note) = prgenuav::campaign::evaluation::report::above_top_note(e) {
         println!("{note}");

@@ -38,6 +38,14 @@ pub fn write(folder: &Path, evaluation: &Evaluation, missing: usize) -> Result<(
     crate::io::write_atomic(&folder.join("report.md"), markdown(evaluation, missing).as_bytes())
 }
 
+/// The total score with its standard error from the runs, where there is one.
+pub fn total_with_sd(e: &Evaluation) -> String {
+    match e.total_score_sd {
+        Some(sd) => format!("{:.3} (sd {sd:.3} from the runs' own scatter)", e.total_score),
+        None => format!("{:.3}", e.total_score),
+    }
+}
+
 fn name(p: &Path) -> String {
     p.file_name()
         .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
@@ -54,9 +62,9 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
     }
     let _ = writeln!(
         md,
-        "| figure | value |\n|---|---|\n| final score | {:.3} |\n| total score | {:.3} |\n| sim_pen | {:.3} ({} of {} evaluated tests similar) |\n| similar below | DTW {} m |\n| 2025: failing tests | {} |\n| 2025: failure score | {:.3} |\n| 2025: diversity | {} |\n",
+        "| figure | value |\n|---|---|\n| final score | {:.3} |\n| total score | {} |\n| sim_pen | {:.3} ({} of {} evaluated tests similar) |\n| similar below | DTW {} m |\n| 2025: failing tests | {} |\n| 2025: failure score | {:.3} |\n| 2025: diversity | {} |\n",
         e.final_score,
-        e.total_score,
+        total_with_sd(e),
         e.sim_pen,
         e.similar_tests,
         e.evaluated,

@@ -53,6 +53,9 @@ pub struct TestEvaluation {
     pub mean_flight_time_s: f64,
     /// mean points x 10 / (obstacles² x mean flight minutes); 0 without runs.
     pub score: f64,
+    /// The standard error of `score` from the runs' own scatter: score per point x the points' sample
+    /// standard deviation / √runs (`None` below 2 runs).
+    pub score_sd: Option<f64>,
     /// The CSV of its average trajectory, once written.
     pub average_trajectory: Option<PathBuf>,
     /// Index of the earlier test whose average lies within the threshold, if any.
@@ -104,6 +107,10 @@ pub struct Evaluation {
     pub sim_pen: f64,
     /// Sum of the test scores.
     pub total_score: f64,
+    /// Its standard error from the runs' own scatter, the tests taken as independent (`None` when an
+    /// evaluated test has fewer than 2 runs). It leaves out whatever moves a whole evaluation: on PX4 two
+    /// evaluations of one suite differed by 1.0-1.7 times this (docs/evaluate.md).
+    pub total_score_sd: Option<f64>,
     /// total_score x sim_pen.
     pub final_score: f64,
     /// The same flights the 2025 way.
@@ -150,6 +157,10 @@ pub fn evaluate_suite(
         1.0 - similar_tests as f64 / n_evaluated as f64
     };
     let total_score = evaluated.iter().map(|t| t.score).sum::<f64>();
+    let total_score_sd = (evaluated.iter().filter(|t| !t.runs.is_empty()))
+        .map(|t| t.score_sd.map(|sd| sd * sd))
+        .sum::<Option<f64>>()
+        .map(f64::sqrt);
     let figures_2025 = figures_2025(tests, &evaluated);
     let evaluation = Evaluation {
         judge,
@@ -159,6 +170,7 @@ pub fn evaluate_suite(
         similar_tests,
         sim_pen,
         total_score,
+        total_score_sd,
         final_score: total_score * sim_pen,
         figures_2025,
         pairs,
@@ -190,11 +202,20 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
     let mean_flight_time_s = runs.iter().map(|r| r.flight_time_s).sum::<f64>() / n;
     let k = t.test.obstacles.len() as f64;
     let minutes = mean_flight_time_s / 60.0;
-    let score = if runs.is_empty() || minutes <= 0.0 {
+    let per_point = if runs.is_empty() || minutes <= 0.0 {
         0.0
     } else {
-        mean_points * TEST_SCORE_SCALE / (k * k * minutes)
+        TEST_SCORE_SCALE / (k * k * minutes)
     };
+    let score = mean_points * per_point;
+    let score_sd = (runs.len() >= 2).then(|| {
+        let var = runs
+            .iter()
+            .map(|r| (f64::from(r.points) - mean_points).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        per_point * (var / n).sqrt()
+    });
     Ok(TestEvaluation {
         test: t.path.clone(),
         obstacles: t.test.obstacles.len(),
@@ -202,6 +223,7 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
         mean_points,
         mean_flight_time_s,
         score,
+        score_sd,
         average_trajectory: None,
         similar_to: None,
     })

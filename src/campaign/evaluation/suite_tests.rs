@@ -137,3 +137,31 @@ fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_it_was_above_
     assert!(e.tests[0].runs[0].above_top.is_none());
     assert!(!super::super::report::markdown(&e, 0).contains("above its top"));
 }
+
+#[test]
+fn the_total_has_a_standard_error_from_the_runs_scatter_and_none_from_single_runs() {
+    // Runs of 5 and 2 points over 60 s (one box): score 35, the points' sample sd 2.12, so the score's
+    // standard error is 10 (the score per point) x 2.12 / √2 = 15.
+    let a = flown(
+        "a.yaml",
+        vec![wall()],
+        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
+    );
+    // Two passes: no scatter.
+    let c = flown("c.yaml", vec![wall()], vec![flight(-30.0, 30.0), flight(-30.0, 30.0)]);
+    let (e, _) = evaluate_suite(&[a.clone(), c], Judge::E2026, 50.0).unwrap();
+    let sd = e.tests[0].score_sd.expect("two runs");
+    assert!((sd - 15.0).abs() < 1e-6, "{sd}");
+    assert_eq!(e.tests[1].score_sd, Some(0.0));
+    assert!((e.total_score_sd.unwrap() - 15.0).abs() < 1e-6);
+    let md = super::super::report::markdown(&e, 0);
+    assert!(
+        md.contains("| total score | 35.000 (sd 15.000 from the runs' own scatter) |"),
+        "{md}"
+    );
+    // One run of a test: no standard error for it, nor for the total.
+    let one = flown("o.yaml", vec![wall()], vec![flight(0.5, 60.0)]);
+    let (e, _) = evaluate_suite(&[a, one], Judge::E2026, 50.0).unwrap();
+    assert_eq!((e.tests[1].score_sd, e.total_score_sd), (None, None));
+    assert!(super::super::report::markdown(&e, 0).contains("| total score | "));
+}
