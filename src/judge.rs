@@ -61,8 +61,9 @@ pub struct FlightDistance {
     /// Whether the un-binned bare path entered a box (a physical collision, whatever the edition).
     pub collision: bool,
     /// Set when the vehicle was higher than the box's top at its closest approach (having crossed over
-    /// it, or passed beside it above the top). Both editions then judge a closeness the vehicle never had:
-    /// the 2026 one is horizontal only, the 2025 one counts the height gap only straight over a box.
+    /// it, or passed beside it above the top). The distance is then horizontal, a closeness the vehicle
+    /// never had: in the 2026 edition always, in the 2025 one beside the box (over it, that edition
+    /// counts the height gap).
     pub above_top: Option<AboveTop>,
 }
 
