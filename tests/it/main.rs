@@ -18,6 +18,7 @@ mod hygiene;
 mod identify;
 mod journal;
 mod journal_edits;
+mod judge_props;
 mod layering;
 mod lfs;
 mod missions;
