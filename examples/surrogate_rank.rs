@@ -9,9 +9,10 @@
 //! Prints, per mission and overall, the Spearman of each against PX4's mean distance and mean points; then,
 //! per mission, what any 10 of these tests (distinct boxes) could score: the best 10 by their own 10-flight
 //! test scores (hindsight, no similarity penalty); the best 10 by one evaluation's 5 flights, scored by the
-//! other's (what picking by PX4's own flights earns at the next evaluation); and the ceiling of 10 tests that earn 1 point on every flight at the
-//! 10 shortest mean flight times (2 points need a flight below 1 m: their count is printed too). Last, each
-//! suite's total in either evaluation against the spread its runs' scatter predicts for the difference.
+//! other's (what picking by PX4's own flights earns at the next evaluation); and the ceiling of 10 tests
+//! that earn 1 point on every flight at the 10 shortest mean flight times (2 points need a flight below
+//! 1 m: their count is printed too). Last, each suite's total in either evaluation against the spread its
+//! runs' scatter predicts for the difference.
 //!
 //! `cargo run --release --example surrogate_rank -- [PARALLEL=2]` (about 5 minutes on 2 cores with the mock;
 //! `MOCK_RUNS=0`: the LFS alone, seconds; `MOCK_PROFILE=NAME` or `MOCK_SETTING=...` as in `mock_fit`).
@@ -26,7 +27,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use prgenuav::bridge::predict;
-use prgenuav::judge::{points, test_score};
+use prgenuav::judge::{points, test_score, test_score_sd};
 use prgenuav::lfs::fidelity::spearman;
 use prgenuav::lfs::sim::MotionModel;
 use prgenuav::model::competition::TEST_SCORE_SCALE;
@@ -108,15 +109,10 @@ fn half_score(row: &Row, k: u8) -> f64 {
     test_score(&d, &t, row.obstacles.len())
 }
 
-/// The variance of [`half_score`] from the runs: (score per point)² x the points' sample variance / runs.
+/// The variance of [`half_score`] from the runs' own scatter.
 fn half_variance(row: &Row, k: u8) -> f64 {
     let (d, t) = flights_of(row, k);
-    let n = d.len() as f64;
-    let p: Vec<f64> = d.iter().map(|x| f64::from(points(*x))).collect();
-    let m = mean(&p);
-    let var = p.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-    let per_point = TEST_SCORE_SCALE / ((row.obstacles.len().pow(2)) as f64 * mean(&t) / 60.0);
-    per_point * per_point * var / n
+    test_score_sd(&d, &t, row.obstacles.len()).map_or(f64::NAN, |sd| sd * sd)
 }
 
 async fn figures(row: Row, seed: u64, mock_runs: u64) -> anyhow::Result<Figures> {
@@ -234,6 +230,7 @@ fn repeat_table(all: &[Figures]) {
     println!("\n| suite | evaluation 1 | evaluation 2 | difference | spread the runs predict (sd) | z |");
     println!("|---|---|---|---|---|---|");
     let mut suites: Vec<&str> = all.iter().map(|f| f.suite.as_str()).collect();
+    suites.sort_unstable();
     suites.dedup();
     for suite in suites {
         let fs: Vec<&Figures> = all.iter().filter(|f| f.suite == suite).collect();

@@ -231,6 +231,31 @@ pub fn test_score(run_distances: &[f64], run_flight_times_s: &[f64], obstacle_co
     mean_points * TEST_SCORE_SCALE / ((obstacle_count * obstacle_count) as f64 * minutes)
 }
 
+/// The standard error of [`test_score`] from the runs' own scatter: score per point x the points' sample
+/// standard deviation / √runs; `None` below 2 runs.
+pub fn test_score_sd(run_distances: &[f64], run_flight_times_s: &[f64], obstacle_count: usize) -> Option<f64> {
+    let n = run_distances.len();
+    if n < 2 {
+        return None;
+    }
+    let minutes = run_flight_times_s.iter().sum::<f64>() / run_flight_times_s.len().max(1) as f64 / 60.0;
+    let per_point = if obstacle_count == 0 || minutes <= 0.0 {
+        0.0
+    } else {
+        TEST_SCORE_SCALE / ((obstacle_count * obstacle_count) as f64 * minutes)
+    };
+    let p: Vec<f64> = run_distances.iter().map(|d| f64::from(points(*d))).collect();
+    let mean = p.iter().sum::<f64>() / n as f64;
+    let var = p.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    Some(per_point * (var / n as f64).sqrt())
+}
+
+/// How many of `flags` are set, and the lowest height above a box's top among them (`None` when none is).
+pub fn above_top_count(flags: impl IntoIterator<Item = Option<AboveTop>>) -> Option<(usize, f64)> {
+    let heights: Vec<f64> = flags.into_iter().flatten().map(|a| a.height_m).collect();
+    Some((heights.len(), heights.into_iter().reduce(f64::min)?))
+}
+
 /// The competition's diversity of a suite: 1 - mean pairwise IoU of the tests' obstacle footprints;
 /// `None` for fewer than two tests.
 pub fn diversity(tests: &[Vec<Obstacle>]) -> Option<f64> {

@@ -53,6 +53,18 @@ impl Judge {
         }
     }
 
+    /// How this edition judges a vehicle that came closest to a box above its top.
+    pub fn above_top_rule(self) -> &'static str {
+        match self {
+            Judge::E2025 => {
+                "the 2025 judge measures horizontally beside a box, and counts the height gap only straight over a box"
+            }
+            Judge::E2026 => {
+                "the 2026 judge is horizontal only and scores a crossing over a box 0 m, whatever its height"
+            }
+        }
+    }
+
     /// The judged distance from the bare path's 2-D distance `d2d` to a box of height `box_h` (metres); `over`
     /// gives the lowest height of the path over the footprint (only asked when `d2d` is 0 in 2025).
     pub fn from_bare(self, d2d: f64, box_h: f64, over: impl FnOnce() -> Option<f64>) -> f64 {

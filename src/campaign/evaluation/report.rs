@@ -6,7 +6,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::suite::Evaluation;
-use crate::judge::Judge;
+use crate::judge::above_top_count;
 use crate::model::ModelError;
 
 /// `report.json`.
@@ -110,17 +110,10 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
 /// Says how many runs were above a box's top where they came closest to it, and how the judge scored them
 /// (`None` when none were).
 pub fn above_top_note(e: &Evaluation) -> Option<String> {
-    let above: Vec<f64> = (e.tests.iter().flat_map(|t| &t.runs))
-        .filter_map(|r| r.above_top.map(|o| o.height_m))
-        .collect();
-    let lowest = above.iter().copied().reduce(f64::min)?;
-    let rule = match e.judge {
-        Judge::E2026 => "This judge is horizontal only: it scores a run over a box 0 m, whatever its height.",
-        Judge::E2025 => "This judge counts the height gap only straight over a box.",
-    };
+    let (runs, lowest) = above_top_count(e.tests.iter().flat_map(|t| &t.runs).map(|r| r.above_top))?;
     Some(format!(
-        "{} run(s) came closest to a box above its top (the lowest {lowest:.2} m above). {rule}",
-        above.len()
+        "{runs} run(s) came closest to a box above its top (the lowest {lowest:.2} m above): {}.",
+        e.judge.above_top_rule()
     ))
 }
 

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::judge::similarity::{average, path_distance, prepare};
-use crate::judge::{AboveTop, Judge, diversity, judge_flight, points};
-use crate::model::competition::{FAIL_BELOW_M, TEST_SCORE_SCALE};
+use crate::judge::{AboveTop, Judge, diversity, judge_flight, points, test_score, test_score_sd};
+use crate::model::competition::FAIL_BELOW_M;
 use crate::model::{ModelError, TestCase, Trajectory};
 
 /// A test and the flights it made.
@@ -200,22 +200,11 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
     let n = runs.len().max(1) as f64;
     let mean_points = runs.iter().map(|r| f64::from(r.points)).sum::<f64>() / n;
     let mean_flight_time_s = runs.iter().map(|r| r.flight_time_s).sum::<f64>() / n;
-    let k = t.test.obstacles.len() as f64;
-    let minutes = mean_flight_time_s / 60.0;
-    let per_point = if runs.is_empty() || minutes <= 0.0 {
-        0.0
-    } else {
-        TEST_SCORE_SCALE / (k * k * minutes)
-    };
-    let score = mean_points * per_point;
-    let score_sd = (runs.len() >= 2).then(|| {
-        let var = runs
-            .iter()
-            .map(|r| (f64::from(r.points) - mean_points).powi(2))
-            .sum::<f64>()
-            / (n - 1.0);
-        per_point * (var / n).sqrt()
-    });
+    let distances: Vec<f64> = runs.iter().map(|r| r.min_distance).collect();
+    let times: Vec<f64> = runs.iter().map(|r| r.flight_time_s).collect();
+    let k = t.test.obstacles.len();
+    let score = test_score(&distances, &times, k);
+    let score_sd = test_score_sd(&distances, &times, k);
     Ok(TestEvaluation {
         test: t.path.clone(),
         obstacles: t.test.obstacles.len(),

@@ -46,20 +46,18 @@ fn wall() -> Obstacle {
     Obstacle::new(10.0, 2.0, 20.0, 25.0, 2.0, 0.0)
 }
 
+/// A test beside the wall with runs 0.1 m (5 points) and 0.9 m (2 points) from it, 60 s each.
+fn five_then_two(name: &str) -> FlownTest {
+    let runs = [0.1, 0.9].map(|d| flight(1.0 - d - 0.125, 60.0));
+    flown(name, vec![wall()], runs.to_vec())
+}
+
 #[test]
 fn scores_mean_points_and_penalises_a_copied_trajectory() {
     // Test a: runs 0.9 m (2 points) and 0.1 m (5 points) from the box, 60 s each.
-    let a = flown(
-        "a.yaml",
-        vec![wall()],
-        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
-    );
+    let a = five_then_two("a.yaml");
     // Test b: the same flights again (a copy of a's trajectory).
-    let b = flown(
-        "b.yaml",
-        vec![wall()],
-        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
-    );
+    let b = five_then_two("b.yaml");
     // Test c: far away (0 points), a different path.
     let c = flown("c.yaml", vec![wall()], vec![flight(-30.0, 30.0), flight(-30.0, 30.0)]);
     let (e, averages) = evaluate_suite(&[a, b, c], Judge::E2026, 50.0).unwrap();
@@ -142,11 +140,7 @@ fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_it_was_above_
 fn the_total_has_a_standard_error_from_the_runs_scatter_and_none_from_single_runs() {
     // Runs of 5 and 2 points over 60 s (one box): score 35, the points' sample sd 2.12, so the score's
     // standard error is 10 (the score per point) x 2.12 / √2 = 15.
-    let a = flown(
-        "a.yaml",
-        vec![wall()],
-        vec![flight(1.0 - 0.1 - 0.125, 60.0), flight(1.0 - 0.9 - 0.125, 60.0)],
-    );
+    let a = five_then_two("a.yaml");
     // Two passes: no scatter.
     let c = flown("c.yaml", vec![wall()], vec![flight(-30.0, 30.0), flight(-30.0, 30.0)]);
     let (e, _) = evaluate_suite(&[a.clone(), c], Judge::E2026, 50.0).unwrap();

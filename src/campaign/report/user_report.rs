@@ -11,7 +11,7 @@ use super::suite::SuiteSummary;
 use super::verdicts::TestVerdict;
 use crate::campaign::config::CampaignInput;
 use crate::io::write_atomic;
-use crate::judge::Judge;
+use crate::judge::{Judge, above_top_count};
 use crate::model::{ModelError, Spelling};
 use crate::plot::suite::{Layout, Point, layouts_svg, scatter_svg};
 
@@ -164,18 +164,12 @@ fn found(r: &View, folder: &Path, unconfirmed: &[&TestVerdict], lines: &mut Vec<
 /// How many written tests came closest to a box while above its top, where the judge's distance is not
 /// the vehicle's (`None` when none did).
 pub fn above_top(r: &View) -> Option<String> {
-    let above: Vec<f64> = (r.tests.iter().filter(|t| t.confirmed))
-        .filter_map(|t| t.above_top.map(|o| o.height_m))
-        .collect();
-    let lowest = above.iter().copied().reduce(f64::min)?;
-    let rule = match r.judge {
-        Judge::E2026 => "the 2026 judge measures horizontally, and scores a crossing over a box 0 m",
-        Judge::E2025 => "the 2025 judge measures horizontally beside a box, and by the height gap over it",
-    };
+    let (tests, lowest) = above_top_count(r.tests.iter().filter(|t| t.confirmed).map(|t| t.above_top))?;
     Some(format!(
-        "Of them, {} came closest to a box above its top (the lowest {lowest:.2} m above): {rule}. Boxes \
-         higher than the vehicle climbs (`--height`, default 20 m) rule this out.",
-        plural(above.len(), "test")
+        "Of them, {} came closest to a box above its top (the lowest {lowest:.2} m above): {}. Boxes higher \
+         than the vehicle climbs (`--height`, default 20 m) rule this out.",
+        plural(tests, "test"),
+        r.judge.above_top_rule()
     ))
 }
 
