@@ -5,7 +5,7 @@
 
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd};
 
-use crate::geo::LocalProjection;
+use geodesy::LocalProjection;
 
 /// One fence shape in local NED metres.
 #[derive(Debug, Clone, PartialEq)]
@@ -158,7 +158,7 @@ pub fn point_in_polygon(p: (f64, f64), vertices: &[(f64, f64)]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geo::SIM_HOME;
+    use geodesy::SIM_HOME;
     use proptest::prelude::*;
 
     fn vertex(cmd: MavCmd, n: f32, proj: &LocalProjection, north: f64, east: f64) -> MISSION_ITEM_INT_DATA {

@@ -21,7 +21,6 @@ pub mod collision_prevention;
 pub mod commands;
 pub mod dynamics;
 pub mod fence;
-pub mod geo;
 pub mod gusts;
 pub mod land_detector;
 pub mod link;

@@ -79,14 +79,14 @@ struct Args {
     crash_on_collision: bool,
     /// Boot here (home and EKF origin): LAT,LON,ALT (degrees, degrees, metres AMSL); default PX4 SITL's.
     #[arg(long, value_parser = parse_home, allow_hyphen_values = true)]
-    home: Option<mock_autopilot::geo::GeoPoint>,
+    home: Option<geodesy::GeoPoint>,
     /// Act as this PX4 release MAJOR.MINOR.PATCH: what AUTOPILOT_VERSION reports; from 1.16 there is no
     /// COM_OBS_AVOID (no avoidance interface).
     #[arg(long, default_value = "1.14.0", value_parser = Px4Release::parse)]
     px4_version: Px4Release,
 }
 
-fn parse_home(s: &str) -> Result<mock_autopilot::geo::GeoPoint, String> {
+fn parse_home(s: &str) -> Result<geodesy::GeoPoint, String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
@@ -95,7 +95,7 @@ fn parse_home(s: &str) -> Result<mock_autopilot::geo::GeoPoint, String> {
         [lat_deg, lon_deg, alt_m]
             if (-90.0..=90.0).contains(&lat_deg) && (-180.0..=180.0).contains(&lon_deg) && alt_m.is_finite() =>
         {
-            Ok(mock_autopilot::geo::GeoPoint {
+            Ok(geodesy::GeoPoint {
                 lat_deg,
                 lon_deg,
                 alt_m,

@@ -3,8 +3,8 @@
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd};
 
 use crate::dynamics::Ned;
-use crate::geo::LocalProjection;
 use crate::mission_items::{is_global_frame, is_relative_alt};
+use geodesy::LocalProjection;
 
 /// A mission item reduced to what the navigator flies.
 #[derive(Debug, Clone, Copy, PartialEq)]

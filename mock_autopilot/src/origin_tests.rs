@@ -6,10 +6,10 @@ use std::time::Duration;
 
 use mavlink::dialects::common::{MavCmd, MavMessage, MavMissionType};
 
-use crate::geo::{GeoPoint, LocalProjection};
 use crate::scenarios::{GCS, case_study_params, command, fly_until_disarmed, mission2, upload};
 use crate::telemetry::ids;
 use crate::vehicle::{Vehicle, VehicleConfig};
+use geodesy::{GeoPoint, LocalProjection};
 
 const DT: Duration = Duration::from_millis(4);
 const BOOT: GeoPoint = GeoPoint {

@@ -5,6 +5,7 @@
 
 use std::time::Duration;
 
+use geodesy::distance_m;
 use mavlink::dialects::common::{MavCmd, MavSeverity};
 
 use crate::modes::FlightMode;
@@ -18,18 +19,6 @@ pub const DEFAULT_ESTIMATOR_SETTLE: Duration = Duration::from_secs(5);
 /// Commander's text while the estimator's horizontal velocity innovations are too large (PX4 v1.14
 /// src/modules/commander/HealthAndArmingChecks/checks/estimatorCheck.cpp:148).
 pub const VELOCITY_UNSTABLE: &str = "Preflight Fail: horizontal velocity unstable";
-
-/// Mean earth radius of PX4's `get_distance_to_next_waypoint` (src/lib/geo/geo.h CONSTANTS_RADIUS_OF_EARTH).
-const EARTH_RADIUS_M: f64 = 6_371_000.0;
-
-/// Great-circle distance between two points in degrees, metres (haversine, as PX4's geo library).
-pub fn distance_m(lat1: f64, lon1: f64, lat2: f64, lon2: f64) -> f64 {
-    let (p1, p2) = (lat1.to_radians(), lat2.to_radians());
-    let dlat = p2 - p1;
-    let dlon = (lon2 - lon1).to_radians();
-    let a = (dlat / 2.0).sin().powi(2) + (dlon / 2.0).sin().powi(2) * p1.cos() * p2.cos();
-    2.0 * EARTH_RADIUS_M * a.sqrt().atan2((1.0 - a).max(0.0).sqrt())
-}
 
 /// Mission commands whose item carries a position (PX4's `MissionBlock::item_contains_position`, the subset a
 /// multicopter mission uses).
@@ -207,7 +196,7 @@ mod tests {
 
     #[test]
     fn a_first_waypoint_beyond_mis_dist_1wp_is_refused_like_px4() {
-        let far = crate::geo::GeoPoint {
+        let far = geodesy::GeoPoint {
             lat_deg: 0.0,
             lon_deg: 0.0,
             alt_m: 0.0,
@@ -253,13 +242,5 @@ mod tests {
             Some(MavResult::MAV_RESULT_TEMPORARILY_REJECTED),
             "no arming into an invalid mission"
         );
-    }
-
-    #[test]
-    fn haversine_distance() {
-        // One degree of latitude on PX4's sphere.
-        let d = distance_m(47.0, 8.0, 48.0, 8.0);
-        assert!((d - 111_194.9).abs() < 1.0, "{d}");
-        assert_eq!(distance_m(1.0, 2.0, 1.0, 2.0), 0.0);
     }
 }

@@ -195,7 +195,7 @@ impl Builder {
     }
 
     /// Boot (and keep the EKF origin) at `home`.
-    pub fn home(mut self, home: crate::geo::GeoPoint) -> Self {
+    pub fn home(mut self, home: geodesy::GeoPoint) -> Self {
         self.vehicle.home = home;
         self
     }

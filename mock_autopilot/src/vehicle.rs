@@ -12,7 +12,6 @@ use mavlink::dialects::common::{MavLandedState, MavMessage, MavMissionResult, Ma
 use crate::avoidance::Avoidance;
 use crate::dynamics::{Body, Limits, Ned, Setpoint, Tuning};
 use crate::fence::Fence;
-use crate::geo::{GeoPoint, LocalProjection, SIM_HOME};
 use crate::gusts::{Gusts, flight_seed};
 use crate::land_detector::{LandDetector, LandInputs, LandParams};
 use crate::manual::ManualState;
@@ -22,6 +21,7 @@ use crate::navigator::{NavCtx, NavEvent, NavParams, Navigator, nav_items};
 use crate::params::{ParamReply, ParamTable, ParamValue};
 use crate::release::Px4Release;
 use crate::telemetry::Streams;
+use geodesy::{GeoPoint, LocalProjection, SIM_HOME};
 
 /// Our MAVLink system id.
 pub const SYSTEM_ID: u8 = 1;

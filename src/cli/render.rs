@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
+use geodesy::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
 use nalgebra::Vector3;
 use prgenuav::io::write_atomic;
-use prgenuav::lfs::frames::{north_east_up_to_enu, yaw_ned_deg_to_enu_rad};
 use prgenuav::lfs::render::{CameraPose, Scene, cloud_from_depth, render_depth};
 
 use super::values::CameraArg;

@@ -5,8 +5,8 @@
 
 use nalgebra::Vector3;
 
-use super::frames::north_east_up_to_enu;
 use crate::model::{CMD_LAND, CMD_TAKEOFF, Mission, Param};
+use geodesy::frames::north_east_up_to_enu;
 
 /// What PX4 does at a mission item.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,13 +4,13 @@
 //! - sensing: [`camera`] (intrinsics and mounting), [`render`] (every pixel) and [`render_fast`] (the
 //!   planner's cloud), with the camera tilt of [`attitude`];
 //! - the vehicle: [`mission`] (the plan as the planner's goals), [`motion`] (how the vehicle follows a
-//!   setpoint), [`frames`] (our local NED to the planner's ENU);
+//!   setpoint), [`geodesy::frames`] (our local NED to the planner's ENU);
 //! - the loop: [`sim`] steps a world tick by tick, configured by [`sim_config`];
 //! - [`eval`]: how well the simulator predicts real flights, and its failure probability from an ensemble.
 //!
 //! The planner's modules are re-exported under their former paths (`lfs::planner`, `lfs::waypoint`, ...), so
 //! callers need not know the crate boundary. Every position, velocity and direction here is in the
-//! planner's **ENU** world frame (x East, y North, z Up, metres, m/s); [`frames`] converts from and to our
+//! planner's **ENU** world frame (x East, y North, z Up, metres, m/s); [`geodesy::frames`] converts from and to our
 //! local NED. Angles are degrees unless named `_rad`.
 
 pub mod attitude;
@@ -22,7 +22,7 @@ pub mod cp_params;
 pub mod cp_pilot;
 pub mod delay;
 pub mod eval;
-pub mod frames;
+
 pub mod mission;
 pub mod motion;
 pub mod range_sensor;

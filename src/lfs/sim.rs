@@ -12,13 +12,13 @@ use nalgebra::Vector3;
 use super::attitude::TiltState;
 use super::camera::Camera;
 use super::delay::DelayQueue;
-use super::frames::yaw_enu_to_ned_rad;
 use super::mission::{MissionParams, MissionRunner, Phase};
 use super::motion::{KinematicState, PaperParams, Px4Params, vertical_step};
 use super::render::{CameraPose, Scene};
 use super::render_fast::{FastRenderScratch, KeepRange, render_cloud};
 use crate::judge::judge_in_frame;
 use crate::model::{Mission, Obstacle, Param, Sample, TestCase, Trajectory};
+use geodesy::frames::yaw_enu_to_ned_rad;
 use prgenuav_planner::planner::{PlanInput, Planner, VehicleState};
 use prgenuav_planner::waypoint::{NavState, WaypointGenerator, WaypointInput};
 

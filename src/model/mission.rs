@@ -7,7 +7,7 @@ use serde_json::Value;
 
 use super::error::{ModelError, Result};
 use super::files::read_text;
-use super::geo::{GeoPoint, LocalProjection};
+use geodesy::{GeoPoint, LocalProjection};
 
 /// MAV_CMD_NAV_WAYPOINT.
 pub const CMD_WAYPOINT: u16 = 16;

@@ -9,11 +9,11 @@ use super::fields::{
     FieldError, FieldResult, as_map, describe, fail, join, known_keys, number, opt_number, opt_string, req_number,
 };
 use super::files::read_text;
-use super::geo::{GeoPoint, SIM_HOME};
 use super::mission::Mission;
 use super::obstacle::{Obstacle, Position, Size};
 use super::references::resolve;
 use super::tables::{Command, Param, command_from, parse_commands_csv, parse_params_csv};
+use geodesy::{GeoPoint, SIM_HOME};
 
 /// Which key names a YAML uses: `drone`/`test` (Aerialist before 2025-09) or `robot`/`mission` (since).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

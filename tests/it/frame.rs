@@ -1,12 +1,12 @@
 //! One frame for judge, planner and obstacles, against the mock on ephemeral ports: a second flight on one
 //! instance (it starts where the first landed), a vehicle whose EKF origin is metres from the test's home, and a
 //! vehicle kilometres away (refused, or re-anchored at its home). The judged distance is compared with the
-//! mock's own true positions, put into the test's frame with the mock's own projection.
+//! mock's own true positions, put into the test's frame by projecting them about the test's home here, not by
+//! the bridge's frame code.
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use mock_autopilot::geo::{GeoPoint as MockGeo, LocalProjection as MockProjection};
 use mock_autopilot::{LinkSpec, MockAutopilot, MockHandle, SpeedFactor};
 use prgenuav::bridge::companion::frame::FrameSource;
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, Status, fly};
@@ -26,11 +26,7 @@ async fn mock_at_speed(boot: GeoPoint, speed: f64) -> (MockHandle, String) {
     let m = MockAutopilot::builder()
         .link(LinkSpec::UdpIn("127.0.0.1:0".parse().expect("addr")))
         .speed_factor(SpeedFactor::Times(speed))
-        .home(MockGeo {
-            lat_deg: boot.lat_deg,
-            lon_deg: boot.lon_deg,
-            alt_m: boot.alt_m,
-        })
+        .home(boot)
         .spawn()
         .await
         .expect("mock starts");
@@ -65,15 +61,7 @@ async fn fly_with_truth(
     o: &FlyOptions,
 ) -> (FlightReport, Trajectory, bool) {
     let mut watch = m.watch_state();
-    let mock_geo = |g: GeoPoint| MockGeo {
-        lat_deg: g.lat_deg,
-        lon_deg: g.lon_deg,
-        alt_m: g.alt_m,
-    };
-    let (vehicle, home) = (
-        MockProjection::new(mock_geo(boot)),
-        MockProjection::new(mock_geo(frame_home)),
-    );
+    let (vehicle, home) = (LocalProjection::new(boot), LocalProjection::new(frame_home));
     let seen: Arc<Mutex<(Vec<Sample>, bool)>> = Arc::default();
     let sink = Arc::clone(&seen);
     let truth = tokio::spawn(async move {

@@ -6,9 +6,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use mock_autopilot::geo::GeoPoint;
 use mock_autopilot::{LinkSpec, MockAutopilot, MockHandle, SpeedFactor, VehicleConfig};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, fly};
+use prgenuav::model::GeoPoint;
 
 use super::case;
 

@@ -7,13 +7,13 @@ use nalgebra::Vector3;
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use crate::lfs::LfsError;
 use crate::lfs::camera::Camera;
-use crate::lfs::frames::{enu_to_ned, ned_to_enu, yaw_enu_to_ned_rad, yaw_ned_to_enu_rad};
 use crate::lfs::params::PlannerParams;
 use crate::lfs::planner::{PlanInput, Planner, VehicleState};
 use crate::lfs::render::{CameraPose, Scene};
 use crate::lfs::render_fast::{FastRenderScratch, KeepRange, render_cloud};
 use crate::lfs::waypoint::{NavState, WaypointGenerator, WaypointInput, WaypointOutput};
 use crate::model::Obstacle;
+use geodesy::frames::{enu_to_ned, ned_to_enu, yaw_enu_to_ned_rad, yaw_ned_to_enu_rad};
 
 /// Planner period assumed for the first step, seconds.
 const FIRST_DT_S: f64 = 0.1;

@@ -1,11 +1,14 @@
-//! Conversions between our local NED frame and the planner's ENU frame (docs/planner.md §1.1, §8.3, §9.1).
+//! The local frames and their conversions, each function named for its direction so call sites say which
+//! frame they hold.
 //!
-//! * local NED: x North, y East, z Down (metres); PX4 yaw clockwise from North.
-//! * planner ENU: x East, y North, z Up (metres); ENU yaw counter-clockwise from East.
+//! - local NED (PX4, the product's tests): x North, y East, z Down, metres; PX4 yaw clockwise from North.
+//! - planner ENU (PX4-Avoidance, MAVROS, Gazebo's world): x East, y North, z Up, metres; yaw counter-clockwise
+//!   from East.
+//! - body FRD (PX4): x forward, y right, z down; body FLU (Gazebo, ROS): x forward, y left, z up.
+//! - Aerialist's positions: x North, y East like NED, but z is the height **up**.
 //!
-//! Both position conversions swap x/y and negate z; they are their own inverse, but are named for the direction
-//! so call sites say which frame they hold. Aerialist heights (z positive **up** in an otherwise NED x/y) have
-//! their own helper.
+//! The position conversions swap x/y and negate z (NED/ENU) or negate y and z (FRD/FLU); each is its own
+//! inverse, but both directions are named.
 
 use nalgebra::{RealField, Vector3};
 
@@ -27,6 +30,16 @@ pub fn north_east_up_to_enu<T: RealField + Copy>(north: T, east: T, up: T) -> Ve
 /// ENU position to Aerialist-style (north, east, height up).
 pub fn enu_to_north_east_up<T: RealField + Copy>(enu: &Vector3<T>) -> (T, T, T) {
     (enu.y, enu.x, enu.z)
+}
+
+/// Body FLU vector (Gazebo: x forward, y left, z up) to body FRD (PX4: x forward, y right, z down).
+pub fn flu_to_frd<T: RealField + Copy>(flu: &Vector3<T>) -> Vector3<T> {
+    Vector3::new(flu.x, -flu.y, -flu.z)
+}
+
+/// Body FRD vector (PX4) to body FLU (Gazebo).
+pub fn frd_to_flu<T: RealField + Copy>(frd: &Vector3<T>) -> Vector3<T> {
+    Vector3::new(frd.x, -frd.y, -frd.z)
 }
 
 /// Wraps radians to [-pi, pi).
@@ -83,6 +96,19 @@ mod tests {
     }
 
     #[test]
+    fn flu_frd_axes() {
+        // Gazebo's iris rotor 0 sits at (0.13, -0.22, 0.023) FLU: front right, just above the body centre.
+        let rotor0 = flu_to_frd(&Vector3::new(0.13f64, -0.22, 0.023));
+        assert_eq!(rotor0, Vector3::new(0.13, 0.22, -0.023));
+        assert_eq!(frd_to_flu(&rotor0), Vector3::new(0.13, -0.22, 0.023));
+        // A yaw rate to the left (counter-clockwise seen from above) is +z in FLU and -z in FRD.
+        assert_eq!(
+            flu_to_frd(&Vector3::new(0.0f64, 0.0, 1.0)),
+            Vector3::new(0.0, 0.0, -1.0)
+        );
+    }
+
+    #[test]
     fn aerialist_height_up() {
         let enu = north_east_up_to_enu(10.0f64, -5.0, 3.5);
         assert_eq!(enu, Vector3::new(-5.0, 10.0, 3.5));
@@ -122,6 +148,15 @@ mod tests {
             let v = Vector3::new(x, y, z);
             prop_assert_eq!(enu_to_ned(&ned_to_enu(&v)), v);
             prop_assert_eq!(ned_to_enu(&enu_to_ned(&v)), v);
+        }
+
+        #[test]
+        fn body_round_trip(x in -1e4f64..1e4, y in -1e4f64..1e4, z in -1e4f64..1e4) {
+            let v = Vector3::new(x, y, z);
+            prop_assert_eq!(frd_to_flu(&flu_to_frd(&v)), v);
+            // A right-handed frame stays right-handed: the cross product maps like a vector.
+            let w = Vector3::new(z, x, y);
+            prop_assert!((flu_to_frd(&v.cross(&w)) - flu_to_frd(&v).cross(&flu_to_frd(&w))).norm() < 1e-6 * (1.0 + v.norm() * w.norm()));
         }
 
         #[test]
