@@ -19,7 +19,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use prgenuav::campaign::fly::confirm::failed;
-use prgenuav::campaign::plan::expected_points::normal_cdf;
+use prgenuav::campaign::report::expected::expected_points::normal_cdf;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::lfs::fidelity::aggregate;
 use prgenuav::model::competition::FAIL_BELOW_M as FAIL_M;

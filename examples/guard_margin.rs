@@ -15,7 +15,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use prgenuav::campaign::evaluation::SIMILAR_BELOW_M;
+use prgenuav::judge::similarity::SIMILAR_BELOW_M;
 use prgenuav::judge::similarity::{average, path_distance, prepare};
 use prgenuav::model::{Trajectory, load_flight};
 

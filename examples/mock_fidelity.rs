@@ -16,7 +16,7 @@ use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
 use prgenuav::campaign::fly::mock_mavlink::mock_builder_with;
-use prgenuav::campaign::fly::mock_profile::MockProfile;
+use prgenuav::campaign::settings::mock_profile::MockProfile;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, load_dir};
 use prgenuav::model::TestCase;
 use tokio::sync::Semaphore;

@@ -33,7 +33,7 @@ use anyhow::Context;
 use mock_flight::fly_on_mock;
 use prgenuav::bridge::{FlyMode, FlyOptions};
 use prgenuav::campaign::fly::mock_mavlink::mock_builder_with;
-use prgenuav::campaign::fly::mock_profile::MockProfile;
+use prgenuav::campaign::settings::mock_profile::MockProfile;
 use prgenuav::judge::Judge;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, fold_of, load_dir};
 use prgenuav::lfs::px4_flights::{self, Px4Flight};

@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 
 use anyhow::Context;
-use prgenuav::campaign::plan::expected_points::{Evidence, Weights, counts, estimate_with, skilled_prior};
+use prgenuav::campaign::report::expected::expected_points::{Evidence, Weights, counts, estimate_with, skilled_prior};
 use prgenuav::campaign::report::expected::score::NEIGHBOUR_IOU;
 use prgenuav::geometry::{Footprint, union_iou};
 use prgenuav::judge::points;

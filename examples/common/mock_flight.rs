@@ -8,7 +8,7 @@ use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{Builder, LinkSpec, SpeedFactor};
 use prgenuav::bridge::{CancelToken, FlightReport, FlyMode, FlyOptions, fly};
 use prgenuav::campaign::fly::mock_mavlink::mock_builder_with;
-use prgenuav::campaign::fly::mock_profile::MockProfile;
+use prgenuav::campaign::settings::mock_profile::MockProfile;
 use prgenuav::model::TestCase;
 
 /// The mock's simulated time runs this many times faster than the wall clock.

@@ -1,7 +1,7 @@
 //! A mock setting given on the command line or in the environment: `profile:NAME` and/or `KEY=VALUE,...`.
 
 use anyhow::Context;
-use prgenuav::campaign::fly::mock_profile::MockProfile;
+use prgenuav::campaign::settings::mock_profile::MockProfile;
 
 /// `profile:NAME` picks the base profile (default `px4-sitl`), every other `KEY=VALUE` overrides a value.
 pub fn parse_setting(s: &str) -> anyhow::Result<MockProfile> {

@@ -1,15 +1,13 @@
-//! What defines a campaign (saved as `campaign.json`) and why one stops early; shared by every stage.
+//! What defines a campaign (saved as `campaign.json`).
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
+use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use super::screen::screener::{Progress, Screener};
+use super::ground::error::CampaignError;
 use super::settings::{Flight, Learning, Mock, Screening};
-use crate::generator::{GenerateError, GeneratorConfig};
+use crate::generator::GeneratorConfig;
 use crate::judge::Judge;
-use crate::model::{ModelError, TestCase};
 
 /// Everything that defines a campaign; saved as `campaign.json` so `--resume` continues the same one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -50,7 +48,7 @@ pub struct CampaignConfig {
     /// camera and planner lag behind the vehicle.
     #[serde(default = "default_mock_latency_ms")]
     pub mock_latency_ms: f64,
-    /// The embedded mocks' profile (`campaign::fly::mock_profile`). `competition` when the key is absent: the only
+    /// The embedded mocks' profile (`campaign::settings::mock_profile`). `competition` when the key is absent: the only
     /// mock there was before profiles, and a resume must match.
     #[serde(default = "profile_before_profiles")]
     pub mock_profile: String,
@@ -100,7 +98,7 @@ pub struct CampaignConfig {
     /// when the key is absent: such campaigns flew every test once) is one flight per test.
     #[serde(default = "one_flight")]
     pub confirm: usize,
-    /// Plan each learning round while the previous one flies ([`super::plan::rounds`]); `false` (also when the key is
+    /// Plan each learning round while the previous one flies ([`super::conductor`]); `false` (also when the key is
     /// absent: such campaigns planned after each round landed) plans after.
     #[serde(default)]
     pub overlap: bool,
@@ -206,37 +204,4 @@ pub fn check_counts(budget: usize, candidates: usize) -> Result<(), CampaignErro
         )));
     }
     Ok(())
-}
-
-/// Why a campaign stopped early.
-#[derive(Debug, thiserror::Error)]
-pub enum CampaignError {
-    /// A file could not be read or written.
-    #[error(transparent)]
-    Model(#[from] ModelError),
-    /// The generator could not place obstacles.
-    #[error(transparent)]
-    Generate(#[from] GenerateError),
-    /// Bad settings.
-    #[error("{0}")]
-    Config(String),
-    /// No vehicle could be reached.
-    #[error("no reachable vehicle: {0}")]
-    NoVehicle(String),
-}
-
-/// What a campaign run reads that stays the same from its first stage to its last.
-pub struct CampaignInput<'a> {
-    /// Settings.
-    pub cfg: &'a CampaignConfig,
-    /// The campaign folder.
-    pub folder: &'a Path,
-    /// The case study.
-    pub case: &'a TestCase,
-    /// The LFS.
-    pub screener: &'a dyn Screener,
-    /// Progress output.
-    pub progress: &'a dyn Progress,
-    /// Stops the campaign.
-    pub cancel: &'a AtomicBool,
 }

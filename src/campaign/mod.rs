@@ -1,14 +1,13 @@
 //! The competition-ready campaign, one pipeline in stages: [`plan`] draws and ranks candidates, [`screen`]
 //! predicts them with the LFS, [`fly`] flies the best on the vehicles within the budget, [`learn`] calibrates
 //! the LFS on the flights, [`store`] keeps the folder, journal and resume, and [`report`] writes the tests.
-//! [`run`] runs the stages in order; [`candidate`] is the record they pass along.
+//! [`conductor`] conducts the rounds and [`run`] runs a campaign; [`ground`] holds what every stage shares.
 
-pub mod candidate;
-pub mod candidate_id;
+pub mod conductor;
 pub mod config;
 pub mod evaluation;
-pub mod flight_status;
 pub mod fly;
+pub mod ground;
 pub mod learn;
 pub mod plan;
 pub mod report;

@@ -1,18 +1,21 @@
 //! The campaign's orchestrator: sample candidates, screen them with the LFS, fly the most promising within the
-//! budget (in rounds, [`super::plan::rounds`]: learning, or one round without), then report the failing ones best
+//! budget (in rounds, [`super::conductor`]: learning, or one round without), then report the failing ones best
 //! first. Resumable from its folder.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-pub use super::config::{CampaignConfig, CampaignError, CampaignInput, DEFAULT_MOCK_LATENCY_MS, check_counts};
+use super::conductor::run_rounds;
+pub use super::config::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
 use super::fly::vehicle::Vehicle;
+pub use super::ground::error::CampaignError;
+pub use super::ground::input::CampaignInput;
+pub use super::ground::screener::{Progress, Screener};
+use super::ground::stage_times::StageTimes;
 use super::learn::calibration::Learnt;
-use super::plan::rounds::run_rounds;
 pub use super::report::outputs::Report;
-use super::report::outputs::{StageTimes, write_outputs};
-pub use super::screen::screener::{Progress, Screener};
+use super::report::outputs::write_outputs;
 use super::store::folder::FolderLock;
 use super::store::journal::{FlightRecord, Journal};
 use super::store::journal_check::{arena_size_m, check_loaded};

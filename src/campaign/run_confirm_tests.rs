@@ -1,7 +1,7 @@
 //! Confirmed failures (`--confirm`) through the whole campaign, static and learning, with a vehicle whose
 //! repeated flights differ: an even candidate that failed passes when flown again, an odd one fails again.
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use std::collections::BTreeMap;
 
 use super::*;

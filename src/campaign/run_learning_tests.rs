@@ -11,7 +11,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     let r = run_scripted(&cfg, dir.path(), &flown);
     assert_eq!(r.suite.flown, 12);
     let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
-    assert!(learnt.rounds.len() >= crate::campaign::plan::rounds::ROUNDS);
+    assert!(learnt.rounds.len() >= crate::campaign::conductor::ROUNDS);
     // The scripted vehicle flies 0.2 m farther than predicted: the bias goes there, shrunk by the prior.
     let bias = learnt.calibration.bias_m();
     assert!((bias - 0.2 * 12.0 / 13.0).abs() < 1e-9, "{bias}");
@@ -214,7 +214,7 @@ fn below_the_diversity_floor_the_failures_still_get_children() {
     let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");
     assert!(
-        r.suite.failed_once >= crate::campaign::plan::neighbours::MIN_FAILING_FOR_DIVERSITY,
+        r.suite.failed_once >= crate::campaign::learn::refit::MIN_FAILING_FOR_DIVERSITY,
         "{:?}",
         r.suite
     );

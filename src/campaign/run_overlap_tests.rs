@@ -57,7 +57,7 @@ fn with_overlap_the_next_round_is_screened_while_a_round_flies_and_the_budget_is
             extra_m: 0.2,
         },
         screened: screened.clone(),
-        first_round: cfg.candidates / crate::campaign::plan::rounds::ROUNDS,
+        first_round: cfg.candidates / crate::campaign::conductor::ROUNDS,
         overlapped: overlapped.clone(),
     };
     let lfs = CountingLfs(screened);

@@ -1,7 +1,7 @@
 //! Campaign pipeline tests with a scripted screener and scripted vehicles (the real LFS and the mock
 //! autopilot are exercised by the integration tests).
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -87,8 +87,8 @@ fn config(budget: usize) -> CampaignConfig {
         mock_speed: 20.0,
         mock_lockstep: true,
         mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
-        mock_profile: crate::campaign::fly::mock_profile::DEFAULT_PROFILE.into(),
-        mock_gust_acc_m_s2: crate::campaign::fly::mock_profile::PX4_SITL_GUST_ACC_M_S2,
+        mock_profile: crate::campaign::settings::mock_profile::DEFAULT_PROFILE.into(),
+        mock_gust_acc_m_s2: crate::campaign::settings::mock_profile::PX4_SITL_GUST_ACC_M_S2,
         screen: true,
         hfs_time_scale: None,
         flight_timeout_s: 500.0,

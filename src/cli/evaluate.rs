@@ -7,9 +7,9 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use prgenuav::campaign::evaluation::RUNS_2026;
 use prgenuav::campaign::evaluation::flying::{EvaluateSetup, Evaluated, evaluate_by_flying};
 use prgenuav::campaign::evaluation::report;
-use prgenuav::campaign::evaluation::{RUNS_2026, SIMILAR_BELOW_M};
 use prgenuav::campaign::fly::runner::{DEFAULT_JOB_TIMEOUT_S, RunnerSettings, Template};
 use prgenuav::campaign::run::CampaignConfig;
 use prgenuav::campaign::settings::keys::flags::JOBS;
@@ -17,6 +17,7 @@ use prgenuav::campaign::settings::{Flight, Requested, find};
 use prgenuav::campaign::setup::fleet::{AtOnce, split};
 use prgenuav::campaign::setup::{self, Ask};
 use prgenuav::campaign::store::journal::FlightRecord;
+use prgenuav::judge::similarity::SIMILAR_BELOW_M;
 use prgenuav::model::Spelling;
 use prgenuav::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 

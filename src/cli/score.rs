@@ -7,8 +7,9 @@ use std::process::ExitCode;
 
 use super::values::JudgeEdition;
 use anyhow::{Context, bail};
-use prgenuav::campaign::evaluation::{Evaluation, SIMILAR_BELOW_M, evaluate_folder};
+use prgenuav::campaign::evaluation::{Evaluation, evaluate_folder};
 use prgenuav::campaign::report::folder_score::{SuiteScore, score_folder};
+use prgenuav::judge::similarity::SIMILAR_BELOW_M;
 use serde::Serialize;
 
 /// Arguments of `score`.

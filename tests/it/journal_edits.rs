@@ -2,11 +2,11 @@
 //! consistent folder (every record believable, each flight once, the file ending on a whole line) or is
 //! refused with an error naming the journal.
 
-use prgenuav::campaign::candidate::{CandidateId, LfsPrediction};
+use prgenuav::campaign::ground::candidate::{CandidateId, LfsPrediction};
 use std::path::{Path, PathBuf};
 
-use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::vehicle::Flown;
+use prgenuav::campaign::ground::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
 use prgenuav::campaign::store::journal_check::{check_journal, check_record, is_inside};
 use proptest::prelude::*;

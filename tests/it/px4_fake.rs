@@ -2,18 +2,18 @@
 //! never boots, to check the statuses, the retry on a fresh instance, the budget accounting and that no
 //! process outlives prgenuav, even killed with SIGKILL. Runs in normal CI.
 
-use prgenuav::campaign::candidate::CandidateId;
+use prgenuav::campaign::ground::candidate::CandidateId;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use prgenuav::bridge::sitl::Px4Build;
-use prgenuav::campaign::candidate::LfsPrediction;
-use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::fleet::fly_all;
 use prgenuav::campaign::fly::px4::{Px4Settings, Px4Vehicle};
 use prgenuav::campaign::fly::vehicle::{Job, Vehicle, VehicleError};
+use prgenuav::campaign::ground::candidate::LfsPrediction;
+use prgenuav::campaign::ground::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::Journal;
 
 use super::{case, repo, test_file, valid_pair};

@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use prgenuav::bridge::FlyMode;
-use prgenuav::campaign::flight_status::FlightStatus;
 use prgenuav::campaign::fly::mock_mavlink::MockVehicle;
 use prgenuav::campaign::fly::vehicle::Vehicle;
+use prgenuav::campaign::ground::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::Journal;
 use prgenuav::model::{Trajectory, load_ulog_trajectory};
 

@@ -9,10 +9,10 @@ use std::sync::atomic::AtomicBool;
 
 use super::folder::{load_tests, write_averages};
 use super::suite::{Evaluation, FlownTest, evaluate_suite};
-use crate::campaign::candidate::{CandidateId, LfsPrediction};
-use crate::campaign::config::CampaignError;
 use crate::campaign::fly::fleet::fly_all;
 use crate::campaign::fly::vehicle::{Job, PoolOutcome, Vehicle};
+use crate::campaign::ground::candidate::{CandidateId, LfsPrediction};
+use crate::campaign::ground::error::CampaignError;
 use crate::campaign::store::folder::FolderLock;
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::judge::Judge;

@@ -12,7 +12,3 @@ pub use suite::{Evaluation, FlownTest, evaluate_suite};
 
 /// The competition flies each test this many times.
 pub const RUNS_2026: usize = 5;
-
-/// The default DTW distance below which two tests' average trajectories are too similar, metres summed
-/// over the alignment (how it was chosen: `docs/evaluate.md`).
-pub const SIMILAR_BELOW_M: f64 = 75.0;

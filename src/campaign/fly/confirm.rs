@@ -5,7 +5,7 @@
 //! A test stops being flown once the majority of K is settled (K = 3: two failures, or two passes). Only a
 //! test that failed at least once is flown again; K = 1 is one flight per test, as without confirmation.
 
-use crate::campaign::candidate::CandidateId;
+use crate::campaign::ground::candidate::CandidateId;
 use std::collections::BTreeMap;
 
 use crate::campaign::store::journal::FlightRecord;
@@ -157,7 +157,7 @@ mod tests {
     #[test]
     fn the_campaign_learns_each_test_once_at_its_flights_mean() {
         let mut interrupted = flight(2, 2, 0.1);
-        interrupted.flown.status = crate::campaign::flight_status::FlightStatus::Interrupted;
+        interrupted.flown.status = crate::campaign::ground::flight_status::FlightStatus::Interrupted;
         let records = vec![
             flight(1, 0, 1.3),
             flight(2, 0, 1.2),

@@ -11,8 +11,8 @@ use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
 use tokio::runtime::Handle;
 
 use crate::bridge::{BridgeError, CancelToken, FlightReport, FlyMode, FlyOptions, fly};
-use crate::campaign::fly::mock_profile::MockProfile;
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
+use crate::campaign::settings::mock_profile::MockProfile;
 use crate::judge::Judge;
 use crate::model::TestCase;
 
@@ -135,7 +135,7 @@ pub struct MockVehicle {
     seed: u64,
 }
 
-/// The embedded mock for `mode` with the default profile ([`crate::campaign::fly::mock_profile::DEFAULT_PROFILE`]).
+/// The embedded mock for `mode` with the default profile ([`crate::campaign::settings::mock_profile::DEFAULT_PROFILE`]).
 pub fn mock_builder(mode: FlyMode) -> mock_autopilot::Builder {
     mock_builder_with(&MockProfile::default(), mode)
 }

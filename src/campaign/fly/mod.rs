@@ -6,7 +6,6 @@
 pub mod confirm;
 pub mod fleet;
 pub mod mock_mavlink;
-pub mod mock_profile;
 pub mod px4;
 pub mod retry;
 pub mod runner;

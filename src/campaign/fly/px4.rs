@@ -3,9 +3,9 @@
 //! "Preflight Fail: horizontal velocity unstable"), in the instance slot its vehicle owns.
 //!
 //! A PX4 that never boots, dies or cannot be flown is the backend's fault, not the test's: the flight is
-//! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::flight_status::FlightStatus::BackendFailed`] (not charged).
+//! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::ground::flight_status::FlightStatus::BackendFailed`] (not charged).
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::path::Path;
 
 use super::vehicle::{Flown, Vehicle, VehicleError};
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::campaign::store::journal::FlightRecord;
 use crate::model::TestCase;
 

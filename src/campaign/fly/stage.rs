@@ -4,11 +4,12 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction};
-use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::pending;
 use crate::campaign::fly::vehicle::Job;
-use crate::campaign::screen::screener::Progress;
+use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction};
+use crate::campaign::ground::error::CampaignError;
+use crate::campaign::ground::input::CampaignInput;
+use crate::campaign::ground::screener::Progress;
 use crate::campaign::store::journal::{FlightRecord, flights_charged};
 use crate::model::TestCase;
 

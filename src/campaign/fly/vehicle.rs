@@ -4,11 +4,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::campaign::candidate::LfsPrediction;
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::candidate::LfsPrediction;
+use crate::campaign::ground::flight_status::FlightStatus;
 // What `Vehicle::fly` returns, defined beside `FlightStatus`: the journal holds it without importing `fly`.
-pub use crate::campaign::flight_status::Flown;
 use crate::campaign::fly::confirm::Tally;
+pub use crate::campaign::ground::flight_status::Flown;
+pub use crate::campaign::ground::stage_times::FleetUse;
 use crate::campaign::store::journal::FlightRecord;
 use crate::model::TestCase;
 
@@ -82,17 +83,6 @@ pub struct PoolOutcome {
     pub errors: Vec<String>,
     /// How busy the vehicles were.
     pub fleet: FleetUse,
-}
-
-/// How busy a fleet's vehicles were, wall time.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FleetUse {
-    /// Vehicles at the start.
-    pub vehicles: usize,
-    /// Seconds the vehicles spent flying (setting up, in the air, landing), summed over the vehicles.
-    pub busy_s: f64,
-    /// Seconds from the first take-off to the last landing.
-    pub span_s: f64,
 }
 
 /// A flight the user's stop cut short (`aborted` after the campaign's cancel) is `interrupted`: not charged,

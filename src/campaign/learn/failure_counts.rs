@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::candidate::{Candidate, CandidateId, unit_of};
+use crate::campaign::ground::candidate::{Candidate, CandidateId, unit_of};
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, bin_of};
 use crate::model::competition::FAIL_BELOW_M;

@@ -8,17 +8,20 @@
 //! theirs and keeps [`UNIFORM_FLOOR`] of uniform mass. It backs off ([`BACKOFF`]) when the failing tests grow
 //! alike or a round could not fill its share of the budget.
 
-use crate::campaign::candidate::{Candidate, LfsPrediction, unit_of};
 use crate::campaign::config::CampaignConfig;
+use crate::campaign::ground::candidate::{Candidate, LfsPrediction, unit_of};
 use crate::campaign::learn::calibration::Calibration;
 use crate::campaign::learn::surrogate::{KernelPoint, Surrogate};
-use crate::campaign::plan::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::judge::diversity;
 use crate::model::Obstacle;
 use crate::model::competition::FAIL_BELOW_M;
 
+/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
+/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
+/// which counts the failures still to come, binds from the first failure.)
+pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
 /// Share of the screened candidates that are elites.
 pub const ELITE_SHARE: f64 = 0.1;
 /// Weight of a flown elite (the closest quarter of the flights, and every failure): a truth counts more than
@@ -149,7 +152,7 @@ pub fn elites(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::candidate::CandidateId;
+    use crate::campaign::ground::candidate::CandidateId;
 
     fn record(candidate: u64, raw: f64, flown: f64) -> FlightRecord {
         crate::campaign::store::journal::test_record(candidate, raw, Some(flown))

@@ -18,10 +18,7 @@ use crate::geometry::{Footprint, union_iou};
 use crate::judge::diversity;
 use crate::model::Obstacle;
 
-/// Below this many failing tests their diversity says little (two tests next to each other score 0.7): it does
-/// not back off the fit, and no child may come closer than `--max-iou`. (The diversity guard's expectation,
-/// which counts the failures still to come, binds from the first failure.)
-pub const MIN_FAILING_FOR_DIVERSITY: usize = 4;
+use crate::campaign::learn::refit::MIN_FAILING_FOR_DIVERSITY;
 /// Expected diversity a child must leave above the user's floor: the expectation is over one round's children,
 /// and the flights' failures scatter around it.
 pub const DIVERSITY_MARGIN: f64 = 0.02;

@@ -2,7 +2,7 @@
 //! ones as children in the boxes around the parents ([`crate::campaign::plan::neighbours`]), each child admitted by the
 //! diversity guard.
 
-use crate::campaign::candidate::{Candidate, Lineage};
+use crate::campaign::ground::candidate::{Candidate, Lineage};
 use crate::campaign::plan::diversity_guard::DiversityGuard;
 use crate::campaign::plan::neighbours::{CHILD_TRIES, child_box};
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood, Proposal};

@@ -1,10 +1,8 @@
 //! Which candidates a campaign draws and in what order it flies them: the draws of each round (histogram
-//! and children near failures), the diversity guard, the ranking, and the rounds themselves.
+//! and children near failures), the diversity guard and the ranking; the rounds themselves are conducted by
+//! [`crate::campaign::conductor`].
 
 pub mod diversity_guard;
 pub mod draw;
-pub mod expected_points;
-pub mod judged_mean;
 pub mod neighbours;
 pub mod rank;
-pub mod rounds;

@@ -7,10 +7,9 @@
 //! close to a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]);
 //! the near-duplicate filter would drop most of them before flight otherwise.
 
-use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction, Lineage};
 use crate::campaign::config::CampaignConfig;
+use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction, Lineage};
 use crate::campaign::learn::failure_counts::BinCount;
-pub use crate::campaign::plan::diversity_guard::MIN_FAILING_FOR_DIVERSITY;
 use crate::campaign::plan::diversity_guard::{DiversityGuard, child_max_iou};
 use crate::campaign::plan::rank::{rank_unflown, rank_unflown_within};
 use crate::campaign::store::journal::FlightRecord;

@@ -2,9 +2,9 @@
 //! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
 //! tests skipped.
 
-pub use crate::campaign::candidate::LfsPrediction;
-use crate::campaign::candidate::{Candidate, CandidateId};
 use crate::campaign::config::CampaignConfig;
+pub use crate::campaign::ground::candidate::LfsPrediction;
+use crate::campaign::ground::candidate::{Candidate, CandidateId};
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
 use crate::model::Obstacle;

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::campaign::store::journal::FlightRecord;
 
 /// One backend's flights.
@@ -85,8 +85,8 @@ pub fn markdown(md: &mut String, backends: &[BackendSummary]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::candidate::{CandidateId, LfsPrediction};
     use crate::campaign::fly::vehicle::Flown;
+    use crate::campaign::ground::candidate::{CandidateId, LfsPrediction};
 
     fn record(vehicle: &str, status: FlightStatus, wall_s: f64) -> FlightRecord {
         FlightRecord {

@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::campaign::candidate::CandidateId;
 use crate::campaign::fly::confirm::failed;
+use crate::campaign::ground::candidate::CandidateId;
 use crate::campaign::store::journal::FlightRecord;
 
 /// One test's Collision Prevention verdict over its flights.

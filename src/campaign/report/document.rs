@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::campaign::fly::vehicle::FleetUse;
+use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::Learnt;
 use crate::campaign::report::backends::BackendSummary;
 use crate::campaign::report::suite::SuiteSummary;
@@ -11,46 +11,11 @@ use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::TestVerdict;
 use crate::judge::Judge;
 
-/// Wall time of each stage, seconds.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct StageTimes {
-    /// Drawing the candidates.
-    pub sample_s: f64,
-    /// Low-fidelity screening.
-    pub screen_s: f64,
-    /// The LFS ensemble on the shortlisted candidates.
-    pub ensemble_s: f64,
-    /// Online learning: calibrating the LFS on the flights, re-ranking, adapting the generator.
-    pub learn_s: f64,
-    /// High-fidelity flights.
-    pub fly_s: f64,
-    /// Writing the outputs.
-    pub report_s: f64,
-    /// Vehicle-seconds the vehicles spent flying, summed over the flight stages.
-    pub vehicle_busy_s: f64,
-    /// Vehicle-seconds available from each stage's first take-off to its last landing (vehicles x span).
-    pub vehicle_span_s: f64,
-}
-
-impl StageTimes {
-    /// Counts a fleet's use of its vehicles.
-    pub fn add_fleet(&mut self, fleet: FleetUse) {
-        self.vehicle_busy_s += fleet.busy_s;
-        self.vehicle_span_s += fleet.vehicles as f64 * fleet.span_s;
-    }
-
-    /// Share of the vehicle time from take-off to last landing the vehicles waited (on screening, learning, or
-    /// the last flights of a round); `None` before any flight.
-    pub fn vehicles_idle(&self) -> Option<f64> {
-        (self.vehicle_span_s > 0.0).then(|| (1.0 - self.vehicle_busy_s / self.vehicle_span_s).clamp(0.0, 1.0))
-    }
-}
-
 /// One flight in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReportedFlight {
     /// The candidate flown.
-    pub candidate: crate::campaign::candidate::CandidateId,
+    pub candidate: crate::campaign::ground::candidate::CandidateId,
     /// Which flight of the candidate, from 0 (left out when 0).
     #[serde(skip_serializing_if = "crate::campaign::store::journal::is_first")]
     pub attempt: u32,
@@ -63,7 +28,7 @@ pub struct ReportedFlight {
     /// Flown un-binned minimum distance, metres.
     pub min_distance_raw: Option<f64>,
     /// How the flight ended.
-    pub status: crate::campaign::flight_status::FlightStatus,
+    pub status: crate::campaign::ground::flight_status::FlightStatus,
     /// Why, in words, when it did not land.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,

@@ -2,8 +2,8 @@
 //! the tests expected to earn 2026 points, less near-duplicate trajectories, are written as `test_N`, by their
 //! expected score ([`expected_score`]); the others that failed are listed in `unconfirmed.json` and the report.
 
-use crate::campaign::candidate::CandidateId;
-use crate::campaign::config::CampaignInput;
+use crate::campaign::ground::candidate::CandidateId;
+use crate::campaign::ground::input::CampaignInput;
 use crate::campaign::learn::calibration::Learnt;
 use crate::campaign::report::markdown::markdown;
 use crate::campaign::report::suite::summary;
@@ -18,7 +18,8 @@ use crate::judge::{ClosestApproach, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
 use crate::plot::{FlightPlot, PathStyle};
 
-pub use crate::campaign::report::document::{Report, ReportedFlight, StageTimes};
+use crate::campaign::ground::stage_times::StageTimes;
+pub use crate::campaign::report::document::{Report, ReportedFlight};
 
 /// Writes `test_N.yaml` (+ `test_N.csv`, `test_N.svg`) for each test to write, best first, then
 /// report.json and report.md (and `unconfirmed.json` with `--confirm` above 1 or tests not written), for the campaign `input` that

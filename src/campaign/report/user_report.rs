@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::suite::SuiteSummary;
 use super::verdicts::TestVerdict;
-use crate::campaign::config::CampaignInput;
+use crate::campaign::ground::input::CampaignInput;
 use crate::io::write_atomic;
 use crate::judge::{Judge, above_top_count};
 use crate::model::{ModelError, Spelling};

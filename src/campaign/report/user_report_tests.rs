@@ -1,9 +1,10 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
-use crate::campaign::candidate::CandidateId;
-use crate::campaign::flight_status::FlightStatus;
-use crate::campaign::report::outputs::{Report, ReportedFlight, StageTimes};
+use crate::campaign::ground::candidate::CandidateId;
+use crate::campaign::ground::flight_status::FlightStatus;
+use crate::campaign::ground::stage_times::StageTimes;
+use crate::campaign::report::outputs::{Report, ReportedFlight};
 use crate::campaign::report::suite::summary;
 use crate::campaign::report::verdicts::verdicts;
 use crate::campaign::store::journal::{FlightRecord, test_record};

@@ -2,7 +2,7 @@
 //! failure rate, whether it is confirmed, and its ranking, best first. With one flight per test every failing
 //! test is confirmed and the ranking is the flights' (smallest distance, then shorter flight).
 
-use crate::campaign::candidate::CandidateId;
+use crate::campaign::ground::candidate::CandidateId;
 use std::cmp::Ordering;
 use std::path::PathBuf;
 

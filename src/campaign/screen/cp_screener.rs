@@ -2,8 +2,8 @@
 //! ([`crate::lfs::cp_model`]) per candidate, with the case's CP parameters. It is deterministic (no wind, no
 //! perturbation), so it has no ensemble.
 
+use crate::campaign::ground::screener::Screener;
 use crate::campaign::screen::lfs_screener::NO_PREDICTION_M;
-use crate::campaign::screen::screener::Screener;
 use crate::judge::Judge;
 use crate::lfs::cp_model::{CpEnd, CpSimConfig, simulate_cp};
 use crate::lfs::cp_params::CpParams;

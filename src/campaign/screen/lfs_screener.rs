@@ -1,7 +1,7 @@
 //! The low-fidelity screener: one simulated flight per candidate with the 3DVFH* LFS, and an ensemble of
 //! perturbed flights for the shortlisted ones.
 
-use crate::campaign::screen::screener::Screener;
+use crate::campaign::ground::screener::Screener;
 use crate::lfs::ensemble::{EnsembleParams, run_ensemble};
 use crate::lfs::sim::{SimConfig, SimStatus, simulate};
 use crate::model::TestCase;

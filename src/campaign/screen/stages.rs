@@ -8,10 +8,11 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction};
-use crate::campaign::config::{CampaignConfig, CampaignError};
+use crate::campaign::config::CampaignConfig;
+use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction};
+use crate::campaign::ground::error::CampaignError;
+use crate::campaign::ground::screener::{Progress, Screener};
 use crate::campaign::screen::parallel::{available_threads, parallel_map};
-use crate::campaign::screen::screener::{Progress, Screener};
 use crate::generator::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};

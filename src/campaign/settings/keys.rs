@@ -187,7 +187,7 @@ pub mod flags {
     /// `--instances` with `--px4`.
     pub const INSTANCES: Limit = Limit::count(
         1,
-        crate::campaign::fly::px4::MAX_INSTANCES,
+        crate::bridge::sitl::slot::SLOTS as usize,
         "PX4 instances (docs/px4.md)",
     );
     /// BUDGET.

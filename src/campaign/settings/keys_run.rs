@@ -2,7 +2,7 @@
 
 use super::keys::{DEFAULT_MOCK_LATENCY_MS, MAX_CANDIDATES, MAX_TIME_SCALE, MOCKS_PER_CORE, section};
 use super::{DefaultValue, Flag, FlagText, Setting};
-use crate::campaign::fly::mock_profile::DEFAULT_PROFILE;
+use crate::campaign::settings::mock_profile::DEFAULT_PROFILE;
 use crate::lfs::eval::ensemble::MAX_MEMBERS;
 use crate::model::Limit;
 

@@ -6,6 +6,7 @@
 pub mod file;
 pub mod keys;
 mod keys_run;
+pub mod mock_profile;
 
 pub mod merge;
 

@@ -6,13 +6,14 @@ use std::time::Duration;
 use tokio::runtime::Handle;
 
 use crate::bridge::sitl::Px4Build;
-use crate::campaign::config::{CampaignConfig, CampaignError};
+use crate::campaign::config::CampaignConfig;
 use crate::campaign::fly::mock_mavlink::{LinkVehicle, MockVehicle};
-use crate::campaign::fly::mock_profile::MockProfile;
 use crate::campaign::fly::px4::{Px4Settings, Px4Vehicle, default_instances};
 use crate::campaign::fly::runner::{RunnerSettings, RunnerVehicle};
 use crate::campaign::fly::vehicle::Vehicle;
+use crate::campaign::ground::error::CampaignError;
 use crate::campaign::screen::parallel::available_threads;
+use crate::campaign::settings::mock_profile::MockProfile;
 
 /// Flights at once, per backend (`None`: the backend's default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

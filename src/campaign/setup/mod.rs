@@ -7,8 +7,9 @@ pub mod resume;
 
 use std::path::PathBuf;
 
-use super::config::{CampaignConfig, CampaignError, Px4Backend, check_counts};
-use super::fly::mock_profile::MockProfile;
+use super::config::{CampaignConfig, Px4Backend, check_counts};
+use super::ground::error::CampaignError;
+use super::settings::mock_profile::MockProfile;
 use super::settings::{Requested, check_ranges};
 use crate::bridge::FlyMode;
 use crate::generator::{Family, GeneratorConfig};
@@ -129,7 +130,7 @@ pub fn check_new(cfg: &CampaignConfig) -> Result<(), CampaignError> {
             ));
         }
         // Refuse a bad prior before anything is sampled or flown.
-        crate::campaign::plan::rounds::load_prior(p)?;
+        crate::campaign::conductor::load_prior(p)?;
     }
     Ok(())
 }

@@ -6,7 +6,8 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::campaign::config::{CampaignConfig, CampaignError};
+use crate::campaign::config::CampaignConfig;
+use crate::campaign::ground::error::CampaignError;
 use crate::campaign::settings::Given;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 

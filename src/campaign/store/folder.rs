@@ -9,7 +9,7 @@ use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
 
-use crate::campaign::config::CampaignError;
+use crate::campaign::ground::error::CampaignError;
 use crate::model::safe_files::read_capped;
 use crate::model::{ModelError, write_atomic};
 

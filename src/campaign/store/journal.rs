@@ -6,9 +6,9 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::campaign::candidate::LfsPrediction;
-use crate::campaign::candidate_id::CandidateId;
-use crate::campaign::flight_status::{FlightStatus, Flown};
+use crate::campaign::ground::candidate::LfsPrediction;
+use crate::campaign::ground::candidate_id::CandidateId;
+use crate::campaign::ground::flight_status::{FlightStatus, Flown};
 use crate::io::write_atomic;
 use crate::model::safe_files::{MAX_READ_BYTES, open_append_no_follow, read_capped};
 use crate::model::{ModelError, Obstacle};

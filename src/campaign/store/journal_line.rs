@@ -10,9 +10,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::campaign::candidate::LfsPrediction;
-use crate::campaign::candidate_id::CandidateId;
-use crate::campaign::flight_status::{FlightStatus, Flown};
+use crate::campaign::ground::candidate::LfsPrediction;
+use crate::campaign::ground::candidate_id::CandidateId;
+use crate::campaign::ground::flight_status::{FlightStatus, Flown};
 use crate::campaign::store::journal::{FlightRecord, is_first};
 use crate::model::Obstacle;
 

@@ -5,8 +5,8 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use super::journal::{FlightRecord, Journal, healed, parse, read_bytes};
-use crate::campaign::candidate_id::CandidateId;
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::candidate_id::CandidateId;
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::io::write_atomic;
 use crate::model::ModelError;
 

@@ -1,6 +1,6 @@
 //! A journal damaged by a crash: what resume drops, what it refuses, and that no byte string panics.
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use proptest::prelude::*;
 
 use super::tests::{line, record};

@@ -1,9 +1,8 @@
-//! What a campaign keeps on disk: its folder and the lock that gives it one writer, the journal of every
-//! flight, and the replay that lets a resumed campaign take the journaled flights instead of flying them.
+//! What a campaign keeps on disk: its folder and the lock that gives it one writer, and the journal of every
+//! flight.
 
 pub mod folder;
 pub mod journal;
 pub mod journal_check;
 mod journal_line;
 mod journal_memory;
-pub mod replay;

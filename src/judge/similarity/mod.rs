@@ -13,6 +13,10 @@ use crate::model::{AERIALIST_BIN_S, Sample, Trajectory};
 use dtw::Point3;
 use softdtw::Series;
 
+/// The default DTW distance below which two tests' average trajectories are too similar, metres summed
+/// over the alignment (how it was chosen: `docs/evaluate.md`).
+pub const SIMILAR_BELOW_M: f64 = 75.0;
+
 /// Aerialist's smoothing of the barycenter (`AVE_GAMMA` of the 2026 evaluation).
 pub const AVERAGE_GAMMA: f64 = 200.0;
 

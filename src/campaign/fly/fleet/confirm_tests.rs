@@ -1,6 +1,6 @@
 //! Confirmation in the fleet: a failing test flown again before the next candidate, within the budget.
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -157,7 +157,7 @@ fn waves_run(script: &[Vec<f64>], jitter_seed: u64, budget: usize) -> Vec<(u64, 
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: true,
-        replay: crate::campaign::store::replay::Replay::none(),
+        replay: crate::campaign::fly::fleet::replay::Replay::none(),
     };
     let (records, _) = crate::campaign::fly::fleet::run_fleet(&mut fleet, setup, |fleet| {
         fleet.push(0, jobs, budget);

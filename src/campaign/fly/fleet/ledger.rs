@@ -1,13 +1,13 @@
 //! What the fleet's workers and its campaign share under one lock: the queue, the flights in the air, the
 //! budget, the waves and the replayed flights.
 
-use crate::campaign::candidate::CandidateId;
+use crate::campaign::ground::candidate::CandidateId;
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
 
+use crate::campaign::fly::fleet::replay::Replay;
 use crate::campaign::fly::vehicle::{FleetUse, Job};
 use crate::campaign::store::journal::FlightRecord;
-use crate::campaign::store::replay::Replay;
 use crate::model::Obstacle;
 
 /// What the workers and the campaign share, under one lock.

@@ -4,23 +4,24 @@
 //! for a round's flights only when it needs them to learn. A resumed campaign's journaled flights are taken
 //! from its [`Replay`] as their jobs come up, in place of flying them.
 
-use crate::campaign::candidate::CandidateId;
+use crate::campaign::ground::candidate::CandidateId;
 use std::collections::{BTreeMap, VecDeque};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
+use crate::campaign::fly::fleet::replay::Replay;
 use crate::campaign::fly::retry::rejected_in_a_row;
 use crate::campaign::fly::vehicle::{FleetUse, Job, PoolOutcome, Vehicle};
 use crate::campaign::store::journal::{FlightRecord, Journal};
-use crate::campaign::store::replay::Replay;
 use crate::model::Obstacle;
 
 /// How long an idle worker or a waiting campaign sleeps before looking at the cancel flag again.
 const POLL: Duration = Duration::from_millis(200);
 
 mod ledger;
+pub mod replay;
 mod worker;
 
 use ledger::Ledger;

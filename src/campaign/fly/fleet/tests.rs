@@ -1,9 +1,9 @@
 //! The fleet: budgets, dropped vehicles, rejections and re-flights, on scripted vehicles.
 
 use super::*;
-use crate::campaign::candidate::{CandidateId, LfsPrediction};
-use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::*;
+use crate::campaign::ground::candidate::{CandidateId, LfsPrediction};
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::campaign::store::journal::Journal;
 use crate::model::TestCase;
 use crate::model::{Obstacle, SIM_HOME};
@@ -300,7 +300,7 @@ fn on_fleet<R>(vehicles: Vec<(&'static str, bool)>, body: impl FnOnce(&Fleet) ->
         cancel: &AtomicBool::new(false),
         on_flight: &|_| {},
         waves: false,
-        replay: crate::campaign::store::replay::Replay::none(),
+        replay: crate::campaign::fly::fleet::replay::Replay::none(),
     };
     run_fleet(&mut v, setup, body)
 }

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::confirm::trajectory_name;
 use crate::campaign::fly::retry::fly_counting_rejections;
 use crate::campaign::fly::vehicle::{Job, Vehicle, interrupted_if_cancelled};
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::campaign::store::journal::{FlightRecord, Journal};
 
 use super::{Fleet, POLL};

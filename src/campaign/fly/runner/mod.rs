@@ -15,9 +15,9 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::judge::Judge;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped, read_tail};
 use crate::model::{Spelling, TestCase, write_atomic};
@@ -174,7 +174,7 @@ impl Vehicle for RunnerVehicle {
 /// A flight the campaign's stop ended (`aborted`: the fleet journals it `interrupted`).
 fn stopped() -> Flown {
     Flown::unflown(
-        crate::campaign::flight_status::FlightStatus::Aborted,
+        crate::campaign::ground::flight_status::FlightStatus::Aborted,
         "the job was stopped".into(),
     )
 }

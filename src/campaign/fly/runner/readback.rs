@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::Flown;
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::judge::cp_verdict::{CpVerdict, cp_verdict};
 use crate::judge::{Judge, judge_flight};
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped};

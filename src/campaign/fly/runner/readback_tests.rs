@@ -1,6 +1,6 @@
 use std::time::{Duration, Instant};
 
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use proptest::prelude::*;
 
 use super::*;

@@ -1,5 +1,5 @@
 use super::*;
-use crate::campaign::flight_status::FlightStatus;
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::model::Obstacle;
 
 fn settings(template: &str, folder: &Path, timeout_ms: u64) -> RunnerSettings {

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::campaign::plan::expected_points::PointsEstimate;
+use crate::campaign::report::expected::expected_points::PointsEstimate;
 
 /// A test's expected 2026 figures.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

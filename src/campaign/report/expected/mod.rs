@@ -2,6 +2,8 @@
 //! ([`score`], with the figures report.json carries in [`figures`]), and the guard that sets aside tests whose
 //! flown trajectories the judge would count as near-duplicates ([`trajectory_guard`]).
 
+pub mod expected_points;
 pub mod figures;
+pub mod judged_mean;
 pub mod score;
 pub mod trajectory_guard;

@@ -1,5 +1,5 @@
 //! The campaign aims at the 2026 score: every test that failed gets its expected mean points over 5 flights
-//! ([`crate::campaign::plan::expected_points`]) from its own flights, its neighbours' (the flown tests whose
+//! ([`crate::campaign::report::expected::expected_points`]) from its own flights, its neighbours' (the flown tests whose
 //! footprints overlap it by IoU >= [`NEIGHBOUR_IOU`]) and the calibrated prediction; the tests rank by their
 //! expected 2026 score (expected points per expected minute, x 10 / obstacles²). Written are those that
 //! failed at least once and whose 10 % bound of expected points is above zero, less those whose flown
@@ -11,9 +11,8 @@
 use std::cmp::Ordering;
 use std::path::Path;
 
-use crate::campaign::candidate::CandidateId;
-use crate::campaign::evaluation::SIMILAR_BELOW_M;
-use crate::campaign::plan::expected_points::{Evidence, Z80, counts, estimate, skilled_prior};
+use crate::campaign::ground::candidate::CandidateId;
+use crate::campaign::report::expected::expected_points::{Evidence, Z80, counts, estimate, skilled_prior};
 pub use crate::campaign::report::expected::figures::{SuiteExpectation, TestExpectation};
 use crate::campaign::report::expected::trajectory_guard::{
     Guarded, choose, expected_sim_pen, flown_average, guard_below,
@@ -22,6 +21,7 @@ use crate::campaign::report::suite::DISTINCT_IOU;
 use crate::campaign::report::verdicts::TestVerdict;
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
+use crate::judge::similarity::SIMILAR_BELOW_M;
 use crate::model::Obstacle;
 use crate::model::competition::TEST_SCORE_SCALE;
 

@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use crate::campaign::plan::expected_points::normal_cdf;
+use crate::campaign::report::expected::expected_points::normal_cdf;
 use crate::campaign::store::journal::FlightRecord;
 use crate::campaign::store::journal_check::inside_bytes;
 use crate::judge::similarity::{average, path_distance, prepare};

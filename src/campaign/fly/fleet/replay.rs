@@ -3,7 +3,7 @@
 //! uninterrupted campaign saw when it planned that round, so on repeatable vehicles (the lockstep mock) the
 //! resumed campaign ends as the uninterrupted one would have, bit for bit.
 
-use crate::campaign::candidate_id::CandidateId;
+use crate::campaign::ground::candidate_id::CandidateId;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 use crate::campaign::fly::vehicle::Job;
@@ -116,7 +116,7 @@ fn key(job: &Job) -> (CandidateId, u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::candidate::LfsPrediction;
+    use crate::campaign::ground::candidate::LfsPrediction;
     use crate::model::TestCase;
 
     fn record(candidate: u64, attempt: u32, status: &str) -> FlightRecord {

@@ -2,8 +2,9 @@
 //! campaign learnt so far and choose the flights, then learn from the flights that landed.
 
 use super::{ROUNDS, Ranking, Round, Rounds};
-use crate::campaign::candidate::{CandidateId, LfsPrediction, Lineage, is_child, unflown};
-use crate::campaign::config::CampaignError;
+use crate::campaign::ground::candidate::{CandidateId, LfsPrediction, Lineage, is_child, unflown};
+use crate::campaign::ground::error::CampaignError;
+use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::RoundLog;
 use crate::campaign::learn::failure_counts::arm_counts;
 use crate::campaign::learn::refit::{Learning, refit};
@@ -11,7 +12,6 @@ use crate::campaign::plan::diversity_guard::DiversityGuard;
 use crate::campaign::plan::draw::{DrawPlan, draw};
 use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
 use crate::campaign::plan::rank::rank_unflown;
-use crate::campaign::report::outputs::StageTimes;
 use crate::campaign::report::user_report::plural;
 use crate::campaign::screen::stages::{Stage, run_ensemble, screen_all};
 use crate::campaign::store::journal::FlightRecord;

@@ -16,7 +16,7 @@
 //! The rounds fly on one [`Fleet`] whose queue stays open: with `overlap` a round is planned while the previous
 //! one flies, learning from the rounds before that (one round of lag), so remote vehicles do not wait on the LFS.
 //!
-//! A resumed campaign replays its plan ([`crate::campaign::store::replay`]): every round is planned again from the start, the
+//! A resumed campaign replays its plan ([`crate::campaign::fly::fleet::replay`]): every round is planned again from the start, the
 //! fleet takes the journaled flights in place of flying them, and only what the journal lacks is flown. Each
 //! round's flights are added in memory in the order they were journaled. A test's later flights (`--confirm`)
 //! are not new tests: the rounds learn from each test once, at the mean of its flights
@@ -33,20 +33,21 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use crate::campaign::candidate::{Candidate, CandidateId, LfsPrediction, Lineage, is_child};
-use crate::campaign::config::{CampaignError, CampaignInput};
 use crate::campaign::fly::confirm::as_learnt;
+use crate::campaign::fly::fleet::replay::Replay;
 use crate::campaign::fly::fleet::{Fleet, FleetSetup, run_fleet};
 use crate::campaign::fly::stage::{FlightCount, FlightStage, announce, no_vehicle_left, note_resuming, stage_jobs};
 use crate::campaign::fly::vehicle::Vehicle;
+use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction, Lineage, is_child};
+use crate::campaign::ground::error::CampaignError;
+use crate::campaign::ground::input::CampaignInput;
+use crate::campaign::ground::screener::Progress;
+use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::{Calibration, Learnt, RoundLog};
 use crate::campaign::learn::failure_counts::{arm_counts, counted_failures};
 use crate::campaign::learn::refit::Learning;
 use crate::campaign::learn::surrogate::Surrogate;
-use crate::campaign::report::outputs::StageTimes;
-use crate::campaign::screen::screener::Progress;
 use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
-use crate::campaign::store::replay::Replay;
 use crate::generator::Generator;
 use crate::generator::adaptive::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;

@@ -9,16 +9,16 @@
 //! [`MAX_NEIGHBOUR_FLIGHTS`]. Expected points = sum of band share x band points; the interval is the 10-90 %
 //! of that sum under the pseudo-counts (normal approximation, clipped to 0-5 points): how sure the campaign is
 //! of the average, which decides whether a test is written. What the judge's 5 flights will average scatters
-//! more ([`crate::campaign::plan::judged_mean`]); that is the interval reported. How the constants were
+//! more ([`crate::campaign::report::expected::judged_mean`]); that is the interval reported. How the constants were
 //! chosen: docs/design-constants.md#expected-points-weights.
 
 use serde::Serialize;
 
 use crate::campaign::learn::calibration::MAX_RESIDUAL_M;
-use crate::campaign::plan::judged_mean::judged_mean;
+use crate::campaign::report::expected::judged_mean::judged_mean;
 use crate::judge::points;
 
-pub use crate::campaign::plan::judged_mean::{BAND_POINTS, Bands};
+pub use crate::campaign::report::expected::judged_mean::{BAND_POINTS, Bands};
 
 /// Weight of the calibrated LFS prediction, pseudo-flights. This and the two neighbour weights were chosen
 /// together by cross-validation with folds by obstacle set (docs/design-constants.md#expected-points-weights).

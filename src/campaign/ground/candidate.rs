@@ -13,7 +13,7 @@ pub use super::candidate_id::CandidateId;
 pub enum Lineage {
     /// The failing flights so far.
     Failures,
-    /// No flight has failed yet: the closest flights within [`super::plan::neighbours::NEAR_MISS_M`] of failing.
+    /// No flight has failed yet: the closest flights within [`crate::campaign::plan::neighbours::NEAR_MISS_M`] of failing.
     NearMisses,
 }
 

@@ -1,5 +1,5 @@
 //! What the 2026 judge will see of a test: the mean points of its [`JUDGED_FLIGHTS`] flights, as a
-//! distribution. The expected points ([`crate::campaign::plan::expected_points`]) say what one flight earns
+//! distribution. The expected points ([`crate::campaign::report::expected::expected_points`]) say what one flight earns
 //! on average and how sure that average is; the judge's mean of 5 flights scatters around it as well (a test
 //! failing half its flights earns 0 to 5 points on 5 flights). Under the estimate's pseudo-counts the band
 //! counts of 5 fresh flights follow a Dirichlet-multinomial, so the distribution is exact: its 56 outcomes

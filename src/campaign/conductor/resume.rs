@@ -1,15 +1,15 @@
 //! What a resumed campaign does with journaled flights its replayed plan cannot take
-//! ([`crate::campaign::store::replay`]): another campaign's lines are refused; those of a learning round that
+//! ([`crate::campaign::fly::fleet::replay`]): another campaign's lines are refused; those of a learning round that
 //! came out otherwise are kept and counted, never flown again.
 
 use std::sync::atomic::Ordering;
 
 use super::Round;
 use super::Rounds;
-use crate::campaign::candidate::{CandidateId, drawn_as};
-use crate::campaign::config::CampaignError;
 use crate::campaign::fly::confirm::as_learnt;
 use crate::campaign::fly::fleet::Fleet;
+use crate::campaign::ground::candidate::{CandidateId, drawn_as};
+use crate::campaign::ground::error::CampaignError;
 
 impl Rounds<'_> {
     /// Checks a resumed campaign's journaled flights of `round`'s candidates against what it drew for them. A
