@@ -7,7 +7,7 @@ use super::wire::notices;
 use super::wire::url::{DEFAULT_URL, LinkAddress, UrlError};
 
 /// How the virtual obstacles are flown around.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum FlyMode {
     /// PX4 <= 1.15 flies the mission with COM_OBS_AVOID = 1; the bridge is the avoidance companion.

@@ -4,7 +4,6 @@
 //! [`conductor`] conducts the rounds and [`run`] runs a campaign; [`ground`] holds what every stage shares.
 
 pub mod conductor;
-pub mod config;
 pub mod evaluation;
 pub mod fly;
 pub mod ground;
@@ -14,5 +13,4 @@ pub mod report;
 pub mod run;
 pub mod screen;
 pub mod settings;
-pub mod setup;
 pub mod store;

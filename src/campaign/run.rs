@@ -1,13 +1,16 @@
 //! The campaign's orchestrator: sample candidates, screen them with the LFS, fly the most promising within the
 //! budget (in rounds, [`super::conductor`]: learning, or one round without), then report the failing ones best
-//! first. Resumable from its folder.
+//! first. Resumable from its folder. [`run_campaign`] is the command line's campaign for the same settings:
+//! the screener the mode calls for and the vehicles the settings name.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use super::conductor::run_rounds;
-pub use super::config::{CampaignConfig, DEFAULT_MOCK_LATENCY_MS, check_counts};
+use tokio::runtime::Handle;
+
+use super::conductor::{load_prior, run_rounds};
+use super::fly::backend;
 use super::fly::vehicle::Vehicle;
 pub use super::ground::error::CampaignError;
 pub use super::ground::input::CampaignInput;
@@ -16,24 +19,54 @@ use super::ground::stage_times::StageTimes;
 use super::learn::calibration::Learnt;
 pub use super::report::outputs::Report;
 use super::report::outputs::write_outputs;
+pub use super::settings::CampaignSettings;
+pub use super::settings::resume::FIRST_SETTINGS_FILE;
 use super::store::folder::FolderLock;
 use super::store::journal::{FlightRecord, Journal};
 use super::store::journal_check::{arena_size_m, check_loaded};
-use crate::io::write_json;
 use crate::model::{ModelError, TestCase};
 
-/// Runs (or resumes) a campaign in `folder`.
+/// Runs (or resumes) the campaign `settings` name in `folder`: screened as its mode calls for
+/// ([`super::screen::screener_for`]), flown on the vehicles its settings name ([`backend::fleet`], their
+/// async tasks on `handle`).
 pub fn run_campaign(
-    cfg: &CampaignConfig,
+    settings: &CampaignSettings,
+    folder: &Path,
+    progress: &dyn Progress,
+    cancel: &AtomicBool,
+    handle: &Handle,
+) -> Result<Report, CampaignError> {
+    check_new(settings)?;
+    let vehicles = backend::fleet(&settings.flights(), folder.to_path_buf(), handle)?;
+    let screener = super::screen::screener_for(settings);
+    run_campaign_with(settings, folder, screener.as_ref(), vehicles, progress, cancel)
+}
+
+/// Checks a campaign before anything is drawn or a folder is claimed: every setting, its vehicles' backend
+/// (the PX4 build and its mode, the runner's template) and its prior.
+pub fn check_new(settings: &CampaignSettings) -> Result<(), CampaignError> {
+    settings.check().map_err(CampaignError::Config)?;
+    backend::px4_build(&settings.flights())?;
+    backend::runner_settings(&settings.flights(), PathBuf::new())?;
+    if let Some(p) = &settings.campaign.prior {
+        // Refuse a bad prior before anything is sampled or flown.
+        load_prior(p)?;
+    }
+    Ok(())
+}
+
+/// Runs (or resumes) a campaign in `folder` with this screener and these vehicles.
+pub fn run_campaign_with(
+    cfg: &CampaignSettings,
     folder: &Path,
     screener: &dyn Screener,
     mut vehicles: Vec<Box<dyn Vehicle>>,
     progress: &dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<Report, CampaignError> {
-    super::setup::check_settings(cfg)?;
+    cfg.check().map_err(CampaignError::Config)?;
     check_paths_are_text(cfg)?;
-    let case = TestCase::load(&cfg.case)?;
+    let case = TestCase::load(&cfg.campaign.case)?;
     let _writer = prepare_folder(cfg, folder)?;
     // Read once, and healed before anything appends: a record must never follow a torn line.
     let (mut journal, dropped) = Journal::load(&folder.join("journal.jsonl"))?;
@@ -108,9 +141,8 @@ fn unjournaled_trajectories(folder: &Path, records: &[FlightRecord]) -> Option<S
 }
 
 /// `campaign.json` keeps its paths as JSON text, so a path that is not UTF-8 could never be resumed.
-fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
-    let paths = [("the case", Some(&cfg.case)), ("--prior", cfg.prior.as_ref())];
-    for (what, path) in paths {
+fn check_paths_are_text(cfg: &CampaignSettings) -> Result<(), CampaignError> {
+    for (what, path) in cfg.paths() {
         if let Some(p) = path.filter(|p| p.to_str().is_none()) {
             return Err(CampaignError::Config(format!(
                 "{what} {}: the path is not UTF-8, and campaign.json stores paths as text for --resume; \
@@ -124,7 +156,7 @@ fn check_paths_are_text(cfg: &CampaignConfig) -> Result<(), CampaignError> {
 
 /// Creates the folder, takes its one-writer lock (held while the campaign runs) and saves the settings as
 /// `campaign.json` (what `--resume` continues).
-fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, CampaignError> {
+fn prepare_folder(cfg: &CampaignSettings, folder: &Path) -> Result<FolderLock, CampaignError> {
     std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
         path: folder.join("flights"),
         action: "cannot create",
@@ -145,14 +177,11 @@ fn prepare_folder(cfg: &CampaignConfig, folder: &Path) -> Result<FolderLock, Cam
     let settings = folder.join("campaign.json");
     // What the campaign began with, kept apart: a resume shows what was changed in campaign.json since.
     if std::fs::symlink_metadata(&settings).is_err() {
-        write_json(&folder.join(FIRST_SETTINGS_FILE), cfg, true)?;
+        cfg.save(&folder.join(FIRST_SETTINGS_FILE))?;
     }
-    write_json(&settings, cfg, true)?;
+    cfg.save(&settings)?;
     Ok(lock)
 }
-
-/// `campaign.json` as the campaign's first run wrote it, never rewritten.
-pub const FIRST_SETTINGS_FILE: &str = "campaign.first.json";
 
 /// A campaign ends with the journal's flights written out as tests and reports.
 fn finish(
@@ -163,7 +192,7 @@ fn finish(
     learning: Option<&Learnt>,
 ) -> Result<Report, CampaignError> {
     // A campaign that does not screen drew its candidates but screened none of them.
-    let screened = if input.cfg.screen { drawn } else { 0 };
+    let screened = if input.cfg.screening.screen { drawn } else { 0 };
     Ok(write_outputs(input, screened, journal, stages, learning)?)
 }
 

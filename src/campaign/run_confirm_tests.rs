@@ -129,9 +129,10 @@ fn a_test_failing_once_in_three_is_not_confirmed_and_re_flights_come_first() {
     for learn in [false, true] {
         let dir = tempfile::tempdir().unwrap();
         let flown = Arc::new(Mutex::new(Vec::new()));
-        let cfg = CampaignConfig {
-            confirm: 3,
-            ..if learn { adapted(14) } else { config(14) }
+        let cfg = {
+            let mut c = if learn { adapted(14) } else { config(14) };
+            c.flight.confirm = 3;
+            c
         };
         let r = run_with(&cfg, dir.path(), flaky(&flown, false)).unwrap();
         check_confirmed(dir.path(), &r, 14);
@@ -181,12 +182,13 @@ fn a_resumed_campaign_flies_the_pending_confirmation_first() {
     for learn in [false, true] {
         let dir = tempfile::tempdir().unwrap();
         let flown = Arc::new(Mutex::new(Vec::new()));
-        let cfg = CampaignConfig {
-            confirm: 3,
-            ..if learn { adapted(12) } else { config(12) }
+        let cfg = {
+            let mut c = if learn { adapted(12) } else { config(12) };
+            c.flight.confirm = 3;
+            c
         };
         let cancel = AtomicBool::new(false);
-        run_campaign(&cfg, dir.path(), &ScriptedLfs, flaky(&flown, true), &Quiet, &cancel).unwrap();
+        run_campaign_with(&cfg, dir.path(), &ScriptedLfs, flaky(&flown, true), &Quiet, &cancel).unwrap();
         let cut = Journal::read(&dir.path().join("journal.jsonl")).unwrap();
         let last = cut.last().unwrap();
         assert!(
@@ -249,9 +251,10 @@ fn killed_after(whole: &Path, records: &[FlightRecord]) -> tempfile::TempDir {
 
 #[test]
 fn a_learning_campaign_killed_after_any_flight_resumes_to_the_uninterrupted_end() {
-    let cfg = CampaignConfig {
-        confirm: 3,
-        ..adapted(16)
+    let cfg = {
+        let mut c = adapted(16);
+        c.flight.confirm = 3;
+        c
     };
     let whole = tempfile::tempdir().unwrap();
     run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();
@@ -278,10 +281,11 @@ fn a_learning_campaign_killed_after_any_flight_resumes_to_the_uninterrupted_end(
 fn a_resumed_campaign_that_plans_while_flying_keeps_every_journaled_flight_within_the_budget() {
     // Planning a round while the last one flies depends on timing, so the replayed plan may not ask for every
     // journaled flight: those are kept and counted, and the budget still holds.
-    let cfg = CampaignConfig {
-        confirm: 3,
-        overlap: true,
-        ..adapted(16)
+    let cfg = {
+        let mut c = adapted(16);
+        c.flight.confirm = 3;
+        c.flight.overlap = true;
+        c
     };
     let whole = tempfile::tempdir().unwrap();
     run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();
@@ -303,9 +307,10 @@ fn a_resumed_campaign_that_plans_while_flying_keeps_every_journaled_flight_withi
 
 #[test]
 fn a_resume_whose_rounds_come_out_otherwise_keeps_the_journaled_flights_and_flies_no_index_twice() {
-    let cfg = CampaignConfig {
-        confirm: 3,
-        ..adapted(16)
+    let cfg = {
+        let mut c = adapted(16);
+        c.flight.confirm = 3;
+        c
     };
     let whole = tempfile::tempdir().unwrap();
     run_with(&cfg, whole.path(), flaky(&Arc::default(), false)).unwrap();

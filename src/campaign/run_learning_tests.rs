@@ -7,7 +7,7 @@ use super::*;
 fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_next_one() {
     let dir = tempfile::tempdir().unwrap();
     let flown = Arc::new(Mutex::new(Vec::new()));
-    let cfg = CampaignConfig { ..adapted(12) };
+    let cfg = adapted(12);
     let r = run_scripted(&cfg, dir.path(), &flown);
     assert_eq!(r.suite.flown, 12);
     let learnt = r.learning.as_ref().expect("a learning campaign reports what it learnt");
@@ -51,7 +51,7 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         .collect();
     let d = crate::judge::diversity(&failing);
     assert!(
-        failing.len() >= 2 && d.is_some_and(|d| d >= cfg.min_diversity),
+        failing.len() >= 2 && d.is_some_and(|d| d >= cfg.learning.min_diversity),
         "{} failing, {d:?}",
         failing.len()
     );
@@ -83,14 +83,17 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
     assert!(md.contains("Candidates drawn near failing flights failed"), "{md}");
     // Every test flown still obeys the rules.
     for rec in Journal::read(&dir.path().join("journal.jsonl")).unwrap() {
-        let t = TestCase::load(&cfg.case).unwrap().with_obstacles(rec.obstacles);
+        let t = TestCase::load(&cfg.campaign.case)
+            .unwrap()
+            .with_obstacles(rec.obstacles);
         assert!(crate::rules::check(&t, &crate::model::Arena::default()).is_empty());
     }
     // The next campaign starts from it: the first round already uses the learnt bias.
     let next_dir = tempfile::tempdir().unwrap();
-    let next_cfg = CampaignConfig {
-        prior: Some(dir.path().to_path_buf()),
-        ..cfg.clone()
+    let next_cfg = {
+        let mut c = cfg.clone();
+        c.campaign.prior = Some(dir.path().to_path_buf());
+        c
     };
     let r2 = run_scripted(&next_cfg, next_dir.path(), &flown);
     let l2 = r2.learning.unwrap();
@@ -102,11 +105,12 @@ fn a_learning_campaign_calibrates_on_its_flights_adapts_its_draws_and_seeds_the_
         std::array::from_fn(|d| learnt.distribution.mean(d))
     );
     // A missing prior is an error naming the file.
-    let bad = CampaignConfig {
-        prior: Some(next_dir.path().join("nowhere")),
-        ..cfg
+    let bad = {
+        let mut c = cfg;
+        c.campaign.prior = Some(next_dir.path().join("nowhere"));
+        c
     };
-    let e = run_campaign(
+    let e = run_campaign_with(
         &bad,
         tempfile::tempdir().unwrap().path(),
         &ScriptedLfs,
@@ -123,29 +127,20 @@ fn children_come_no_closer_than_child_max_iou_and_never_held_below_max_iou() {
     use crate::campaign::plan::diversity_guard::child_max_iou;
     let mut cfg = config(10);
     assert_eq!(child_max_iou(&cfg), 0.5, "no --child-max-iou: max_iou");
-    cfg.child_max_iou = Some(0.75);
+    cfg.learning.child_max_iou = 0.75;
     assert_eq!(child_max_iou(&cfg), 0.75);
-    cfg.child_max_iou = Some(0.3);
+    cfg.learning.child_max_iou = 0.3;
     assert_eq!(child_max_iou(&cfg), 0.5);
-    let json = serde_json::to_value(config(10)).expect("config serialises");
-    let mut old = json.as_object().expect("an object").clone();
-    old.remove("child_max_iou");
-    old.remove("mock_gust_acc_m_s2");
-    let read: CampaignConfig = serde_json::from_value(old.into()).expect("an old campaign.json reads");
-    assert_eq!(read.child_max_iou, None);
-    assert_eq!(
-        read.mock_gust_acc_m_s2, 0.0,
-        "campaigns from before the gusts resume without them"
-    );
 }
 
 #[test]
 fn close_children_stay_within_child_max_iou_of_every_flown_test() {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = CampaignConfig {
-        min_diversity: 0.0,
-        child_max_iou: Some(0.75),
-        ..adapted(24)
+    let cfg = {
+        let mut c = adapted(24);
+        c.learning.min_diversity = 0.0;
+        c.learning.child_max_iou = 0.75;
+        c
     };
     let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");
@@ -170,7 +165,7 @@ fn close_children_stay_within_child_max_iou_of_every_flown_test() {
 #[test]
 fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = CampaignConfig { ..adapted(24) };
+    let cfg = adapted(24);
     // Flies 1.5 m farther than the scripted LFS predicts: never below 1.5 m, often within 0.3 m of it.
     let vehicles: Vec<Box<dyn Vehicle>> = vec![Box::new(ScriptedVehicle {
         flown: Arc::new(Mutex::new(Vec::new())),
@@ -207,9 +202,10 @@ fn a_vehicle_that_never_fails_gets_children_around_its_closest_flights() {
 fn below_the_diversity_floor_the_failures_still_get_children() {
     let dir = tempfile::tempdir().unwrap();
     // A floor no set of failures reaches: from the fourth failure on the failing tests are always below it.
-    let cfg = CampaignConfig {
-        min_diversity: 0.999,
-        ..adapted(40)
+    let cfg = {
+        let mut c = adapted(40);
+        c.learning.min_diversity = 0.999;
+        c
     };
     let r = run_scripted(&cfg, dir.path(), &Arc::new(Mutex::new(Vec::new())));
     let learnt = r.learning.expect("learnt");

@@ -6,7 +6,7 @@ use super::*;
 struct CountingLfs(Arc<AtomicUsize>);
 
 impl Screener for CountingLfs {
-    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+    fn screen(&self, test: &TestCase) -> Screened {
         self.0.fetch_add(1, Ordering::SeqCst);
         ScriptedLfs.screen(test)
     }
@@ -42,9 +42,10 @@ impl Vehicle for OverlapProbe {
 #[test]
 fn with_overlap_the_next_round_is_screened_while_a_round_flies_and_the_budget_is_flown_once() {
     let dir = tempfile::tempdir().unwrap();
-    let cfg = CampaignConfig {
-        overlap: true,
-        ..adapted(16)
+    let cfg = {
+        let mut c = adapted(16);
+        c.flight.overlap = true;
+        c
     };
     let screened = Arc::new(AtomicUsize::new(0));
     let overlapped = Arc::new(Mutex::new(None));
@@ -57,11 +58,11 @@ fn with_overlap_the_next_round_is_screened_while_a_round_flies_and_the_budget_is
             extra_m: 0.2,
         },
         screened: screened.clone(),
-        first_round: cfg.candidates / crate::campaign::conductor::ROUNDS,
+        first_round: cfg.screening.candidates / crate::campaign::conductor::ROUNDS,
         overlapped: overlapped.clone(),
     };
     let lfs = CountingLfs(screened);
-    let r = run_campaign(
+    let r = run_campaign_with(
         &cfg,
         dir.path(),
         &lfs,

@@ -7,9 +7,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
-use crate::campaign::run::{CampaignConfig, CampaignError, Progress, Screener, run_campaign};
+use crate::campaign::ground::screener::Screened;
+use crate::campaign::run::{CampaignError, CampaignSettings, Progress, Screener, run_campaign_with};
 use crate::campaign::store::journal::Journal;
-use crate::generator::GeneratorConfig;
 use crate::generator::adaptive::DIMS;
 use crate::model::TestCase;
 
@@ -17,8 +17,8 @@ use crate::model::TestCase;
 struct ScriptedLfs;
 
 impl Screener for ScriptedLfs {
-    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
-        ((test.obstacles[0].position.y - 20.0).abs() / 2.0, 40.0, "landed".into())
+    fn screen(&self, test: &TestCase) -> Screened {
+        Screened::new((test.obstacles[0].position.y - 20.0).abs() / 2.0, 40.0, "landed")
     }
 }
 
@@ -51,7 +51,7 @@ impl Vehicle for ScriptedVehicle {
 /// A 40 s flight that landed `d` metres from the boxes.
 fn landed(d: f64) -> Flown {
     Flown {
-        status: FlightStatus::Landed,
+        status: FlightStatus::LANDED,
         min_distance: Some(d),
         min_distance_raw: Some(d),
         flight_time_s: 40.0,
@@ -69,64 +69,45 @@ impl Progress for Quiet {
     fn note(&self, _: &str) {}
 }
 
-fn config(budget: usize) -> CampaignConfig {
-    CampaignConfig {
-        judge: crate::judge::Judge::default(),
-        anchor_at_vehicle_home: false,
-        case: Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml"),
-        seed: 3,
-        budget,
-        candidates: 60,
-        threshold_m: 5.0,
-        max_iou: 0.5,
-        generator: GeneratorConfig::default(),
-        old_spelling: false,
-        hfs: vec!["scripted".into()],
-        mode: "avoidance".into(),
-        motion: "px4".into(),
-        mock_speed: 20.0,
-        mock_lockstep: true,
-        mock_latency_ms: crate::campaign::run::DEFAULT_MOCK_LATENCY_MS,
-        mock_profile: crate::campaign::settings::mock_profile::DEFAULT_PROFILE.into(),
-        mock_gust_acc_m_s2: crate::campaign::settings::mock_profile::PX4_SITL_GUST_ACC_M_S2,
-        screen: true,
-        hfs_time_scale: None,
-        flight_timeout_s: 500.0,
-        ensemble: 0,
-        learn: false,
-        adapt: false,
-        prior: None,
-        min_diversity: 0.8,
-        child_max_iou: None,
-        confirm: 1,
-        overlap: false,
-        runner: None,
-        jobs: None,
-        px4: None,
-    }
+fn config(budget: usize) -> CampaignSettings {
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml");
+    let mut c = crate::campaign::settings::test_settings(&case, budget);
+    // The scripted vehicles stand for MAVLink ones; these tests pass them in.
+    c.vehicles.connect = vec!["udpin:127.0.0.1:14540".into()];
+    c.campaign.seed = 3;
+    c.screening.candidates = 60;
+    c.screening.threshold_m = 5.0;
+    c.screening.ensemble = 0;
+    c.mock.speed = 20.0;
+    c.mock.gust_acc_m_s2 = crate::campaign::settings::mock_profile::PX4_SITL_GUST_ACC_M_S2;
+    c.learning.learn = false;
+    c.learning.adapt = false;
+    c.learning.child_max_iou = c.screening.max_iou;
+    c.flight.confirm = 1;
+    c.flight.overlap = false;
+    c
 }
 
 /// [`config`] with learning and the adapted generator on.
-fn adapted(budget: usize) -> CampaignConfig {
-    CampaignConfig {
-        learn: true,
-        adapt: true,
-        ..config(budget)
-    }
+fn adapted(budget: usize) -> CampaignSettings {
+    let mut c = config(budget);
+    c.learning.learn = true;
+    c.learning.adapt = true;
+    c
 }
 
 /// `cfg`'s campaign in `dir` with the scripted LFS and vehicles, run to its end.
-fn run_scripted(cfg: &CampaignConfig, dir: &Path, flown: &Arc<Mutex<Vec<f64>>>) -> crate::campaign::run::Report {
+fn run_scripted(cfg: &CampaignSettings, dir: &Path, flown: &Arc<Mutex<Vec<f64>>>) -> crate::campaign::run::Report {
     run_with(cfg, dir, vehicle(flown, None)).unwrap()
 }
 
 /// `cfg`'s campaign in `dir` with the scripted LFS on `vehicles`.
 fn run_with(
-    cfg: &CampaignConfig,
+    cfg: &CampaignSettings,
     dir: &Path,
     vehicles: Vec<Box<dyn Vehicle>>,
 ) -> Result<crate::campaign::run::Report, CampaignError> {
-    run_campaign(cfg, dir, &ScriptedLfs, vehicles, &Quiet, &AtomicBool::new(false))
+    run_campaign_with(cfg, dir, &ScriptedLfs, vehicles, &Quiet, &AtomicBool::new(false))
 }
 
 fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<dyn Vehicle>> {
@@ -143,7 +124,7 @@ fn vehicle(flown: &Arc<Mutex<Vec<f64>>>, stop_after: Option<usize>) -> Vec<Box<d
 fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
     let dir = tempfile::tempdir().unwrap();
     let flown = Arc::new(Mutex::new(Vec::new()));
-    let r = run_campaign(
+    let r = run_campaign_with(
         &config(8),
         dir.path(),
         &ScriptedLfs,
@@ -204,7 +185,7 @@ fn killed_and_resumed_campaign_flies_nothing_twice_and_respects_the_budget() {
     let dir = tempfile::tempdir().unwrap();
     let flown = Arc::new(Mutex::new(Vec::new()));
     let cancel = AtomicBool::new(false);
-    let first = run_campaign(
+    let first = run_campaign_with(
         &config(10),
         dir.path(),
         &ScriptedLfs,
@@ -214,7 +195,7 @@ fn killed_and_resumed_campaign_flies_nothing_twice_and_respects_the_budget() {
     );
     assert_eq!(first.unwrap().suite.flown, 4);
     assert_eq!(Journal::read(&dir.path().join("journal.jsonl")).unwrap().len(), 4);
-    let second = run_campaign(
+    let second = run_campaign_with(
         &config(10),
         dir.path(),
         &ScriptedLfs,
@@ -231,7 +212,7 @@ fn killed_and_resumed_campaign_flies_nothing_twice_and_respects_the_budget() {
     dedup.dedup();
     assert_eq!(dedup.len(), 10, "a test was flown twice: {all:?}");
     // A third run has nothing left to fly.
-    let third = run_campaign(
+    let third = run_campaign_with(
         &config(10),
         dir.path(),
         &ScriptedLfs,
@@ -248,19 +229,13 @@ fn bad_settings_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let flown = Arc::new(Mutex::new(Vec::new()));
     let quiet = AtomicBool::new(false);
-    let e = run_campaign(
-        &config(0),
-        dir.path(),
-        &ScriptedLfs,
-        vehicle(&flown, None),
-        &Quiet,
-        &quiet,
-    )
-    .unwrap_err();
+    let mut zero = config(1);
+    zero.campaign.budget = 0;
+    let e = run_campaign_with(&zero, dir.path(), &ScriptedLfs, vehicle(&flown, None), &Quiet, &quiet).unwrap_err();
     assert!(matches!(e, CampaignError::Config(_)), "{e}");
     let mut bad = config(3);
-    bad.case = "missions/does-not-exist.yaml".into();
-    let e = run_campaign(&bad, dir.path(), &ScriptedLfs, vehicle(&flown, None), &Quiet, &quiet).unwrap_err();
+    bad.campaign.case = "missions/does-not-exist.yaml".into();
+    let e = run_campaign_with(&bad, dir.path(), &ScriptedLfs, vehicle(&flown, None), &Quiet, &quiet).unwrap_err();
     assert!(e.to_string().contains("does-not-exist.yaml"), "{e}");
 }
 
@@ -272,13 +247,13 @@ struct EnsembleLfs {
 }
 
 impl Screener for EnsembleLfs {
-    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+    fn screen(&self, test: &TestCase) -> Screened {
         ScriptedLfs.screen(test)
     }
     fn ensemble(&self, test: &TestCase, n: usize, seed: u64) -> Option<Vec<f64>> {
         assert_eq!(n, 8);
         self.runs.fetch_add(1, Ordering::SeqCst);
-        let (d, _, _) = ScriptedLfs.screen(test);
+        let d = ScriptedLfs.screen(test).min_distance_m;
         self.seeds.lock().unwrap().push((d, seed));
         // Failing members in an order unrelated to the point prediction's.
         let failing = ((d * 1000.0) as usize) % 9;
@@ -298,11 +273,12 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
         runs: AtomicUsize::new(0),
         seeds: Mutex::new(Vec::new()),
     };
-    let cfg = CampaignConfig {
-        ensemble: 8,
-        ..config(4)
+    let cfg = {
+        let mut c = config(4);
+        c.screening.ensemble = 8;
+        c
     };
-    let r = run_campaign(
+    let r = run_campaign_with(
         &cfg,
         dir.path(),
         &lfs,
@@ -323,7 +299,7 @@ fn with_an_ensemble_the_shortlist_flies_by_expected_points_per_minute_and_resume
     assert!(r.suite.lfs_p_fail_brier.is_some());
     assert!(dir.path().join("ensemble.json").is_file());
     // The resume flies the rest without re-running a cached ensemble.
-    let r2 = run_campaign(
+    let r2 = run_campaign_with(
         &cfg,
         dir.path(),
         &lfs,
@@ -377,10 +353,11 @@ impl Vehicle for DyingVehicle {
 fn a_campaign_whose_every_vehicle_is_dropped_stops_with_an_error_and_keeps_its_flights() {
     for (learn, adapt) in [(false, false), (true, true)] {
         let dir = tempfile::tempdir().unwrap();
-        let cfg = CampaignConfig {
-            learn,
-            adapt,
-            ..config(20)
+        let cfg = {
+            let mut c = config(20);
+            c.learning.learn = learn;
+            c.learning.adapt = adapt;
+            c
         };
         let vehicles: Vec<Box<dyn Vehicle>> =
             vec![Box::new(DyingVehicle { left: 3 }), Box::new(DyingVehicle { left: 2 })];
@@ -415,13 +392,13 @@ fn a_run_reads_the_journal_file_once() {
         let flown = Arc::new(Mutex::new(Vec::new()));
         let reads_of = |vehicles, cancel: &AtomicBool| {
             READS.with(|n| n.set(0));
-            run_campaign(&cfg, dir.path(), &ScriptedLfs, vehicles, &Quiet, cancel).unwrap();
+            run_campaign_with(&cfg, dir.path(), &ScriptedLfs, vehicles, &Quiet, cancel).unwrap();
             READS.with(|n| n.get())
         };
         let killed = reads_of(vehicle(&flown, Some(3)), &AtomicBool::new(false));
         let resumed = reads_of(vehicle(&flown, None), &AtomicBool::new(false));
-        assert_eq!((killed, resumed), (1, 1), "learn {}", cfg.learn);
-        assert_eq!(flown.lock().unwrap().len(), 6, "learn {}", cfg.learn);
+        assert_eq!((killed, resumed), (1, 1), "learn {}", cfg.learning.learn);
+        assert_eq!(flown.lock().unwrap().len(), 6, "learn {}", cfg.learning.learn);
     }
 }
 
@@ -449,7 +426,7 @@ fn a_journal_line_another_campaign_wrote_stops_the_resume_learning_or_not() {
         r["obstacles"][0]["position"]["x"] = (x + 0.5).into();
     };
     let beyond = |r: &mut serde_json::Value| r["candidate"] = 999.into();
-    let cases: [(CampaignConfig, &Edit); 3] = [(config(4), &moved), (adapted(16), &moved), (config(4), &beyond)];
+    let cases: [(CampaignSettings, &Edit); 3] = [(config(4), &moved), (adapted(16), &moved), (config(4), &beyond)];
     for (cfg, edit) in cases {
         let dir = tempfile::tempdir().unwrap();
         let flown = Arc::new(Mutex::new(Vec::new()));
@@ -460,9 +437,9 @@ fn a_journal_line_another_campaign_wrote_stops_the_resume_learning_or_not() {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("another campaign") && e.contains("journal.jsonl"),
+            e.contains("another campaign") && e.contains("journal.jsonl") && !e.contains("  "),
             "learn {}: {e}",
-            cfg.learn
+            cfg.learning.learn
         );
         assert_eq!(flown.lock().unwrap().len(), before, "nothing flies");
     }

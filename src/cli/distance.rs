@@ -4,9 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use prgenuav::judge::{Judge, judge_flight};
+use prgenuav::judge::judge_flight;
 
-use super::values::JudgeEdition;
 use prgenuav::model::{TestCase, Trajectory};
 
 /// Arguments of `distance`.
@@ -19,14 +18,13 @@ pub struct DistanceArgs {
     /// Print `{"judge", "min_distance", "min_distance_raw", "per_obstacle", ...}`.
     #[arg(long)]
     json: bool,
-    /// Judge edition of the distance. Both editions origin-align the log first (Aerialist's rule for logs that
-    /// start at home).
-    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
-    judge: JudgeEdition,
+    /// The judge edition.
+    #[command(flatten)]
+    judge: super::setting_flags::JudgeFlag,
 }
 
 pub fn run(args: DistanceArgs) -> anyhow::Result<ExitCode> {
-    let judge = Judge::from(args.judge);
+    let judge = args.judge.edition()?;
     let test = TestCase::load(&args.test)?;
     let flight = Trajectory::load_csv(&args.flight)?;
     let Some(verdict) = judge_flight(&flight, &test.obstacles, judge) else {

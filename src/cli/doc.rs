@@ -144,8 +144,9 @@ fn campaign_toml(s: &mut String) {
          the command line overrides the key. A key or section the format does not know is an error naming the \
          file and the key. A file without sections whose keys are all [generator]'s is read as [generator].\n\n\
          With `generate --resume FOLDER`, a key (or flag) whose value differs from the setting stored in \
-         FOLDER/campaign.json is refused, naming both; the same value is accepted. `mock.vehicles` and \
-         `flight.connect_timeout_s` are not stored, so a resumed campaign may change them.\n"
+         FOLDER/campaign.json is refused, naming both; the same value is accepted. `mock.vehicles`, \
+         `flight.connect_timeout_s` and the `--instances`, `--job-timeout` and `--runner-cancel` flags are taken \
+         as asked again, and `--jobs` as asked or else as the campaign last ran.\n"
     );
     for section in SECTIONS {
         let _ = writeln!(s, "### [{section}]\n");
@@ -155,7 +156,8 @@ fn campaign_toml(s: &mut String) {
             // A constant default is shown as code; one that depends on the campaign, as prose.
             let default = match k.default {
                 DefaultValue::Constant(_) => format!("`{}`", k.example()),
-                DefaultValue::Setup { doc, .. } => doc.to_string(),
+                DefaultValue::Rule { doc, .. } | DefaultValue::Absent { doc, .. } => doc.to_string(),
+                DefaultValue::Required { .. } => "required".to_string(),
             };
             let _ = writeln!(s, "| `{}` | {default} | {flag} | {} |", k.key, k.help);
         }

@@ -12,7 +12,9 @@ use prgenuav::lfs::ensemble::{EnsembleParams, MAX_MEMBERS};
 use prgenuav::lfs::fidelity::{Aggregates, EnsembleSpec, FidelityReport, FlightCase, evaluate_with, load_dir};
 use prgenuav::lfs::sim::SimConfig;
 
-use super::values::{FovEstimateArg, Motion, name_of};
+use super::values::{FovEstimateArg, choice};
+use prgenuav::campaign::settings::Choice;
+use prgenuav::lfs::sim::Motion;
 
 /// Arguments of `fidelity`.
 #[derive(Debug, clap::Args)]
@@ -20,7 +22,7 @@ pub struct FidelityArgs {
     /// Folder of flight JSON files (the format of the competition flights in tests/data/hfs-flights).
     dir: PathBuf,
     /// Motion model of the simulated vehicle.
-    #[arg(long, value_enum, default_value_t = Motion::Paper)]
+    #[arg(long, value_parser = choice::<Motion>(), default_value = "paper")]
     motion: Motion,
     /// Print `{"cases": [...], "mae", "spearman", "precision", "recall", "tiers", ...}`.
     #[arg(long)]
@@ -150,7 +152,7 @@ fn print_report(report: &FidelityReport) {
 }
 
 fn run_cv(args: &FidelityArgs, cases: &[FlightCase], base: &SimConfig, k: usize) -> anyhow::Result<ExitCode> {
-    let motion = name_of(&args.motion);
+    let motion = args.motion.name().to_string();
     let Some(grid) = default_grid(&motion) else {
         bail!("no cross-validation grid for motion model {motion}");
     };

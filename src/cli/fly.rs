@@ -15,14 +15,16 @@ use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
 };
-use prgenuav::campaign::fly::px4::DEFAULT_SPEED_FACTOR;
 use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
 use super::limits;
+use super::setting_flags::FlyFlags;
 use super::stop_signals::StopSignals;
-use super::values::{JudgeEdition, Mode, Motion};
+use prgenuav::campaign::settings::Loaded;
+use prgenuav::judge::Judge;
+use prgenuav::lfs::sim::Motion;
 
 /// The motion model of `fly`'s low-fidelity prediction: the campaign's screening default, so a flown test is
 /// compared with what chose it (`simulate` defaults to the paper's model; `--motion px4` gives this one).
@@ -36,17 +38,6 @@ pub struct FlyArgs {
     /// The vehicle: udpin:HOST:PORT, udpout:, tcpout:HOST:PORT, serial:/dev/ttyACM0:57600 (or udpin://...).
     #[arg(long, value_name = "URL", default_value = DEFAULT_URL)]
     connect: String,
-    /// Start a fresh PX4 SIH instance for the flight (at the test's home, on the first free instance slot of
-    /// this machine) and stop it after: BUILD_DIR is your PX4-Autopilot (v1.14 to v1.17)
-    /// `build/px4_sitl_default` folder (docs/px4.md).
-    #[arg(long, value_name = "BUILD_DIR", conflicts_with = "connect")]
-    px4: Option<PathBuf>,
-    /// How the flight avoids the virtual obstacles.
-    #[arg(long, value_enum, default_value_t = Mode::Avoidance)]
-    mode: Mode,
-    /// Give up after this many seconds of flight (LAND is commanded).
-    #[arg(long, value_name = "S", default_value_t = 500.0)]
-    timeout: f64,
     /// Print the report as JSON.
     #[arg(long)]
     json: bool,
@@ -76,14 +67,6 @@ pub struct FlyArgs {
     /// pose this many milliseconds old (--time-scale is then the mock's upper bound).
     #[arg(long, value_name = "LATENCY_MS")]
     lockstep: Option<f64>,
-    /// Judge edition of the distances (and of the low-fidelity prediction).
-    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
-    judge: JudgeEdition,
-    /// Re-anchor the test (mission, obstacles, fence) at the vehicle's home (HOME_POSITION), keeping its local
-    /// geometry, and print where the boxes now are. Without it, a vehicle whose home is farther from the
-    /// test's home than its MIS_DIST_1WP is refused before anything is uploaded (exit code 2).
-    #[arg(long)]
-    anchor_at_vehicle_home: bool,
     /// Refuse a test that breaks the current competition rules (default: warn and fly it anyway, as the
     /// recorded flights of older editions need).
     #[arg(long)]
@@ -95,25 +78,55 @@ pub struct FlyArgs {
     /// Do not show the vehicle's messages, readiness and clock warnings on stderr as they arrive.
     #[arg(long)]
     quiet: bool,
+    /// The flight's settings: its mode, judge, timeout, anchoring and a PX4 started for it.
+    #[command(flatten)]
+    settings: FlyFlags,
+}
+
+/// The settings of one flight, as the flags give them (their defaults from their declarations).
+struct Flight {
+    mode: FlyMode,
+    judge: Judge,
+    timeout_s: f64,
+    anchor_at_vehicle_home: bool,
+    /// `--px4 BUILD_DIR`: a fresh instance started for the flight.
+    px4: Option<PathBuf>,
+    /// The speed factor of that instance when `--time-scale` does not say.
+    px4_speed_factor: f64,
+}
+
+impl Flight {
+    fn of(args: &FlyArgs) -> anyhow::Result<Self> {
+        let a = args.settings.request(&Loaded::default())?.asked;
+        Ok(Self {
+            mode: a.campaign.mode(),
+            judge: a.campaign.judge(),
+            timeout_s: a.flight.timeout_s(),
+            anchor_at_vehicle_home: a.flight.anchor_at_vehicle_home(),
+            px4: a.vehicles.px4.clone(),
+            px4_speed_factor: a.vehicles.speed_factor(),
+        })
+    }
 }
 
 pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     // Arguments first, resources second.
+    let flight = Flight::of(&args)?;
     LinkAddress::parse(&args.connect)?;
     super::check_outputs(&[
         ("--plot", args.plot.as_deref()),
         ("--trajectory", args.trajectory.as_deref()),
         ("--world", args.world.as_deref()),
     ])?;
-    let build = open_build(&args)?;
+    let build = open_build(&flight)?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
     if write_world(&args, &test)? && args.world_only {
         return Ok(ExitCode::SUCCESS);
     }
-    let prediction = prediction(&args, &test);
-    let mut opts = options(&args, prediction.as_ref())?;
+    let prediction = prediction(&args, &flight, &test);
+    let mut opts = options(&args, &flight, prediction.as_ref())?;
     // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
     let px4 = match &build {
         Some(b) => Some(start_px4(b, &test, &mut opts, args.json || args.quiet)?),
@@ -152,21 +165,21 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
 }
 
 /// `--px4`: the checked build folder, refused when its release cannot fly `--mode`.
-fn open_build(args: &FlyArgs) -> anyhow::Result<Option<Px4Build>> {
-    let Some(dir) = args.px4.as_deref() else {
+fn open_build(flight: &Flight) -> anyhow::Result<Option<Px4Build>> {
+    let Some(dir) = flight.px4.as_deref() else {
         return Ok(None);
     };
     let build = Px4Build::open(dir)?;
-    build.check_mode(args.mode.into())?;
+    build.check_mode(flight.mode)?;
     Ok(Some(build))
 }
 
 /// The LFS prediction for the mode flown (none with `--no-predict`; a failure is a warning).
-fn prediction(args: &FlyArgs, test: &TestCase) -> Option<Prediction> {
+fn prediction(args: &FlyArgs, flight: &Flight, test: &TestCase) -> Option<Prediction> {
     (!args.no_predict)
-        .then(|| match args.mode {
-            Mode::CollisionPrevention => predict_cp(test, args.judge.into()),
-            _ => predict(test, PREDICTION_MOTION.model(), args.judge.into()),
+        .then(|| match flight.mode {
+            FlyMode::CollisionPrevention => predict_cp(test, flight.judge),
+            _ => predict(test, PREDICTION_MOTION.model(), flight.judge),
         })
         .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok())
 }
@@ -233,15 +246,15 @@ fn exit_code(report: &FlightReport) -> ExitCode {
 }
 
 /// The bridge's options from the flags, checked before anything is contacted.
-fn options(args: &FlyArgs, prediction: Option<&Prediction>) -> anyhow::Result<FlyOptions> {
+fn options(args: &FlyArgs, flight: &Flight, prediction: Option<&Prediction>) -> anyhow::Result<FlyOptions> {
     let opts = FlyOptions {
         connect: args.connect.clone(),
-        mode: args.mode.into(),
-        timeout_s: limits::FLY_TIMEOUT.check(args.timeout)?,
+        mode: flight.mode,
+        timeout_s: flight.timeout_s,
         trajectory_csv: args.trajectory.clone(),
         fence: !args.no_fence,
-        time_scale: limits::FLY_TIME_SCALE.check(args.time_scale.unwrap_or(if args.px4.is_some() {
-            DEFAULT_SPEED_FACTOR
+        time_scale: limits::FLY_TIME_SCALE.check(args.time_scale.unwrap_or(if flight.px4.is_some() {
+            flight.px4_speed_factor
         } else {
             1.0
         }))?,
@@ -251,8 +264,8 @@ fn options(args: &FlyArgs, prediction: Option<&Prediction>) -> anyhow::Result<Fl
             Some(ms) if ms.is_finite() && (0.0..=1000.0).contains(&ms) => Some(Duration::from_secs_f64(ms / 1000.0)),
             Some(ms) => anyhow::bail!("--lockstep {ms}: expected a latency of 0 to 1000 ms"),
         },
-        judge: args.judge.into(),
-        anchor_at_vehicle_home: args.anchor_at_vehicle_home,
+        judge: flight.judge,
+        anchor_at_vehicle_home: flight.anchor_at_vehicle_home,
         ready_timeout_s: limits::FLY_READY_TIMEOUT.check(args.ready_timeout)?,
         // Quiet or not, a listener: the vehicle is asked for its version, which the report names.
         notices: Some(if args.quiet {

@@ -22,10 +22,6 @@ impl Named {
     }
 }
 
-pub const FLY_TIMEOUT: Named = Named {
-    names: "fly --timeout",
-    limit: Limit::above(0.0, 86_400.0, "s"),
-};
 pub const FLY_TIME_SCALE: Named = Named {
     names: "fly --time-scale",
     limit: Limit::above(0.0, MAX_TIME_SCALE, "x wall time"),
@@ -49,7 +45,6 @@ pub const EVALUATE_RUNS: Named = Named {
 #[cfg(test)]
 pub fn render(s: &mut String) {
     use prgenuav::campaign::settings::all;
-    use prgenuav::campaign::settings::keys::flags;
     use std::fmt::Write as _;
     let _ = writeln!(s, "## Ranges of the numeric settings\n");
     let _ = writeln!(
@@ -64,23 +59,12 @@ pub fn render(s: &mut String) {
             let _ = writeln!(s, "| {} | {} |", st.names(), l.range());
         }
     }
-    let rows = [
-        ("BUDGET", flags::BUDGET),
-        ("--jobs (with --runner)", flags::JOBS),
-        ("--job-timeout", flags::JOB_TIMEOUT),
-        ("--speed-factor", flags::PX4_SPEED_FACTOR),
-        ("--instances", flags::INSTANCES),
-    ];
-    for (name, l) in rows {
-        let _ = writeln!(s, "| {name} | {} |", l.range());
-    }
-    for n in [
-        FLY_TIMEOUT,
-        FLY_TIME_SCALE,
-        FLY_READY_TIMEOUT,
-        SIMILAR_BELOW,
-        EVALUATE_RUNS,
-    ] {
+    let _ = writeln!(
+        s,
+        "| --jobs (with --runner) | {} |",
+        prgenuav::campaign::settings::keys::RUNNER_JOBS.range()
+    );
+    for n in [FLY_TIME_SCALE, FLY_READY_TIMEOUT, SIMILAR_BELOW, EVALUATE_RUNS] {
         let _ = writeln!(s, "| {} | {} |", n.names, n.limit.range());
     }
     let _ = writeln!(

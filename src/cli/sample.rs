@@ -9,7 +9,7 @@ use prgenuav::generator::{Generator, GeneratorConfig, Placement};
 use prgenuav::judge::diversity;
 use prgenuav::model::TestCase;
 
-use prgenuav::campaign::settings::{Loaded, lay_over};
+use prgenuav::campaign::settings::Loaded;
 use prgenuav::model::Spelling;
 
 use super::setting_flags::GeneratorFlags;
@@ -30,9 +30,6 @@ pub struct SampleArgs {
     /// The same as N (kept for scripts).
     #[arg(long, hide = true, value_name = "N")]
     count: Option<u64>,
-    /// Seed of every random draw: the same seed gives byte-identical tests.
-    #[arg(short, long, default_value_t = 0)]
-    seed: u64,
     /// Folder the tests are written to (test_0.yaml, test_1.yaml, ...); refused when it holds files, unless
     /// --force.
     #[arg(short, long, value_name = "DIR", default_value = "generated_tests/samples")]
@@ -58,16 +55,11 @@ pub struct GeneratorArgs {
 }
 
 impl GeneratorArgs {
-    /// The configuration (defaults, then the TOML file, then the flags) and the spelling to write.
-    pub fn config(&self) -> anyhow::Result<(GeneratorConfig, Spelling)> {
+    /// The configuration (defaults, then the TOML file, then the flags), the spelling to write and the seed.
+    pub fn config(&self) -> anyhow::Result<(GeneratorConfig, Spelling, u64)> {
         let file = Loaded::read(self.config.as_deref()).map_err(anyhow::Error::msg)?;
-        let req = lay_over(&file, &self.flags.given).map_err(anyhow::Error::msg)?;
-        let spelling = if req.settings.output.spelling() == "old" {
-            Spelling::Old
-        } else {
-            Spelling::New
-        };
-        Ok((req.generator, spelling))
+        let req = self.flags.request(&file)?;
+        Ok((req.generator(), req.asked.output.spelling(), req.asked.campaign.seed()))
     }
 }
 
@@ -84,9 +76,9 @@ pub fn run(args: SampleArgs) -> anyhow::Result<ExitCode> {
         bail!("N {count} is out of range: 1 to {MAX_COUNT} tests");
     }
     super::check_outputs(&[("--out", Some(args.out.join("test_0.yaml").as_path()))])?;
-    let (config, spelling) = args.generator.config()?;
+    let (config, spelling, seed) = args.generator.config()?;
     let case = TestCase::load(&args.case)?.with_absolute_references()?;
-    let generator = Generator::new(&case, config, args.seed)?;
+    let generator = Generator::new(&case, config, seed)?;
     let placements: Vec<Placement> = (0..count).map(|i| generator.sample(i)).collect::<Result<_, _>>()?;
     super::out_folder::claim(&args.out, args.force)?;
     let mut files = Vec::new();
@@ -108,7 +100,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<ExitCode> {
             .collect();
         super::print_json(&serde_json::json!({
             "output_folder": args.out.display().to_string(),
-            "seed": args.seed,
+            "seed": seed,
             "soi": generator.soi(),
             "a_side": generator.a_side(),
             "diversity": div,
@@ -128,7 +120,7 @@ pub fn run(args: SampleArgs) -> anyhow::Result<ExitCode> {
         println!(
             "wrote {} (seed {}), diversity {}",
             plural(files.len(), "test"),
-            args.seed,
+            seed,
             div.map_or("n/a".into(), |d| format!("{d:.3}"))
         );
         println!("output folder: {}", args.out.display());

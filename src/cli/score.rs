@@ -5,7 +5,6 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::values::JudgeEdition;
 use anyhow::{Context, bail};
 use prgenuav::campaign::evaluation::{Evaluation, evaluate_folder};
 use prgenuav::campaign::report::folder_score::{SuiteScore, score_folder};
@@ -20,9 +19,9 @@ pub struct ScoreArgs {
     /// Print the full result as JSON (files named by absolute paths).
     #[arg(long)]
     json: bool,
-    /// Judge edition of the distances and points.
-    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
-    judge: JudgeEdition,
+    /// The judge edition.
+    #[command(flatten)]
+    judge: super::setting_flags::JudgeFlag,
     /// Two tests are too similar when the DTW distance of their average trajectories is below this (metres,
     /// summed over the alignment; docs/evaluate.md).
     #[arg(long, value_name = "METRES", default_value_t = SIMILAR_BELOW_M)]
@@ -45,13 +44,13 @@ pub fn run(mut args: ScoreArgs) -> anyhow::Result<ExitCode> {
     // Absolute, as evaluate's report.json: the JSON's paths resolve from any directory.
     args.folder = absolute(&args.folder)?;
     args.averages = args.averages.as_deref().map(absolute).transpose()?;
-    let suite = score_folder(&args.folder, args.judge.into())?;
+    let suite = score_folder(&args.folder, args.judge.edition()?)?;
     if suite.tests.is_empty() {
         bail!("{}: no test_N.yaml files", args.folder.display());
     }
     let evaluation = evaluate_folder(
         &args.folder,
-        args.judge.into(),
+        args.judge.edition()?,
         args.similar_below,
         args.averages.as_deref(),
     )?;

@@ -14,7 +14,8 @@ use prgenuav::model::TestCase;
 use prgenuav::model::competition::FAIL_BELOW_M;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
-use super::values::{CameraArg, JudgeEdition, Motion};
+use super::values::{CameraArg, choice};
+use prgenuav::lfs::sim::Motion;
 
 /// Arguments of `simulate`.
 #[derive(Debug, clap::Args)]
@@ -22,7 +23,7 @@ pub struct SimulateArgs {
     /// The test YAML (obstacles + mission).
     test: PathBuf,
     /// Motion model of the simulated vehicle.
-    #[arg(long, value_enum, default_value_t = Motion::Paper)]
+    #[arg(long, value_parser = choice::<Motion>(), default_value = "paper")]
     motion: Motion,
     /// Depth camera preset.
     #[arg(long, value_enum, default_value_t = CameraArg::Hfs)]
@@ -37,9 +38,9 @@ pub struct SimulateArgs {
     /// Write a top-down SVG plot of the flight.
     #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
-    /// Judge edition of the predicted distance.
-    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
-    judge: JudgeEdition,
+    /// The judge edition.
+    #[command(flatten)]
+    judge: super::setting_flags::JudgeFlag,
     /// Refuse a test that breaks the current competition rules (default: warn and simulate it anyway).
     #[arg(long)]
     strict: bool,
@@ -76,7 +77,7 @@ struct Report {
 }
 
 pub fn run(args: SimulateArgs) -> anyhow::Result<ExitCode> {
-    let judge = Judge::from(args.judge);
+    let judge = args.judge.edition()?;
     super::check_outputs(&[
         ("--trajectory", args.trajectory.as_deref()),
         ("--plot", args.plot.as_deref()),

@@ -22,7 +22,7 @@ use geodesy::frames::yaw_enu_to_ned_rad;
 use prgenuav_planner::planner::{PlanInput, Planner, VehicleState};
 use prgenuav_planner::waypoint::{NavState, WaypointGenerator, WaypointInput};
 
-pub use super::sim_config::{MotionModel, SimConfig, SimError, SimResult, SimStatus, cruise_param};
+pub use super::sim_config::{Motion, MotionModel, SimConfig, SimError, SimResult, SimStatus, cruise_param};
 
 /// The stages of one tick, in order.
 pub const STAGES: [&str; 5] = ["sense", "plan", "control", "integrate", "record"];

@@ -11,6 +11,27 @@ use crate::judge::{FlightDistance, Judge};
 use crate::model::{Param, Trajectory};
 use prgenuav_planner::params::PlannerParams;
 
+/// The motion model by name, as a campaign's settings choose it (its constants are the fitted ones).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Motion {
+    /// PX4's waypoint generator and a PX4-like position tracker.
+    #[default]
+    Px4,
+    /// The paper's kinematic rule towards the planner's first tree node.
+    Paper,
+}
+
+impl Motion {
+    /// The model with its fitted constants.
+    pub fn model(self) -> MotionModel {
+        match self {
+            Motion::Px4 => MotionModel::Px4(Px4Params::default()),
+            Motion::Paper => MotionModel::Paper(PaperParams::default()),
+        }
+    }
+}
+
 /// Which motion model moves the vehicle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MotionModel {

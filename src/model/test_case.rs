@@ -16,7 +16,8 @@ use super::tables::{Command, Param, command_from, parse_commands_csv, parse_para
 use geodesy::{GeoPoint, SIM_HOME};
 
 /// Which key names a YAML uses: `drone`/`test` (Aerialist before 2025-09) or `robot`/`mission` (since).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Spelling {
     /// `drone:` and `test:`.
     Old,

@@ -88,18 +88,34 @@ fn the_check_finds_numbered_references_and_nothing_else() {
     assert!(numbered_refs("subsession 3, tissue 4").is_empty());
 }
 
-/// The public types (`pub struct`, `enum`, `trait`, `type`) declared in `text`, by name.
+/// The public types (`pub struct`, `enum`, `trait`, `type`) declared in `text`, by name, and those a
+/// settings section declares (`section! { Name, NameAsked, "section", ... }`); a macro's own template
+/// (`pub struct $name`) names none.
 fn public_types(text: &str) -> Vec<String> {
     let mut names = Vec::new();
+    let mut in_section = false;
     for line in text.lines() {
         let t = line.trim_start();
+        if t.starts_with("section! {") {
+            in_section = true;
+        } else if in_section && !t.starts_with("///") {
+            names.extend(
+                t.split(',')
+                    .take(2)
+                    .map(|n| n.trim().to_string())
+                    .filter(|n| !n.is_empty()),
+            );
+            in_section = false;
+        }
         for kind in ["pub struct ", "pub enum ", "pub trait ", "pub type "] {
             if let Some(rest) = t.strip_prefix(kind) {
                 let name: String = rest
                     .chars()
                     .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
                     .collect();
-                names.push(name);
+                if !name.is_empty() {
+                    names.push(name);
+                }
             }
         }
     }

@@ -38,10 +38,10 @@ fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
 
 fn journal_text() -> String {
     [
-        record(0, FlightStatus::Landed),
-        record(3, FlightStatus::Collision),
+        record(0, FlightStatus::LANDED),
+        record(3, FlightStatus::COLLISION),
         record(5, FlightStatus::Interrupted),
-        record(7, FlightStatus::Landed),
+        record(7, FlightStatus::LANDED),
     ]
     .iter()
     .map(|r| serde_json::to_string(r).unwrap() + "\n")

@@ -485,6 +485,48 @@ fn workspace_crates_below_the_library_import_nothing_of_ours() {
     }
 }
 
+/// The campaign's floors, lowest first: the settings, the ground floor every stage shares, the stages in the
+/// order data flows through them, and the conductor and the run on top.
+const CAMPAIGN_FLOORS: &[&str] = &[
+    "settings",
+    "ground",
+    "store",
+    "screen",
+    "fly",
+    "learn",
+    "plan",
+    "report",
+    "evaluation",
+    "conductor",
+    "run",
+];
+
+#[test]
+fn campaign_floors_import_only_downwards() {
+    let floor = |m: &str| {
+        let room = m.strip_prefix("campaign::")?.split("::").next()?;
+        Some(
+            CAMPAIGN_FLOORS
+                .iter()
+                .position(|f| *f == room)
+                .unwrap_or_else(|| panic!("campaign::{room} stands on no floor: add it to CAMPAIGN_FLOORS")),
+        )
+    };
+    let g = library();
+    assert!(g.contains_key("campaign::ground::candidate") && g.contains_key("campaign::conductor"));
+    let mut up = Vec::new();
+    for (m, deps) in &g {
+        for d in deps {
+            if let (Some(a), Some(b)) = (floor(m), floor(d))
+                && a < b
+            {
+                up.push(format!("{m} imports {d}, a floor above it"));
+            }
+        }
+    }
+    assert!(up.is_empty(), "{}", up.join("\n"));
+}
+
 #[test]
 fn bridge_groups_import_only_downwards() {
     let rank = |m: &str| match m.strip_prefix("bridge::")?.split("::").next() {

@@ -185,7 +185,7 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
     assert!(folder.join("flights/candidate_0.px4.log").is_file());
     let stored: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("campaign.json")).unwrap()).unwrap();
-    assert_eq!(stored["px4"]["speed_factor"], 5.0);
+    assert_eq!(stored["vehicles"]["speed_factor"], 5.0);
 }
 
 #[test]

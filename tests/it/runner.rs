@@ -37,7 +37,7 @@ fn record_the_standin_ulog() {
         Some(std::time::Duration::ZERO),
     );
     let flown = mock.fly(&test, &csv, &AtomicBool::new(false)).unwrap();
-    assert_eq!(flown.status, FlightStatus::Landed, "{flown:?}");
+    assert_eq!(flown.status, FlightStatus::LANDED, "{flown:?}");
     let t = Trajectory::load_csv(&csv).unwrap();
     let mut w = ULogWriter::new().local_position_format();
     for s in &t.samples {

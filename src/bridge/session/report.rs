@@ -17,7 +17,7 @@ use crate::bridge::wire::link::LinkStats;
 use crate::bridge::wire::notices::VehicleMessage;
 
 /// How a flight ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
     /// Flown to the end, landed and disarmed.
@@ -35,6 +35,16 @@ pub enum Status {
 }
 
 impl Status {
+    /// Every status.
+    pub const ALL: [Status; 6] = [
+        Status::Landed,
+        Status::Collision,
+        Status::Timeout,
+        Status::LinkLost,
+        Status::Aborted,
+        Status::Rejected,
+    ];
+
     /// The JSON spelling.
     pub fn as_str(self) -> &'static str {
         match self {

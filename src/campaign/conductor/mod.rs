@@ -45,7 +45,7 @@ use crate::campaign::ground::screener::Progress;
 use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::{Calibration, Learnt, RoundLog};
 use crate::campaign::learn::failure_counts::{arm_counts, counted_failures};
-use crate::campaign::learn::refit::Learning;
+use crate::campaign::learn::refit::Lessons;
 use crate::campaign::learn::surrogate::Surrogate;
 use crate::campaign::store::journal::{FlightRecord, Journal, flights_charged};
 use crate::generator::Generator;
@@ -89,7 +89,7 @@ pub fn run_rounds(
     note_interrupted(input.progress, journal);
     let resumed = journal.charged();
     let mut campaign = Rounds::start(input, &count, &resumed)?;
-    let replay = Replay::new(&resumed, input.cfg.budget);
+    let replay = Replay::new(&resumed, input.cfg.campaign.budget);
     let progress = input.progress;
     let tick = !input.cfg.overlaps_rounds();
     let on_flight = |r: &FlightRecord| announce(progress, count.next(), r, tick);
@@ -156,7 +156,7 @@ struct Rounds<'a> {
     calibration: Calibration,
     surrogate: Option<Surrogate>,
     /// The last round's learning, reused while no flight has landed since.
-    carried: Option<(usize, Learning)>,
+    carried: Option<(usize, Lessons)>,
     /// Rounds pushed to the fleet and not yet learnt from, oldest first.
     in_air: VecDeque<Pushed>,
     /// The flights' numbering in the progress lines.
@@ -211,22 +211,22 @@ impl<'a> Rounds<'a> {
         let cfg = input.cfg;
         let learning = cfg.learns();
         // Without learning the one round draws from the uniform distribution and ranks by the LFS alone.
-        let prior = (cfg.prior.as_deref().filter(|_| learning))
+        let prior = (cfg.campaign.prior.as_deref().filter(|_| learning))
             .map(load_prior)
             .transpose()?;
         let start_calibration = prior
             .as_ref()
             .map_or_else(Calibration::default, |p| p.calibration.carried());
         let distribution = match &prior {
-            Some(p) if cfg.adapt => p.distribution.clone(),
+            Some(p) if cfg.learning.adapt => p.distribution.clone(),
             _ => DrawDistribution::uniform(),
         };
         let how = "; the rounds are planned again and take the journaled flights rather than flying them";
-        note_resuming(input.progress, resumed, cfg.budget, how);
+        note_resuming(input.progress, resumed, cfg.campaign.budget, how);
         Ok(Self {
             input,
             learning,
-            base: Generator::new(input.case, cfg.generator.clone(), cfg.seed)?,
+            base: Generator::new(input.case, cfg.generator.clone(), cfg.campaign.seed)?,
             calibration: start_calibration.clone(),
             start_calibration,
             distribution,
@@ -250,7 +250,7 @@ impl<'a> Rounds<'a> {
         let extra = if self.learning { EXTRA_ROUNDS } else { 0 };
         for index in 0..planned + extra {
             // Past the planned rounds only while the near-duplicate filter left budget unflown.
-            if index >= planned && self.promised() >= cfg.budget {
+            if index >= planned && self.promised() >= cfg.campaign.budget {
                 break;
             }
             if self.input.cancel.load(Ordering::Relaxed) {

@@ -40,7 +40,8 @@ impl Rounds<'_> {
             .join(", ");
         if round.index == 0 || !self.learning {
             return Err(CampaignError::Config(format!(
-                "{}: the journaled flights of candidate(s) {ids} are not what this campaign draws for them (other                  obstacles, or an index it never draws): the lines come from another campaign (seed, case or \
+                "{}: the journaled flights of candidate(s) {ids} are not what this campaign draws for them \
+                 (other obstacles, or an index it never draws): the lines come from another campaign (seed, case or \
                  settings); remove them or restore the journal, then resume",
                 journal.display()
             )));

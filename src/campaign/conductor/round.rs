@@ -7,7 +7,7 @@ use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::RoundLog;
 use crate::campaign::learn::failure_counts::arm_counts;
-use crate::campaign::learn::refit::{Learning, refit};
+use crate::campaign::learn::refit::{Lessons, refit};
 use crate::campaign::plan::diversity_guard::DiversityGuard;
 use crate::campaign::plan::draw::{DrawPlan, draw};
 use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
@@ -26,9 +26,9 @@ impl Rounds<'_> {
         let cfg = self.input.cfg;
         let rounds = self.planned_rounds();
         let own = if index < rounds {
-            cfg.candidates * (index + 1) / rounds - cfg.candidates * index / rounds
+            cfg.screening.candidates * (index + 1) / rounds - cfg.screening.candidates * index / rounds
         } else {
-            cfg.candidates.div_ceil(rounds)
+            cfg.screening.candidates.div_ceil(rounds)
         };
         let t = Instant::now();
         // Below the diversity floor the children go on: the guard admits only those that do not lower it, so
@@ -52,8 +52,8 @@ impl Rounds<'_> {
         let child_rate = arm_counts(&self.journal, |c| is_child(&self.candidates, c, lineage))
             .0
             .rate();
-        let planned = cfg.budget * (index + 1).min(rounds) / rounds;
-        let later = cfg.budget - planned;
+        let planned = cfg.campaign.budget * (index + 1).min(rounds) / rounds;
+        let later = cfg.campaign.budget - planned;
         // A child must differ from its siblings and from every flown test (or come close where the failing tests'
         // diversity can afford it), and keep their expected diversity above the floor.
         let flown: &[FlightRecord] = if children == 0 { &[] } else { &self.journal };
@@ -95,7 +95,7 @@ impl Rounds<'_> {
 
     /// Whether the rounds move the generator towards failures.
     pub(super) fn adapts(&self) -> bool {
-        self.learning && self.input.cfg.adapt
+        self.learning && self.input.cfg.learning.adapt
     }
 
     /// Screens the round's candidates (cached per round, with the distribution and the parents they came from;
@@ -109,7 +109,7 @@ impl Rounds<'_> {
         } else {
             "screening.json".to_string()
         };
-        let screened = if self.input.cfg.screen {
+        let screened = if self.input.cfg.screening.screen {
             screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?
         } else {
             range
@@ -141,14 +141,17 @@ impl Rounds<'_> {
             .collect();
         let mut fresh = self.predict(&flown, stages);
         let remaining = round.planned.saturating_sub(committed);
-        if cfg.screen {
+        if cfg.screening.screen {
             stages.ensemble_s += run_ensemble(&self.stage(), &mut fresh, cfg, remaining)?;
         }
-        let (ranked, share) = self.choose(round, &fresh, remaining, &FlightRecord::queued(busy));
+        let (ranked, share) = self.choose(round, &fresh, remaining, busy);
         Ok(Ranking {
             ranked,
             remaining,
-            below: fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).count(),
+            below: fresh
+                .iter()
+                .filter(|s| s.min_distance < cfg.screening.threshold_m)
+                .count(),
             share,
             bias_m: self.calibration.bias_m(),
         })
@@ -163,7 +166,7 @@ impl Rounds<'_> {
         let t = Instant::now();
         let taught = match self.carried.take() {
             Some((at, l)) if at == self.flights.len() => l,
-            _ => Learning::from(&self.start_calibration, &self.journal, &self.candidates),
+            _ => Lessons::from(&self.start_calibration, &self.journal, &self.candidates),
         };
         self.calibration = taught.calibration.clone();
         self.surrogate = taught.kernel;
@@ -186,9 +189,11 @@ impl Rounds<'_> {
         round: &Round,
         fresh: &[LfsPrediction],
         remaining: usize,
-        queued: &[FlightRecord],
+        busy: &[(CandidateId, Vec<Obstacle>)],
     ) -> (Vec<LfsPrediction>, f64) {
-        let seen: Vec<FlightRecord> = self.journal.iter().chain(queued).cloned().collect();
+        let seen: Vec<&[Obstacle]> = (self.journal.iter().map(|r| r.obstacles.as_slice()))
+            .chain(busy.iter().map(|(_, o)| o.as_slice()))
+            .collect();
         let cfg = self.input.cfg;
         let is_arm = |c| is_child(&self.candidates, c, round.lineage);
         let (near_flown, other_flown) = arm_counts(&self.journal, is_arm);
@@ -241,13 +246,13 @@ impl Rounds<'_> {
                 round.index + 1,
                 ranking.ranked.len(),
                 ranking.remaining,
-                self.input.cfg.threshold_m
+                self.input.cfg.screening.threshold_m
             ));
         }
     }
 
     pub(super) fn log_round(&mut self, round: &Round, flights: usize, share: f64, bias_m: f64) {
-        let adapt = self.input.cfg.adapt;
+        let adapt = self.input.cfg.learning.adapt;
         self.log.push(RoundLog {
             round: round.index,
             first_candidate: round.first,
@@ -268,9 +273,9 @@ impl Rounds<'_> {
     /// fewer than its share of the budget: `starved`).
     pub(super) fn learn(&mut self, starved: bool, stages: &mut StageTimes) {
         let t = Instant::now();
-        let taught = Learning::from(&self.start_calibration, &self.journal, &self.candidates);
+        let taught = Lessons::from(&self.start_calibration, &self.journal, &self.candidates);
         self.calibration = taught.calibration.clone();
-        if self.input.cfg.adapt {
+        if self.input.cfg.learning.adapt {
             let fit = (self.input.cfg, starved);
             self.distribution = refit(&self.distribution, &self.candidates, &self.journal, &taught, fit);
         }
@@ -283,15 +288,15 @@ impl Rounds<'_> {
     fn note_single(&self, ranking: &Ranking) {
         let (cfg, progress) = (self.input.cfg, self.input.progress);
         let (flying, remaining, below) = (ranking.ranked.len(), ranking.remaining, ranking.below);
-        progress.note(&if cfg.screen {
+        progress.note(&if cfg.screening.screen {
             format!(
                 "{below} of {} candidates predicted below {} m; flying {flying}",
-                cfg.candidates, cfg.threshold_m
+                cfg.screening.candidates, cfg.screening.threshold_m
             )
         } else {
             format!(
                 "{} candidates drawn, not screened (--no-screen); flying {flying} in the order drawn",
-                cfg.candidates
+                cfg.screening.candidates
             )
         });
         if flying < remaining {
@@ -300,7 +305,7 @@ impl Rounds<'_> {
                  predicted below --threshold {} m (or too close to one kept); raise --threshold or --candidates to \
                  use the budget",
                 remaining - flying,
-                cfg.threshold_m
+                cfg.screening.threshold_m
             ));
         }
     }

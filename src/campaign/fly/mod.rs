@@ -3,6 +3,7 @@
 //! re-flights ([`confirm`]), and the backends: embedded mock and MAVLink ([`mock_mavlink`]), PX4 SITL
 //! ([`px4`]) and jobs on an engine ([`runner`]).
 
+pub mod backend;
 pub mod confirm;
 pub mod fleet;
 pub mod mock_mavlink;

@@ -204,8 +204,8 @@ fn starved(answers: Option<AnswerCounts>, instance: u8) -> Option<String> {
 fn never_ready(f: Flown, instance: u8) -> Attempt {
     let why = f.reason.as_deref().unwrap_or("no reason given");
     match f.status {
-        FlightStatus::Rejected => Attempt::Failed(format!("PX4 instance {instance} was never ready to fly: {why}")),
-        FlightStatus::LinkLost => Attempt::Failed(format!("PX4 instance {instance} went silent: {why}")),
+        FlightStatus::REJECTED => Attempt::Failed(format!("PX4 instance {instance} was never ready to fly: {why}")),
+        FlightStatus::LINK_LOST => Attempt::Failed(format!("PX4 instance {instance} went silent: {why}")),
         _ => Attempt::Flew(f),
     }
 }
@@ -288,7 +288,7 @@ fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown 
 /// The campaign's stop came before the flight took off: `aborted`, which the fleet journals as interrupted.
 fn stopped_before_flying(written: &Result<String, String>) -> Flown {
     Flown::unflown(
-        FlightStatus::Aborted,
+        FlightStatus::ABORTED,
         format!("stopped before PX4 was flying; {}", console_note(written)),
     )
 }
@@ -329,19 +329,19 @@ mod tests {
         let f = |status: FlightStatus| {
             Flown::unflown(status, "not ready to arm within 60 s (missing: home position)".into())
         };
-        match never_ready(f(FlightStatus::Rejected), 3) {
+        match never_ready(f(FlightStatus::REJECTED), 3) {
             Attempt::Failed(why) => assert!(why.contains("instance 3") && why.contains("home position"), "{why}"),
             _ => panic!("a rejected flight on a fresh instance must be retried, not journaled as flown"),
         }
         let silent = Flown {
             reason: Some("arming: no answer from the vehicle after 10 retries".into()),
-            ..f(FlightStatus::LinkLost)
+            ..f(FlightStatus::LINK_LOST)
         };
         match never_ready(silent, 1) {
             Attempt::Failed(why) => assert!(why.contains("went silent") && why.contains("arming"), "{why}"),
             _ => panic!("a fresh instance that stops answering must be retried, not charged as a flight"),
         }
-        for status in [FlightStatus::Landed, FlightStatus::Collision, FlightStatus::Timeout] {
+        for status in [FlightStatus::LANDED, FlightStatus::COLLISION, FlightStatus::TIMEOUT] {
             assert!(matches!(never_ready(f(status), 0), Attempt::Flew(_)), "{status}");
         }
     }
@@ -383,7 +383,7 @@ mod tests {
         let p = Path::new("/x/campaign/flights/candidate_4.px4.log");
         assert_eq!(shown(p), PathBuf::from("flights/candidate_4.px4.log"));
         let f = Flown {
-            status: FlightStatus::Timeout,
+            status: FlightStatus::TIMEOUT,
             min_distance: None,
             min_distance_raw: None,
             flight_time_s: 1.0,

@@ -91,7 +91,7 @@ pub(in crate::campaign) fn rejected_in_a_row(history: &[FlightRecord], vehicle: 
         .iter()
         .rev()
         .filter(|r| r.vehicle == vehicle)
-        .take_while(|r| r.flown.status == FlightStatus::Rejected)
+        .take_while(|r| r.flown.status == FlightStatus::REJECTED)
         .count()
 }
 
@@ -105,7 +105,7 @@ pub(in crate::campaign) fn fly_counting_rejections(
     rejected_in_a_row: &mut usize,
 ) -> Result<Flown, VehicleError> {
     match vehicle.fly(test, csv, cancel) {
-        Ok(flown) if flown.status == FlightStatus::Rejected => {
+        Ok(flown) if flown.status == FlightStatus::REJECTED => {
             *rejected_in_a_row += 1;
             if *rejected_in_a_row >= REJECTED_IN_A_ROW_TO_DROP {
                 Err(VehicleError::Unreachable {
@@ -132,7 +132,7 @@ mod tests {
 
     fn flown() -> Flown {
         Flown {
-            status: FlightStatus::Landed,
+            status: FlightStatus::LANDED,
             min_distance: Some(2.0),
             min_distance_raw: Some(2.0),
             flight_time_s: 60.0,

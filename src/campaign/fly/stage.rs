@@ -72,7 +72,7 @@ impl<'a> FlightStage<'a> {
             progress: input.progress,
             cancel: input.cancel,
             done,
-            confirm: input.cfg.confirm,
+            confirm: input.cfg.flight.confirm,
             waves: input.cfg.repeatable_vehicles(),
         }
     }

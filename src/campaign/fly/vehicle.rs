@@ -88,7 +88,7 @@ pub struct PoolOutcome {
 /// A flight the user's stop cut short (`aborted` after the campaign's cancel) is `interrupted`: not charged,
 /// flown again first on resume. A flight that ended on its own while the stop came keeps its status.
 pub(in crate::campaign) fn interrupted_if_cancelled(mut flown: Flown, cancel: &AtomicBool) -> Flown {
-    if flown.status == FlightStatus::Aborted && cancel.load(Ordering::Relaxed) {
+    if flown.status == FlightStatus::ABORTED && cancel.load(Ordering::Relaxed) {
         flown.status = FlightStatus::Interrupted;
         flown.reason = Some(format!(
             "stopped by the user ({}); not charged to the budget, flown again first on --resume",

@@ -1,6 +1,6 @@
-//! How a campaign's flight ended, one type from the vehicle's report to the journal and back, and the
-//! vehicle's whole outcome of a flight ([`Flown`]). The serde names are the journal's strings, so journals
-//! written before read as they were.
+//! How a campaign's flight ended, one type from the vehicle's report to the journal and back (the bridge's
+//! own status, or the campaign's two endings), and the vehicle's whole outcome of a flight ([`Flown`]). The
+//! journal's strings are the bridge's, so journals written before read as they were.
 
 use std::fmt;
 
@@ -9,61 +9,77 @@ use serde::{Deserialize, Serialize};
 use crate::bridge::session::report::Status;
 use crate::judge::cp_verdict::CpVerdict;
 
-/// How a flight ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+/// How a flight ended: as the vehicle's side reported it (the bridge's [`Status`]), or by the campaign's own
+/// hand (the user's stop, a failed backend).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum FlightStatus {
-    /// Flown to the end, landed and disarmed.
-    Landed,
-    /// The vehicle entered an obstacle.
-    Collision,
-    /// Still flying at the timeout.
-    Timeout,
-    /// The vehicle went silent or rebooted.
-    LinkLost,
-    /// Cancelled mid-flight by the vehicle's side.
-    Aborted,
-    /// The vehicle refused the mission, a parameter, a mode or arming.
-    Rejected,
+    /// As the vehicle's side reported it.
+    Vehicle(Status),
     /// Cut short by the user's stop: journaled so the trajectory is kept, not charged, flown again on resume.
     Interrupted,
     /// The backend failed around the flight after its retry: the vehicle, not the test, is at fault.
     BackendFailed,
-    /// A stand-in for a flight queued or in the air (no outcome yet); never journaled.
-    #[serde(skip)]
-    Queued,
 }
 
 impl FlightStatus {
-    /// The journal's spelling.
+    /// Flown to the end, landed and disarmed.
+    pub const LANDED: Self = Self::Vehicle(Status::Landed);
+    /// The vehicle entered an obstacle.
+    pub const COLLISION: Self = Self::Vehicle(Status::Collision);
+    /// Still flying at the timeout.
+    pub const TIMEOUT: Self = Self::Vehicle(Status::Timeout);
+    /// The vehicle went silent or rebooted.
+    pub const LINK_LOST: Self = Self::Vehicle(Status::LinkLost);
+    /// Cancelled mid-flight by the vehicle's side.
+    pub const ABORTED: Self = Self::Vehicle(Status::Aborted);
+    /// The vehicle refused the mission, a parameter, a mode or arming.
+    pub const REJECTED: Self = Self::Vehicle(Status::Rejected);
+
+    /// The journal's spelling (the vehicle's own statuses as the bridge spells them).
     pub fn as_str(self) -> &'static str {
         match self {
-            Self::Landed => "landed",
-            Self::Collision => "collision",
-            Self::Timeout => "timeout",
-            Self::LinkLost => "link_lost",
-            Self::Aborted => "aborted",
-            Self::Rejected => "rejected",
+            Self::Vehicle(s) => s.as_str(),
             Self::Interrupted => "interrupted",
             Self::BackendFailed => "backend_failed",
-            Self::Queued => "queued",
+        }
+    }
+
+    /// The status spelled `text` in a journal.
+    pub fn parse(text: &str) -> Option<Self> {
+        match text {
+            "interrupted" => Some(Self::Interrupted),
+            "backend_failed" => Some(Self::BackendFailed),
+            other => Status::ALL.into_iter().find(|s| s.as_str() == other).map(Self::Vehicle),
         }
     }
 
     /// Whether the flight counts against the budget: an interrupted flight or a failed backend says nothing
     /// about the test.
     pub fn charged(self) -> bool {
-        !matches!(self, Self::Interrupted | Self::BackendFailed)
+        matches!(self, Self::Vehicle(_))
     }
 
     /// Whether the flight ran to its end (a measurement exists).
     pub fn completed(self) -> bool {
-        matches!(self, Self::Landed | Self::Collision)
+        matches!(self, Self::Vehicle(s) if s.completed())
     }
 
     /// Whether a vehicle's own report can say it (`prgenuav fly`'s statuses); the others are the campaign's.
     pub fn from_vehicle(self) -> bool {
-        !matches!(self, Self::Interrupted | Self::BackendFailed | Self::Queued)
+        matches!(self, Self::Vehicle(_))
+    }
+}
+
+impl Serialize for FlightStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for FlightStatus {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        Self::parse(&text).ok_or_else(|| serde::de::Error::custom(format!("unknown flight status {text:?}")))
     }
 }
 
@@ -75,14 +91,7 @@ impl fmt::Display for FlightStatus {
 
 impl From<Status> for FlightStatus {
     fn from(s: Status) -> Self {
-        match s {
-            Status::Landed => Self::Landed,
-            Status::Collision => Self::Collision,
-            Status::Timeout => Self::Timeout,
-            Status::LinkLost => Self::LinkLost,
-            Status::Aborted => Self::Aborted,
-            Status::Rejected => Self::Rejected,
-        }
+        Self::Vehicle(s)
     }
 }
 
@@ -147,28 +156,37 @@ mod tests {
     use super::*;
 
     const ALL: [FlightStatus; 8] = [
-        FlightStatus::Landed,
-        FlightStatus::Collision,
-        FlightStatus::Timeout,
-        FlightStatus::LinkLost,
-        FlightStatus::Aborted,
-        FlightStatus::Rejected,
+        FlightStatus::LANDED,
+        FlightStatus::COLLISION,
+        FlightStatus::TIMEOUT,
+        FlightStatus::LINK_LOST,
+        FlightStatus::ABORTED,
+        FlightStatus::REJECTED,
         FlightStatus::Interrupted,
         FlightStatus::BackendFailed,
     ];
 
     #[test]
     fn the_journal_strings_read_and_write_as_before() {
-        for s in ALL {
+        let names = [
+            "landed",
+            "collision",
+            "timeout",
+            "link_lost",
+            "aborted",
+            "rejected",
+            "interrupted",
+            "backend_failed",
+        ];
+        for (s, name) in ALL.into_iter().zip(names) {
             let json = serde_json::to_string(&s).unwrap();
-            assert_eq!(json, format!("\"{}\"", s.as_str()));
+            assert_eq!(json, format!("\"{name}\""));
             assert_eq!(serde_json::from_str::<FlightStatus>(&json).unwrap(), s);
         }
-        for bridge in [Status::Landed, Status::LinkLost, Status::Rejected] {
+        for bridge in Status::ALL {
             assert_eq!(FlightStatus::from(bridge).as_str(), bridge.as_str());
         }
         assert!(serde_json::from_str::<FlightStatus>("\"queued\"").is_err());
-        assert!(serde_json::to_string(&FlightStatus::Queued).is_err());
         assert!(serde_json::from_str::<FlightStatus>("\"crashed\"").is_err());
     }
 

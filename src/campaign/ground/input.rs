@@ -4,13 +4,13 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use super::screener::{Progress, Screener};
-use crate::campaign::config::CampaignConfig;
+use crate::campaign::settings::CampaignSettings;
 use crate::model::TestCase;
 
 /// What a campaign run reads that stays the same from its first stage to its last.
 pub struct CampaignInput<'a> {
     /// Settings.
-    pub cfg: &'a CampaignConfig,
+    pub cfg: &'a CampaignSettings,
     /// The campaign folder.
     pub folder: &'a Path,
     /// The case study.

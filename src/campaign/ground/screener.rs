@@ -3,10 +3,32 @@
 use crate::lfs::ensemble::EnsembleParams;
 use crate::model::TestCase;
 
+/// What the low-fidelity simulator predicts of one test's flight.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Screened {
+    /// Predicted minimum distance (the campaign's judge), metres.
+    pub min_distance_m: f64,
+    /// Predicted flight time, seconds (the full timeout for a flight that never lands).
+    pub flight_time_s: f64,
+    /// How the simulated flight ended, in words (`landed`, `timeout`, `error: ...`).
+    pub ending: String,
+}
+
+impl Screened {
+    /// A prediction of `min_distance_m` over `flight_time_s` that ended `ending`.
+    pub fn new(min_distance_m: f64, flight_time_s: f64, ending: impl Into<String>) -> Self {
+        Self {
+            min_distance_m,
+            flight_time_s,
+            ending: ending.into(),
+        }
+    }
+}
+
 /// Predicts a test's flight with the low-fidelity simulator.
 pub trait Screener: Sync {
-    /// Predicted minimum distance (m), flight time (s) and how the simulated flight ended.
-    fn screen(&self, test: &TestCase) -> (f64, f64, String);
+    /// The prediction of `test`'s flight.
+    fn screen(&self, test: &TestCase) -> Screened;
 
     /// The predicted path, for plots (`None` if the screener has none).
     fn path(&self, _test: &TestCase) -> Option<crate::model::Trajectory> {

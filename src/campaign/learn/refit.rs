@@ -8,10 +8,10 @@
 //! theirs and keeps [`UNIFORM_FLOOR`] of uniform mass. It backs off ([`BACKOFF`]) when the failing tests grow
 //! alike or a round could not fill its share of the budget.
 
-use crate::campaign::config::CampaignConfig;
 use crate::campaign::ground::candidate::{Candidate, LfsPrediction, unit_of};
 use crate::campaign::learn::calibration::Calibration;
 use crate::campaign::learn::surrogate::{KernelPoint, Surrogate};
+use crate::campaign::settings::CampaignSettings;
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, DrawDistribution};
 use crate::judge::diversity;
@@ -47,7 +47,7 @@ pub fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
 }
 
 /// What the journal teaches: the calibration, and the flights' kernel over the flights this run drew.
-pub struct Learning {
+pub struct Lessons {
     /// The LFS's calibration.
     pub calibration: Calibration,
     points: Vec<KernelPoint>,
@@ -55,7 +55,7 @@ pub struct Learning {
     pub kernel: Option<Surrogate>,
 }
 
-impl Learning {
+impl Lessons {
     /// Learns from the flights in `done`, starting from `start`.
     pub fn from(start: &Calibration, done: &[FlightRecord], candidates: &[Candidate]) -> Self {
         // Parallel vehicles journal a round's flights in the order they land; learning in candidate order
@@ -99,15 +99,15 @@ pub fn refit(
     distribution: &DrawDistribution,
     candidates: &[Candidate],
     done: &[FlightRecord],
-    taught: &Learning,
-    (cfg, starved): (&CampaignConfig, bool),
+    taught: &Lessons,
+    (cfg, starved): (&CampaignSettings, bool),
 ) -> DrawDistribution {
     let failing: Vec<Vec<Obstacle>> = done
         .iter()
         .filter(|r| r.flown.min_distance.is_some_and(|d| d < FAIL_BELOW_M))
         .map(|r| r.obstacles.clone())
         .collect();
-    let below_floor = diversity(&failing).is_some_and(|d| d < cfg.min_diversity);
+    let below_floor = diversity(&failing).is_some_and(|d| d < cfg.learning.min_diversity);
     let alike = below_floor && failing.len() >= MIN_FAILING_FOR_DIVERSITY;
     let (rate, floor) = if starved || alike {
         BACKOFF

@@ -12,7 +12,7 @@
 //! first failure on, lenient early (many failures to come dilute a close pair) and strict late, also on a stack
 //! that fails rarely (docs/design-constants.md#the-expectation-holds-from-the-first-failure).
 
-use crate::campaign::config::CampaignConfig;
+use crate::campaign::settings::CampaignSettings;
 use crate::campaign::store::journal::FlightRecord;
 use crate::geometry::{Footprint, union_iou};
 use crate::judge::diversity;
@@ -23,10 +23,9 @@ use crate::campaign::learn::refit::MIN_FAILING_FOR_DIVERSITY;
 /// and the flights' failures scatter around it.
 pub const DIVERSITY_MARGIN: f64 = 0.02;
 
-/// How close to a flown test a child may come: `child_max_iou`, never below `max_iou` (campaign files written
-/// before the child rule: `max_iou`).
-pub fn child_max_iou(cfg: &CampaignConfig) -> f64 {
-    cfg.child_max_iou.unwrap_or(cfg.max_iou).max(cfg.max_iou)
+/// How close to a flown test a child may come: `child_max_iou`, never below `max_iou`.
+pub fn child_max_iou(cfg: &CampaignSettings) -> f64 {
+    cfg.learning.child_max_iou.max(cfg.screening.max_iou)
 }
 
 fn prints(obstacles: &[Obstacle]) -> Vec<Footprint> {
@@ -84,9 +83,15 @@ impl DiversityGuard {
 
     /// The rule for a round of campaign `cfg` after the flights in `done`, with `later` flights of the budget
     /// left after this round ([`projection`]).
-    pub fn for_round(done: &[FlightRecord], fail_m: f64, cfg: &CampaignConfig, later: usize) -> Self {
+    pub fn for_round(done: &[FlightRecord], fail_m: f64, cfg: &CampaignSettings, later: usize) -> Self {
         let (failures, mean_iou) = projection(done, fail_m, later);
-        Self::new(done, fail_m, (cfg.max_iou, child_max_iou(cfg)), cfg.min_diversity).expecting(failures, mean_iou)
+        Self::new(
+            done,
+            fail_m,
+            (cfg.screening.max_iou, child_max_iou(cfg)),
+            cfg.learning.min_diversity,
+        )
+        .expecting(failures, mean_iou)
     }
 
     /// Counts `failures` more failing tests to come (after this round), each overlapping any other test by

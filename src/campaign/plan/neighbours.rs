@@ -7,11 +7,11 @@
 //! close to a flown test where the failing tests' diversity allows ([`crate::campaign::plan::diversity_guard`]);
 //! the near-duplicate filter would drop most of them before flight otherwise.
 
-use crate::campaign::config::CampaignConfig;
 use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction, Lineage};
 use crate::campaign::learn::failure_counts::BinCount;
 use crate::campaign::plan::diversity_guard::{DiversityGuard, child_max_iou};
-use crate::campaign::plan::rank::{rank_unflown, rank_unflown_within};
+use crate::campaign::plan::rank::{Seen, rank_unflown, rank_unflown_within};
+use crate::campaign::settings::CampaignSettings;
 use crate::campaign::store::journal::FlightRecord;
 use crate::generator::adaptive::{DIMS, Neighbourhood};
 
@@ -102,15 +102,15 @@ pub fn rank_split(
     fresh: &[LfsPrediction],
     is_local: impl Fn(CandidateId) -> bool,
     share: f64,
-    (done, candidates): (&[FlightRecord], &[Candidate]),
-    cfg: &CampaignConfig,
+    (seen, candidates): (&Seen, &[Candidate]),
+    cfg: &CampaignSettings,
     remaining: usize,
     (guard, (near_rate, other_rate)): (&mut DiversityGuard, (f64, f64)),
 ) -> Vec<LfsPrediction> {
     let (near, other): (Vec<LfsPrediction>, Vec<LfsPrediction>) =
         fresh.iter().cloned().partition(|s| is_local(s.candidate));
     let quota = ((remaining as f64 * share).round() as usize).min(remaining);
-    let near = rank_unflown_within(&near, done, candidates, cfg, usize::MAX, child_max_iou(cfg));
+    let near = rank_unflown_within(&near, seen, candidates, cfg, usize::MAX, child_max_iou(cfg));
     let mut chosen: Vec<LfsPrediction> = Vec::new();
     let mut later = Vec::new();
     for s in near {
@@ -120,7 +120,7 @@ pub fn rank_split(
             later.push(s);
         }
     }
-    let others = rank_unflown(&other, done, candidates, cfg, usize::MAX);
+    let others = rank_unflown(&other, seen, candidates, cfg, usize::MAX);
     let rest = others
         .into_iter()
         .map(|s| (s, other_rate))

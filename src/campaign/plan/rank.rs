@@ -2,10 +2,10 @@
 //! LFS ensemble), else the most severe point prediction first; near-duplicates of each other and of the flown
 //! tests skipped.
 
-use crate::campaign::config::CampaignConfig;
 pub use crate::campaign::ground::candidate::LfsPrediction;
 use crate::campaign::ground::candidate::{Candidate, CandidateId};
-use crate::campaign::store::journal::FlightRecord;
+use crate::campaign::settings::CampaignSettings;
+
 use crate::geometry::{Footprint, union_iou};
 use crate::model::Obstacle;
 
@@ -50,25 +50,28 @@ pub(in crate::campaign) fn too_similar(a: &[Obstacle], b: &[Obstacle], max_iou: 
     union_iou(&fa, &fb) > max_iou
 }
 
-/// The ranking's candidates to fly: near-duplicates of each other and of every journaled flight skipped, at
-/// most `remaining`.
+/// The obstacles of every test flown or in the air, which a candidate to fly must not copy.
+pub type Seen<'a> = [&'a [Obstacle]];
+
+/// The ranking's candidates to fly: near-duplicates of each other and of every test `seen` skipped, at most
+/// `remaining`.
 pub fn rank_unflown(
     fresh: &[LfsPrediction],
-    done: &[FlightRecord],
+    seen: &Seen,
     candidates: &[Candidate],
-    cfg: &CampaignConfig,
+    cfg: &CampaignSettings,
     remaining: usize,
 ) -> Vec<LfsPrediction> {
-    rank_unflown_within(fresh, done, candidates, cfg, remaining, cfg.max_iou)
+    rank_unflown_within(fresh, seen, candidates, cfg, remaining, cfg.screening.max_iou)
 }
 
 /// As [`rank_unflown`], with candidates allowed to overlap a flown test up to `flown_max_iou` (children of
 /// failing flights admitted by [`crate::campaign::plan::diversity_guard`]); among themselves they still obey `max_iou`.
 pub fn rank_unflown_within(
     fresh: &[LfsPrediction],
-    done: &[FlightRecord],
+    seen: &Seen,
     candidates: &[Candidate],
-    cfg: &CampaignConfig,
+    cfg: &CampaignSettings,
     remaining: usize,
     flown_max_iou: f64,
 ) -> Vec<LfsPrediction> {
@@ -79,11 +82,17 @@ pub fn rank_unflown_within(
             .map(Obstacle::footprint)
             .collect()
     };
-    let mut ranked = rank(fresh, cfg.threshold_m, cfg.max_iou, usize::MAX, footprints);
+    let mut ranked = rank(
+        fresh,
+        cfg.screening.threshold_m,
+        cfg.screening.max_iou,
+        usize::MAX,
+        footprints,
+    );
     ranked.retain(|s| {
-        !done
+        !seen
             .iter()
-            .any(|r| too_similar(&r.obstacles, &candidates[s.candidate.index()].obstacles, flown_max_iou))
+            .any(|o| too_similar(o, &candidates[s.candidate.index()].obstacles, flown_max_iou))
     });
     ranked.truncate(remaining);
     ranked

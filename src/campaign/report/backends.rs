@@ -111,10 +111,10 @@ mod tests {
         assert_eq!(backend_of("udpin:0.0.0.0:14540"), "udpin:0.0.0.0:14540");
         assert_eq!(backend_of("a#b"), "a#b");
         let s = summarise(&[
-            record("runner#0", FlightStatus::Landed, 3.0),
-            record("mock#1", FlightStatus::Landed, 0.5),
+            record("runner#0", FlightStatus::LANDED, 3.0),
+            record("mock#1", FlightStatus::LANDED, 0.5),
             record("runner#1", FlightStatus::BackendFailed, 99.0),
-            record("runner#1", FlightStatus::Collision, 5.0),
+            record("runner#1", FlightStatus::COLLISION, 5.0),
             record("runner#0", FlightStatus::Interrupted, 1.0),
         ]);
         assert_eq!(s.len(), 2);

@@ -35,17 +35,17 @@ pub fn write_outputs(
     let cfg = input.cfg;
     let charged = journal.charged();
     let records = charged.as_slice();
-    let mut tests = verdicts(records, cfg.confirm);
+    let mut tests = verdicts(records, cfg.flight.confirm);
     let expected_2026 = expected_score::aim(input.folder, records, &mut tests);
     let reported = write_failing_tests(input, &mut tests)?;
     let flights: Vec<ReportedFlight> = records.iter().map(|r| reported_flight(r, &reported)).collect();
     let mut tests: Vec<TestVerdict> = tests.into_iter().map(|(t, _)| t).collect();
     user_report::write_unconfirmed(input, &mut tests, spelling(input))?;
-    let mut suite = summary(records, &tests, cfg.screen);
-    suite.confirm = cfg.confirm;
+    let mut suite = summary(records, &tests, cfg.screening.screen);
+    suite.confirm = cfg.flight.confirm;
     suite.expected_2026 = Some(expected_2026);
     suite.candidates_screened = candidates_screened;
-    suite.screening_per_s = if cfg.screen && stages.screen_s > 0.0 {
+    suite.screening_per_s = if cfg.screening.screen && stages.screen_s > 0.0 {
         candidates_screened as f64 / stages.screen_s
     } else {
         0.0
@@ -53,10 +53,10 @@ pub fn write_outputs(
     stages.report_s = t0.elapsed().as_secs_f64();
     let report = Report {
         case: input.case.path.display().to_string(),
-        judge: cfg.judge,
-        judge_definition: cfg.judge.description(),
-        seed: cfg.seed,
-        budget: cfg.budget,
+        judge: cfg.campaign.judge,
+        judge_definition: cfg.campaign.judge.description(),
+        seed: cfg.campaign.seed,
+        budget: cfg.campaign.budget,
         flights,
         tests,
         suite,
@@ -70,7 +70,7 @@ pub fn write_outputs(
     };
     user_report::write_pictures(input, &report.view())?;
     let unconfirmed: Vec<&TestVerdict> = report.tests.iter().filter(|t| !t.confirmed).collect();
-    if cfg.confirm > 1 || !unconfirmed.is_empty() {
+    if cfg.flight.confirm > 1 || !unconfirmed.is_empty() {
         write_json(&input.folder.join("unconfirmed.json"), &unconfirmed, true)?;
     }
     write_json(&input.folder.join("report.json"), &report, true)?;
@@ -113,7 +113,7 @@ fn write_failing_tests(
         );
         let lfs = input.screener.path(&test);
         // Flown trajectories are recorded in the test's frame.
-        let judged = (flown.as_ref()).and_then(|t| judge_in_frame(t, &test.obstacles, input.cfg.judge));
+        let judged = (flown.as_ref()).and_then(|t| judge_in_frame(t, &test.obstacles, input.cfg.campaign.judge));
         verdict.above_top = judged.as_ref().and_then(|j| j.above_top);
         let closest = judged.map(|j| j.closest);
         let svg = plot(&test, lfs.as_ref(), flown.as_ref(), closest.as_ref(), &title);
@@ -126,11 +126,7 @@ fn write_failing_tests(
 
 /// The key spelling the tests are written in.
 fn spelling(input: &CampaignInput) -> Spelling {
-    if input.cfg.old_spelling {
-        Spelling::Old
-    } else {
-        Spelling::New
-    }
+    input.cfg.output.spelling
 }
 
 /// One flight in the report; `reported` names the failing tests written.

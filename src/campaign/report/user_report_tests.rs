@@ -173,7 +173,7 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
         predicted_p_fail: None,
         min_distance: Some(2.5),
         min_distance_raw: Some(2.5),
-        status: FlightStatus::Landed,
+        status: FlightStatus::LANDED,
         reason: None,
         flight_time_s: 60.0,
         points: 0,

@@ -2,7 +2,7 @@
 //! ([`crate::lfs::cp_model`]) per candidate, with the case's CP parameters. It is deterministic (no wind, no
 //! perturbation), so it has no ensemble.
 
-use crate::campaign::ground::screener::Screener;
+use crate::campaign::ground::screener::{Screened, Screener};
 use crate::campaign::screen::lfs_screener::NO_PREDICTION_M;
 use crate::judge::Judge;
 use crate::lfs::cp_model::{CpEnd, CpSimConfig, simulate_cp};
@@ -26,11 +26,11 @@ impl CpScreener {
 }
 
 impl Screener for CpScreener {
-    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+    fn screen(&self, test: &TestCase) -> Screened {
         let cfg = self.config();
         let cp = match CpParams::from_params(&test.params) {
             Ok(cp) => cp,
-            Err(e) => return (NO_PREDICTION_M, cfg.timeout_s, format!("error: {e}")),
+            Err(e) => return Screened::new(NO_PREDICTION_M, cfg.timeout_s, format!("error: {e}")),
         };
         let p = simulate_cp(test, &cp, &cfg);
         let d = p.min_distance.unwrap_or(NO_PREDICTION_M);
@@ -40,7 +40,7 @@ impl Screener for CpScreener {
             CpEnd::Stuck(_) => (cfg.timeout_s, "timeout"),
             CpEnd::Timeout => (cfg.timeout_s, "timeout"),
         };
-        (d, t, status.into())
+        Screened::new(d, t, status)
     }
 
     fn path(&self, test: &TestCase) -> Option<Trajectory> {
@@ -59,11 +59,11 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml");
         let mut t = TestCase::load(&path).unwrap();
         t.obstacles.clear();
-        let (d, time, status) = CpScreener::default().screen(&t);
-        assert_eq!((d, status.as_str()), (NO_PREDICTION_M, "landed"));
-        assert!(time > 10.0 && time < 200.0, "{time}");
+        let s = CpScreener::default().screen(&t);
+        assert_eq!((s.min_distance_m, s.ending.as_str()), (NO_PREDICTION_M, "landed"));
+        assert!(s.flight_time_s > 10.0 && s.flight_time_s < 200.0, "{s:?}");
         t.obstacles = vec![Obstacle::new(2.0, 2.0, 20.0, -3.0, 27.0, 0.0)];
-        let (d, _, _) = CpScreener::default().screen(&t);
+        let d = CpScreener::default().screen(&t).min_distance_m;
         assert!(d < 10.0, "{d}");
     }
 }

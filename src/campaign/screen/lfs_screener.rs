@@ -1,7 +1,7 @@
 //! The low-fidelity screener: one simulated flight per candidate with the 3DVFH* LFS, and an ensemble of
 //! perturbed flights for the shortlisted ones.
 
-use crate::campaign::ground::screener::Screener;
+use crate::campaign::ground::screener::{Screened, Screener};
 use crate::lfs::ensemble::{EnsembleParams, run_ensemble};
 use crate::lfs::sim::{SimConfig, SimStatus, simulate};
 use crate::model::TestCase;
@@ -19,7 +19,7 @@ pub struct LfsScreener {
 }
 
 impl Screener for LfsScreener {
-    fn screen(&self, test: &TestCase) -> (f64, f64, String) {
+    fn screen(&self, test: &TestCase) -> Screened {
         match simulate(test, &self.config) {
             Ok(r) => {
                 let d = r.distance.map_or(NO_PREDICTION_M, |d| d.min_distance);
@@ -33,9 +33,9 @@ impl Screener for LfsScreener {
                 let status = serde_json::to_value(r.status)
                     .ok()
                     .and_then(|v| v.as_str().map(String::from));
-                (d, t, status.unwrap_or_else(|| "unknown".into()))
+                Screened::new(d, t, status.unwrap_or_else(|| "unknown".into()))
             }
-            Err(e) => (NO_PREDICTION_M, self.config.timeout_s, format!("error: {e}")),
+            Err(e) => Screened::new(NO_PREDICTION_M, self.config.timeout_s, format!("error: {e}")),
         }
     }
 

@@ -8,11 +8,11 @@ use std::sync::atomic::AtomicBool;
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::config::CampaignConfig;
 use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction};
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::screener::{Progress, Screener};
 use crate::campaign::screen::parallel::{available_threads, parallel_map};
+use crate::campaign::settings::CampaignSettings;
 use crate::generator::{DrawDistribution, Neighbourhood};
 use crate::io::write_json;
 use crate::lfs::ensemble::{Ensemble, EnsembleParams};
@@ -87,8 +87,8 @@ pub fn screen_all(
         &|n| ctx.progress.tick(n),
         |&i| {
             let test = ctx.case.with_obstacles(ctx.candidates[i as usize].obstacles.clone());
-            let (min_distance, flight_time_s, status) = ctx.screener.screen(&test);
-            LfsPrediction::point(CandidateId(i), min_distance, flight_time_s, status)
+            let s = ctx.screener.screen(&test);
+            LfsPrediction::point(CandidateId(i), s.min_distance_m, s.flight_time_s, s.ending)
         },
     );
     let screened: Vec<LfsPrediction> = results.into_iter().flatten().collect();
@@ -110,7 +110,7 @@ pub fn screen_all(
 pub fn ensemble_shortlist(
     ctx: &Stage,
     fresh: &[LfsPrediction],
-    cfg: &CampaignConfig,
+    cfg: &CampaignSettings,
     shortlist: usize,
 ) -> Result<BTreeMap<u64, Vec<f64>>, CampaignError> {
     let cache_path = ctx.folder.join("ensemble.json");
@@ -118,7 +118,10 @@ pub fn ensemble_shortlist(
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
-    let mut order: Vec<&LfsPrediction> = fresh.iter().filter(|s| s.min_distance < cfg.threshold_m).collect();
+    let mut order: Vec<&LfsPrediction> = fresh
+        .iter()
+        .filter(|s| s.min_distance < cfg.screening.threshold_m)
+        .collect();
     order.sort_by(|a, b| {
         a.min_distance
             .total_cmp(&b.min_distance)
@@ -139,7 +142,11 @@ pub fn ensemble_shortlist(
             &|n| ctx.progress.tick(n),
             |&c| {
                 let test = ctx.case.with_obstacles(ctx.candidates[c as usize].obstacles.clone());
-                (c, ctx.screener.ensemble(&test, cfg.ensemble, member_seed(cfg.seed, c)))
+                (
+                    c,
+                    ctx.screener
+                        .ensemble(&test, cfg.screening.ensemble, member_seed(cfg.campaign.seed, c)),
+                )
             },
         );
         if results.iter().any(Option::is_none) {
@@ -152,7 +159,7 @@ pub fn ensemble_shortlist(
     }
     ctx.progress.note(&format!(
         "ensemble of {}: {} candidates ranked by expected points per minute",
-        cfg.ensemble,
+        cfg.screening.ensemble,
         order.len()
     ));
     Ok(cache)
@@ -164,10 +171,10 @@ pub fn ensemble_shortlist(
 pub fn run_ensemble(
     ctx: &Stage,
     fresh: &mut [LfsPrediction],
-    cfg: &CampaignConfig,
+    cfg: &CampaignSettings,
     remaining: usize,
 ) -> Result<f64, CampaignError> {
-    if cfg.ensemble == 0 || remaining == 0 {
+    if cfg.screening.ensemble == 0 || remaining == 0 {
         return Ok(0.0);
     }
     let t = std::time::Instant::now();

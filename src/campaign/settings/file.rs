@@ -5,51 +5,22 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-
 use crate::generator::GeneratorConfig;
-use crate::model::Range;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped};
-
-pub use super::keys::Output;
-pub use super::keys_run::{Flight, Learning, Mock, Screening};
-
-/// The file's sections; every key is optional (a key left out keeps its default, or the flag's value).
-#[derive(Debug, Default, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct CampaignToml {
-    /// The obstacle construction (the keys of the generator's own configuration).
-    #[serde(default)]
-    pub generator: Option<GeneratorConfig>,
-    #[serde(default)]
-    /// `[output]`.
-    pub output: Output,
-    #[serde(default)]
-    /// `[screening]`.
-    pub screening: Screening,
-    #[serde(default)]
-    /// `[mock]`.
-    pub mock: Mock,
-    #[serde(default)]
-    /// `[flight]`.
-    pub flight: Flight,
-    #[serde(default)]
-    /// `[learning]`.
-    pub learning: Learning,
-}
 
 /// The sections a campaign TOML may have.
 pub const SECTIONS: [&str; 6] = ["generator", "output", "screening", "mock", "flight", "learning"];
 
-/// A campaign TOML as read: its sections as written (a generator-only file under `generator`) and as typed.
+/// The sections only the command line sets: what the campaign is and what flies it.
+pub const FLAG_SECTIONS: [&str; 2] = ["campaign", "vehicles"];
+
+/// A campaign TOML as read: its sections as written (a generator-only file under `generator`).
 #[derive(Debug, Default, Clone)]
 pub struct Loaded {
     /// The file (`None`: no file).
     pub path: Option<PathBuf>,
     /// Its sections as written.
     pub raw: toml::Table,
-    /// Its sections as typed.
-    pub toml: CampaignToml,
 }
 
 impl Loaded {
@@ -64,21 +35,28 @@ impl Loaded {
     }
 
     /// Parses the text of `path`. A file without sections whose keys are all the generator's is read as
-    /// `[generator]`, so a generator-only file works wherever a campaign file does.
+    /// `[generator]`, so a generator-only file works wherever a campaign file does. Every value is typed here
+    /// once, so a bad one is named before any flag is looked at.
     pub fn parse(text: &str, path: &Path) -> Result<Self, String> {
         let raw: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
         let generator_only = !raw.is_empty() && raw.keys().all(|k| !SECTIONS.contains(&k.as_str()));
-        let raw = if generator_only {
+        let raw = if generator_only && raw.keys().all(|k| !FLAG_SECTIONS.contains(&k.as_str())) {
             GeneratorConfig::from_toml(text)?;
             toml::Table::from_iter([("generator".to_string(), toml::Value::Table(raw))])
         } else {
             raw
         };
-        let toml = typed(&raw)?;
+        if let Some(s) = raw.keys().find(|k| FLAG_SECTIONS.contains(&k.as_str())) {
+            return Err(format!(
+                "[{s}] is given on the command line (its flags), not in the campaign TOML; the file's sections are \
+                 {}",
+                SECTIONS.join(", ")
+            ));
+        }
+        super::asked::Asked::typed(&raw)?;
         Ok(Self {
             path: Some(path.to_path_buf()),
             raw,
-            toml,
         })
     }
 
@@ -87,6 +65,14 @@ impl Loaded {
         self.path
             .as_deref()
             .map_or_else(String::new, |p| p.display().to_string())
+    }
+
+    /// Whether the file sets `section.key`.
+    pub fn sets(&self, section: &str, key: &str) -> bool {
+        self.raw
+            .get(section)
+            .and_then(toml::Value::as_table)
+            .is_some_and(|t| t.contains_key(key))
     }
 
     /// The `[generator]` keys the file sets.
@@ -99,18 +85,8 @@ impl Loaded {
     }
 }
 
-/// The sections as typed, the generator's checked.
-pub fn typed(raw: &toml::Table) -> Result<CampaignToml, String> {
-    let c: CampaignToml = toml::Value::Table(raw.clone())
-        .try_into()
-        .map_err(|e: toml::de::Error| e.to_string())?;
-    if let Some(g) = &c.generator {
-        g.validate().map_err(|e| format!("[generator] {e}"))?;
-    }
-    Ok(c)
-}
-
-/// Every declared key as a TOML file, each set to its example value (its default where that is a constant).
+/// Every key a campaign TOML may set, as a TOML file, each set to its example value (its default where that is
+/// a constant).
 pub fn example_toml() -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
@@ -121,11 +97,4 @@ pub fn example_toml() -> String {
         }
     }
     s
-}
-
-/// `--diagonal 6,11` and the like: a range as `MIN,MAX`.
-pub fn parse_range(s: &str) -> Result<Range, String> {
-    let (a, b) = s.split_once(',').ok_or_else(|| format!("{s:?}: expected MIN,MAX"))?;
-    let num = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("{t:?} is not a number"));
-    Ok(Range::new(num(a)?, num(b)?))
 }

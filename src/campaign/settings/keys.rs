@@ -1,195 +1,113 @@
-//! The declaration of every campaign setting, section by section: the section types of the campaign TOML
-//! ([`super::file`]) are generated from it, with a getter for each constant default.
+//! The declaration of the settings only the command line gives: what the campaign is (`[campaign]`: the case,
+//! the budget, the seed, the mode, the judge, the prior) and what flies it (`[vehicles]`: the embedded mocks,
+//! MAVLink URLs, PX4 SITL instances started here, or runner jobs).
 
-use super::{DefaultValue, Flag, FlagText, Setting};
-use crate::generator::GeneratorConfig;
-use crate::generator::limits as bounds;
-use crate::model::Range;
+use std::path::PathBuf;
 
-/// The largest speed-up of simulated time: beyond it a vehicle's physics step outruns any link.
-pub const MAX_TIME_SCALE: f64 = 1000.0;
+use super::declare::section;
+use super::{Flag, Resume};
+use crate::bridge::FlyMode;
+use crate::judge::Judge;
+use crate::model::Limit;
+
 /// The largest budget accepted. A campaign keeps its journal in memory (about 1 KB a flight) and the report
 /// compares failing tests pairwise, so 10,000 flights stay small; on the mock they take about 5 hours.
 pub const MAX_BUDGET: usize = 10_000;
 /// The most candidates accepted. Each is screened by a full low-fidelity flight (about 0.2 s of one core), so
 /// 100,000 are hours of screening; they are held as a few hundred bytes each.
 pub const MAX_CANDIDATES: usize = 100_000;
-/// Fitted against the recorded competition flights: any pose age only adds clearance, so none is modelled
-/// (docs/design-constants.md#mock-pose-latency).
-pub const DEFAULT_MOCK_LATENCY_MS: f64 = 0.0;
-/// Embedded mock autopilots per core, at most: each simulates and judges a flight on the campaign's threads.
-pub const MOCKS_PER_CORE: usize = 8;
-
-/// A setting with no flag, no stored key and no range: what each declaration starts from.
-pub(super) const BLANK: Setting = Setting {
-    section: "",
-    key: "",
-    flag: None,
-    stored: "",
-    default: DefaultValue::Setup { doc: "", example: "" },
-    range: None,
-    choices: &[],
-    help: "",
-    parse: <String as FlagText>::parse,
-};
-
-/// Declares a section: its type (every key optional, unknown keys refused), a getter per constant default
-/// (`[value EXPR]`), and its table of [`Setting`]s. `[setup "words", "example"]` is a default the campaign's
-/// setup decides.
-macro_rules! section {
-    ($(#[$m:meta])* $name:ident, $section:literal, $table:ident {
-        $( $field:ident : $ty:ty = [$($default:tt)*] { $($desc:tt)* } ),* $(,)?
-    }) => {
-        $(#[$m])*
-        #[derive(Debug, Default, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
-        #[serde(deny_unknown_fields)]
-        pub struct $name { $( #[doc = concat!("`", $section, ".", stringify!($field), "`.")] pub $field: Option<$ty>, )* }
-
-        impl $name { $( section!(@get $field $ty [$($default)*]); )* }
-
-        #[doc = concat!("The `[", $section, "]` settings.")]
-        pub const $table: &[Setting] = &[ $( section!(@setting $section, $field, $ty, [$($default)*], $($desc)*) ),* ];
-    };
-    (@setting $section:literal, $field:ident, $ty:ty, [$($default:tt)*], $($desc:tt)*) => {
-        Setting {
-            section: $section,
-            key: stringify!($field),
-            default: section!(@default $ty [$($default)*]),
-            parse: <$ty as FlagText>::parse,
-            $($desc)*
-            ..BLANK
-        }
-    };
-    (@get $field:ident $ty:ty [value $d:expr]) => {
-        /// The value given, else the default.
-        pub fn $field(&self) -> $ty { self.$field.clone().unwrap_or_else(|| $d) }
-    };
-    (@get $field:ident $ty:ty [setup $doc:literal, $ex:literal]) => {};
-    (@default $ty:ty [value $d:expr]) => { DefaultValue::Constant(|| toml::Value::try_from::<$ty>($d).ok()) };
-    (@default $ty:ty [setup $doc:literal, $ex:literal]) => { DefaultValue::Setup { doc: $doc, example: $ex } };
-}
-
-/// Declares the `[generator]` keys, whose type is the generator's own [`GeneratorConfig`].
-macro_rules! generator {
-    ($( $field:ident : $ty:ty { $($desc:tt)* } ),* $(,)?) => {
-        /// The `[generator]` settings.
-        pub const GENERATOR: &[Setting] = &[ $(
-            section!(@setting "generator", $field, $ty, [value GeneratorConfig::default().$field], $($desc)*)
-        ),* ];
-    };
-}
-
-generator! {
-    diagonal_m: Range {
-        flag: Some(Flag::value("--diagonal", "MIN,MAX")),
-        stored: "generator.diagonal_m",
-        range: Some(bounds::DIAGONAL_M),
-        help: "Diagonal of obstacle 1's base, metres; the upper bound keeps obstacle 2 (1.75 x as long) within the 20 m rule.",
-    },
-    width_m: f64 {
-        stored: "generator.width_m",
-        range: Some(bounds::WIDTH_M),
-        help: "Width of both bases, metres.",
-    },
-    split: f64 {
-        stored: "generator.split",
-        range: Some(bounds::SPLIT),
-        help: "Share of obstacle 1's length on the A side of the segment of interest (the paper family's).",
-    },
-    length_factor: f64 {
-        stored: "generator.length_factor",
-        range: Some(bounds::LENGTH_FACTOR),
-        help: "Obstacle 2's length as a multiple of obstacle 1's, so the drone cannot circle it.",
-    },
-    height_m: f64 {
-        flag: Some(Flag::value("--height", "M")),
-        stored: "generator.height_m",
-        range: Some(bounds::HEIGHT_M),
-        help: "Height of both boxes, metres (above the 10 m flight altitude, so the drone cannot fly over).",
-    },
-    angle_deg: Range {
-        flag: Some(Flag::value("--angle", "MIN,MAX")),
-        stored: "generator.angle_deg",
-        range: Some(bounds::ANGLE_DEG),
-        help: "Acute angle between obstacle 1's A part and the direction of flight, degrees.",
-    },
-    gap_m: Range {
-        flag: Some(Flag::value("--gap", "MIN,MAX")),
-        stored: "generator.gap_m",
-        range: Some(bounds::GAP_M),
-        help: "Gap between obstacle 1's A end and obstacle 2, metres.",
-    },
-    overhang: Range {
-        stored: "generator.overhang",
-        range: Some(bounds::OVERHANG),
-        help: "How far obstacle 2 reaches past obstacle 1's far face, as a share of its length.",
-    },
-    family: crate::generator::Family {
-        flag: Some(Flag::value("--family", "FAMILY")),
-        stored: "generator.family",
-        choices: &[
-            ("paper", "The paper's two-obstacle S."),
-            ("extended", "The split drawn too, and a third obstacle where the case allows."),
-            ("gate", "Two boxes across the path with a gap around 2 x CP_DIST."),
-        ],
-        help: "`paper` (two obstacles, the paper's split), `extended` (the split drawn from `adapted_split`, and a \
-               third obstacle beyond the pair where the mission leaves room) or `gate` (two boxes across the path \
-               with a gap around 2 x CP_DIST; the default with --mode collision-prevention).",
-    },
-    adapted_split: Range {
-        stored: "generator.adapted_split",
-        range: Some(bounds::ADAPTED_SPLIT),
-        help: "The extended family's range of `split`.",
-    },
-    third_ahead_m: Range {
-        stored: "generator.third_ahead_m",
-        range: Some(bounds::THIRD_AHEAD_M),
-        help: "The extended family's clear distance along the segment of interest from the pair to the third \
-               obstacle, metres.",
-    },
-    max_attempts: u32 {
-        stored: "generator.max_attempts",
-        range: Some(bounds::MAX_ATTEMPTS),
-        help: "Draws per test before the generator reports that the mission leaves no room.",
-    },
-}
+/// The largest speed-up of simulated time: beyond it a vehicle's physics step outruns any link.
+pub const MAX_TIME_SCALE: f64 = 1000.0;
+/// Runner jobs at once, at most: each is a thread and a local process (`sh -c`, `srun`, `kubectl`, ...).
+pub const MAX_JOBS: usize = 1024;
+/// `--jobs` with `--runner` (on the mocks it has `mock.vehicles`' range, on PX4 `--instances`').
+pub const RUNNER_JOBS: Limit = Limit::count(1, MAX_JOBS, "(each job is a thread and a local process)");
 
 section! {
-    /// `[output]`.
-    Output, "output", OUTPUT {
-        spelling: String = [value "new".to_string()] {
-            flag: Some(Flag::value("--spelling", "SPELLING")),
-            stored: "old_spelling",
-            choices: &[
-                ("new", "`robot:` and `mission:` (Aerialist since 2025-09)."),
-                ("old", "`drone:` and `test:` (Aerialist before 2025-09, e.g. the 2025 competition's)."),
-            ],
-            help: "Key spelling of the written YAML: `new` (robot/mission) or `old` (drone/test, Aerialist before \
-                   2025-09).",
+    /// `[campaign]`: what the campaign is.
+    Campaign, CampaignAsked, "campaign", CAMPAIGN {
+        case: PathBuf = [required "missions/mission2.yaml"] {
+            flag: Some(Flag::positional("case", "CASE", 1)),
+            help: "The case study YAML (mission, params, commands).",
+        },
+        budget: usize = [required "100"] {
+            flag: Some(Flag::positional("budget", "BUDGET", 2)),
+            range: Some(Limit::count(1, MAX_BUDGET, "flights")),
+            help: "High-fidelity flights allowed (the competition's budget): 1 to 10000.",
+        },
+        seed: u64 = [value 0] {
+            flag: Some(Flag::value("--seed", "S").short('s').visible()),
+            help: "Seed of every random draw: the same seed draws the same candidates.",
+        },
+        mode: FlyMode = [value FlyMode::Avoidance] {
+            flag: Some(Flag::value("--mode", "MODE")),
+            help: "How the flights avoid the virtual obstacles.",
+        },
+        judge: Judge = [value Judge::E2026] {
+            flag: Some(Flag::value("--judge", "EDITION").visible()),
+            help: "Judge edition of the distances (and of the low-fidelity prediction).",
+        },
+        prior: PathBuf = [absent "none: the campaign starts from the shipped calibration", "results/2026-11-29T03-20-58"] {
+            flag: Some(Flag { conflicts_with: "no-learn", ..Flag::value("--prior", "FOLDER").visible() }),
+            help: "Start from what an earlier campaign learnt (its output folder's learnt.json).",
         },
     }
 }
 
-pub(super) use section;
-
-/// Numbers only the command line gives.
-pub mod flags {
-    use crate::model::Limit;
-
-    /// Runner jobs at once, at most: each is a thread and a local process (`sh -c`, `srun`, `kubectl`, ...).
-    pub const MAX_JOBS: usize = 1024;
-    /// `--jobs` with `--runner`.
-    pub const JOBS: Limit = Limit::count(1, MAX_JOBS, "(each job is a thread and a local process)");
-    /// `--job-timeout`.
-    pub const JOB_TIMEOUT: Limit = Limit::above(0.0, 604_800.0, "s");
-    /// `--speed-factor`.
-    pub const PX4_SPEED_FACTOR: Limit = Limit::above(0.0, 100.0, "x wall time");
-    /// `--instances` with `--px4`.
-    pub const INSTANCES: Limit = Limit::count(
-        1,
-        crate::bridge::sitl::slot::SLOTS as usize,
-        "PX4 instances (docs/px4.md)",
-    );
-    /// BUDGET.
-    pub const BUDGET: Limit = Limit::count(1, super::MAX_BUDGET, "flights");
+section! {
+    /// `[vehicles]`: what flies the campaign.
+    Vehicles, VehiclesAsked, "vehicles", VEHICLES {
+        connect: Vec<String> = [value vec!["mock".to_string()]] {
+            flag: Some(Flag { alias: "hfs", ..Flag::value("--connect", "mock|URL,...").visible() }),
+            help: "The vehicles: `mock` (embedded mock autopilots) or MAVLink URLs separated by commas, one flight per \
+                   vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).",
+        },
+        runner: String = [absent "none: the flights go to the vehicles of `connect` or `px4`", "srun {test}"] {
+            flag: Some(Flag { conflicts_with: "connect", ..Flag::value("--runner", "COMMAND").visible() }),
+            help: "Fly each test as a job of an existing engine: this shell command, run per flight in the flight's \
+                   job folder with {test} (its test YAML), {dir} (the folder) and {id} filled in; the flight is read \
+                   back from what the job leaves there (docs/runners.md: Aerialist, Slurm, Kubernetes).",
+        },
+        jobs: usize = [absent "the backend's own: one per core on the mocks, what the cores carry on --px4, 1 runner job", "2"] {
+            flag: Some(Flag::value("--jobs", "N").short('j').visible()),
+            resume: Resume::Inherited,
+            help: "Flights at once, whatever flies them: embedded mocks (default: one per core), --px4 instances \
+                   (default: what the cores carry) or --runner jobs (default 1).",
+        },
+        job_timeout_s: f64 = [value 1200.0] {
+            flag: Some(Flag::value("--job-timeout", "S")),
+            range: Some(Limit::above(0.0, 604_800.0, "s")),
+            resume: Resume::Asked,
+            help: "Wall-time limit of one runner job, seconds (with --runner).",
+        },
+        runner_cancel: String = [absent "none: a stopped job is left to its engine", "scancel --name {id}"] {
+            flag: Some(Flag::value("--runner-cancel", "COMMAND")),
+            resume: Resume::Asked,
+            help: "With --runner: the command that cancels a job in its engine when the campaign stops or the job \
+                   times out, with {id} (`scancel --name {id}`; docs/runners.md). Not kept: give it again with \
+                   --resume.",
+        },
+        px4: PathBuf = [absent "none: no PX4 is started here", "/path/to/PX4-Autopilot/build/px4_sitl_default"] {
+            flag: Some(Flag { conflicts_with: "connect", ..Flag::value("--px4", "BUILD_DIR").visible() }),
+            help: "Fly on PX4 SITL instances started here, every flight on a fresh instance at the test's home: \
+                   BUILD_DIR is your PX4-Autopilot `build/px4_sitl_default` folder (docs/px4.md).",
+        },
+        instances: usize = [absent "what the machine's cores carry at the speed factor (docs/px4.md)", "2"] {
+            flag: Some(Flag::value("--instances", "K")),
+            range: Some(Limit::count(1, crate::bridge::sitl::slot::SLOTS as usize, "PX4 instances (docs/px4.md)")),
+            resume: Resume::Asked,
+            help: "PX4 instances flying at once (default: what the machine's cores carry at --speed-factor, \
+                   docs/px4.md); --jobs says the same.",
+        },
+        speed_factor: f64 = [value 5.0] {
+            flag: Some(Flag::value("--speed-factor", "F")),
+            range: Some(Limit::above(0.0, 100.0, "x wall time")),
+            help: "PX4_SIM_SPEED_FACTOR of the --px4 instances (the factor the PX4 campaigns of docs/experiments.md \
+                   flew at).",
+        },
+        keep_ulog: bool = [value false] {
+            flag: Some(Flag::switch("--keep-ulog", true)),
+            help: "Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg.",
+        },
+    }
 }

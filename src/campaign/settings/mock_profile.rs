@@ -20,6 +20,18 @@ pub struct MockProfile {
     pub tuning: Tuning,
 }
 
+/// A profile's name, as `mock.profile` takes it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum ProfileName {
+    /// `px4-sitl`: fitted to real PX4 v1.14 SITL (SIH).
+    #[default]
+    #[serde(rename = "px4-sitl")]
+    Px4Sitl,
+    /// `competition`: fitted to the competition's recorded Gazebo flights.
+    #[serde(rename = "competition")]
+    Competition,
+}
+
 /// The default profile's name.
 pub const DEFAULT_PROFILE: &str = "px4-sitl";
 
@@ -62,6 +74,15 @@ impl MockProfile {
             params: params.into_iter().map(|(n, v)| (n.to_string(), v)).collect(),
             tuning,
         })
+    }
+
+    /// The profile `name`.
+    pub fn of(name: ProfileName) -> Self {
+        let named = match name {
+            ProfileName::Px4Sitl => "px4-sitl",
+            ProfileName::Competition => "competition",
+        };
+        Self::by_name(named).unwrap_or_else(|| unreachable!("every ProfileName is a profile"))
     }
 
     /// The profile called `name`, or an error naming the known ones.
@@ -123,6 +144,8 @@ mod tests {
             "{e}"
         );
         assert_eq!(MockProfile::default().name, DEFAULT_PROFILE);
+        assert_eq!(MockProfile::of(ProfileName::default()).name, DEFAULT_PROFILE);
+        assert_eq!(MockProfile::of(ProfileName::Competition).name, "competition");
     }
 
     #[test]

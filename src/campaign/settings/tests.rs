@@ -1,30 +1,27 @@
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::*;
-use crate::campaign::setup::{self, Ask};
-use crate::judge::Judge;
 
-fn ask() -> Ask {
-    Ask {
-        case: PathBuf::from("missions/mission2.yaml"),
-        budget: 20,
-        seed: 0,
-        connect: vec!["mock".into()],
-        mode: "avoidance".into(),
-        judge: Judge::E2026,
-        prior: None,
-        runner: None,
-        jobs: None,
-        px4: None,
-    }
+/// A new campaign's request: CASE and BUDGET, and `flags`.
+fn request(flags: Vec<(&'static Setting, toml::Value)>, file: &Loaded) -> Result<Request, String> {
+    let mut all = vec![
+        (
+            find("campaign", "case").unwrap(),
+            toml::Value::String("missions/mission2.yaml".into()),
+        ),
+        (find("campaign", "budget").unwrap(), toml::Value::Integer(20)),
+    ];
+    all.extend(flags);
+    Request::new(file, &all)
 }
 
 #[test]
 fn every_declared_key_parses_and_every_key_of_the_format_is_declared() {
     let text = example_toml();
     let loaded = Loaded::parse(&text, Path::new("example.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
-    let json = serde_json::to_value(&loaded.toml).unwrap();
-    for section in SECTIONS {
+    let asked = request::Asked::typed(&loaded.raw).unwrap();
+    let json = serde_json::to_value(&asked).unwrap();
+    for section in SECTIONS.into_iter().filter(|s| *s != "generator") {
         let keys = json[section].as_object().unwrap();
         for (k, v) in keys {
             assert!(!v.is_null(), "[{section}] {k} is not declared");
@@ -50,11 +47,11 @@ fn every_constant_default_is_a_value_and_every_example_a_flag_value() {
         if let Some(f) = &s.flag
             && !f.is_switch()
         {
-            let example = s.example().replace(['{', '}', ' '], "");
+            let example = s.example().replace(['{', '}', ' ', '[', ']'], "");
             let text = example
                 .strip_prefix("min=")
                 .map(|r| r.replace(",max=", ","))
-                .unwrap_or(example.trim_matches('"').to_string());
+                .unwrap_or(example.trim_matches('"').replace('"', ""));
             assert!((s.parse)(&text).is_ok(), "{} {text}", f.long);
         }
     }
@@ -71,15 +68,17 @@ fn unknown_keys_and_sections_are_named() {
     assert!(e.contains("gap_m"), "{e}");
     let e = Loaded::parse("[mock]\nspeed = \"fast\"\n", p).unwrap_err();
     assert!(e.contains("speed"), "{e}");
+    let e = Loaded::parse("[screening]\nmotion = \"pixhawk\"\n", p).unwrap_err();
+    assert!(e.contains("pixhawk") && e.contains("px4"), "{e}");
+    let e = Loaded::parse("[campaign]\nseed = 3\n", p).unwrap_err();
+    assert!(e.contains("command line"), "{e}");
 }
 
 #[test]
 fn a_file_of_generator_keys_alone_is_the_generator_section() {
     let l = Loaded::parse("family = \"extended\"\n", Path::new("g.toml")).unwrap();
-    assert_eq!(
-        l.toml.generator.as_ref().map(|g| g.family),
-        Some(crate::generator::Family::Extended)
-    );
+    let r = Request::new(&l, &[]).unwrap();
+    assert_eq!(r.generator().family, crate::generator::Family::Extended);
     assert_eq!(l.generator_keys(), ["family"]);
     let e = Loaded::parse("gap_m = { min = 2.5, max = 3.0 }\nbogus = 1\n", Path::new("g.toml")).unwrap_err();
     assert!(e.contains("bogus"), "{e}");
@@ -106,41 +105,84 @@ fn beyond(s: &Setting) -> Option<String> {
 fn every_number_beyond_its_declared_range_is_refused_naming_it() {
     for s in all() {
         let Some(v) = beyond(s) else { continue };
-        let text = format!("[{}]\n{} = {v}\n", s.section, s.key);
-        let refused = Loaded::parse(&text, Path::new("r.toml")).and_then(|file| {
-            let req = lay_over(&file, &[])?;
-            check_unstored(&req.settings)?;
-            setup::check(&setup::build(&ask(), &req)).map_err(|e| e.to_string())
-        });
-        let e = refused.expect_err(&text);
-        assert!(e.contains(s.key) && e.contains("range"), "{text}: {e}");
+        if s.in_file() {
+            let text = format!("[{}]\n{} = {v}\n", s.section, s.key);
+            let refused = Loaded::parse(&text, Path::new("r.toml"))
+                .and_then(|file| request(vec![], &file))
+                .and_then(|r| CampaignSettings::resolve(&r))
+                .and_then(|c| c.check());
+            let e = refused.expect_err(&text);
+            assert!(e.contains(s.key) && e.contains("range"), "{text}: {e}");
+        }
         if let Some(f) = s.flag.filter(|f| !f.is_switch()) {
             let value = toml::from_str::<toml::Table>(&format!("v = {v}")).unwrap()["v"].clone();
-            let e = lay_over(&Loaded::default(), &[(s, value)]).unwrap_err();
-            assert!(e.contains(f.long) && e.contains("range"), "{}: {e}", f.long);
+            let e = Request::new(&Loaded::default(), &[(s, value)]).unwrap_err();
+            let named = if f.position.is_some() { s.key } else { f.long };
+            assert!(e.contains(named) && e.contains("range"), "{}: {e}", f.long);
         }
     }
 }
 
 #[test]
-fn flags_replace_the_file_and_are_recorded_by_their_stored_names() {
+fn flags_replace_the_file_and_are_recorded_as_given() {
     let file = Loaded::parse("[mock]\nspeed = 50.0\nvehicles = 3\n", Path::new("m.toml")).unwrap();
     let speed = find("mock", "speed").unwrap();
-    let req = lay_over(&file, &[(speed, toml::Value::Float(20.0))]).unwrap();
-    assert_eq!(req.settings.mock.speed(), 20.0);
-    assert_eq!(req.settings.mock.vehicles, Some(3));
-    assert_eq!(req.given, [Given::flag("--mock-speed", false, "mock_speed")]);
-    let cfg = setup::build(&ask(), &req);
-    assert_eq!(cfg.mock_speed, 20.0);
-    assert_eq!(setup::build(&ask(), &Requested::default()).mock_speed, 100.0);
-    let cp = Ask {
-        mode: "collision-prevention".into(),
-        ..ask()
-    };
+    let req = request(vec![(speed, toml::Value::Float(20.0))], &file).unwrap();
+    assert_eq!(req.asked.mock.speed, Some(20.0));
+    assert_eq!(req.asked.mock.vehicles, Some(3));
+    let given: Vec<(String, Option<String>)> = (req.given.iter())
+        .map(|g| (g.setting.toml_key(), g.file.clone()))
+        .collect();
     assert_eq!(
-        setup::build(&cp, &Requested::default()).mock_speed,
-        setup::CP_MOCK_SPEED
+        given,
+        [
+            ("campaign.case".to_string(), None),
+            ("campaign.budget".to_string(), None),
+            ("mock.speed".to_string(), None),
+            ("mock.vehicles".to_string(), Some("m.toml".to_string())),
+        ]
     );
-    let file_only = lay_over(&file, &[]).unwrap();
-    assert_eq!(setup::build(&cp, &file_only).mock_speed, 50.0, "a given speed wins");
+    let s = CampaignSettings::resolve(&req).unwrap();
+    assert_eq!((s.mock.speed, s.mock.vehicles), (20.0, 3));
+}
+
+#[test]
+fn campaign_json_is_the_settings_and_reads_back_as_they_were() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = CampaignSettings::resolve(&request(vec![], &Loaded::default()).unwrap()).unwrap();
+    s.save(&dir.path().join("campaign.json")).unwrap();
+    assert_eq!(CampaignSettings::load(dir.path()).unwrap(), s);
+    let json = s.to_json().unwrap();
+    assert_eq!(json["format"], json::FORMAT);
+    let mut newer = json.clone();
+    newer["format"] = serde_json::json!(json::FORMAT + 1);
+    let e = CampaignSettings::from_json(newer).unwrap_err();
+    assert!(e.contains("newer prgenuav"), "{e}");
+    let mut stray = json;
+    stray["screening"]["thresold_m"] = serde_json::json!(2.0);
+    assert!(CampaignSettings::from_json(stray).unwrap_err().contains("thresold_m"));
+}
+
+/// Each setting's default is declared once: every key `campaign.json` holds is a declared setting's, so no
+/// default can hide in the stored type; and no declared default is a second spelling of another's.
+#[test]
+fn every_stored_key_is_a_declared_setting() {
+    let s = CampaignSettings::resolve(&request(vec![], &Loaded::default()).unwrap()).unwrap();
+    let json = serde_json::to_value(&s).unwrap();
+    let mut stored = Vec::new();
+    for (section, keys) in json.as_object().unwrap() {
+        for key in keys.as_object().unwrap().keys() {
+            stored.push(format!("{section}.{key}"));
+        }
+    }
+    let declared: Vec<String> = all().map(Setting::toml_key).collect();
+    assert_eq!(stored.len(), declared.len());
+    for k in &stored {
+        assert!(declared.contains(k), "{k} is stored but not declared");
+    }
+    let mut flags: Vec<&str> = all().filter_map(|s| s.flag.map(|f| f.long)).collect();
+    let n = flags.len();
+    flags.sort();
+    flags.dedup();
+    assert_eq!(flags.len(), n, "a flag is declared twice");
 }

@@ -38,22 +38,6 @@ pub struct FlightRecord {
 }
 
 impl FlightRecord {
-    /// Stand-ins for the flights queued or in the air (no distance yet), for the near-duplicate filter.
-    pub fn queued(busy: &[(CandidateId, Vec<Obstacle>)]) -> Vec<FlightRecord> {
-        busy.iter()
-            .map(|(candidate, obstacles)| FlightRecord {
-                candidate: *candidate,
-                attempt: 0,
-                obstacles: obstacles.clone(),
-                prediction: LfsPrediction::point(*candidate, f64::NAN, 0.0, String::new()),
-                flown: Flown::ended(FlightStatus::Queued),
-                vehicle: String::new(),
-                trajectory: PathBuf::new(),
-                wall_s: 0.0,
-            })
-            .collect()
-    }
-
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
         self.flown.status.charged()
@@ -314,7 +298,7 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
             min_distance: flown,
             min_distance_raw: flown,
             flight_time_s: 60.0,
-            ..Flown::ended(FlightStatus::Landed)
+            ..Flown::ended(FlightStatus::LANDED)
         },
         vehicle: "x".into(),
         trajectory: "t.csv".into(),
@@ -337,7 +321,7 @@ mod tests {
                 min_distance: Some(1.0),
                 min_distance_raw: Some(0.9),
                 flight_time_s: 41.0,
-                ..Flown::ended(FlightStatus::Landed)
+                ..Flown::ended(FlightStatus::LANDED)
             },
             vehicle: "mock".into(),
             trajectory: "flights/candidate_1.csv".into(),
@@ -371,7 +355,7 @@ mod tests {
         let base = record(2);
         let stopped = FlightRecord {
             flown: Flown {
-                status: FlightStatus::LinkLost,
+                status: FlightStatus::LINK_LOST,
                 reason: Some("no MISSION_ACK within 1.0 s".into()),
                 min_distance: None,
                 ..base.flown.clone()

@@ -191,7 +191,7 @@ fn a_record_with_every_field_is_written_as_the_journal_line_always_was() {
         expected_points: Some(3.0),
         ..LfsPrediction::point(CandidateId(4), 0.5, 40.0, "landed".into())
     };
-    r.flown.status = FlightStatus::Collision;
+    r.flown.status = FlightStatus::COLLISION;
     (r.flown.warnings, r.flown.reason) = (vec!["w".into()], Some("r".into()));
     (r.flown.closest_centre_m, r.flown.inside_cp_dist) = (Some(1.5), Some(true));
     let line = r#"{"candidate":4,"attempt":2,"obstacles":[],"predicted_min_distance":0.5,"predicted_flight_time_s":40.0,"predicted_p_fail":0.25,"predicted_raw_min_distance":0.75,"min_distance":1.0,"min_distance_raw":0.9,"status":"collision","flight_time_s":41.0,"warnings":["w"],"reason":"r","vehicle":"mock","trajectory":"flights/candidate_1.csv","wall_s":0.3,"closest_centre_m":1.5,"inside_cp_dist":true}"#;

@@ -3,10 +3,6 @@
 //! in docs/cli.md.
 
 pub(super) mod plan;
-pub(super) mod px4;
-mod resume;
-mod runner;
-mod stored_changes;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,67 +12,22 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::ArgMatches;
-use prgenuav::campaign::fly::vehicle::Vehicle;
-use prgenuav::campaign::ground::screener::Screener;
 use prgenuav::campaign::report::outputs::Report;
 use prgenuav::campaign::report::user_report;
 use prgenuav::campaign::run::run_campaign;
-use prgenuav::campaign::screen::cp_screener::CpScreener;
-use prgenuav::campaign::screen::lfs_screener::LfsScreener;
-use prgenuav::campaign::setup::fleet;
-use prgenuav::lfs::ensemble::EnsembleParams;
-use prgenuav::lfs::sim::SimConfig;
-use tokio::runtime::Runtime;
 
 use super::progress::Reporter;
 use super::setting_flags::CampaignFlags;
 use super::stop_signals::StopSignals;
-use super::values::{JudgeEdition, Mode, Motion, parse_stored};
 use plan::Plan;
 
-/// Arguments of `generate`.
+/// Arguments of `generate`: every campaign setting's flag (CASE, BUDGET and the expert ones among them, from
+/// their declarations), and how this run reads and prints.
 #[derive(Debug, clap::Args)]
 pub struct GenerateArgs {
-    /// The case study YAML (mission, params, commands).
-    #[arg(value_name = "CASE")]
-    case: Option<PathBuf>,
-    /// High-fidelity flights allowed (the competition's budget): 1 to 10000.
-    budget: Option<usize>,
-    /// Seed of the generator: the same seed draws the same candidates.
-    #[arg(short, long, default_value_t = 0)]
-    seed: u64,
     /// Folder in which the campaign's timestamped output folder is created.
     #[arg(short, long, value_name = "DIR", default_value = "generated_tests")]
     out: PathBuf,
-    /// The vehicles: `mock` (embedded mock autopilots) or MAVLink URLs separated by commas, one flight per
-    /// vehicle at a time (e.g. udpin:0.0.0.0:14540,udpin:0.0.0.0:14541).
-    #[arg(long, alias = "hfs", value_name = "mock|URL,...", default_value = "mock")]
-    connect: String,
-    /// Fly each test as a job of an existing engine: this shell command, run per flight in the flight's job
-    /// folder with {test} (its test YAML), {dir} (the folder) and {id} filled in; the flight is read back
-    /// from what the job leaves there (docs/runners.md: Aerialist, Slurm, Kubernetes).
-    #[arg(long, value_name = "COMMAND", conflicts_with = "connect")]
-    runner: Option<String>,
-    /// Flights at once, whatever flies them: embedded mocks (default: one per core), --px4 instances (default:
-    /// what the cores carry) or --runner jobs (default 1).
-    #[arg(short, long, value_name = "N")]
-    jobs: Option<usize>,
-    /// Wall-time limit of one runner job, seconds (with --runner; default 1200).
-    #[arg(long, hide = true, value_name = "S")]
-    job_timeout: Option<f64>,
-    /// With --runner: the command that cancels a job in its engine when the campaign stops or the job times
-    /// out, with {id} (`scancel --name {id}`; docs/runners.md). Not stored: give it again with --resume.
-    #[arg(long, hide = true, value_name = "COMMAND")]
-    runner_cancel: Option<String>,
-    /// How the flights avoid the virtual obstacles.
-    #[arg(long, hide = true, value_enum, default_value_t = Mode::Avoidance)]
-    mode: Mode,
-    /// Judge edition of the distances (and of the low-fidelity prediction).
-    #[arg(long, value_enum, default_value_t = JudgeEdition::E2026)]
-    judge: JudgeEdition,
-    /// Start from what an earlier campaign learnt (its output folder's learnt.json).
-    #[arg(long, value_name = "FOLDER", conflicts_with = "no-learn")]
-    prior: Option<PathBuf>,
     /// Continue a killed campaign in FOLDER with the settings in its campaign.json (a flag asking for a
     /// different value is refused).
     #[arg(long, value_name = "FOLDER")]
@@ -91,8 +42,6 @@ pub struct GenerateArgs {
     /// Print the report as JSON on stdout (and no progress output).
     #[arg(long)]
     json: bool,
-    #[command(flatten)]
-    px4: px4::Px4Flags,
     /// The campaign settings' flags (the expert ones hidden; each sets its campaign TOML key).
     #[command(flatten)]
     settings: CampaignFlags,
@@ -100,39 +49,25 @@ pub struct GenerateArgs {
 
 pub fn run(args: GenerateArgs, matches: &ArgMatches) -> anyhow::Result<ExitCode> {
     let plan = plan::plan(&args, matches)?;
-    let cfg = &plan.cfg;
+    let cfg = &plan.settings;
     if args.resume.is_some()
-        && let Some(note) = complete_note(&plan.folder, cfg.budget)
+        && let Some(note) = complete_note(&plan.folder, cfg.campaign.budget)
     {
         eprintln!("{note}");
     }
     let (runtime, stop) = runtime_stopped_by_signals()?;
-    let vehicles = vehicles(&plan, &runtime)?;
     let progress = Reporter::new(args.quiet || args.json);
-    let screener = LfsScreener {
-        config: SimConfig {
-            motion: parse_stored::<Motion>(&cfg.motion, "motion")?.model(),
-            judge: cfg.judge,
-            ..SimConfig::default()
-        },
-        ensemble: EnsembleParams::default(),
-    };
-    let cp_screener = CpScreener { judge: cfg.judge };
-    let screener: &dyn Screener = match parse_stored::<Mode>(&cfg.mode, "mode")? {
-        Mode::CollisionPrevention => &cp_screener,
-        _ => &screener,
-    };
-    let report = run_campaign(cfg, &plan.folder, screener, vehicles, &progress, &stop)?;
+    let report = run_campaign(cfg, &plan.folder, &progress, &stop, runtime.handle())?;
     print_summary(&report, &plan, args.json)?;
-    let unspent = cfg.budget.saturating_sub(report.suite.flown);
+    let unspent = cfg.campaign.budget.saturating_sub(report.suite.flown);
     if unspent > 0 && !stop.load(Ordering::SeqCst) {
         eprintln!(
             "warning: {unspent} of the budget's {} flights went unspent: too few candidates were predicted below \
              --threshold {} m, or vehicles or backends failed (see the warnings above)",
-            cfg.budget, cfg.threshold_m
+            cfg.campaign.budget, cfg.screening.threshold_m
         );
     }
-    if let Some(w) = floor_warning(report.suite.diversity, cfg.adapt, cfg.min_diversity) {
+    if let Some(w) = floor_warning(report.suite.diversity, cfg.adapts(), cfg.learning.min_diversity) {
         eprintln!("warning: {w}");
     }
     let failed_jobs: usize = report.backends.iter().map(|b| b.failed_jobs).sum();
@@ -197,18 +132,6 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
         }
     }
     std::process::exit(EXIT_INTERRUPTED);
-}
-
-/// The vehicles that fly, as the library builds them for the campaign.
-pub(super) fn vehicles(plan: &Plan, runtime: &Runtime) -> anyhow::Result<Vec<Box<dyn Vehicle>>> {
-    let fleet = fleet::fleet(
-        &plan.cfg,
-        &plan.at_once,
-        plan.connect_timeout_s,
-        plan.runner.clone(),
-        runtime.handle(),
-    )?;
-    Ok(fleet)
 }
 
 /// The report on stdout: JSON, or the figures, the verdict and next step, and the output folder.

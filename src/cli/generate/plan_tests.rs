@@ -2,17 +2,16 @@ use std::path::Path;
 
 use clap::FromArgMatches;
 
-use prgenuav::campaign::settings::{Loaded, Requested, example_toml};
+use prgenuav::campaign::settings::{CampaignSettings, Loaded, example_toml};
 
-use super::{GenerateArgs, build, request};
-use prgenuav::campaign::setup::resume::show;
+use super::GenerateArgs;
 
-fn requested(argv: &[&str], file: &Loaded) -> (GenerateArgs, Requested) {
+fn settings(argv: &[&str], file: &Loaded) -> CampaignSettings {
     let m = crate::cli::command().try_get_matches_from(argv).unwrap();
     let m = m.subcommand_matches("generate").unwrap();
     let args = GenerateArgs::from_arg_matches(m).unwrap();
-    let req = request(&args, m, file).unwrap().req;
-    (args, req)
+    let request = args.settings.request(file).unwrap();
+    CampaignSettings::resolve(&request).unwrap()
 }
 
 /// docs/cli.md's example file sets every key to its documented default (or, where the default depends on
@@ -20,34 +19,14 @@ fn requested(argv: &[&str], file: &Loaded) -> (GenerateArgs, Requested) {
 #[test]
 fn the_documented_defaults_are_the_defaults() {
     let argv = ["prgenuav", "generate", "missions/mission2.yaml", "20"];
-    let (args, none) = requested(&argv, &Loaded::default());
+    let none = settings(&argv, &Loaded::default());
     let file = Loaded::parse(&example_toml(), Path::new("example.toml")).unwrap();
-    let (_, all) = requested(&argv, &file);
-    let case = || args.case.clone().unwrap();
-    let mut a = serde_json::to_value(build(case(), 20, &args, &none)).unwrap();
-    let mut b = serde_json::to_value(build(case(), 20, &args, &all)).unwrap();
-    // The one default no value can spell: measured on each vehicle.
-    assert_eq!(b["hfs_time_scale"], 1.0);
-    a["hfs_time_scale"] = serde_json::Value::Null;
-    b["hfs_time_scale"] = serde_json::Value::Null;
-    assert_eq!(a, b);
-    // Every key campaign.json stores, and CASE and BUDGET.
-    assert_eq!(
-        all.given.len(),
-        prgenuav::campaign::settings::all()
-            .filter(|s| !s.stored.is_empty())
-            .count()
-            + 2
-    );
-    assert!(none.given.iter().all(|g| g.key == "case" || g.key == "budget"));
-}
-
-#[test]
-fn stored_values_are_shown_as_typed() {
-    assert_eq!(show(&serde_json::json!("avoidance")), "avoidance");
-    assert_eq!(show(&serde_json::json!(["udpin:a", "udpin:b"])), "udpin:a,udpin:b");
-    assert_eq!(show(&serde_json::json!({"min": 2.0, "max": 4.0})), "2.0,4.0");
-    assert_eq!(show(&serde_json::json!(3)), "3");
+    let mut all = settings(&argv, &file);
+    // The defaults no value can spell: measured on each vehicle, and one per core.
+    assert_eq!(all.flight.connect_time_scale, Some(1.0));
+    all.flight.connect_time_scale = None;
+    all.mock.vehicles = none.mock.vehicles;
+    assert_eq!(none, all);
 }
 
 #[test]
@@ -55,8 +34,7 @@ fn failures_are_confirmed_by_default_wherever_flights_scatter() {
     let confirm = |extra: &[&str]| {
         let mut argv = vec!["prgenuav", "generate", "missions/mission2.yaml", "20"];
         argv.extend_from_slice(extra);
-        let (args, req) = requested(&argv, &Loaded::default());
-        build(args.case.clone().unwrap(), 20, &args, &req).confirm
+        settings(&argv, &Loaded::default()).flight.confirm
     };
     assert_eq!(confirm(&[]), 3, "the default mock profile has PX4's scatter");
     assert_eq!(confirm(&["--connect", "udpin:0.0.0.0:14540"]), 3);

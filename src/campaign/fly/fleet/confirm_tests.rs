@@ -31,7 +31,7 @@ impl Vehicle for Scripted {
         let script = &self.script[id as usize];
         let d = script[n.min(script.len() - 1)];
         Ok(Flown {
-            status: FlightStatus::Landed,
+            status: FlightStatus::LANDED,
             min_distance: Some(d),
             min_distance_raw: Some(d),
             flight_time_s: 40.0,

@@ -32,7 +32,7 @@ impl Vehicle for Fake {
                 d.store(true, Ordering::SeqCst);
             }
             return Ok(Flown {
-                status: FlightStatus::Rejected,
+                status: FlightStatus::REJECTED,
                 min_distance: None,
                 min_distance_raw: None,
                 flight_time_s: 0.0,
@@ -64,7 +64,7 @@ impl Vehicle for Fake {
         let id = test.obstacles[0].position.x as u64;
         self.log.lock().unwrap().push((self.name.into(), id));
         Ok(Flown {
-            status: FlightStatus::Landed,
+            status: FlightStatus::LANDED,
             min_distance: Some(1.0),
             min_distance_raw: Some(0.9),
             flight_time_s: 40.0,
@@ -228,7 +228,7 @@ fn a_vehicle_that_rejects_flights_in_a_row_is_dropped_and_the_last_one_flown_els
     // One rejection is journaled, the second's job is flown by "ok": the budget is spent on 4 flights.
     let rejected: Vec<_> = records
         .iter()
-        .filter(|r| r.flown.status == FlightStatus::Rejected)
+        .filter(|r| r.flown.status == FlightStatus::REJECTED)
         .collect();
     assert_eq!((records.len(), rejected.len(), out.flown), (5, 1, 5));
     let mut ids: Vec<u64> = records.iter().map(|r| r.candidate.0).collect();

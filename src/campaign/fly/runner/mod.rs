@@ -106,7 +106,7 @@ impl RunnerVehicle {
         let code = match ran.ended {
             Ended::Cancelled => {
                 let why = format!("the job was stopped{}", in_engine());
-                return Attempt::Flew(Flown::unflown(FlightStatus::Aborted, why));
+                return Attempt::Flew(Flown::unflown(FlightStatus::ABORTED, why));
             }
             Ended::TimedOut => {
                 let limit = s.timeout.as_secs_f64();
@@ -174,7 +174,7 @@ impl Vehicle for RunnerVehicle {
 /// A flight the campaign's stop ended (`aborted`: the fleet journals it `interrupted`).
 fn stopped() -> Flown {
     Flown::unflown(
-        crate::campaign::ground::flight_status::FlightStatus::Aborted,
+        crate::campaign::ground::flight_status::FlightStatus::ABORTED,
         "the job was stopped".into(),
     )
 }

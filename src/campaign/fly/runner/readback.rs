@@ -84,7 +84,7 @@ pub fn read_back(
     let trajectory = trajectory(&found, &mut problems);
     match (trajectory, report) {
         (Some((path, t)), report) => {
-            let claimed = report.as_ref().map_or(FlightStatus::Landed, |r| r.status);
+            let claimed = report.as_ref().map_or(FlightStatus::LANDED, |r| r.status);
             if let Some(why) = not_a_whole_flight(&t, claimed) {
                 return Err(format!("{}: {why}", path.display()));
             }
@@ -196,12 +196,12 @@ fn judged(t: Trajectory, path: PathBuf, report: Option<FlyReport>, obstacles: &[
     let reported = report.is_some();
     let (mut status, mut reason, warnings, time) = match report {
         Some(r) => (r.status, r.reason, r.warnings, r.flight_time_s),
-        None => (FlightStatus::Landed, None, Vec::new(), None),
+        None => (FlightStatus::LANDED, None, Vec::new(), None),
     };
     if let Some(v) = verdict.as_ref().filter(|v| v.collision)
-        && matches!(status, FlightStatus::Landed | FlightStatus::Timeout)
+        && matches!(status, FlightStatus::LANDED | FlightStatus::TIMEOUT)
     {
-        status = FlightStatus::Collision;
+        status = FlightStatus::COLLISION;
         let c = v.closest;
         reason = Some(format!(
             "entered obstacle {} at t = {:.1} s, ({:.2}, {:.2}, {:.2}) m",

@@ -57,7 +57,7 @@ fn an_aerialist_ulog_deep_in_the_folder_is_judged() {
     std::fs::create_dir_all(&logs).unwrap();
     std::fs::write(logs.join("01-02-03-04-05_0123456789ab.ulg"), ulog(&pass())).unwrap();
     let b = read(tmp.path(), b"entry - INFO - LOG:results/logs/x.ulg\n").unwrap();
-    assert_eq!(b.flown.status, FlightStatus::Landed);
+    assert_eq!(b.flown.status, FlightStatus::LANDED);
     assert!(!b.reported);
     let d = b.flown.min_distance.unwrap();
     // 3 m beside a 2 m wide box: 2 m to its side, less the 2026 edition's buffer.
@@ -82,7 +82,7 @@ fn a_trajectory_csv_is_judged_and_a_collision_named() {
     std::fs::write(tmp.path().join("flight.csv"), csv).unwrap();
     std::fs::write(tmp.path().join("commands.csv"), "command,x\n1,2\n").unwrap();
     let b = read(tmp.path(), b"").unwrap();
-    assert_eq!(b.flown.status, FlightStatus::Collision);
+    assert_eq!(b.flown.status, FlightStatus::COLLISION);
     assert!(b.flown.reason.unwrap().contains("entered obstacle 0"));
     assert_eq!(b.flown.min_distance, Some(0.0));
 }
@@ -101,7 +101,7 @@ fn a_fly_report_on_stdout_gives_the_ending() {
 }
 "#;
     let b = read(tmp.path(), out).unwrap();
-    assert_eq!(b.flown.status, FlightStatus::Timeout);
+    assert_eq!(b.flown.status, FlightStatus::TIMEOUT);
     assert!(b.reported);
     assert_eq!(b.flown.warnings, vec!["planner slow".to_string()]);
     assert_eq!(b.flown.flight_time_s, 500.0);
@@ -204,7 +204,7 @@ fn a_flight_cut_in_the_air_or_without_a_time_span_is_refused_saying_why() {
     assert!(e.contains("ends 10.0 m above") && e.contains("cut short"), "{e}");
     // The same log with a timeout report is what a timeout looks like: a result.
     let b = read(tmp.path(), br#"{"status": "timeout"}"#).unwrap();
-    assert_eq!(b.flown.status, FlightStatus::Timeout);
+    assert_eq!(b.flown.status, FlightStatus::TIMEOUT);
 
     let flat = tempfile::tempdir().unwrap();
     let mut csv = String::from("timestamp,x,y,z,r\n");
@@ -268,6 +268,6 @@ fn a_collision_prevention_report_gets_its_verdict_measured_here() {
     let f = read(empty.path(), rejected.as_bytes()).unwrap().flown;
     assert_eq!(
         (f.status, f.closest_centre_m, f.inside_cp_dist),
-        (FlightStatus::Rejected, None, None)
+        (FlightStatus::REJECTED, None, None)
     );
 }

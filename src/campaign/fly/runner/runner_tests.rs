@@ -35,7 +35,7 @@ fn a_job_leaving_a_trajectory_is_a_judged_flight() {
         10_000,
     );
     let f = r.unwrap();
-    assert_eq!(f.status, FlightStatus::Landed, "{f:?}");
+    assert_eq!(f.status, FlightStatus::LANDED, "{f:?}");
     assert!(f.min_distance.is_some());
     assert_eq!(v.name(), "runner#0");
     let csv = std::fs::read_to_string(tmp.path().join("flights/candidate_7.csv")).unwrap();
@@ -98,7 +98,7 @@ fn a_stopped_campaign_stops_the_job() {
     let tmp = tempfile::tempdir().unwrap();
     let mut v = RunnerVehicle::new(0, Arc::new(settings("sleep 30; : {test}", tmp.path(), 60_000)));
     let r = v.fly(&test_case(), &tmp.path().join("c.csv"), &AtomicBool::new(true));
-    assert_eq!(r.unwrap().status, FlightStatus::Aborted);
+    assert_eq!(r.unwrap().status, FlightStatus::ABORTED);
 }
 
 #[test]
@@ -120,7 +120,7 @@ fn a_job_stopped_or_timed_out_is_cancelled_in_its_engine_by_its_id() {
         .fly(&test_case(), &tmp.path().join("flights/candidate_3.csv"), &stop)
         .unwrap();
     t.join().unwrap();
-    assert_eq!(f.status, FlightStatus::Aborted);
+    assert_eq!(f.status, FlightStatus::ABORTED);
     let reason = f.reason.unwrap();
     assert!(reason.contains("asked the engine to cancel it"), "{reason}");
     let ids = std::fs::read_to_string(tmp.path().join("cancelled")).unwrap();
