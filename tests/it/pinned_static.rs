@@ -150,3 +150,39 @@ fn a_folder_the_one_pass_campaign_left_when_killed_resumes_to_the_uninterrupted_
     assert_eq!(resumed, uninterrupted);
     assert!(stdout.contains("of 4 flights"), "{stdout}");
 }
+
+/// A killed learning campaign whose `campaign.json` the previous, flat format holds (written by prgenuav
+/// before the settings were sectioned, with three of its six flights journaled) resumes to what the
+/// uninterrupted campaign made: the embedded mock flies in lockstep, so the result repeats to the line.
+#[test]
+fn a_learning_campaign_of_the_previous_format_resumes_to_its_uninterrupted_result() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let folder = dir.path().join("killed");
+    copy_tree(&repo().join("tests/data/learning-killed"), &folder);
+    let f = folder.to_string_lossy().into_owned();
+    let (code, stdout, stderr) = prgenuav(&["generate", "--resume", &f, "--quiet"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(
+        stdout.lines().next(),
+        Some(
+            "2 failing tests (2 distinct at IoU 0.5) of 6 flights (20 candidates screened), failure score 2.18, \
+             diversity 0.956"
+        ),
+        "{stdout}"
+    );
+    let (code, _, stderr) = prgenuav(&["generate", "--resume", &f, "--seed", "2"]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--seed 2 conflicts with seed 1 stored in"), "{stderr}");
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("create");
+    for e in std::fs::read_dir(from).expect("read").flatten() {
+        let target = to.join(e.file_name());
+        if e.path().is_dir() {
+            copy_tree(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).expect("copy");
+        }
+    }
+}
