@@ -23,7 +23,9 @@ pub enum SimError {
         source: std::io::Error,
     },
     /// PX4 did not connect in time.
-    #[error("PX4 did not connect to TCP {addr} within {waited:?}: start PX4 SITL for this instance (PX4_SIM_MODEL=none_iris)")]
+    #[error(
+        "PX4 did not connect to TCP {addr} within {waited:?}: start PX4 SITL for this instance (PX4_SIM_MODEL=none_iris)"
+    )]
     NoConnection {
         /// The address.
         addr: String,
@@ -31,7 +33,9 @@ pub enum SimError {
         waited: Duration,
     },
     /// The serial device could not be opened.
-    #[error("cannot open serial device {device} at {baud} baud: {source} (is the board plugged in, the path right, and no other program using it?)")]
+    #[error(
+        "cannot open serial device {device} at {baud} baud: {source} (is the board plugged in, the path right, and no other program using it?)"
+    )]
     SerialOpen {
         /// The device path.
         device: String,
@@ -52,6 +56,8 @@ pub enum SimError {
     #[error("link lost: {0}")]
     LinkLost(String),
     /// PX4 connected but never sent a motor command.
-    #[error("PX4 connected but sent no HIL_ACTUATOR_CONTROLS within {0:?}: is it PX4 SITL with an external simulator (none_iris)?")]
+    #[error(
+        "PX4 connected but sent no HIL_ACTUATOR_CONTROLS within {0:?}: is it PX4 SITL with an external simulator (none_iris)?"
+    )]
     NeverAnswered(Duration),
 }

@@ -65,25 +65,39 @@ fn parse_home(s: &str) -> Result<GeoPoint, String> {
     let num = |x: &str, what: &str| x.parse::<f64>().map_err(|_| format!("{what} '{x}' is not a number"));
     let (lat, lon, alt) = (num(lat, "latitude")?, num(lon, "longitude")?, num(alt, "altitude")?);
     if !(-90.0..=90.0).contains(&lat) || !(-180.0..=180.0).contains(&lon) || !(-500.0..=9000.0).contains(&alt) {
-        return Err(format!("'{s}' is out of range: latitude -90..90, longitude -180..180, altitude -500..9000 m"));
+        return Err(format!(
+            "'{s}' is out of range: latitude -90..90, longitude -180..180, altitude -500..9000 m"
+        ));
     }
-    Ok(GeoPoint { lat_deg: lat, lon_deg: lon, alt_m: alt })
+    Ok(GeoPoint {
+        lat_deg: lat,
+        lon_deg: lon,
+        alt_m: alt,
+    })
 }
 
 fn parse_wind(s: &str) -> Result<(f64, f64), String> {
-    let (n, e) = s.split_once(',').ok_or_else(|| format!("'{s}' is not NORTH,EAST in m/s (e.g. 0,3)"))?;
+    let (n, e) = s
+        .split_once(',')
+        .ok_or_else(|| format!("'{s}' is not NORTH,EAST in m/s (e.g. 0,3)"))?;
     let num = |x: &str| x.trim().parse::<f64>().map_err(|_| format!("'{x}' is not a number"));
     Ok((num(n)?, num(e)?))
 }
 
 fn parse_serial(s: &str) -> Result<(String, u32), String> {
-    let (dev, baud) = s.rsplit_once(':').ok_or_else(|| format!("'{s}' is not DEVICE:BAUD (e.g. /dev/ttyACM0:921600)"))?;
-    let baud = baud.parse::<u32>().map_err(|_| format!("baud '{baud}' is not a number (e.g. 921600)"))?;
+    let (dev, baud) = s
+        .rsplit_once(':')
+        .ok_or_else(|| format!("'{s}' is not DEVICE:BAUD (e.g. /dev/ttyACM0:921600)"))?;
+    let baud = baud
+        .parse::<u32>()
+        .map_err(|_| format!("baud '{baud}' is not a number (e.g. 921600)"))?;
     Ok((dev.to_string(), baud))
 }
 
 fn parse_gateway(s: &str) -> Result<SocketAddr, String> {
-    let rest = s.strip_prefix("udp:").ok_or_else(|| format!("'{s}' is not udp:HOST:PORT (e.g. udp:127.0.0.1:14550)"))?;
+    let rest = s
+        .strip_prefix("udp:")
+        .ok_or_else(|| format!("'{s}' is not udp:HOST:PORT (e.g. udp:127.0.0.1:14550)"))?;
     rest.to_socket_addrs()
         .map_err(|e| format!("'{rest}' is no address: {e}"))?
         .next()
@@ -128,7 +142,10 @@ async fn main() -> ExitCode {
             eprintln!("prgenuav-sim: {e}");
             let bad_input = matches!(
                 e,
-                SimError::PortInUse { .. } | SimError::Listen { .. } | SimError::SerialOpen { .. } | SimError::Gateway { .. }
+                SimError::PortInUse { .. }
+                    | SimError::Listen { .. }
+                    | SimError::SerialOpen { .. }
+                    | SimError::Gateway { .. }
             );
             ExitCode::from(if bad_input { 2 } else { 1 })
         }
@@ -144,8 +161,13 @@ async fn run_tcp(sim: &mut Simulator, a: &Args, cancel: &Cancel) -> Result<Strin
         freewheel_speed: a.speed.max(1.0),
         ..LockstepConfig::default()
     };
-    eprintln!("prgenuav-sim: waiting for PX4 instance {} on TCP {addr} (lockstep)", a.instance);
-    let r = sim.serve_sitl(addr, Duration::from_secs(a.connect_timeout_s), &lockstep, cancel).await?;
+    eprintln!(
+        "prgenuav-sim: waiting for PX4 instance {} on TCP {addr} (lockstep)",
+        a.instance
+    );
+    let r = sim
+        .serve_sitl(addr, Duration::from_secs(a.connect_timeout_s), &lockstep, cancel)
+        .await?;
     Ok(format!(
         "{:.1} s simulated in {:.1} s (x{:.2}), {} steps, {} answers, {} waits timed out",
         r.sim_s,
@@ -163,7 +185,9 @@ async fn run_serial(sim: &mut Simulator, a: &Args, dev: &str, baud: u32, cancel:
         remote,
     });
     eprintln!("prgenuav-sim: board on {dev} at {baud} baud, wall clock 250 Hz");
-    let r = sim.run_hitl(dev, baud, gateway, &WallClockConfig::default(), cancel).await?;
+    let r = sim
+        .run_hitl(dev, baud, gateway, &WallClockConfig::default(), cancel)
+        .await?;
     Ok(format!(
         "{} steps in {:.1} s, {} late ticks, {} motor commands, gateway {} out / {} in",
         r.steps, r.wall_s, r.late_ticks, r.answers, r.to_endpoint, r.to_board

@@ -176,7 +176,10 @@ impl Gate {
 
     /// Holds so far, and late releases among them.
     pub fn counts(&self) -> (u64, u64) {
-        (self.shared.holds.load(Ordering::Relaxed), self.shared.late.load(Ordering::Relaxed))
+        (
+            self.shared.holds.load(Ordering::Relaxed),
+            self.shared.late.load(Ordering::Relaxed),
+        )
     }
 
     /// The earliest due instant at or before `now`, consuming every one up to `now`.

@@ -115,6 +115,10 @@ impl Lockstep {
     /// PX4 sent a motor command at `now`: the answer to the last step.
     pub fn on_actuators(&mut self, now: Instant) {
         self.last_heard = now;
+        if !self.locked && self.config.speed_cap.is_none() {
+            // The freewheel's pace no longer applies.
+            self.next_due = now;
+        }
         self.locked = true;
         self.answered = true;
         self.stats.answers += 1;

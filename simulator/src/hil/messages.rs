@@ -59,7 +59,9 @@ pub fn classify(msg: &MavMessage) -> Incoming {
             time_usec: a.time_usec,
             controls: a.controls,
             armed: a.mode.contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),
-            lockstep: a.flags.contains(HilActuatorControlsFlags::HIL_ACTUATOR_CONTROLS_FLAGS_LOCKSTEP),
+            lockstep: a
+                .flags
+                .contains(HilActuatorControlsFlags::HIL_ACTUATOR_CONTROLS_FLAGS_LOCKSTEP),
         },
         MavMessage::COMMAND_LONG(c) if c.command == MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => Incoming::MessageInterval {
             message_id: c.param1 as u32,
@@ -146,7 +148,11 @@ pub fn hil_state_quaternion(t: &GroundTruth, time_usec: u64) -> MavMessage {
     let q = t.attitude.quaternion();
     let v = t.velocity_ned_m_s;
     let cm = |x: f64| (x * 100.0).round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16;
-    let mg = |x: f64| (x / 9.80665 * 1000.0).round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16;
+    let mg = |x: f64| {
+        (x / 9.80665 * 1000.0)
+            .round()
+            .clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
+    };
     let a = t.attitude * t.specific_force_frd_m_s2;
     let speed = (v.norm() * 100.0).round().min(65534.0) as u16;
     MavMessage::HIL_STATE_QUATERNION(HIL_STATE_QUATERNION_DATA {

@@ -6,8 +6,8 @@ use std::time::{Duration, Instant};
 
 use tokio::net::{TcpListener, TcpStream};
 
-use super::lockstep::{Decision, Lockstep, LockstepConfig, LockstepStats};
 use super::link::{LinkEvent, Outbox, spawn_reader};
+use super::lockstep::{Decision, Lockstep, LockstepConfig, LockstepStats};
 use super::messages::classify;
 use super::stepper::{Observers, Stamp, StepCounts, Stepper};
 use crate::cancel::Cancel;
@@ -80,7 +80,11 @@ pub struct LockstepReport {
 impl LockstepReport {
     /// Simulated seconds per wall second.
     pub fn real_time_factor(&self) -> f64 {
-        if self.wall_s > 0.0 { self.sim_s / self.wall_s } else { 0.0 }
+        if self.wall_s > 0.0 {
+            self.sim_s / self.wall_s
+        } else {
+            0.0
+        }
     }
 }
 
@@ -115,7 +119,12 @@ pub async fn run_lockstep(
                 continue;
             }
             Decision::WaitUntil(t) => t,
-            Decision::LinkLost => break Err(SimError::LinkLost(format!("PX4 silent for {:?}", config.link_lost_after))),
+            Decision::LinkLost => {
+                break Err(SimError::LinkLost(format!(
+                    "PX4 silent for {:?}",
+                    config.link_lost_after
+                )));
+            }
             Decision::NeverAnswered => break Err(SimError::NeverAnswered(config.first_answer_within)),
         };
         tokio::select! {

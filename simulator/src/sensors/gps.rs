@@ -95,7 +95,13 @@ impl Gps {
 
     /// Measures at `t` (a step of `dt_s`) the true position and velocity (local NED); returns the report
     /// due at `t`, if one is.
-    pub fn step(&mut self, t: SimTime, position_ned_m: &Vector3<f64>, velocity_ned_m_s: &Vector3<f64>, dt_s: f64) -> Option<GpsFix> {
+    pub fn step(
+        &mut self,
+        t: SimTime,
+        position_ned_m: &Vector3<f64>,
+        velocity_ned_m_s: &Vector3<f64>,
+        dt_s: f64,
+    ) -> Option<GpsFix> {
         let fix = self.measure(t, position_ned_m, velocity_ned_m_s, dt_s);
         self.line.push_back(fix);
         while self.line.len() > 1 && self.line[1].measured_at.plus(self.config.delay) <= t {

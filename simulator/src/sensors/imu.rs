@@ -67,9 +67,11 @@ impl Imu {
     /// The reading of a step of `dt_s` whose true rate and specific force are given (body FRD).
     pub fn sample(&mut self, rates_frd: &Vector3<f64>, specific_force_frd: &Vector3<f64>, dt_s: f64) -> ImuSample {
         let n = self.noise;
-        self.gyro_bias.step(&mut self.rng, n.gyro_random_walk, n.gyro_bias_tau_s, dt_s);
+        self.gyro_bias
+            .step(&mut self.rng, n.gyro_random_walk, n.gyro_bias_tau_s, dt_s);
         let gyro_noise = self.rng.vector(n.gyro_noise_density / dt_s.sqrt());
-        self.accel_bias.step(&mut self.rng, n.accel_random_walk, n.accel_bias_tau_s, dt_s);
+        self.accel_bias
+            .step(&mut self.rng, n.accel_random_walk, n.accel_bias_tau_s, dt_s);
         let accel_noise = self.rng.vector(n.accel_noise_density / dt_s.sqrt());
         ImuSample {
             accel_frd_m_s2: specific_force_frd + self.accel_bias.value + accel_noise,

@@ -102,7 +102,9 @@ impl Sensors {
     /// The readings at `t`, the end of a step of `dt_s` the vehicle has just made.
     pub fn sample(&mut self, t: SimTime, vehicle: &Vehicle, dt_s: f64) -> SensorFrame {
         let body = &vehicle.body;
-        let imu = self.imu.sample(&body.rates_frd_rad_s, &vehicle.specific_force_frd(), dt_s);
+        let imu = self
+            .imu
+            .sample(&body.rates_frd_rad_s, &vehicle.specific_force_frd(), dt_s);
         let mag_frd_gauss = due(&mut self.next_mag, t, self.config.mag_period).then(|| {
             let since = t.since(self.last_mag).as_secs_f64().max(dt_s);
             self.last_mag = t;

@@ -89,7 +89,10 @@ mod tests {
         assert_eq!(quadrant(1), (false, false, Spin::Ccw));
         assert_eq!(quadrant(2), (true, false, Spin::Cw));
         assert_eq!(quadrant(3), (false, true, Spin::Cw));
-        assert!((r[0].position_frd_m.z + 0.023).abs() < 1e-12, "hubs 23 mm above the centre of mass");
+        assert!(
+            (r[0].position_frd_m.z + 0.023).abs() < 1e-12,
+            "hubs 23 mm above the centre of mass"
+        );
     }
 
     #[test]

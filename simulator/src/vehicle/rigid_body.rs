@@ -101,7 +101,11 @@ mod tests {
             integrate(&mut s, &iris_like(), &Wrench::default(), 9.8068, dt);
         }
         // z(2 s) = -100 + g t^2 / 2 = -80.3864; semi-implicit Euler adds g dt t / 2 = 0.0098.
-        assert!(close(s.position_ned_m.z, -100.0 + 0.5 * 9.8068 * 4.0, 0.011), "{}", s.position_ned_m.z);
+        assert!(
+            close(s.position_ned_m.z, -100.0 + 0.5 * 9.8068 * 4.0, 0.011),
+            "{}",
+            s.position_ned_m.z
+        );
         assert!(close(s.velocity_ned_m_s.z, 9.8068 * 2.0, 1e-9));
     }
 
