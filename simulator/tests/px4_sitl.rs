@@ -145,9 +145,11 @@ async fn fly(var: &str, instance: u16, v112: bool) {
         target,
     ))
     .await;
+    // Take off to 10 m above the home (param 7: altitude above mean sea level).
+    let alt = (SimConfig::default().home.alt_m + 10.0) as f32;
     send(command(
         MavCmd::MAV_CMD_NAV_TAKEOFF,
-        [0.0, 0.0, 0.0, f32::NAN, f32::NAN, f32::NAN, f32::NAN],
+        [0.0, 0.0, 0.0, f32::NAN, f32::NAN, f32::NAN, alt],
         target,
     ))
     .await;
@@ -162,18 +164,19 @@ async fn fly(var: &str, instance: u16, v112: bool) {
         }
         assert!(
             clock.now().since(t_takeoff) < Duration::from_secs(60),
-            "no climb: at {z} m\n{}",
+            "no climb: at {z} m after {:?} wall\n{}",
+            wall.elapsed(),
             px4.console()
         );
         send(beat.clone()).await;
-        tokio::time::sleep(Duration::from_millis(500)).await;
+        tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let climb_s = clock.now().since(t_takeoff).as_secs_f64();
     // Hover 10 s of simulated time after settling 5 s.
     let settle = clock.now();
     while clock.now().since(settle) < Duration::from_secs(5) {
         send(beat.clone()).await;
-        tokio::time::sleep(Duration::from_millis(200)).await;
+        tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let (mut zmin, mut zmax) = (f64::MAX, f64::MIN);
     let hover = clock.now();

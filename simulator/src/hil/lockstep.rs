@@ -172,9 +172,9 @@ impl Lockstep {
         };
         self.next_due = match speed {
             Some(s) if s > 0.0 => {
-                // Keep the average pace, without bursting after a stall of more than 50 ms.
+                // Keep the average pace; after a stall of more than 50 ms start afresh instead of bursting.
                 let next = self.next_due + STEP.div_f64(s);
-                next.max(now.checked_sub(Duration::from_millis(50)).unwrap_or(now))
+                if next + Duration::from_millis(50) < now { now } else { next }
             }
             _ => now,
         };

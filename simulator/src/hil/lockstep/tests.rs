@@ -74,3 +74,38 @@ fn a_px4_that_never_answers_is_reported() {
     let l = Lockstep::new(LockstepConfig::default(), t0);
     assert_eq!(l.decide(t0 + Duration::from_secs(120)), Decision::NeverAnswered);
 }
+
+#[test]
+fn the_pace_holds_over_many_steps_and_restarts_after_a_stall() {
+    let t0 = Instant::now();
+    let cfg = LockstepConfig {
+        speed_cap: Some(4.0),
+        ..LockstepConfig::default()
+    };
+    let mut l = Lockstep::new(cfg, t0);
+    l.on_actuators(t0);
+    let mut now = t0;
+    let mut steps = 0;
+    // A PX4 answering at once: 1 s of wall time allows 4 s of simulated time, 1000 steps.
+    while now < t0 + Duration::from_secs(1) {
+        match l.decide(now) {
+            Decision::Step { .. } => {
+                l.stepped(now, false);
+                l.on_actuators(now);
+                steps += 1;
+            }
+            Decision::WaitUntil(t) => now = t,
+            other => panic!("{other:?}"),
+        }
+    }
+    assert!((999..=1001).contains(&steps), "{steps}");
+    // After a 1 s stall, one step at once, then the pace again (no burst of 250 steps).
+    now += Duration::from_secs(1);
+    assert_eq!(l.decide(now), Decision::Step { timed_out: false });
+    l.stepped(now, false);
+    l.on_actuators(now);
+    assert_eq!(l.decide(now), Decision::Step { timed_out: false });
+    l.stepped(now, false);
+    l.on_actuators(now);
+    assert_eq!(l.decide(now), Decision::WaitUntil(now + ms(1)));
+}
