@@ -26,7 +26,7 @@ pub struct Frame {
 #[derive(Debug, Clone)]
 pub enum LinkEvent {
     /// A CRC-valid frame.
-    Frame(Frame),
+    Frame(Box<Frame>),
     /// The stream ended or failed: the reason.
     Closed(String),
 }
@@ -41,7 +41,7 @@ where
         let mut reader = AsyncMavlinkReader::new(source);
         loop {
             let event = match reader.read_any_raw_message::<MavMessage>().await {
-                Ok(raw) => LinkEvent::Frame(frame_of(&raw)),
+                Ok(raw) => LinkEvent::Frame(Box::new(frame_of(&raw))),
                 Err(e) => LinkEvent::Closed(format!("{e:?}")),
             };
             let closed = matches!(event, LinkEvent::Closed(_));

@@ -174,7 +174,11 @@ impl Lockstep {
             Some(s) if s > 0.0 => {
                 // Keep the average pace; after a stall of more than 50 ms start afresh instead of bursting.
                 let next = self.next_due + STEP.div_f64(s);
-                if next + Duration::from_millis(50) < now { now } else { next }
+                if next + Duration::from_millis(50) < now {
+                    now
+                } else {
+                    next
+                }
             }
             _ => now,
         };

@@ -114,7 +114,7 @@ where
                 run.report.steps += 1;
             }
             ev = rx.recv() => match ev {
-                Some(LinkEvent::Frame(f)) => on_frame(&mut run, sim, gateway.as_mut(), f),
+                Some(LinkEvent::Frame(f)) => on_frame(&mut run, sim, gateway.as_mut(), *f),
                 Some(LinkEvent::Closed(why)) => break Err(SimError::LinkLost(format!("serial device closed or unplugged ({why})"))),
                 None => break Err(SimError::LinkLost("serial reader stopped".into())),
             },
