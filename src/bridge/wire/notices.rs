@@ -1,7 +1,6 @@
 //! What the vehicle says and what the bridge notices while a flight runs, kept for the report and handed to
 //! an optional live sink (the `fly` CLI prints to stderr): the vehicle's STATUSTEXT of severity WARNING or
 //! worse, readiness progress, and clock warnings.
-#![allow(deprecated)]
 
 use std::sync::{Arc, Mutex};
 
