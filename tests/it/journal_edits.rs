@@ -20,10 +20,10 @@ fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
         candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
-        prediction: LfsPrediction {
+        prediction: Some(LfsPrediction {
             p_fail: Some(0.5),
             ..LfsPrediction::point(CandidateId(candidate), 1.0, 60.0, String::new())
-        },
+        }),
         flown: Flown {
             min_distance: Some(0.8 + candidate as f64),
             min_distance_raw: Some(0.7 + candidate as f64),

@@ -11,7 +11,7 @@ use super::folder::{load_tests, write_averages};
 use super::suite::{Evaluation, FlownTest, evaluate_suite};
 use crate::campaign::fly::fleet::fly_all;
 use crate::campaign::fly::vehicle::{Job, PoolOutcome, Vehicle};
-use crate::campaign::ground::candidate::{CandidateId, LfsPrediction};
+use crate::campaign::ground::candidate::CandidateId;
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::store::folder::FolderLock;
 use crate::campaign::store::journal::{FlightRecord, Journal};
@@ -150,7 +150,7 @@ fn missing_jobs(tests: &[(PathBuf, TestCase)], done: &[FlightRecord], runs: usiz
             if done.iter().any(|r| r.candidate == candidate) {
                 continue;
             }
-            jobs.push(Job::new(LfsPrediction::none(candidate, "not predicted"), test.clone()));
+            jobs.push(Job::new(candidate, None, test.clone()));
         }
     }
     jobs

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use crate::campaign::fly::confirm::pending;
 use crate::campaign::fly::vehicle::Job;
-use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction};
+use crate::campaign::ground::candidate::{Candidate, CandidateId, Pick};
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::input::CampaignInput;
 use crate::campaign::ground::screener::Progress;
@@ -80,7 +80,7 @@ impl<'a> FlightStage<'a> {
 
 /// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
 /// or in the air already, left out), then `ranked` in order.
-pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<LfsPrediction>, busy: &[CandidateId]) -> Vec<Job> {
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Pick>, busy: &[CandidateId]) -> Vec<Job> {
     let again = pending(ctx.done, ctx.confirm)
         .into_iter()
         .filter(|(_, first)| !busy.contains(&first.candidate))
@@ -88,15 +88,16 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<LfsPrediction>, busy: &[Candida
             tally,
             confirm: ctx.confirm,
             ..Job::new(
+                first.candidate,
                 first.prediction.clone(),
                 ctx.case.with_obstacles(first.obstacles.clone()),
             )
         });
-    let fresh = ranked.into_iter().map(|s| {
-        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate.index()].obstacles.clone());
+    let fresh = ranked.into_iter().map(|pick| {
+        let test = (ctx.case).with_obstacles(ctx.candidates[pick.candidate.index()].obstacles.clone());
         Job {
             confirm: ctx.confirm,
-            ..Job::new(s, test)
+            ..Job::new(pick.candidate, pick.prediction, test)
         }
     });
     again.chain(fresh).collect()
@@ -134,11 +135,9 @@ pub(in crate::campaign) fn announce(
     if tick {
         progress.tick(in_stage);
     }
-    let predicted = if r.prediction.is_made() {
-        format!("predicted {:.2} m", r.prediction.min_distance)
-    } else {
-        "not screened".into()
-    };
+    let predicted = r
+        .predicted_m()
+        .map_or("not screened".into(), |d| format!("predicted {d:.2} m"));
     progress.note(&format!(
         "flight {n}: candidate {}{} {predicted}, flew {} ({})",
         r.candidate,

@@ -135,8 +135,8 @@ fn reported_flight(r: &FlightRecord, reported: &[(CandidateId, String)]) -> Repo
     ReportedFlight {
         candidate: r.candidate,
         attempt: r.attempt,
-        predicted_min_distance: r.prediction.min_distance,
-        predicted_p_fail: r.prediction.p_fail,
+        predicted_min_distance: r.predicted_m(),
+        predicted_p_fail: r.prediction.as_ref().and_then(|p| p.p_fail),
         min_distance: r.flown.min_distance,
         min_distance_raw: r.flown.min_distance_raw,
         status: r.flown.status,

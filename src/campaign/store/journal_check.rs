@@ -86,7 +86,7 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
             return Err(format!("{field} {} s is outside [0, {MAX_FLIGHT_TIME_S}] s", number(t)));
         }
     }
-    if let Some(p) = record.prediction.p_fail
+    if let Some(p) = record.prediction.as_ref().and_then(|p| p.p_fail)
         && !(0.0..=1.0).contains(&p)
     {
         return Err(format!(
