@@ -2,11 +2,15 @@
 
 use std::path::Path;
 
-use px4_ulog::full_parser::{SomeVec, read_file};
+use px4_ulog::full_parser::{Completeness, SomeVec, read_file};
 
 use super::error::{ModelError, Result};
 use super::safe_files::MAX_ULOG_BYTES;
 use super::trajectory::{Sample, Trajectory, check_step};
+use super::ulog_frames::check_frames;
+
+/// What a damaged log's error adds: it is refused whole, never read as the shorter flight it still holds.
+const REFUSED: &str = "refused rather than scored as a shorter flight";
 
 /// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
 /// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
@@ -19,10 +23,27 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
     };
     let name = path.to_str().ok_or_else(|| bad("the path is not UTF-8".into()))?;
     check_ulog_file(path)?;
+    let frames = check_frames(path).map_err(|source| ModelError::Io {
+        path: path.to_path_buf(),
+        action: "cannot read",
+        source,
+    })?;
+    if let Err(d) = frames {
+        return Err(bad(format!("damaged ULog at byte {}: {}; {REFUSED}", d.offset, d.why)));
+    }
     // The parser asserts its own invariants; a malformed log must be an error, not a crash.
     let parsed = std::panic::catch_unwind(|| read_file(name))
         .map_err(|_| bad("malformed ULog (the parser gave up)".into()))?
         .map_err(|e| bad(format!("not a readable ULog: {e}")))?;
+    match parsed.completeness {
+        Completeness::Complete => {}
+        Completeness::Truncated => return Err(bad(format!("the ULog ends inside a message: {REFUSED}"))),
+        Completeness::MalformedRecord(why) => {
+            return Err(bad(format!(
+                "damaged ULog (a message does not parse: {why}); {REFUSED}"
+            )));
+        }
+    }
     let topic = parsed
         .messages
         .get("vehicle_local_position")
@@ -48,8 +69,18 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         .copied()
         .ok_or_else(|| bad("vehicle_local_position has no samples".into()))?;
     check_timestamps(&t).map_err(bad)?;
-    let samples = (0..t.len().min(x.len()).min(y.len()).min(z.len()))
-        .filter(|&i| x[i].is_finite() && y[i].is_finite() && z[i].is_finite())
+    let n = t.len().min(x.len()).min(y.len()).min(z.len());
+    let finite = |i: usize| x[i].is_finite() && y[i].is_finite() && z[i].is_finite();
+    // Before the estimator has a position the log may hold none; once it has, a gap is damage.
+    let from = (0..n).find(|&i| finite(i)).unwrap_or(n);
+    if let Some(i) = (from..n).find(|&i| !finite(i)) {
+        return Err(bad(format!(
+            "vehicle_local_position sample {} (timestamp {} us) has no finite position, after finite ones: {REFUSED}",
+            i + 1,
+            t[i]
+        )));
+    }
+    let samples = (from..n)
         .map(|i| Sample {
             t_s: (t[i] - t0) / 1e6,
             x: x[i],
