@@ -3,7 +3,7 @@
 
 pub mod folder;
 pub mod journal;
-pub mod journal_check;
 mod journal_line;
 mod journal_memory;
 pub mod replay;
+pub mod trust;

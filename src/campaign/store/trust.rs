@@ -1,13 +1,68 @@
-//! What a journal line may say: the campaign folder is a trust boundary, so a value read back from it is
-//! checked before it is believed. A trajectory must be a file inside the folder (no `..`, not absolute, not
-//! through a link); a flown distance must be finite and within the arena; times and probabilities must be
-//! numbers a flight can have. A line that breaks a rule is refused, naming the line, the field and the rule.
+//! The one trust boundary of a folder a command writes into and reads back: `generate`'s campaign folder,
+//! `evaluate`'s `SUITE/evaluation`, `score --averages`. What it writes goes into folders of its own (a link
+//! or a file in a folder's place is refused: it would carry every write elsewhere), through the atomic,
+//! link-replacing writer; what it reads back is checked before it is believed. A path read from the folder
+//! must be a file inside it (no `..`, not absolute, not through a link); a flown distance must be finite and
+//! within the arena; times and probabilities must be numbers a flight can have. A line that breaks a rule is
+//! refused, naming the line, the field and the rule.
 
+use std::os::unix::fs::MetadataExt;
 use std::path::{Component, Path};
 
 use super::journal::{FlightRecord, Journal};
+use crate::model::limit::number;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
-use crate::model::{Arena, ModelError, TestCase};
+use crate::model::{Arena, ModelError, TestCase, Trajectory};
+
+/// Creates the folder `dir` if it is missing (its parent must exist), and checks it is a folder of its own
+/// ([`check_own_folder`]): `command` names the writer in the refusal.
+pub fn make_own_folder(dir: &Path, command: &str) -> Result<(), ModelError> {
+    match std::fs::create_dir(dir) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => check_own_folder(dir, command),
+        Err(source) => Err(ModelError::Io {
+            path: dir.to_path_buf(),
+            action: "cannot create",
+            source,
+        }),
+    }
+}
+
+/// Checks that `dir`, if there, is a folder and not a link: what `command` writes into must stay inside.
+pub fn check_own_folder(dir: &Path, command: &str) -> Result<(), ModelError> {
+    let what = match std::fs::symlink_metadata(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(source) => {
+            return Err(ModelError::Io {
+                path: dir.to_path_buf(),
+                action: "cannot inspect",
+                source,
+            });
+        }
+        Ok(m) if m.file_type().is_symlink() => match std::fs::read_link(dir) {
+            Ok(to) => format!("a link to {}", to.display()),
+            Err(_) => "a link".to_string(),
+        },
+        Ok(m) if m.is_dir() => return Ok(()),
+        Ok(_) => "a file".to_string(),
+    };
+    Err(ModelError::Io {
+        path: dir.to_path_buf(),
+        action: "cannot write into",
+        source: std::io::Error::other(format!(
+            "it is {what}, not a folder of its own; {command} writes only inside its folder: remove it, then run \
+             again"
+        )),
+    })
+}
+
+/// Whether `a` and `b` are one folder (the same file once links are followed); false if either is missing.
+pub fn same_folder(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
 
 /// The longest flight time a journal line may state, seconds (a day: far above any flight limit).
 pub const MAX_FLIGHT_TIME_S: f64 = 86_400.0;
@@ -97,15 +152,6 @@ pub fn check_record(record: &FlightRecord, size_m: f64) -> Result<(), String> {
     Ok(())
 }
 
-/// A number as a user reads it: huge ones in scientific notation, not three hundred digits.
-fn number(v: f64) -> String {
-    if v.is_finite() && v.abs() >= 1e6 {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}
-
 /// Whether `path` names something inside the folder it is relative to: relative, with plain names only (an
 /// empty path, a flight without a file, is inside).
 pub fn is_inside(path: &Path) -> bool {
@@ -113,72 +159,62 @@ pub fn is_inside(path: &Path) -> bool {
         .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
 }
 
-/// The bytes of the folder's file `relative`, if it is inside `folder` ([`is_inside`]), a regular file and no
-/// link, and within the read cap; `None` otherwise (the caller goes without it).
-pub fn inside_bytes(folder: &Path, relative: &Path) -> Option<Vec<u8>> {
+/// The bytes of the folder's file `relative`: it must be inside `folder` ([`is_inside`]), reached through no
+/// link, a regular file within the read cap; else why not.
+pub fn read_inside(folder: &Path, relative: &Path) -> Result<Vec<u8>, String> {
     if !is_inside(relative) || relative.as_os_str().is_empty() {
-        return None;
+        return Err(format!(
+            "{:?} is not a file inside {} (`..` and absolute paths are refused)",
+            relative.display().to_string(),
+            folder.display()
+        ));
     }
     // No link on the way either: `flights` itself may have been replaced by one.
     let mut at = folder.to_path_buf();
+    let file = folder.join(relative);
     for part in relative.parent().into_iter().flat_map(Path::components) {
         at.push(part);
-        if std::fs::symlink_metadata(&at).map_or(true, |m| !m.is_dir()) {
-            return None;
+        match std::fs::symlink_metadata(&at) {
+            Ok(m) if m.is_dir() => {}
+            Ok(_) => {
+                return Err(format!(
+                    "{}: not read: {} is a link or a file, not a folder of its own",
+                    file.display(),
+                    at.display()
+                ));
+            }
+            Err(_) => {
+                return Err(format!(
+                    "{}: missing (there is no folder {})",
+                    file.display(),
+                    at.display()
+                ));
+            }
         }
     }
-    read_capped_no_follow(&folder.join(relative), MAX_READ_BYTES).ok()
+    read_capped_no_follow(&folder.join(relative), MAX_READ_BYTES).map_err(|e| e.to_string())
+}
+
+/// [`read_inside`], `None` when it cannot be read (the caller goes without it).
+pub fn inside_bytes(folder: &Path, relative: &Path) -> Option<Vec<u8>> {
+    read_inside(folder, relative).ok()
+}
+
+/// The flight (a trajectory CSV) the folder's file `relative` holds, read as [`read_inside`] does; why not,
+/// naming the file and where it is damaged.
+pub fn read_inside_flight(folder: &Path, relative: &Path) -> Result<Trajectory, String> {
+    let bytes = read_inside(folder, relative)?;
+    let path = folder.join(relative);
+    let text = String::from_utf8(bytes).map_err(|e| {
+        format!(
+            "{}: not UTF-8 text (invalid byte at offset {})",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        )
+    })?;
+    Trajectory::parse_csv(&text, &path).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::campaign::store::journal::test_record;
-
-    #[test]
-    fn paths_leaving_the_folder_are_not_inside() {
-        for p in ["flights/candidate_1.csv", "./flights/x.csv", ""] {
-            assert!(is_inside(Path::new(p)), "{p}");
-        }
-        for p in ["../x.csv", "flights/../../etc/passwd", "/etc/passwd"] {
-            assert!(!is_inside(Path::new(p)), "{p}");
-        }
-    }
-
-    #[test]
-    fn distances_outside_the_arena_and_odd_times_are_refused() {
-        let ok = test_record(1, 1.0, Some(2.0));
-        check_record(&ok, 100.0).unwrap();
-        for d in [-1.0, 1e300, 100.5] {
-            let e = check_record(&test_record(1, 1.0, Some(d)), 100.0).unwrap_err();
-            assert!(e.contains("min_distance") && e.contains("outside [0, 100.0]"), "{e}");
-        }
-        let mut slow = ok.clone();
-        slow.flown.flight_time_s = -3.0;
-        assert!(check_record(&slow, 100.0).unwrap_err().contains("flight_time_s"));
-        let away = FlightRecord {
-            trajectory: "../../../../etc/hosts".into(),
-            ..ok
-        };
-        let e = check_record(&away, 100.0).unwrap_err();
-        assert!(
-            e.contains("../../../../etc/hosts") && e.contains("not a file inside"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn a_link_inside_the_folder_is_not_read_through() {
-        let dir = tempfile::tempdir().unwrap();
-        let secret = dir.path().join("secret");
-        std::fs::write(&secret, "s").unwrap();
-        std::fs::create_dir(dir.path().join("f")).unwrap();
-        std::os::unix::fs::symlink(&secret, dir.path().join("f/l.csv")).unwrap();
-        std::fs::write(dir.path().join("f/r.csv"), "r").unwrap();
-        assert_eq!(inside_bytes(dir.path(), Path::new("f/l.csv")), None);
-        assert_eq!(inside_bytes(dir.path(), Path::new("f/r.csv")), Some(b"r".to_vec()));
-        assert_eq!(inside_bytes(dir.path(), Path::new("f/../secret")), None);
-        std::os::unix::fs::symlink(dir.path().join("f"), dir.path().join("g")).unwrap();
-        assert_eq!(inside_bytes(dir.path(), Path::new("g/r.csv")), None, "a linked folder");
-    }
-}
+#[path = "trust_tests.rs"]
+mod tests;
