@@ -47,3 +47,27 @@ fn a_link_inside_the_folder_is_not_read_through() {
     std::os::unix::fs::symlink(dir.path().join("f"), dir.path().join("g")).unwrap();
     assert_eq!(inside_bytes(dir.path(), Path::new("g/r.csv")), None, "a linked folder");
 }
+
+#[test]
+fn a_link_or_a_file_in_a_folders_place_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let own = dir.path().join("flights");
+    make_own_folder(&own, "the campaign").unwrap();
+    make_own_folder(&own, "the campaign").unwrap();
+    assert!(own.is_dir());
+    check_own_folder(&dir.path().join("missing"), "the campaign").unwrap();
+    let elsewhere = tempfile::tempdir().unwrap();
+    let link = dir.path().join("averages");
+    std::os::unix::fs::symlink(elsewhere.path(), &link).unwrap();
+    let e = make_own_folder(&link, "evaluate").unwrap_err().to_string();
+    assert!(
+        e.contains("averages") && e.contains("a link to") && e.contains("evaluate writes only inside"),
+        "{e}"
+    );
+    std::fs::write(dir.path().join("jobs"), "").unwrap();
+    let e = check_own_folder(&dir.path().join("jobs"), "evaluate")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("it is a file"), "{e}");
+    assert!(same_folder(&link, elsewhere.path()) && !same_folder(&own, elsewhere.path()));
+}
