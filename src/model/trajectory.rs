@@ -114,18 +114,7 @@ impl Trajectory {
             column: None,
             message,
         };
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        if let Some(last) = text.rsplit('\n').next().filter(|l| !l.trim().is_empty()) {
-            let line = text.lines().count();
-            return Err(syntax(
-                line,
-                format!(
-                    "the last row ({:?}) has no newline at its end: the file was cut mid-row; refused rather than \
-                     read as a shorter flight (if the row is whole, end it with a newline)",
-                    last.chars().take(40).collect::<String>()
-                ),
-            ));
-        }
+        let text = whole_rows(text).map_err(|(line, why)| syntax(line, why))?;
         let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
         let Some((_, header)) = lines.next() else {
             return Err(syntax(
@@ -194,6 +183,23 @@ impl Trajectory {
         }
         out
     }
+}
+
+/// The CSV `text` without a byte-order mark; or, when its last row has no newline, that line and why it is
+/// refused (the file was cut mid-row).
+fn whole_rows(text: &str) -> std::result::Result<&str, (usize, String)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let Some(last) = text.rsplit('\n').next().filter(|l| !l.trim().is_empty()) else {
+        return Ok(text);
+    };
+    Err((
+        text.lines().count(),
+        format!(
+            "the last row ({:?}) has no newline at its end: the file was cut mid-row; refused rather than read as \
+             a shorter flight (if the row is whole, end it with a newline)",
+            last.chars().take(40).collect::<String>()
+        ),
+    ))
 }
 
 /// The longest pause between consecutive samples of one flight, seconds.

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use px4_ulog::full_parser::{Completeness, SomeVec, read_file};
+use px4_ulog::full_parser::{Completeness, ParsedData, SomeVec, read_file};
 
 use super::error::{ModelError, Result};
 use super::safe_files::MAX_ULOG_BYTES;
@@ -12,16 +12,19 @@ use super::ulog_frames::check_frames;
 /// What a damaged log's error adds: it is refused whole, never read as the shorter flight it still holds.
 const REFUSED: &str = "refused rather than scored as a shorter flight";
 
-/// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
-/// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
-pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
-    let bad = |message: String| ModelError::Syntax {
+/// A syntax error of the log at `path`.
+fn bad(path: &Path, message: String) -> ModelError {
+    ModelError::Syntax {
         path: path.to_path_buf(),
         line: None,
         column: None,
         message,
-    };
-    let name = path.to_str().ok_or_else(|| bad("the path is not UTF-8".into()))?;
+    }
+}
+
+/// The log at `path` parsed whole: its framing checked first, and anything the parser had to stop at refused.
+fn parse_whole(path: &Path) -> Result<ParsedData> {
+    let name = path.to_str().ok_or_else(|| bad(path, "the path is not UTF-8".into()))?;
     check_ulog_file(path)?;
     let frames = check_frames(path).map_err(|source| ModelError::Io {
         path: path.to_path_buf(),
@@ -29,21 +32,30 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         source,
     })?;
     if let Err(d) = frames {
-        return Err(bad(format!("damaged ULog at byte {}: {}; {REFUSED}", d.offset, d.why)));
+        return Err(bad(
+            path,
+            format!("damaged ULog at byte {}: {}; {REFUSED}", d.offset, d.why),
+        ));
     }
     // The parser asserts its own invariants; a malformed log must be an error, not a crash.
     let parsed = std::panic::catch_unwind(|| read_file(name))
-        .map_err(|_| bad("malformed ULog (the parser gave up)".into()))?
-        .map_err(|e| bad(format!("not a readable ULog: {e}")))?;
-    match parsed.completeness {
-        Completeness::Complete => {}
-        Completeness::Truncated => return Err(bad(format!("the ULog ends inside a message: {REFUSED}"))),
-        Completeness::MalformedRecord(why) => {
-            return Err(bad(format!(
-                "damaged ULog (a message does not parse: {why}); {REFUSED}"
-            )));
-        }
+        .map_err(|_| bad(path, "malformed ULog (the parser gave up)".into()))?
+        .map_err(|e| bad(path, format!("not a readable ULog: {e}")))?;
+    match &parsed.completeness {
+        Completeness::Complete => Ok(parsed),
+        Completeness::Truncated => Err(bad(path, format!("the ULog ends inside a message: {REFUSED}"))),
+        Completeness::MalformedRecord(why) => Err(bad(
+            path,
+            format!("damaged ULog (a message does not parse: {why}); {REFUSED}"),
+        )),
     }
+}
+
+/// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
+/// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
+pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
+    let bad = |message: String| bad(path, message);
+    let parsed = parse_whole(path)?;
     let topic = parsed
         .messages
         .get("vehicle_local_position")

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use super::folder::write_averages;
 use super::listing::{Rules, load_tests};
 use super::missing::{Missing, missing};
-use super::runs::{MAX_TRIES, Run, read_runs};
+use super::runs::{MAX_TRIES, RunState, read_runs};
 use super::suite::{Evaluation, FlownTest, evaluate_suite};
 use crate::campaign::config::CampaignError;
 use crate::campaign::fly::fleet::fly_all;
@@ -165,7 +165,7 @@ fn fly_missing(
 
 /// Tells once of each flight that left nothing to judge, for a run not yet judged.
 fn warn_unjudged(
-    runs: &[Run],
+    runs: &[RunState],
     tests: &[(PathBuf, TestCase)],
     warned: &mut Vec<(u64, u32)>,
     warn: &(dyn Fn(&str) + Sync),
@@ -217,7 +217,7 @@ fn check_same_tests(done: &[FlightRecord], tests: &[(PathBuf, TestCase)], journa
 }
 
 /// Each test with the flights its runs are judged on, in run order.
-fn flown_tests(tests: &[(PathBuf, TestCase)], runs: &[Run]) -> Vec<FlownTest> {
+fn flown_tests(tests: &[(PathBuf, TestCase)], runs: &[RunState]) -> Vec<FlownTest> {
     (tests.iter().enumerate())
         .map(|(i, (path, test))| FlownTest {
             path: path.clone(),

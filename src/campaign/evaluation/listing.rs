@@ -28,7 +28,7 @@ pub fn test_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
         numbered.sort();
         return Ok(numbered.into_iter().map(|(_, p)| p).collect());
     }
-    yaml.sort_by(|a, b| natural_key(a).cmp(&natural_key(b)));
+    yaml.sort_by_key(|p| natural_key(p));
     Ok(yaml)
 }
 

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::Serialize;
 
-use super::runs::Run;
+use super::runs::RunState;
 use crate::bridge::wire::notices::counted;
 use crate::campaign::flight_status::FlightStatus;
 use crate::campaign::fly::vehicle::PoolOutcome;
@@ -26,7 +26,7 @@ pub struct Missing {
 /// The runs of `runs` still without a flight to judge, and why: `new` are the journal's records of this run,
 /// `outcome` what its fleet did, `journal` its file (named in what to do).
 pub fn missing(
-    runs: &[Run],
+    runs: &[RunState],
     tests: &[(PathBuf, TestCase)],
     new: &[FlightRecord],
     outcome: &PoolOutcome,
@@ -63,7 +63,7 @@ mod tests {
 
     #[test]
     fn every_backend_failure_is_named_once_with_its_count() {
-        let run = Run {
+        let run = RunState {
             test: 0,
             run: 0,
             judged: None,

@@ -2,7 +2,7 @@
 //! judged on its first journaled flight that left something to judge. A flight that left nothing (no
 //! trajectory, a deleted or damaged file, a record of a moment) is not counted, and its run is flown again
 //! as the run's next flight, up to [`MAX_TRIES`] flights; after that the run stays missing, and
-//! [`Run::stuck`] says what to do. Without the retry one such flight would leave the evaluation incomplete
+//! [`RunState::stuck`] says what to do. Without the retry one such flight would leave the evaluation incomplete
 //! for good.
 
 use std::path::{Path, PathBuf};
@@ -34,7 +34,7 @@ pub struct Unjudged {
 
 /// One run of one test.
 #[derive(Debug, Clone)]
-pub struct Run {
+pub struct RunState {
     /// The test's index in the suite.
     pub test: usize,
     /// The run's number, from 0.
@@ -45,7 +45,7 @@ pub struct Run {
     pub unjudged: Vec<Unjudged>,
 }
 
-impl Run {
+impl RunState {
     /// Its candidate number in the journal.
     pub fn candidate(&self) -> CandidateId {
         CandidateId(self.test as u64 * RUN_STRIDE + self.run as u64)
@@ -121,11 +121,11 @@ pub fn read_runs(
     records: &[(usize, FlightRecord)],
     folder: &Path,
     runs: usize,
-) -> Vec<Run> {
+) -> Vec<RunState> {
     let mut out = Vec::with_capacity(tests.len() * runs);
     for test in 0..tests.len() {
         for run in 0..runs {
-            let mut r = Run {
+            let mut r = RunState {
                 test,
                 run,
                 judged: None,

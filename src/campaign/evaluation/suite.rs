@@ -158,14 +158,7 @@ pub fn evaluate_suite(
     };
     // + 0.0 on every sum: an empty f64 sum is -0.0, printed "-0.000".
     let total_score = evaluated.iter().map(|t| t.score).sum::<f64>() + 0.0;
-    let total_score_sd = (n_evaluated > 0)
-        .then(|| {
-            (evaluated.iter().filter(|t| !t.runs.is_empty()))
-                .map(|t| t.score_sd.map(|sd| sd * sd))
-                .sum::<Option<f64>>()
-                .map(|v| (v + 0.0).sqrt())
-        })
-        .flatten();
+    let total_score_sd = total_sd(&evaluated);
     let figures_2025 = figures_2025(tests, &evaluated);
     let evaluation = Evaluation {
         judge,
@@ -182,6 +175,15 @@ pub fn evaluate_suite(
         tests: evaluated,
     };
     Ok((evaluation, averages))
+}
+
+/// The total's standard error: the root sum of squares of the evaluated tests' (`None` when one has none, or
+/// none is evaluated).
+fn total_sd(tests: &[TestEvaluation]) -> Option<f64> {
+    let mut evaluated = tests.iter().filter(|t| !t.runs.is_empty()).peekable();
+    evaluated.peek()?;
+    let sum = evaluated.map(|t| t.score_sd.map(|sd| sd * sd)).sum::<Option<f64>>()?;
+    Some((sum + 0.0).sqrt())
 }
 
 fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelError> {
