@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use prgenuav::campaign::fly::vehicle::Flown;
 use prgenuav::campaign::ground::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
-use prgenuav::campaign::store::journal_check::{check_journal, check_record, is_inside};
+use prgenuav::campaign::store::trust::{check_journal, check_record, is_inside};
 use proptest::prelude::*;
 use serde_json::Value;
 

@@ -4,7 +4,10 @@
 
 pub mod flying;
 pub mod folder;
+pub mod listing;
+pub mod missing;
 pub mod report;
+pub mod runs;
 pub mod suite;
 
 pub use folder::evaluate_folder;

@@ -1,7 +1,9 @@
 //! The flight stage: the tests waiting for confirmation, then a ranking, as jobs for the fleet; the flights'
 //! progress lines.
 
+use std::collections::HashSet;
 use std::path::Path;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use crate::campaign::fly::confirm::pending;
@@ -104,11 +106,19 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Pick>, busy: &[CandidateId]) ->
 }
 
 /// Counts a campaign's flights for its progress lines: each flight's number in the campaign, and in the flight
-/// stage under way (what the stage's progress counts to).
+/// stage under way (what the stage's progress counts to); and the flights' warnings said so far.
 #[derive(Debug, Default)]
 pub(in crate::campaign) struct FlightCount {
     total: AtomicUsize,
     stage_start: AtomicUsize,
+    said: Mutex<HashSet<String>>,
+}
+
+/// A flight's numbers ([`FlightCount::next`]), with the count it came from.
+pub(in crate::campaign) struct Numbered<'a> {
+    n: usize,
+    in_stage: usize,
+    count: &'a FlightCount,
 }
 
 impl FlightCount {
@@ -119,19 +129,28 @@ impl FlightCount {
     }
 
     /// Counts one flight: its number in the campaign and in the stage, both from 1.
-    pub(in crate::campaign) fn next(&self) -> (usize, usize) {
+    pub(in crate::campaign) fn next(&self) -> Numbered<'_> {
         let n = self.total.fetch_add(1, Ordering::Relaxed) + 1;
-        (n, n.saturating_sub(self.stage_start.load(Ordering::Relaxed)))
+        Numbered {
+            n,
+            in_stage: n.saturating_sub(self.stage_start.load(Ordering::Relaxed)),
+            count: self,
+        }
+    }
+
+    /// Whether `warning` is said for the first time in the campaign.
+    fn first_time(&self, warning: &str) -> bool {
+        self.said
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .insert(warning.to_string())
     }
 }
 
-/// Tells the user of a flight, numbered `(in the campaign, in the stage)`.
-pub(in crate::campaign) fn announce(
-    progress: &dyn Progress,
-    (n, in_stage): (usize, usize),
-    r: &FlightRecord,
-    tick: bool,
-) {
+/// Tells the user of a flight; a warning already said for an earlier flight (the same setting changed on
+/// every flight, say) is not said again.
+pub(in crate::campaign) fn announce(progress: &dyn Progress, numbered: Numbered<'_>, r: &FlightRecord, tick: bool) {
+    let Numbered { n, in_stage, count } = numbered;
     if tick {
         progress.tick(in_stage);
     }
@@ -148,7 +167,40 @@ pub(in crate::campaign) fn announce(
         r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
         r.flown.status
     ));
-    for w in &r.flown.warnings {
-        progress.note(&format!("  warning: {w}"));
+    for w in r.flown.warnings.iter().filter(|w| count.first_time(w)) {
+        progress.note(&format!("  warning: {w} (said once: not repeated for later flights)"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::store::journal::test_record;
+
+    struct Notes(Mutex<Vec<String>>);
+
+    impl Progress for Notes {
+        fn stage(&self, _: &str, _: usize) {}
+        fn tick(&self, _: usize) {}
+        fn note(&self, message: &str) {
+            self.0.lock().unwrap().push(message.to_string());
+        }
+    }
+
+    #[test]
+    fn a_warning_every_flight_gives_is_said_once() {
+        let (count, notes) = (FlightCount::default(), Notes(Mutex::new(Vec::new())));
+        let mut r = test_record(1, 1.0, Some(2.0));
+        r.flown.warnings = vec!["MPC_POS_MODE set to 3 for this flight".into()];
+        for _ in 0..3 {
+            announce(&notes, count.next(), &r, false);
+        }
+        let said = notes.0.into_inner().unwrap();
+        assert_eq!(
+            said.iter().filter(|n| n.contains("MPC_POS_MODE")).count(),
+            1,
+            "{said:#?}"
+        );
+        assert_eq!(said.iter().filter(|n| n.starts_with("flight ")).count(), 3);
     }
 }

@@ -12,7 +12,7 @@ use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
 use crate::campaign::report::{backends, expected::score as expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
-use crate::campaign::store::journal_check::inside_bytes;
+use crate::campaign::store::trust::inside_bytes;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{ClosestApproach, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};

@@ -175,7 +175,7 @@ fn collision_prevention_verdicts_are_kept_and_old_lines_without_them_still_load(
     assert_eq!(cp_of(&read[1]), (Some(1.35), Some(true)));
     let mut bad = cp;
     bad.flown.closest_centre_m = Some(-0.5);
-    let e = crate::campaign::store::journal_check::check_record(&bad, 100.0).unwrap_err();
+    let e = crate::campaign::store::trust::check_record(&bad, 100.0).unwrap_err();
     assert!(e.contains("closest_centre_m") && e.contains("outside"), "{e}");
 }
 
