@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::bail;
 use prgenuav::campaign::evaluation::RUNS_2026;
 use prgenuav::campaign::evaluation::flying::{EVALUATION_DIR, EvaluateSetup, Evaluated, evaluate_by_flying};
-use prgenuav::campaign::evaluation::report;
+use prgenuav::campaign::evaluation::{kept, report};
 use prgenuav::campaign::fly::backend;
 use prgenuav::campaign::settings::evaluation::EvaluationSettings;
 use prgenuav::campaign::settings::{CampaignSettings, Loaded};
@@ -47,8 +47,9 @@ pub struct EvaluateArgs {
     settings: EvaluateFlags,
 }
 
-/// The flights' settings: the suite's campaign.json when it has one (the same mock it was generated on),
-/// else the defaults; the flags given here override them, a backend given replaces the suite's.
+/// The flights' settings: what the evaluation kept when it ran before (a fixed setting asked otherwise is
+/// refused), else the suite's campaign.json when it has one (the same mock it was generated on), else the
+/// defaults; the flags given here override them, a backend given replaces the suite's.
 fn settings(args: &EvaluateArgs) -> anyhow::Result<EvaluationSettings> {
     let mut request = args.settings.request(&Loaded::default())?;
     request.check().map_err(anyhow::Error::msg)?;
@@ -58,7 +59,8 @@ fn settings(args: &EvaluateArgs) -> anyhow::Result<EvaluationSettings> {
         Ok(_) => Some(CampaignSettings::load(&args.folder)?),
         Err(_) => None,
     };
-    let settings = EvaluationSettings::resolve(&request, suite.as_ref()).map_err(anyhow::Error::msg)?;
+    let evaluation = args.folder.join(EVALUATION_DIR);
+    let settings = kept::settings(&evaluation, &request, suite.as_ref())?;
     backend::px4_build(&settings.flights())?;
     Ok(settings)
 }
@@ -96,7 +98,7 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
         suite: &args.folder,
         runs: args.runs,
         top: args.top,
-        judge: settings.judge,
+        settings: &settings,
         similar_below_m: args.similar_below,
         cancel: &stop,
         on_flight: &on_flight,

@@ -16,10 +16,10 @@ use super::suite::{Evaluation, FlownTest, evaluate_suite};
 use crate::campaign::fly::fleet::fly_all;
 use crate::campaign::fly::vehicle::{Job, PoolOutcome, Vehicle};
 use crate::campaign::ground::error::CampaignError;
+use crate::campaign::settings::evaluation::EvaluationSettings;
 use crate::campaign::store::folder::FolderLock;
 use crate::campaign::store::journal::{FlightRecord, Journal};
 use crate::campaign::store::trust::{arena_size_m, check_loaded, check_own_folder, make_own_folder};
-use crate::judge::Judge;
 use crate::model::{ModelError, TestCase};
 
 pub use super::runs::RUN_STRIDE;
@@ -39,8 +39,8 @@ pub struct EvaluateSetup<'a> {
     pub runs: usize,
     /// Only the first N tests.
     pub top: Option<usize>,
-    /// The judge of every flight.
-    pub judge: Judge,
+    /// What the flights fly with (their judge judges them), kept beside the journal.
+    pub settings: &'a EvaluationSettings,
     /// The similarity threshold, metres (DTW).
     pub similar_below_m: f64,
     /// Stops the flights: vehicles in the air land; their flights are journaled, not charged.
@@ -85,6 +85,7 @@ pub fn evaluate_by_flying(
     let folder = suite.join(EVALUATION_DIR);
     own_folders(&folder)?;
     let _lock = FolderLock::acquire(&folder)?;
+    super::kept::keep(&folder, setup.settings, &tests)?;
     let journal_path = folder.join("journal.jsonl");
     let (mut journal, dropped) = Journal::load(&journal_path)?;
     if let Some(dropped) = dropped {
@@ -105,7 +106,7 @@ pub fn evaluate_by_flying(
         setup.cancel,
     );
     let flown = flown_tests(&tests, &runs);
-    let (mut evaluation, averages) = evaluate_suite(&flown, setup.judge, setup.similar_below_m)?;
+    let (mut evaluation, averages) = evaluate_suite(&flown, setup.settings.campaign.judge, setup.similar_below_m)?;
     make_own_folder(&folder.join("averages"), WRITER)?;
     write_averages(&folder.join("averages"), &mut evaluation, &averages)?;
     super::report::write(&folder, &evaluation, &missing)?;

@@ -4,6 +4,7 @@
 
 pub mod flying;
 pub mod folder;
+pub mod kept;
 pub mod listing;
 pub mod missing;
 pub mod report;
