@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use prgenuav::campaign::evaluation::Evaluation;
 use prgenuav::campaign::evaluation::folder::{evaluate_folder, read_folder};
-use prgenuav::campaign::report::folder_score::{SuiteScore, score_flights};
+use prgenuav::campaign::evaluation::folder_score::{SuiteScore, score_flights};
 use prgenuav::judge::similarity::SIMILAR_BELOW_M;
 use prgenuav::model::limit::number;
 use serde::Serialize;

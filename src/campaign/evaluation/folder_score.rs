@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::campaign::evaluation::FlownTest;
-use crate::campaign::evaluation::folder::{FolderFlights, read_folder};
+use super::FlownTest;
+use super::folder::{FolderFlights, read_folder};
 use crate::geometry::union_iou;
 use crate::judge::{Judge, diversity, judge_flight, points, test_score};
 use crate::model::{ModelError, Obstacle};
