@@ -89,6 +89,12 @@ pub fn run_campaign_with(
     // A resume replays the plan: the journaled flights are taken where it has them, the rest are flown.
     match run_rounds(&input, &mut vehicles, &mut journal, &mut stages) {
         Ok((learnt, drawn)) => finish(&input, &journal, drawn, stages, learnt.as_ref()),
+        // Every vehicle lost: the flights journaled so far (and which failed on their backend) are reported
+        // before the error, as when every flight failed on its backend.
+        Err(e @ CampaignError::NoVehicle(_)) => {
+            finish(&input, &journal, 0, stages, None)?;
+            Err(e)
+        }
         Err(e) => report_if_stopped(e, &input, &journal, stages),
     }
 }

@@ -172,7 +172,7 @@ fn generate_with_a_dying_px4_journals_the_failure_and_stops_with_a_clear_error()
         "--out",
         out.path().to_str().unwrap(),
     ]);
-    assert_eq!(code, 2, "{err}");
+    assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("no reachable vehicle") && err.contains("no sensors"),
         "{err}"

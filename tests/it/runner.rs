@@ -178,14 +178,20 @@ fn a_broken_runner_is_dropped_after_two_failed_flights_and_nothing_is_charged() 
         "0",
     ]);
     // The second flight in a row that fails on the backend drops the runner (fly/retry.rs): with no vehicle
-    // left the campaign ends as an error that says why and how to resume.
-    assert_eq!(code, 2, "no vehicle left: {stdout}{stderr}");
+    // left the campaign says why and how to resume, and exits 1 with a report, as a budget of 1 whose one
+    // flight failed on its backend does.
+    assert_eq!(code, 1, "no vehicle left: {stdout}{stderr}");
     assert!(
         stderr.contains("2 flights in a row failed on the backend") && stderr.contains("cannot reach the cluster"),
         "{stderr}"
     );
     assert!(stderr.contains("--resume"), "{stderr}");
     let folder = std::fs::read_dir(out.path()).unwrap().next().unwrap().unwrap().path();
+    let report = std::fs::read_to_string(folder.join("report.md")).expect("report.md");
+    assert!(
+        report.contains("cannot reach the cluster"),
+        "the backend failure in report.md: {report}"
+    );
     let all = Journal::read_all(&folder.join("journal.jsonl")).unwrap();
     assert!(
         all.len() == 1 && all[0].flown.status == FlightStatus::BackendFailed,

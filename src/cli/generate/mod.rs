@@ -14,7 +14,7 @@ use anyhow::Context;
 use clap::ArgMatches;
 use prgenuav::campaign::report::outputs::Report;
 use prgenuav::campaign::report::user_report;
-use prgenuav::campaign::run::run_campaign;
+use prgenuav::campaign::run::{CampaignError, run_campaign};
 
 use super::progress::Reporter;
 use super::setting_flags::CampaignFlags;
@@ -57,7 +57,20 @@ pub fn run(args: GenerateArgs, matches: &ArgMatches) -> anyhow::Result<ExitCode>
     }
     let (runtime, stop) = runtime_stopped_by_signals()?;
     let progress = Reporter::new(args.quiet || args.json);
-    let report = run_campaign(cfg, &plan.folder, &progress, &stop, runtime.handle())?;
+    let report = match run_campaign(cfg, &plan.folder, &progress, &stop, runtime.handle()) {
+        Ok(report) => report,
+        // The setup broke, not the input: exit 1 as when every flight failed on its backend; report.md has the
+        // flights journaled before the last vehicle was dropped.
+        Err(e @ CampaignError::NoVehicle(_)) => {
+            eprintln!("error: {e}");
+            eprintln!(
+                "report of the flights so far: {}",
+                plan.folder.join("report.md").display()
+            );
+            return Ok(ExitCode::from(super::EXIT_FAIL));
+        }
+        Err(e) => return Err(e.into()),
+    };
     print_summary(&report, &plan, args.json)?;
     let unspent = cfg.campaign.budget.saturating_sub(report.suite.flown);
     if unspent > 0 && !stop.load(Ordering::SeqCst) {
