@@ -38,9 +38,12 @@ pub async fn run(
     let anchored = std::sync::OnceLock::new();
     let (mut s, clock_report) = connect(test, opts, transport, cancel).await?;
     s.ready.started = Some(s.link.clock().now());
-    let stop = match s.place(&anchored).await {
-        Ok(()) => match s.prepare().await {
-            Ok(()) => flight::follow(&mut s, &mut recorder).await,
+    let stop = match s.check_hitl().await {
+        Ok(()) => match s.place(&anchored).await {
+            Ok(()) => match s.prepare().await {
+                Ok(()) => flight::follow(&mut s, &mut recorder).await,
+                Err(stop) => stop,
+            },
             Err(stop) => stop,
         },
         Err(stop) => stop,

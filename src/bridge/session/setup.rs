@@ -47,9 +47,15 @@ impl Session<'_> {
         }
         if self.opts.mode == FlyMode::Avoidance {
             let steer = flight::steer_for(self.test, self.opts, self.frame, self.mpc_xy_cruise_m_s);
-            let pacing = match self.opts.lockstep {
-                Some(latency) => avoidance::Pacing::Lockstep { latency },
-                None => avoidance::Pacing::FreeRunning,
+            let pacing = match (&self.opts.sim_gate, self.opts.lockstep) {
+                (Some(gate), _) => avoidance::Pacing::SimulatedTime(avoidance::SimPaced {
+                    gate: gate.clone(),
+                    frame: self.frame,
+                    test_home: self.test.home,
+                    period: avoidance::ANSWER_PERIOD,
+                }),
+                (None, Some(latency)) => avoidance::Pacing::Lockstep { latency },
+                (None, None) => avoidance::Pacing::FreeRunning,
             };
             let companion = self.companion.clone();
             for t in avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing) {
