@@ -42,11 +42,11 @@ pub struct SimPaced {
 const REQUEST_INTERVAL: Duration = Duration::from_millis(200);
 /// A request is overdue this long (PX4 time) after the interval: the stream's own jitter is a step or two.
 const REQUEST_SLACK: Duration = Duration::from_millis(20);
-/// The longest wall wait at a hold for an overdue request (sent by PX4, not yet through the UDP link).
+/// The longest wall wait at a hold for overdue requests (sent by PX4, not yet through the UDP link).
 const OVERDUE_WAIT: Duration = Duration::from_millis(50);
 /// Wall time PX4's MAVLink receiver is given to take the answer before simulated time goes on, so the
 /// answer lands at the instant it was planned for on an idle machine.
-const SETTLE: Duration = Duration::from_micros(300);
+const SETTLE: Duration = Duration::from_micros(2000);
 
 /// The companion's view between holds: the vehicle, PX4's requests and when the last two were sent.
 struct State {
@@ -82,7 +82,7 @@ pub(super) async fn run(
         let now = Duration::from_micros(hold.truth.time.as_micros());
         drain(&mut rx, &mut st, target, &clock, &mut answers);
         if st.overdue(now) {
-            wait_for_request(&mut rx, &mut st, target, &clock, &mut answers).await;
+            wait_for_request(&mut rx, &mut st, now, target, &clock, &mut answers).await;
         }
         st.view.pose = Some(truth_pose(&hold.truth, &project, paced.frame));
         let planned = match st.companion.steer_input(&st.view, now) {
@@ -143,17 +143,18 @@ fn drain(
     }
 }
 
-/// Waits (at most [`OVERDUE_WAIT`] of wall time) for the next request, taking what arrives meanwhile.
+/// Waits (at most [`OVERDUE_WAIT`] of wall time) until the newest request is no longer overdue at `now`,
+/// taking what arrives meanwhile.
 async fn wait_for_request(
     rx: &mut broadcast::Receiver<Arc<Inbound>>,
     st: &mut State,
+    now: Duration,
     target: Target,
     clock: &VehicleClock,
     answers: &mut Answers,
 ) {
-    let before = st.last_request.map(|(at, _)| at);
     let deadline = Instant::now() + OVERDUE_WAIT;
-    while st.last_request.map(|(at, _)| at) == before {
+    while st.overdue(now) {
         match tokio::time::timeout_at(deadline.into(), rx.recv()).await {
             Ok(Ok(inb)) => st.take(&inb, target, clock, answers),
             Ok(Err(broadcast::error::RecvError::Lagged(_))) => {}

@@ -45,6 +45,8 @@ pub struct SimSummary {
     pub holds: u64,
     /// Holds released late (after [`MAX_HOLD`]) or never.
     pub late_releases: u64,
+    /// Simulated time PX4 first armed the motors at, seconds.
+    pub armed_at_s: Option<f64>,
     /// Why it ended on its own (PX4 lost, the device gone), if it did.
     pub error: Option<String>,
 }
@@ -77,6 +79,9 @@ impl std::fmt::Display for SimSummary {
             self.holds,
             self.late_releases
         )?;
+        if let Some(t) = self.armed_at_s {
+            write!(f, ", armed at {t:.3} s")?;
+        }
         match &self.error {
             Some(e) => write!(f, "; ended: {e}"),
             None => Ok(()),
@@ -114,11 +119,13 @@ impl SimRun {
             sim = sim.with_gate(g);
         }
         let seed = config.seed;
+        let armed = first_armed(&sim);
         let run = Self::spawn(move |cancel| async move {
             let r = sim.run_sitl(&server, accept_within, &lockstep, &cancel).await;
             let mut s = SimSummary {
                 link: "tcp lockstep",
                 seed,
+                armed_at_s: armed.borrow().map(|t| t.as_secs_f64()),
                 ..SimSummary::default()
             };
             match r {
@@ -169,6 +176,7 @@ impl SimRun {
         }))
     }
 
+    /// Starts `body` (the simulator's run, ending with its summary) on the runtime.
     fn spawn<F, Fut>(body: F) -> SimRun
     where
         F: FnOnce(Cancel) -> Fut,
@@ -210,6 +218,23 @@ impl SimRun {
             ..SimSummary::default()
         })
     }
+}
+
+/// A watch of the simulated time the motors were first armed at (for the summary: a flight's start on
+/// simulated time).
+fn first_armed(sim: &Simulator) -> tokio::sync::watch::Receiver<Option<simulator::SimTime>> {
+    let mut truth = sim.truth();
+    let (tx, rx) = tokio::sync::watch::channel(None);
+    tokio::spawn(async move {
+        while truth.changed().await.is_ok() {
+            let t = *truth.borrow_and_update();
+            if t.armed {
+                tx.send_replace(Some(t.time));
+                return;
+            }
+        }
+    });
+    rx
 }
 
 impl Drop for SimRun {

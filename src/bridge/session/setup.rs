@@ -27,6 +27,10 @@ const GF_WARNING_ONLY: f64 = 1.0;
 /// LOCAL_POSITION_NED rate requested, Hz: at least 30, so the recorded path (and the closest approach found
 /// on it) is dense whatever the vehicle streams by default.
 pub const POSITION_RATE_HZ: f64 = 50.0;
+/// TRAJECTORY_REPRESENTATION_WAYPOINTS rate requested when the companion runs on simulated time, Hz.
+pub const REQUEST_RATE_HZ: f64 = 50.0;
+/// TRAJECTORY_REPRESENTATION_WAYPOINTS' message id.
+const TRAJECTORY_REPRESENTATION_WAYPOINTS_ID: u16 = 332;
 
 impl Session<'_> {
     /// Everything before the first command of the flight.
@@ -179,12 +183,16 @@ impl Session<'_> {
 
     /// LOCAL_POSITION_NED at [`POSITION_RATE_HZ`]; ATTITUDE as fast, for the heading. Refusals are warnings.
     async fn request_streams(&mut self) {
-        let interval_us = (1e6 / POSITION_RATE_HZ) as f32;
-        for id in [32.0, 30.0] {
-            let p = [id, interval_us, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let mut streams = vec![(32.0, POSITION_RATE_HZ), (30.0, POSITION_RATE_HZ)];
+        if self.opts.sim_gate.is_some() && self.opts.mode == FlyMode::Avoidance {
+            // On simulated time the companion answers the newest request at each hold: at PX4's 5 Hz the
+            // request it has would be up to 200 ms old, by when the stream happened to tick.
+            streams.push((f32::from(TRAJECTORY_REPRESENTATION_WAYPOINTS_ID), REQUEST_RATE_HZ));
+        }
+        for (id, hz) in streams {
+            let p = [id, (1e6 / hz) as f32, 0.0, 0.0, 0.0, 0.0, 0.0];
             if let Err(e) = self.command(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, p).await {
-                self.warnings
-                    .push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
+                self.warnings.push(format!("message {id} at {hz} Hz: {e}"));
             }
         }
     }
