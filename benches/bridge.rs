@@ -1,7 +1,6 @@
 //! Mission upload of 100 items to the mock autopilot on loopback UDP, through the bridge's link and upload
 //! state machine: a clean link, and 20 % loss each way (recovered by PX4-style re-requests and our retries).
 //! The mock runs in real time (speed factor 1), as PX4 SITL would.
-#![allow(deprecated)] // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -15,6 +14,7 @@ use prgenuav::bridge::wire::exchange::{RetryPolicy, Target};
 use prgenuav::bridge::wire::link::{Link, MavTransport};
 use prgenuav::bridge::wire::mission_upload::MissionUpload;
 
+#[expect(deprecated, reason = "PX4 accepts MAV_FRAME_GLOBAL_RELATIVE_ALT_INT")]
 fn items(n: usize) -> Vec<MISSION_ITEM_INT_DATA> {
     (0..n)
         .map(|i| MISSION_ITEM_INT_DATA {

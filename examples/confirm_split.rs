@@ -52,15 +52,17 @@ fn probabilities(records: &[FlightRecord]) -> Vec<(f64, f64, bool)> {
     let mut residuals: Vec<f64> = Vec::new();
     let mut out = Vec::new();
     for r in records.iter().filter(|r| r.attempt == 0) {
-        let Some(flown) = r.flown.min_distance else { continue };
+        let (Some(flown), Some(predicted)) = (r.flown.min_distance, r.prediction.as_ref()) else {
+            continue;
+        };
         let n = residuals.len() as f64;
         let bias = residuals.iter().sum::<f64>() / (n + 3.0);
         let var = (3.0 * 0.09 + residuals.iter().map(|x| (x - bias).powi(2)).sum::<f64>()) / (n + 3.0);
-        let q = normal_cdf((FAIL_M - (r.prediction.min_distance + bias)) / var.sqrt());
-        if let Some(p) = r.prediction.p_fail {
+        let q = normal_cdf((FAIL_M - (predicted.min_distance + bias)) / var.sqrt());
+        if let Some(p) = predicted.p_fail {
             out.push((q, p, flown < FAIL_M));
         }
-        residuals.push(flown - r.prediction.min_distance);
+        residuals.push(flown - predicted.min_distance);
     }
     out
 }
@@ -73,8 +75,8 @@ fn print_ranking(folder: &std::path::Path, first: &[&FlightRecord]) {
             .filter_map(|r| Some((p(r)?, r.flown.min_distance?)))
             .collect()
     };
-    let ranked = aggregate(&pairs(&|r| Some(r.prediction.min_distance)));
-    let raw = aggregate(&pairs(&|r| r.prediction.raw_min_distance));
+    let ranked = aggregate(&pairs(&|r| r.predicted_m()));
+    let raw = aggregate(&pairs(&|r| r.prediction.as_ref()?.raw_min_distance));
     let show = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.3}"));
     println!(
         "{}: {} first flights; Spearman against the flown distance: the campaign's prediction {}, the raw LFS {}",

@@ -76,11 +76,13 @@ fn written_tests(folder: &Path) -> anyhow::Result<HashMap<String, u64>> {
 fn collect(campaign: &Path, out: &Path, reports: &[PathBuf]) -> anyhow::Result<()> {
     let mut cases: BTreeMap<u64, Case> = BTreeMap::new();
     for r in Journal::read(&campaign.join("journal.jsonl"))? {
+        // A test flown unscreened has no prediction to weigh: NaN, as the expectation takes it.
         if r.attempt == 0 {
+            let predicted_m = r.predicted_m().unwrap_or(f64::NAN);
             let case = Case {
                 candidate: r.candidate.0,
                 obstacles: r.obstacles,
-                predicted_m: r.prediction.min_distance,
+                predicted_m,
                 runs: Vec::new(),
             };
             cases.insert(r.candidate.0, case);

@@ -1,6 +1,7 @@
 //! How the competition judges a flight (`docs/formats.md`, judging and scoring): minimum distance to the obstacles,
 //! points per run and the test score. Two definitions of the distance exist ([`Judge`], see [`edition`]).
 
+mod closest;
 pub mod cp_verdict;
 pub mod edition;
 pub mod similarity;
@@ -92,19 +93,25 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
     }
     let raw = trajectory;
     let binned = raw.binned(AERIALIST_BIN_S);
+    let mut collision = false;
     let per_obstacle: Vec<ObstacleDistance> = obstacles
         .iter()
         .enumerate()
-        .map(|(index, o)| ObstacleDistance {
-            index,
-            distance: judged_distance(judge, o, &binned.samples),
-            distance_raw: judged_distance(judge, o, &raw.samples),
+        .map(|(index, o)| {
+            // The raw path's bare distance once: the edition's value and the collision both come from it.
+            let (f, bare) = bare_distance(o, &raw.samples);
+            let over = || lowest_over(&f, &raw.samples);
+            // A collision is the bare path inside a box, whatever the edition's buffer says.
+            collision |= Judge::E2025.from_bare(bare, o.size.h, over) == 0.0;
+            ObstacleDistance {
+                index,
+                distance: judged_distance(judge, o, &binned.samples),
+                distance_raw: judge.from_bare(bare, o.size.h, over),
+            }
         })
         .collect();
     let min = |f: fn(&ObstacleDistance) -> f64| per_obstacle.iter().map(f).fold(f64::INFINITY, f64::min);
-    let closest = closest_approach(judge, obstacles, &raw.samples);
-    // A collision is the bare path inside a box, whatever the edition's buffer says.
-    let collision = obstacles.iter().any(|o| obstacle_distance(o, &raw.samples) == 0.0);
+    let closest = closest::closest_approach(judge, obstacles, &raw.samples);
     let above_top = (obstacles.get(closest.obstacle))
         .map(|o| closest.z - o.size.h)
         .filter(|h| *h > 0.0)
@@ -126,10 +133,16 @@ pub fn judge_in_frame(trajectory: &Trajectory, obstacles: &[Obstacle], judge: Ju
 
 /// The distance from `obstacle` to `path` by `judge`'s definition.
 pub fn judged_distance(judge: Judge, obstacle: &Obstacle, path: &[Sample]) -> f64 {
+    let (f, d) = bare_distance(obstacle, path);
+    judge.from_bare(d, obstacle.size.h, || lowest_over(&f, path))
+}
+
+/// The obstacle's footprint and its 2-D distance to `path` as a polyline (infinite without a sample).
+fn bare_distance(obstacle: &Obstacle, path: &[Sample]) -> (Footprint, f64) {
     let f = obstacle.footprint();
     let pts: Vec<P2> = path.iter().map(|s| P2::new(s.x, s.y)).collect();
     let d = f.distance_to_polyline(&pts).unwrap_or(f64::INFINITY);
-    judge.from_bare(d, obstacle.size.h, || lowest_over(&f, path))
+    (f, d)
 }
 
 /// Aerialist's `Obstacle.distance` (the 2025 edition): 2-D distance from the footprint to the path as a
@@ -156,58 +169,6 @@ fn lowest_over(f: &Footprint, path: &[Sample]) -> Option<f64> {
         }
     }
     low
-}
-
-fn closest_approach(judge: Judge, obstacles: &[Obstacle], path: &[Sample]) -> ClosestApproach {
-    let mut best = ClosestApproach {
-        t_s: 0.0,
-        x: 0.0,
-        y: 0.0,
-        z: 0.0,
-        obstacle: 0,
-        distance: f64::INFINITY,
-    };
-    for (k, o) in obstacles.iter().enumerate() {
-        let f = o.footprint();
-        let at = |s: &Sample| f.distance_to_point(P2::new(s.x, s.y));
-        let segments: Vec<(Sample, Sample)> = if path.len() == 1 {
-            vec![(path[0], path[0])]
-        } else {
-            path.windows(2).map(|w| (w[0], w[1])).collect()
-        };
-        for (a, b) in segments {
-            // Distance to a convex set is convex along a segment: a ternary search finds its minimum.
-            let lerp = |t: f64| Sample {
-                t_s: a.t_s + (b.t_s - a.t_s) * t,
-                x: a.x + (b.x - a.x) * t,
-                y: a.y + (b.y - a.y) * t,
-                z: a.z + (b.z - a.z) * t,
-                r: None,
-            };
-            let (mut lo, mut hi) = (0.0, 1.0);
-            for _ in 0..60 {
-                let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
-                if at(&lerp(m1)) <= at(&lerp(m2)) {
-                    hi = m2
-                } else {
-                    lo = m1
-                }
-            }
-            let s = lerp((lo + hi) / 2.0);
-            let d = judge.from_bare(at(&s), o.size.h, || Some(s.z));
-            if d < best.distance {
-                best = ClosestApproach {
-                    t_s: s.t_s,
-                    x: s.x,
-                    y: s.y,
-                    z: s.z,
-                    obstacle: k,
-                    distance: d,
-                };
-            }
-        }
-    }
-    best
 }
 
 /// The competition's points for one run ([`RUN_POINTS`]: 5 below 0.25 m, 2 below 1 m, 1 below 1.5 m, else 0).

@@ -33,6 +33,19 @@ fn v(path: String, value: Value, rule: impl Into<String>) -> Violation {
     }
 }
 
+/// What a test needs to be flown and judged, beyond [`check`]'s rules: an obstacle. A file without one is a
+/// case study, valid as such (`check` says so), but a flight of it has no distance to judge, and a test score
+/// divides by the obstacles squared; `evaluate` and `score` refuse it by this rule.
+pub fn judgeable(test: &TestCase) -> Option<Violation> {
+    test.obstacles.is_empty().then(|| {
+        v(
+            "simulation.obstacles".into(),
+            json!(0),
+            "a test needs at least 1 obstacle to be judged (a file without obstacles is a case study)",
+        )
+    })
+}
+
 /// Every violation of `arena`'s rules by `test`; empty when the test is valid.
 pub fn check(test: &TestCase, arena: &Arena) -> Vec<Violation> {
     check_obstacles(&test.obstacles, &test.mission, arena)

@@ -3,10 +3,10 @@
 //! The vehicle streams TRAJECTORY_REPRESENTATION_WAYPOINTS at 5 Hz (point 0: the setpoint it
 //! would fly, 1: current waypoint, 2: next waypoint), follows the companion's point 0, and holds
 //! position when no valid answer came for 0.5 s. The companion (component 196) must heartbeat.
-#![allow(deprecated)] // TRAJECTORY_REPRESENTATION_WAYPOINTS is deprecated upstream (PX4 1.15 removed it).
 
 use std::time::Duration;
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 use mavlink::dialects::common::{MavMessage, MavSeverity, MavState, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA};
 
 use crate::dynamics::{Ned, Setpoint};
@@ -64,6 +64,7 @@ fn finite3(x: f32, y: f32, z: f32) -> Option<Ned> {
     (x.is_finite() && y.is_finite() && z.is_finite()).then(|| Ned::new(x.into(), y.into(), z.into()))
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 impl Avoidance {
     /// A HEARTBEAT from component 196.
     pub fn on_heartbeat(&mut self, now: Duration, status: MavState) {
@@ -228,6 +229,7 @@ fn answer_setpoint(a: &Answer, nav_sp: &Setpoint, z_caps: Option<(f64, f64)>) ->
 /// (FlightTaskAuto.cpp `updateAvoidanceDesiredSetpoints(_position_setpoint, _velocity_setpoint, _type)`); while
 /// landing that is the land point's x, y with z unset and the descent speed as z velocity
 /// (`_prepareLandSetpoints`). Points 1 and 2 are the current and next mission item.
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn request(
     nav_sp: &Setpoint,
     sp_command: u16,
@@ -287,6 +289,7 @@ fn request(
     t
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn set_point(t: &mut TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize, p: Ned) {
     t.pos_x[i] = p.x as f32;
     t.pos_y[i] = p.y as f32;
@@ -294,6 +297,7 @@ fn set_point(t: &mut TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, i: usize, p: Ned)
 }
 
 #[cfg(test)]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 mod tests {
     use super::*;
 

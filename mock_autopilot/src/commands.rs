@@ -1,5 +1,4 @@
 //! COMMAND_LONG / COMMAND_INT handling with PX4's results; anything unknown is UNSUPPORTED.
-#![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
 
 use mavlink::dialects::common::{COMMAND_ACK_DATA, MESSAGE_INTERVAL_DATA, MavCmd, MavMessage, MavResult, MavSeverity};
 
@@ -10,6 +9,7 @@ use crate::vehicle::Vehicle;
 /// PX4's magic param2 that forces arming/disarming.
 pub const FORCE_MAGIC: f32 = 21196.0;
 
+#[expect(deprecated, reason = "PX4 still answers MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES")]
 impl Vehicle {
     /// Execute a command from `from` and send its COMMAND_ACK.
     pub(crate) fn on_command(&mut self, from: (u8, u8), cmd: MavCmd, p: [f32; 7], is_int: bool) {

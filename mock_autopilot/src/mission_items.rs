@@ -2,14 +2,14 @@
 //!
 //! PX4 rejects local frames (`MAV_MISSION_UNSUPPORTED_FRAME`), unknown commands
 //! (`MAV_MISSION_UNSUPPORTED`) and fence/rally commands inside a mission (`MAV_MISSION_ERROR`).
-#![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
 
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 use mavlink::dialects::common::{
     MISSION_ITEM_DATA, MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionResult, MavMissionType,
 };
 
 /// True for the global frames PX4 accepts for positional items.
-#[allow(deprecated)]
+#[expect(deprecated, reason = "PX4 accepts MAV_FRAME_GLOBAL_RELATIVE_ALT_INT")]
 pub fn is_global_frame(frame: MavFrame) -> bool {
     matches!(
         frame,
@@ -21,7 +21,7 @@ pub fn is_global_frame(frame: MavFrame) -> bool {
 }
 
 /// True when `z` of an item in `frame` is relative to home rather than AMSL.
-#[allow(deprecated)]
+#[expect(deprecated, reason = "PX4 accepts MAV_FRAME_GLOBAL_RELATIVE_ALT_INT")]
 pub fn is_relative_alt(frame: MavFrame) -> bool {
     matches!(
         frame,
@@ -54,7 +54,10 @@ pub fn is_positional(cmd: MavCmd) -> bool {
 }
 
 /// Non-positional mission commands PX4's mission parser knows.
-#[allow(deprecated)]
+#[expect(
+    deprecated,
+    reason = "PX4's mission parser still knows MAV_CMD_DO_SET_ROI and the like"
+)]
 fn is_mission_other(cmd: MavCmd) -> bool {
     use MavCmd::*;
     matches!(
@@ -155,6 +158,7 @@ pub fn validate_item(ty: MavMissionType, item: &MISSION_ITEM_INT_DATA) -> Result
 }
 
 /// A float `MISSION_ITEM` (deprecated) in the int form PX4 stores.
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 pub fn from_float_item(m: &MISSION_ITEM_DATA) -> MISSION_ITEM_INT_DATA {
     let to_e7 = |deg: f32| -> i32 {
         let v = f64::from(deg) * 1e7;
@@ -185,6 +189,7 @@ pub fn from_float_item(m: &MISSION_ITEM_DATA) -> MISSION_ITEM_INT_DATA {
 }
 
 /// The float form of a stored item (answer to the deprecated `MISSION_REQUEST`).
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 pub fn to_float_item(m: &MISSION_ITEM_INT_DATA) -> MISSION_ITEM_DATA {
     let positional = is_positional(m.command);
     let conv = |v: i32| {

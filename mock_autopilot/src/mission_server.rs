@@ -2,10 +2,10 @@
 //!
 //! No sockets and no clock: `on_message(msg, from, now)` and `on_tick(now)` return the actions
 //! to take, so tests script messages with a fake time.
-#![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
 
 use std::time::Duration;
 
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 use mavlink::dialects::common::{
     MISSION_ACK_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA, MISSION_REQUEST_DATA, MISSION_REQUEST_INT_DATA,
     MavMessage, MavMissionResult, MavMissionType, MavSeverity,
@@ -91,6 +91,7 @@ fn ack(partner: (u8, u8), ty: MavMissionType, result: MavMissionResult, opaque_i
     })))
 }
 
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 impl MissionServer {
     /// Empty storage; `reject` makes every upload fail with that code (fault injection).
     pub fn new(reject: Option<MavMissionResult>) -> Self {

@@ -1,5 +1,3 @@
-#![allow(deprecated)] // MAV_FRAME_BODY_NED is deprecated, but a sender may still use it.
-
 use proptest::prelude::*;
 
 use super::*;
@@ -62,6 +60,7 @@ fn north_aligned_sectors_turn_with_the_heading() {
 }
 
 #[test]
+#[expect(deprecated, reason = "a sender may still use MAV_FRAME_BODY_NED")]
 fn stale_zero_width_and_unsupported_messages_change_nothing() {
     let mut m = message(MavFrame::MAV_FRAME_BODY_FRD, 0, 0.0, 0.0);
     m.distances = [100; BIN_COUNT];
@@ -110,6 +109,7 @@ fn the_echo_is_the_body_frame_map() {
     );
 }
 
+#[expect(deprecated, reason = "a sender may still use MAV_FRAME_BODY_NED")]
 fn frames() -> impl Strategy<Value = MavFrame> {
     prop_oneof![
         Just(MavFrame::MAV_FRAME_GLOBAL),

@@ -1,6 +1,5 @@
 //! The EKF origin stays where the vehicle booted; a second flight starts where the first landed; the origin,
 //! home and global positions agree with the local ones.
-#![allow(deprecated)]
 
 use std::time::Duration;
 

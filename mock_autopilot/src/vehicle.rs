@@ -2,7 +2,6 @@
 //!
 //! Sans-IO: `handle(header, msg)` takes input, `step(dt)` advances simulated time by one fixed
 //! physics step, and `drain_outbox()` yields the messages to send (as sysid 1 / compid 1).
-#![allow(deprecated)] // PX4 still speaks the deprecated messages/commands, so the mock must too.
 
 use std::time::Duration;
 
@@ -160,6 +159,7 @@ pub struct Vehicle {
     gusts: Gusts,
 }
 
+#[expect(deprecated, reason = "PX4 still speaks mission items and the avoidance interface")]
 impl Vehicle {
     /// A vehicle on the ground at `cfg.home`, disarmed, in AUTO.LOITER.
     pub fn new(cfg: VehicleConfig) -> Self {
@@ -581,6 +581,7 @@ impl Vehicle {
 }
 
 /// (target_system, target_component) of messages that carry one.
+#[expect(deprecated, reason = "PX4 still speaks mission items and the avoidance interface")]
 fn target_of(msg: &MavMessage) -> Option<(u8, u8)> {
     use MavMessage as M;
     Some(match msg {

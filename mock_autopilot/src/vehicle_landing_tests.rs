@@ -1,9 +1,9 @@
 //! Landing with and without an avoidance companion: PX4's land detector decides, not the touchdown.
-#![allow(deprecated)]
 
 use std::time::Duration;
 
 use mavlink::MavHeader;
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 use mavlink::dialects::common::{
     HEARTBEAT_DATA, MavCmd, MavLandedState, MavMessage, MavMissionType, MavState,
     TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA,
@@ -44,6 +44,7 @@ struct Log {
 
 /// Flies mission 2 with COM_OBS_AVOID 1 for `limit`, answering every request with `answer(request)` (None: no
 /// answer). Stops at disarm.
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn fly_with_companion(
     limit: Duration,
     mut answer: impl FnMut(&TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA>,
@@ -104,6 +105,7 @@ fn fly_with_companion(
 
 /// The "cannot plan" answer: PX4's own point 0 back (for the land descent: position (x, y, NaN), velocity
 /// (NaN, NaN, land speed), as PX4-Avoidance answers a landing).
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn mirror(req: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
     let mut a = req.clone();
     a.valid_points = 1;
@@ -111,6 +113,7 @@ fn mirror(req: &TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> TRAJECTORY_REPRESEN
 }
 
 /// A companion that answers the land descent with a position setpoint at height `z` (NED) over the land point.
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn holding_at(
     z: f32,
 ) -> impl FnMut(&TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA) -> Option<TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA> {
@@ -195,6 +198,7 @@ fn companion_holding_just_above_the_ground_never_lands() {
 }
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn companion_positions_below_the_ground_or_velocity_descents_land() {
     // A position target under the ground keeps a descent commanded into it (as on PX4).
     let (_, log) = fly_with_companion(Duration::from_secs(150), holding_at(1.0));
@@ -213,6 +217,7 @@ fn companion_positions_below_the_ground_or_velocity_descents_land() {
 }
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn companion_answers_during_takeoff_keep_px4s_takeoff_speed() {
     // PX4-Avoidance answers the takeoff with a position at the goal altitude; a companion could answer with a
     // fast climb velocity. PX4 caps the climb at MPC_TKO_SPEED (FlightTaskAuto.cpp l. 827-829) either way.

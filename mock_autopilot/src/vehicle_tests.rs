@@ -158,7 +158,7 @@ fn texts_of(msgs: &[MavMessage]) -> Vec<String> {
 }
 
 #[test]
-#[allow(deprecated)]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn avoidance_companion_steers_and_its_silence_holds() {
     use mavlink::dialects::common::{HEARTBEAT_DATA, MavState};
     let mut v = vehicle();

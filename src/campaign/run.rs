@@ -23,7 +23,7 @@ pub use super::settings::CampaignSettings;
 pub use super::settings::resume::FIRST_SETTINGS_FILE;
 use super::store::folder::FolderLock;
 use super::store::journal::{FlightRecord, Journal};
-use super::store::journal_check::{arena_size_m, check_loaded};
+use super::store::trust::{arena_size_m, check_loaded, check_own_folder, make_own_folder};
 use crate::model::{ModelError, TestCase};
 
 /// Runs (or resumes) the campaign `settings` name in `folder`: screened as its mode calls for
@@ -157,23 +157,15 @@ fn check_paths_are_text(cfg: &CampaignSettings) -> Result<(), CampaignError> {
 /// Creates the folder, takes its one-writer lock (held while the campaign runs) and saves the settings as
 /// `campaign.json` (what `--resume` continues).
 fn prepare_folder(cfg: &CampaignSettings, folder: &Path) -> Result<FolderLock, CampaignError> {
-    std::fs::create_dir_all(folder.join("flights")).map_err(|source| ModelError::Io {
-        path: folder.join("flights"),
+    std::fs::create_dir_all(folder).map_err(|source| ModelError::Io {
+        path: folder.to_path_buf(),
         action: "cannot create",
         source,
     })?;
     let lock = FolderLock::acquire(folder)?;
     // The folders the campaign writes into must be its own: a link there would carry every write elsewhere.
-    for sub in ["flights", "jobs"] {
-        let path = folder.join(sub);
-        if std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir()) {
-            return Err(CampaignError::Config(format!(
-                "{}: not a folder of the campaign's own (a link or a file); the campaign writes only into its \
-                 folder: remove it, then resume",
-                path.display()
-            )));
-        }
-    }
+    make_own_folder(&folder.join("flights"), "the campaign")?;
+    check_own_folder(&folder.join("jobs"), "the campaign")?;
     let settings = folder.join("campaign.json");
     // What the campaign began with, kept apart: a resume shows what was changed in campaign.json since.
     if std::fs::symlink_metadata(&settings).is_err() {

@@ -136,7 +136,7 @@ fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
     assert_eq!(r.suite.flown, 8);
     assert_eq!(flown.lock().unwrap().len(), 8);
     // Flights went most-severe first.
-    let predicted: Vec<f64> = r.flights.iter().map(|f| f.predicted_min_distance).collect();
+    let predicted: Vec<f64> = r.flights.iter().filter_map(|f| f.predicted_min_distance).collect();
     assert!(predicted.windows(2).all(|w| w[0] <= w[1]), "{predicted:?}");
     // Reported tests are exactly the flights below 1.5 m, best first, as valid YAML with their CSVs.
     let failing: Vec<f64> = r
@@ -176,7 +176,10 @@ fn a_campaign_flies_the_budget_and_reports_failing_tests_best_first() {
     }
     assert_eq!(
         r.suite.lfs_precision,
-        Some(1.0).filter(|_| r.flights.iter().any(|f| f.predicted_min_distance < 1.5))
+        Some(1.0).filter(|_| r
+            .flights
+            .iter()
+            .any(|f| f.predicted_min_distance.is_some_and(|p| p < 1.5)))
     );
 }
 

@@ -4,14 +4,14 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use prgenuav::model::{Arena, TestCase};
-use prgenuav::rules::{Violation, check};
+use prgenuav::rules::{Violation, check, judgeable};
 
 /// Arguments of `check`.
 #[derive(Debug, clap::Args)]
 pub struct CheckArgs {
     /// The test (or case study) YAML.
     test: PathBuf,
-    /// Print `{"valid", "violations": [{"path", "value", "rule"}]}`.
+    /// Print `{"valid", "judgeable", "violations": [{"path", "value", "rule"}]}`.
     #[arg(long)]
     json: bool,
 }
@@ -19,6 +19,9 @@ pub struct CheckArgs {
 #[derive(serde::Serialize)]
 struct Report<'a> {
     valid: bool,
+    /// Whether `evaluate` and `score` can judge it as a test (a case study without obstacles is valid, not
+    /// judgeable).
+    judgeable: bool,
     violations: &'a [Violation],
 }
 
@@ -26,11 +29,21 @@ pub fn run(args: CheckArgs) -> anyhow::Result<ExitCode> {
     let test = TestCase::load(&args.test)?;
     let violations = check(&test, &Arena::default());
     let valid = violations.is_empty();
+    let as_test = judgeable(&test);
     if args.json {
         super::print_json(&Report {
             valid,
+            judgeable: as_test.is_none(),
             violations: &violations,
         })?;
+    } else if let (true, Some(v)) = (valid, &as_test) {
+        println!(
+            "{}: valid as a case study (0 obstacles); not a test evaluate or score can judge: {} = {}: {}",
+            args.test.display(),
+            v.path,
+            v.value,
+            v.rule
+        );
     } else if valid {
         println!("{}: valid ({} obstacles)", args.test.display(), test.obstacles.len());
     } else {

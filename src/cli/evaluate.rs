@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::bail;
 use prgenuav::campaign::evaluation::RUNS_2026;
 use prgenuav::campaign::evaluation::flying::{EVALUATION_DIR, EvaluateSetup, Evaluated, evaluate_by_flying};
-use prgenuav::campaign::evaluation::report;
+use prgenuav::campaign::evaluation::{kept, report};
 use prgenuav::campaign::fly::backend;
 use prgenuav::campaign::settings::evaluation::EvaluationSettings;
 use prgenuav::campaign::settings::{CampaignSettings, Loaded};
@@ -22,12 +22,13 @@ use super::setting_flags::EvaluateFlags;
 /// Arguments of `evaluate`.
 #[derive(Debug, clap::Args)]
 pub struct EvaluateArgs {
-    /// The suite: a `generate` output folder or any folder of test_N.yaml files, best first.
+    /// The suite: a `generate` output folder or any folder of Aerialist test YAMLs, best first (test_N.yaml
+    /// by N; without any, every .yaml by name).
     folder: PathBuf,
     /// Flights per test (1 to 20; the 2026 competition flies 5).
     #[arg(long, default_value_t = RUNS_2026)]
     runs: usize,
-    /// Only the first N tests.
+    /// Only the first N tests (the others are not read).
     #[arg(long, value_name = "N")]
     top: Option<usize>,
     /// Two tests are too similar when the DTW distance of their average trajectories is below this (metres,
@@ -37,8 +38,8 @@ pub struct EvaluateArgs {
     /// Print report.json on stdout.
     #[arg(long)]
     json: bool,
-    /// No progress on stderr.
-    #[arg(long)]
+    /// No progress on stderr (warnings and errors still go there).
+    #[arg(short, long)]
     quiet: bool,
     /// The flights' settings (a suite that is a campaign's folder is flown as the campaign was: its mode,
     /// judge, seed and vehicles, unless given here).
@@ -46,8 +47,9 @@ pub struct EvaluateArgs {
     settings: EvaluateFlags,
 }
 
-/// The flights' settings: the suite's campaign.json when it has one (the same mock it was generated on),
-/// else the defaults; the flags given here override them, a backend given replaces the suite's.
+/// The flights' settings: what the evaluation kept when it ran before (a fixed setting asked otherwise is
+/// refused), else the suite's campaign.json when it has one (the same mock it was generated on), else the
+/// defaults; the flags given here override them, a backend given replaces the suite's.
 fn settings(args: &EvaluateArgs) -> anyhow::Result<EvaluationSettings> {
     let mut request = args.settings.request(&Loaded::default())?;
     request.check().map_err(anyhow::Error::msg)?;
@@ -57,7 +59,8 @@ fn settings(args: &EvaluateArgs) -> anyhow::Result<EvaluationSettings> {
         Ok(_) => Some(CampaignSettings::load(&args.folder)?),
         Err(_) => None,
     };
-    let settings = EvaluationSettings::resolve(&request, suite.as_ref()).map_err(anyhow::Error::msg)?;
+    let evaluation = args.folder.join(EVALUATION_DIR);
+    let settings = kept::settings(&evaluation, &request, suite.as_ref())?;
     backend::px4_build(&settings.flights())?;
     Ok(settings)
 }
@@ -75,7 +78,8 @@ fn check(args: &EvaluateArgs) -> anyhow::Result<()> {
 pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
     check(&args)?;
     let settings = settings(&args)?;
-    let (runtime, stop) = super::generate::runtime_stopped_by_signals()?;
+    let (runtime, stop) =
+        super::generate::runtime_stopped_by_signals_resuming("run the same evaluate command again to resume")?;
     let flights = settings.flights();
     let mut fleet = backend::fleet(&flights, args.folder.join(EVALUATION_DIR), runtime.handle())?;
     let quiet = args.quiet || args.json;
@@ -89,22 +93,25 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
         }
     };
     let started = Instant::now();
+    let on_warning = |w: &str| eprintln!("{w}");
     let setup = EvaluateSetup {
         suite: &args.folder,
         runs: args.runs,
         top: args.top,
-        judge: settings.judge,
+        settings: &settings,
         similar_below_m: args.similar_below,
         cancel: &stop,
         on_flight: &on_flight,
+        on_warning: &on_warning,
     };
     let done = evaluate_by_flying(&mut fleet, &setup)?;
     print_summary(&done, args.json, started)?;
-    if done.missing > 0 || stop.load(Ordering::SeqCst) {
-        eprintln!(
-            "incomplete: {} flight(s) missing; run the same command again to fly them",
-            done.missing
-        );
+    if done.missing.flights > 0 || stop.load(Ordering::SeqCst) {
+        eprintln!("incomplete: {} flight(s) missing; why:", done.missing.flights);
+        for why in &done.missing.why {
+            eprintln!("  - {why}");
+        }
+        eprintln!("run the same command again to fly them (once what failed is fixed)");
         return Ok(ExitCode::from(super::EXIT_FAIL));
     }
     Ok(ExitCode::SUCCESS)
@@ -114,7 +121,7 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
 fn print_summary(done: &Evaluated, json: bool, started: Instant) -> anyhow::Result<()> {
     let e = &done.evaluation;
     if json {
-        println!("{}", report::json(e, done.missing)?);
+        println!("{}", report::json(e, &done.missing)?);
         return Ok(());
     }
     println!(
@@ -124,7 +131,7 @@ fn print_summary(done: &Evaluated, json: bool, started: Instant) -> anyhow::Resu
         e.sim_pen,
         e.similar_tests,
         e.evaluated,
-        e.similar_below_m,
+        prgenuav::model::limit::number(e.similar_below_m),
         e.figures_2025.failing,
         e.figures_2025.failure_score
     );

@@ -6,9 +6,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
-use prgenuav::campaign::evaluation::{Evaluation, evaluate_folder};
-use prgenuav::campaign::report::folder_score::{SuiteScore, score_folder};
+use prgenuav::campaign::evaluation::Evaluation;
+use prgenuav::campaign::evaluation::folder::{evaluate_folder, read_folder};
+use prgenuav::campaign::evaluation::folder_score::{SuiteScore, score_flights};
 use prgenuav::judge::similarity::SIMILAR_BELOW_M;
+use prgenuav::model::limit::number;
 use serde::Serialize;
 
 /// Arguments of `score`.
@@ -44,12 +46,18 @@ pub fn run(mut args: ScoreArgs) -> anyhow::Result<ExitCode> {
     // Absolute, as evaluate's report.json: the JSON's paths resolve from any directory.
     args.folder = absolute(&args.folder)?;
     args.averages = args.averages.as_deref().map(absolute).transpose()?;
-    let suite = score_folder(&args.folder, args.judge.edition()?)?;
-    if suite.tests.is_empty() {
-        bail!("{}: no test_N.yaml files", args.folder.display());
+    let folder = read_folder(&args.folder)?;
+    if folder.no_flights() {
+        bail!(
+            "{}: none of its {} test(s) has a flight (beside test_N.yaml: test_N.csv, test_N.ulg, or runs \
+             test_N-K.csv|ulg): nothing to score",
+            args.folder.display(),
+            folder.tests.len()
+        );
     }
+    let suite = score_flights(&folder, args.judge.edition()?)?;
     let evaluation = evaluate_folder(
-        &args.folder,
+        &folder,
         args.judge.edition()?,
         args.similar_below,
         args.averages.as_deref(),
@@ -84,7 +92,7 @@ fn print_2025(suite: &SuiteScore) {
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         let min = t.runs.iter().map(|r| r.min_distance).fold(f64::INFINITY, f64::min);
-        let time = t.runs.iter().map(|r| r.flight_time_s).sum::<f64>() / t.runs.len().max(1) as f64;
+        let time = t.runs.iter().map(|r| r.flight_time_s).sum::<f64>() / t.runs.len().max(1) as f64 + 0.0;
         let note = match (t.runs.is_empty(), t.duplicate_of) {
             (true, _) => " (no flight)".to_string(),
             (_, Some(j)) => format!(" (duplicate of test {j})"),
@@ -113,17 +121,19 @@ fn print_2025(suite: &SuiteScore) {
 fn print_2026(e: &Evaluation) {
     let closest = e.pairs.iter().map(|p| p.dtw).fold(f64::INFINITY, f64::min);
     let closest = if closest.is_finite() {
-        format!("{closest:.1}")
+        format!("closest pair {closest:.1} m")
     } else {
-        "n/a".into()
+        "no pair to compare: fewer than 2 tests have flights".into()
     };
+    // The 2026 protocol (mean points, sim_pen); the distances are the chosen judge's.
     println!(
-        "2026: total score {} x sim_pen {:.3} ({} of {} evaluated tests similar below DTW {} m; closest pair {closest} m) = final score {:.3}",
+        "2026 evaluation, judge {}: total score {} x sim_pen {:.3} ({} of {} evaluated tests similar below DTW {} m; {closest}) = final score {:.3}",
+        e.judge,
         prgenuav::campaign::evaluation::report::total_with_sd(e),
         e.sim_pen,
         e.similar_tests,
         e.evaluated,
-        e.similar_below_m,
+        number(e.similar_below_m),
         e.final_score
     );
     if let Some(note) = prgenuav::campaign::evaluation::report::above_top_note(e) {

@@ -80,16 +80,14 @@ impl Footprint {
         if self.contains(a) || self.contains(b) {
             return 0.0;
         }
-        let mut best = f64::INFINITY;
+        // Closest pair between two non-crossing segments has an end point on one of them: the segment's ends
+        // against the rectangle, and each corner against the segment.
+        let mut best = self.distance_to_point(a).min(self.distance_to_point(b));
         for (c, d) in self.edges() {
             if segments_intersect(a, b, c, d) {
                 return 0.0;
             }
-            // Closest pair between two non-crossing segments has an end point on one of them.
-            best = best
-                .min((c - closest_on_segment(c, a, b)).norm())
-                .min(self.distance_to_point(a))
-                .min(self.distance_to_point(b));
+            best = best.min((c - closest_on_segment(c, a, b)).norm());
         }
         best
     }

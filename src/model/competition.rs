@@ -69,6 +69,21 @@ pub const MISSION_PARAMS: [(&str, f64); 8] = [
 /// Wall-clock limit of one simulation in the competition's protocol, seconds (`docs/formats.md`, scoring).
 pub const SIMULATION_TIMEOUT_S: f64 = 500.0;
 
+/// The shortest flight a score counts, seconds. A test score divides by the flight time, so a record of a
+/// moment scores absurdly (two samples 1 us apart: 1.2e9 points a minute). No competition mission flies in less:
+/// landing from the 10 m flight altitude alone takes 14 s at PX4's landing speed (0.7 m/s).
+pub const MIN_FLIGHT_S: f64 = 10.0;
+
+/// Why a recorded flight of `duration_s` seconds cannot be scored, if it cannot ([`MIN_FLIGHT_S`]).
+pub fn flight_time_rule(duration_s: f64) -> Option<String> {
+    (duration_s < MIN_FLIGHT_S).then(|| {
+        format!(
+            "the flight lasts {duration_s:.3} s: a flight shorter than {MIN_FLIGHT_S} s is not a mission flown (landing \
+             from the flight altitude alone takes longer), and a test score divides by the flight time"
+        )
+    })
+}
+
 impl Arena {
     /// The 2025/2026 competition's rules, from the constants above.
     pub const COMPETITION: Arena = Arena {
@@ -90,5 +105,12 @@ mod tests {
     #[test]
     fn half_width_is_exact() {
         assert_eq!(HALF_VEHICLE_WIDTH_M, 0.125);
+    }
+
+    #[test]
+    fn a_flight_of_a_moment_is_not_scored() {
+        let why = flight_time_rule(1e-6).unwrap();
+        assert!(why.contains("0.000 s") && why.contains("shorter than 10 s"), "{why}");
+        assert_eq!(flight_time_rule(MIN_FLIGHT_S), None);
     }
 }

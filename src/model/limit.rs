@@ -115,7 +115,7 @@ impl Limit {
             } else {
                 String::new()
             };
-            return Err(format!("{names} {v} is out of range: {}{here}", self.range()));
+            return Err(format!("{names} {} is out of range: {}{here}", number(v), self.range()));
         }
         Ok(v)
     }
@@ -127,9 +127,33 @@ impl Limit {
     }
 }
 
+/// A number as a user reads it: as written when ordinary, in scientific notation when huge or tiny (1e308, not
+/// three hundred digits).
+pub fn number(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn huge_and_tiny_numbers_are_said_in_scientific_notation() {
+        assert_eq!(number(1e308), "1e308");
+        assert_eq!(number(75.0), "75");
+        assert_eq!(number(2.5e-7), "2.5e-7");
+        let e = Limit::within(0.0, 1e6, "m")
+            .check("--similar-below", 1e308)
+            .unwrap_err();
+        assert!(
+            e.len() < 100 && e.contains("--similar-below 1e308 is out of range"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn ends_are_taken_and_beyond_them_refused() {

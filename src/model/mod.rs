@@ -16,6 +16,7 @@ mod tables;
 mod test_case;
 mod trajectory;
 mod ulog;
+pub mod ulog_frames;
 
 pub use arena::{Arena, Range};
 pub use competition::AERIALIST_BIN_S;
@@ -30,3 +31,7 @@ pub use tables::{Command, Param, parse_commands_csv, parse_params_csv};
 pub use test_case::{Spelling, TestCase};
 pub use trajectory::{Sample, Trajectory};
 pub use ulog::{load_flight, load_ulog_trajectory};
+
+#[cfg(test)]
+#[path = "damage_tests.rs"]
+mod damage_tests;

@@ -104,7 +104,9 @@ impl Trajectory {
         Self::parse_csv(&read_text(path)?, path)
     }
 
-    /// Parses the CSV text; `path` names the file in errors.
+    /// Parses the CSV text; `path` names the file in errors. A UTF-8 byte-order mark before the header is
+    /// skipped (spreadsheets write one). A last row without its newline is refused: the file was cut mid-row,
+    /// and its last value may be cut short, as a damaged ULog is refused.
     pub fn parse_csv(text: &str, path: &Path) -> Result<Self> {
         let syntax = |line: usize, message: String| ModelError::Syntax {
             path: path.to_path_buf(),
@@ -112,6 +114,7 @@ impl Trajectory {
             column: None,
             message,
         };
+        let text = whole_rows(text).map_err(|(line, why)| syntax(line, why))?;
         let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
         let Some((_, header)) = lines.next() else {
             return Err(syntax(
@@ -180,6 +183,23 @@ impl Trajectory {
         }
         out
     }
+}
+
+/// The CSV `text` without a byte-order mark; or, when its last row has no newline, that line and why it is
+/// refused (the file was cut mid-row).
+fn whole_rows(text: &str) -> std::result::Result<&str, (usize, String)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let Some(last) = text.rsplit('\n').next().filter(|l| !l.trim().is_empty()) else {
+        return Ok(text);
+    };
+    Err((
+        text.lines().count(),
+        format!(
+            "the last row ({:?}) has no newline at its end: the file was cut mid-row; refused rather than read as \
+             a shorter flight (if the row is whole, end it with a newline)",
+            last.chars().take(40).collect::<String>()
+        ),
+    ))
 }
 
 /// The longest pause between consecutive samples of one flight, seconds.
@@ -319,10 +339,25 @@ mod tests {
         );
         let back = Trajectory::parse_csv(&t.to_csv(), Path::new("g.csv")).unwrap();
         assert_eq!(back, t);
-        let e = Trajectory::parse_csv("timestamp,x,y,z,r\n0,a,0,0,0", Path::new("f.csv")).unwrap_err();
+        let e = Trajectory::parse_csv("timestamp,x,y,z,r\n0,a,0,0,0\n", Path::new("f.csv")).unwrap_err();
         assert!(e.to_string().contains("f.csv:2"), "{e}");
         assert!(Trajectory::parse_csv("", Path::new("f.csv")).is_err());
-        assert!(Trajectory::parse_csv("timestamp,x,y,z\n1,0,0,0\n0,0,0,0", Path::new("f.csv")).is_err());
+        assert!(Trajectory::parse_csv("timestamp,x,y,z\n1,0,0,0\n0,0,0,0\n", Path::new("f.csv")).is_err());
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped_and_a_row_cut_mid_way_is_refused() {
+        let text = "timestamp,x,y,z,r\n0,0,0,0,\n500000,1.5,2.5,3,0.25\n";
+        let plain = Trajectory::parse_csv(text, Path::new("f.csv")).unwrap();
+        let marked = Trajectory::parse_csv(&format!("\u{feff}{text}"), Path::new("f.csv")).unwrap();
+        assert_eq!(marked, plain);
+        // Cut inside its last value: 0.25 read as 0.2 had it been taken.
+        let e = Trajectory::parse_csv(&text[..text.len() - 2], Path::new("f.csv")).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.starts_with("f.csv:3:") && e.contains("no newline") && e.contains("cut mid-row"),
+            "{e}"
+        );
     }
 }
 

@@ -2,27 +2,60 @@
 
 use std::path::Path;
 
-use px4_ulog::full_parser::{SomeVec, read_file};
+use px4_ulog::full_parser::{Completeness, ParsedData, SomeVec, read_file};
 
 use super::error::{ModelError, Result};
 use super::safe_files::MAX_ULOG_BYTES;
 use super::trajectory::{Sample, Trajectory, check_step};
+use super::ulog_frames::check_frames;
 
-/// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
-/// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
-pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
-    let bad = |message: String| ModelError::Syntax {
+/// What a damaged log's error adds: it is refused whole, never read as the shorter flight it still holds.
+const REFUSED: &str = "refused rather than scored as a shorter flight";
+
+/// A syntax error of the log at `path`.
+fn bad(path: &Path, message: String) -> ModelError {
+    ModelError::Syntax {
         path: path.to_path_buf(),
         line: None,
         column: None,
         message,
-    };
-    let name = path.to_str().ok_or_else(|| bad("the path is not UTF-8".into()))?;
+    }
+}
+
+/// The log at `path` parsed whole: its framing checked first, and anything the parser had to stop at refused.
+fn parse_whole(path: &Path) -> Result<ParsedData> {
+    let name = path.to_str().ok_or_else(|| bad(path, "the path is not UTF-8".into()))?;
     check_ulog_file(path)?;
+    let frames = check_frames(path).map_err(|source| ModelError::Io {
+        path: path.to_path_buf(),
+        action: "cannot read",
+        source,
+    })?;
+    if let Err(d) = frames {
+        return Err(bad(
+            path,
+            format!("damaged ULog at byte {}: {}; {REFUSED}", d.offset, d.why),
+        ));
+    }
     // The parser asserts its own invariants; a malformed log must be an error, not a crash.
     let parsed = std::panic::catch_unwind(|| read_file(name))
-        .map_err(|_| bad("malformed ULog (the parser gave up)".into()))?
-        .map_err(|e| bad(format!("not a readable ULog: {e}")))?;
+        .map_err(|_| bad(path, "malformed ULog (the parser gave up)".into()))?
+        .map_err(|e| bad(path, format!("not a readable ULog: {e}")))?;
+    match &parsed.completeness {
+        Completeness::Complete => Ok(parsed),
+        Completeness::Truncated => Err(bad(path, format!("the ULog ends inside a message: {REFUSED}"))),
+        Completeness::MalformedRecord(why) => Err(bad(
+            path,
+            format!("damaged ULog (a message does not parse: {why}); {REFUSED}"),
+        )),
+    }
+}
+
+/// Reads `vehicle_local_position` (first instance) from a ULog: `x` North, `y` East, height = `-z`, heading
+/// in radians; time in seconds from the log's first sample. Not yet origin-aligned (the judge does that).
+pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
+    let bad = |message: String| bad(path, message);
+    let parsed = parse_whole(path)?;
     let topic = parsed
         .messages
         .get("vehicle_local_position")
@@ -48,8 +81,18 @@ pub fn load_ulog_trajectory(path: &Path) -> Result<Trajectory> {
         .copied()
         .ok_or_else(|| bad("vehicle_local_position has no samples".into()))?;
     check_timestamps(&t).map_err(bad)?;
-    let samples = (0..t.len().min(x.len()).min(y.len()).min(z.len()))
-        .filter(|&i| x[i].is_finite() && y[i].is_finite() && z[i].is_finite())
+    let n = t.len().min(x.len()).min(y.len()).min(z.len());
+    let finite = |i: usize| x[i].is_finite() && y[i].is_finite() && z[i].is_finite();
+    // Before the estimator has a position the log may hold none; once it has, a gap is damage.
+    let from = (0..n).find(|&i| finite(i)).unwrap_or(n);
+    if let Some(i) = (from..n).find(|&i| !finite(i)) {
+        return Err(bad(format!(
+            "vehicle_local_position sample {} (timestamp {} us) has no finite position, after finite ones: {REFUSED}",
+            i + 1,
+            t[i]
+        )));
+    }
+    let samples = (from..n)
         .map(|i| Sample {
             t_s: (t[i] - t0) / 1e6,
             x: x[i],

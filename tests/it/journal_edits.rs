@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use prgenuav::campaign::fly::vehicle::Flown;
 use prgenuav::campaign::ground::flight_status::FlightStatus;
 use prgenuav::campaign::store::journal::{FlightRecord, Journal};
-use prgenuav::campaign::store::journal_check::{check_journal, check_record, is_inside};
+use prgenuav::campaign::store::trust::{check_journal, check_record, is_inside};
 use proptest::prelude::*;
 use serde_json::Value;
 
@@ -20,10 +20,10 @@ fn record(candidate: u64, status: FlightStatus) -> FlightRecord {
         candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
-        prediction: LfsPrediction {
+        prediction: Some(LfsPrediction {
             p_fail: Some(0.5),
             ..LfsPrediction::point(CandidateId(candidate), 1.0, 60.0, String::new())
-        },
+        }),
         flown: Flown {
             min_distance: Some(0.8 + candidate as f64),
             min_distance_raw: Some(0.7 + candidate as f64),

@@ -130,7 +130,8 @@ fn backend_failures_are_journaled_but_not_charged_to_the_budget() {
     let jobs: Vec<Job> = (0..3)
         .map(|i| {
             Job::new(
-                LfsPrediction::point(CandidateId(i), 1.0, 40.0, "landed".into()),
+                CandidateId(i),
+                Some(LfsPrediction::point(CandidateId(i), 1.0, 40.0, "landed".into())),
                 base.clone(),
             )
         })

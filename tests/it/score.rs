@@ -1,6 +1,6 @@
 //! `score`: the competition's metrics over a folder of tests with CSV and ULog flights.
 
-use prgenuav::campaign::report::folder_score::score_folder;
+use prgenuav::campaign::evaluation::folder_score::score_folder;
 use prgenuav::judge::Judge;
 use prgenuav::model::{Obstacle, Spelling, load_ulog_trajectory};
 

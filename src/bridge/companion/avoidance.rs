@@ -5,12 +5,12 @@
 //! mirrored when it cannot plan. Goals, takeoff and land follow PX4-Avoidance (see [`Companion::on_request`]):
 //! while landing the answer is PX4's own kind of land setpoint (x, y held, z unset, descent velocity), which is
 //! what lets PX4's land detector see the vehicle resting with low thrust and disarm.
-#![allow(deprecated)] // TRAJECTORY_REPRESENTATION_WAYPOINTS: deprecated upstream since PX4 1.15 removed it.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 use mavlink::dialects::common::{
     HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA,
 };
@@ -44,6 +44,7 @@ const MAV_CMD_NAV_TAKEOFF: u16 = 22;
 /// The companion's memory: PX4's latest request and the goal it implies, kept as PX4-Avoidance's
 /// `fcuInputGoalCallback` (local_planner_nodelet.cpp) keeps them.
 #[derive(Debug, Clone, Default)]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 pub struct Companion {
     request: Option<(TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA, Duration)>,
     /// The goal; its z may be NaN while landing (PX4's land setpoint leaves z unset).
@@ -60,6 +61,7 @@ pub struct Companion {
     pub planned: u64,
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 impl Companion {
     /// A request from PX4 at vehicle time `now`.
     ///
@@ -267,6 +269,7 @@ pub(super) struct Answers {
     asked: Option<Instant>,
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 impl Answers {
     /// Answers on `link`, counted in `stats`.
     pub(super) fn new(link: Arc<Link>, stats: Arc<CompanionStats>) -> Self {
@@ -322,6 +325,7 @@ pub(super) fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> boo
     inb_header.component_id != AVOIDANCE_COMPONENT_ID && inb_header.system_id == u32::from(target.system)
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 async fn run_lockstep(
     link: Arc<Link>,
     target: Target,
@@ -381,6 +385,7 @@ async fn beat(link: Arc<Link>) {
     }
 }
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<CompanionStats>) {
     let clock = link.clock();
     let mut rx = link.subscribe();

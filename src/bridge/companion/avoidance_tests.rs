@@ -13,6 +13,7 @@ fn mirrored_answers_warn_above_one_percent() {
 use crate::bridge::companion::steer::{MirrorSetpoint, Straight};
 use crate::bridge::wire::pose::PoseNed;
 
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn request(p0: [f32; 3], p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
     let mut t = empty_trajectory(0, 3);
     (t.pos_x[0], t.pos_y[0], t.pos_z[0]) = (p0[0], p0[1], p0[2]);
@@ -34,6 +35,7 @@ fn flying() -> VehicleView {
 }
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
     let mut c = Companion::default();
     let t0 = Duration::ZERO;
@@ -58,6 +60,7 @@ fn mirrors_when_it_cannot_plan_and_goes_quiet_without_requests() {
 }
 
 /// A PX4 1.14 request: point 0 = PX4's setpoint (type `cmd0`), point 1 = current item (type `cmd1`).
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn px4(p0: [f32; 3], v0: [f32; 3], cmd0: u16, p1: [f32; 3], cmd1: u16) -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
     let mut t = request(p0, p1, cmd1);
     (t.vel_x[0], t.vel_y[0], t.vel_z[0]) = (v0[0], v0[1], v0[2]);
@@ -66,6 +69,7 @@ fn px4(p0: [f32; 3], v0: [f32; 3], cmd0: u16, p1: [f32; 3], cmd1: u16) -> TRAJEC
 }
 
 /// PX4 1.14 landing at (50, 0): point 0 its land setpoint (z unset, 1.5 m/s down), point 1 the land item.
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn px4_land() -> TRAJECTORY_REPRESENTATION_WAYPOINTS_DATA {
     let nan = f32::NAN;
     px4(
@@ -81,6 +85,7 @@ const UNSET: u16 = u16::MAX;
 const NAN3: [f32; 3] = [f32::NAN; 3];
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn goals_follow_px4_avoidance_through_takeoff_cruise_and_land() {
     let mut c = Companion::default();
     let t0 = Duration::ZERO;
@@ -113,6 +118,7 @@ fn goals_follow_px4_avoidance_through_takeoff_cruise_and_land() {
 }
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn landing_answer_is_a_descent_velocity_with_z_unset() {
     let mut c = Companion::default();
     let land = px4_land();
@@ -133,6 +139,7 @@ fn landing_answer_is_a_descent_velocity_with_z_unset() {
 }
 
 #[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 fn plans_towards_the_current_waypoint() {
     let mut c = Companion::default();
     c.on_request(&request([1.0, 2.0, -3.0], [10.0, 0.0, -5.0], UNSET), Duration::ZERO);

@@ -1,7 +1,6 @@
 //! The first step of a flight, before anything is uploaded or armed: where the vehicle stands against the
 //! test's home ([`super::placement`]), re-anchoring the test at the vehicle's home if asked, and the test's
 //! frame (the EKF origin's offset, [`crate::bridge::companion::frame`]).
-#![allow(deprecated)]
 
 use std::sync::OnceLock;
 use std::time::Duration;

@@ -1,7 +1,6 @@
 //! What every step of one flight shares: the link, the vehicle as last heard, the test and the options, and
 //! why the flight stopped. The steps ([`super::anchor`], [`super::setup`], [`super::ready`], [`super::flight`])
 //! are methods and functions on [`Session`]; this module depends on none of them.
-#![allow(deprecated)]
 
 use std::sync::Arc;
 use std::time::Duration;

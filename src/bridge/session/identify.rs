@@ -1,7 +1,6 @@
 //! Who answered: before anything is uploaded, `fly` names the vehicle it locked onto (system id, autopilot,
 //! vehicle type and, when the vehicle says, its flight software version), so a wrong vehicle on a shared port
 //! is seen before it flies.
-#![allow(deprecated)]
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -68,6 +67,7 @@ pub fn px4_version(heartbeat: &HEARTBEAT_DATA, flight_sw: Option<u32>) -> Option
 }
 
 /// Asks for AUTOPILOT_VERSION and waits a bounded while for its flight_sw_version.
+#[expect(deprecated, reason = "PX4 still answers MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES")]
 pub async fn flight_sw_version(
     link: &Link,
     rx: &mut broadcast::Receiver<Arc<Inbound>>,

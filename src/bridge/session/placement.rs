@@ -8,7 +8,6 @@
 //!    vehicle's home ([`ANCHOR_OPTION`], [`crate::model::TestCase::anchored_at`]). 3. The offset of the EKF
 //!    origin in the test's frame ([`crate::bridge::companion::frame`]): GPS_GLOBAL_ORIGIN (asked for with MAV_CMD_REQUEST_MESSAGE
 //!    49, since PX4 sends it only once and on change), or a GLOBAL_POSITION_INT as a fallback.
-#![allow(deprecated)]
 
 use serde::Serialize;
 

@@ -6,7 +6,6 @@
 //! navigator's verdict on the mission (modeCheck.cpp:111-123 clears AUTO.MISSION's arming bit without a valid
 //! mission). A bit that passes in Hold and fails in AUTO.MISSION means the vehicle refuses this mission, so it
 //! is never armed into it.
-#![allow(deprecated)]
 
 use std::time::Duration;
 

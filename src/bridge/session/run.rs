@@ -1,7 +1,6 @@
 //! One flight from connection to report: find and lock onto the vehicle, heartbeat, set the parameters,
 //! upload and check the mission, upload the obstacles as a geofence, wait for home, then hand over to
 //! [`super::flight`] and finally restore what was changed. Vehicle refusals end in a report, not an error.
-#![allow(deprecated)]
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;

@@ -1,7 +1,6 @@
 //! Everything before the first command of the flight: the avoidance companion, the case study's parameters,
 //! the mission (uploaded and read back), the obstacles as a geofence, the position streams and readiness;
 //! and, after the flight, the parameters put back.
-#![allow(deprecated)]
 
 use std::time::Duration;
 

@@ -1,6 +1,5 @@
 //! Where the vehicle is on Earth, from its own messages: HOME_POSITION, GPS_GLOBAL_ORIGIN (its EKF origin) and
 //! GLOBAL_POSITION_INT paired with the LOCAL_POSITION_NED of the same moment. Feeds [`crate::bridge::companion::frame`].
-#![allow(deprecated)]
 
 use mavlink::dialects::common::MavMessage;
 

@@ -1,6 +1,5 @@
 //! Mission upload (MAVLink mission protocol, GCS side) for any mission type, as a socket-free state machine:
 //! MISSION_COUNT, then answer each MISSION_REQUEST(_INT) with its MISSION_ITEM_INT, until MISSION_ACK.
-#![allow(deprecated)] // PX4 may still send MISSION_REQUEST; it must be answered.
 
 use std::time::Duration;
 
@@ -96,6 +95,7 @@ impl MissionUpload {
     }
 }
 
+#[expect(deprecated, reason = "PX4 still speaks MISSION_REQUEST and MISSION_ITEM")]
 impl Exchange for MissionUpload {
     type Output = u32;
 

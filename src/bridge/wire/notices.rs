@@ -1,7 +1,6 @@
 //! What the vehicle says and what the bridge notices while a flight runs, kept for the report and handed to
 //! an optional live sink (the `fly` CLI prints to stderr): the vehicle's STATUSTEXT of severity WARNING or
 //! worse, readiness progress, and clock warnings.
-#![allow(deprecated)]
 
 use std::sync::{Arc, Mutex};
 
@@ -105,11 +104,26 @@ pub fn severity_word(s: MavSeverity) -> Option<&'static str> {
 /// The vehicle's messages so far, shared between the collecting task and the session.
 pub type Messages = Arc<Mutex<Vec<VehicleMessage>>>;
 
-/// The last `n` messages' texts joined with "; " (what a refusal's reason quotes).
+/// `texts` with each text once, in the order it first came, a repeated one followed by its count: a vehicle
+/// that refuses 96 times says "Arming denied (x96)", not the words 96 times over.
+pub fn counted<'a>(texts: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
+    for t in texts {
+        match seen.iter_mut().find(|(s, _)| *s == t) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((t, 1)),
+        }
+    }
+    (seen.into_iter())
+        .map(|(t, n)| if n > 1 { format!("{t} (x{n})") } else { t.to_string() })
+        .collect()
+}
+
+/// The last `n` messages' texts joined with "; " (what a refusal's reason quotes), repeats counted.
 pub fn last_texts(messages: &Messages, n: usize) -> Option<String> {
     let m = messages.lock().unwrap_or_else(|p| p.into_inner());
     let start = m.len().saturating_sub(n);
-    let texts: Vec<&str> = m[start..].iter().map(|v| v.text.as_str()).collect();
+    let texts = counted(m[start..].iter().map(|v| v.text.as_str()));
     (!texts.is_empty()).then(|| texts.join("; "))
 }
 
@@ -118,10 +132,10 @@ pub fn count(messages: &Messages) -> usize {
     messages.lock().map_or(0, |m| m.len())
 }
 
-/// Texts of the messages from index `from` on, joined with "; ".
+/// Texts of the messages from index `from` on, joined with "; ", repeats counted ([`counted`]).
 pub fn texts_since(messages: &Messages, from: usize) -> Option<String> {
     let m = messages.lock().unwrap_or_else(|p| p.into_inner());
-    let texts: Vec<&str> = m.iter().skip(from).map(|v| v.text.as_str()).collect();
+    let texts = counted(m.iter().skip(from).map(|v| v.text.as_str()));
     (!texts.is_empty()).then(|| texts.join("; "))
 }
 
@@ -200,5 +214,30 @@ mod tests {
         let a = NoticeSink::new(|_| {});
         assert_eq!(a, a.clone());
         assert_ne!(a, NoticeSink::new(|_| {}));
+    }
+
+    #[test]
+    fn a_refusal_repeated_96_times_is_said_once_with_its_count() {
+        let m: Messages = Arc::default();
+        let push = |t: &str| {
+            m.lock().unwrap().push(VehicleMessage {
+                t_s: 0.0,
+                severity: "critical",
+                text: t.into(),
+            })
+        };
+        push("Preflight Fail: baro");
+        for _ in 0..96 {
+            push("Arming denied: Resolve system health failures first");
+        }
+        let line = texts_since(&m, 0).unwrap();
+        assert_eq!(
+            line,
+            "Preflight Fail: baro; Arming denied: Resolve system health failures first (x96)"
+        );
+        assert_eq!(
+            last_texts(&m, 2).unwrap(),
+            "Arming denied: Resolve system health failures first (x2)"
+        );
     }
 }

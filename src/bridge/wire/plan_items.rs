@@ -1,6 +1,5 @@
 //! What the bridge uploads: the test's mission as MISSION_ITEM_INTs, the obstacles' footprints as geofence
 //! exclusion polygons, and the comparison of an uploaded plan with the one read back.
-#![allow(deprecated)] // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT is deprecated upstream but PX4 accepts it.
 
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionType};
 use num_traits::FromPrimitive;
@@ -56,6 +55,7 @@ fn deg_e7(deg: f64) -> i32 {
 
 /// Each obstacle's footprint as an exclusion polygon (4 vertices, `param1` = 4), corners unprojected about
 /// `home` with PX4's projection, in MAV_FRAME_GLOBAL_INT (altitude unused by PX4's polygon check).
+#[expect(deprecated, reason = "PX4 accepts MAV_FRAME_GLOBAL_RELATIVE_ALT_INT")]
 pub fn fence_items(obstacles: &[Obstacle], home: &LocalProjection) -> Vec<MISSION_ITEM_INT_DATA> {
     let mut out = Vec::with_capacity(obstacles.len() * 4);
     for o in obstacles {
@@ -91,6 +91,7 @@ fn same_f32(a: f32, b: f32) -> bool {
 ///
 /// Frames are compared loosely (`GLOBAL_RELATIVE_ALT` and its `_INT` twin are the same frame to PX4) and
 /// NaN equals NaN, since a vehicle may store either spelling.
+#[expect(deprecated, reason = "PX4 accepts MAV_FRAME_GLOBAL_RELATIVE_ALT_INT")]
 pub fn first_difference(sent: &[MISSION_ITEM_INT_DATA], got: &[MISSION_ITEM_INT_DATA]) -> Option<String> {
     if sent.len() != got.len() {
         return Some(format!("{} items uploaded, {} read back", sent.len(), got.len()));

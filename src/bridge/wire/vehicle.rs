@@ -1,6 +1,5 @@
 //! What the bridge knows about the vehicle, folded from its messages: armed, mode, landed state, home,
 //! pose, mission progress, and whether it rebooted. Pure; every task keeps its own copy.
-#![allow(deprecated)]
 
 use std::time::Duration;
 

@@ -38,7 +38,7 @@ use crate::campaign::fly::fleet::replay::Replay;
 use crate::campaign::fly::fleet::{Fleet, FleetSetup, run_fleet};
 use crate::campaign::fly::stage::{FlightCount, FlightStage, announce, no_vehicle_left, note_resuming, stage_jobs};
 use crate::campaign::fly::vehicle::Vehicle;
-use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction, Lineage, is_child};
+use crate::campaign::ground::candidate::{Candidate, CandidateId, Lineage, Pick, is_child};
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::input::CampaignInput;
 use crate::campaign::ground::screener::Progress;
@@ -190,7 +190,7 @@ struct Round {
 
 /// A round's ranking and what it was made with.
 struct Ranking {
-    ranked: Vec<LfsPrediction>,
+    ranked: Vec<Pick>,
     /// Flights left in the round's share of the budget.
     remaining: usize,
     /// Unflown candidates predicted below the threshold.

@@ -2,7 +2,7 @@
 //! campaign learnt so far and choose the flights, then learn from the flights that landed.
 
 use super::{ROUNDS, Ranking, Round, Rounds};
-use crate::campaign::ground::candidate::{CandidateId, LfsPrediction, Lineage, is_child, unflown};
+use crate::campaign::ground::candidate::{CandidateId, LfsPrediction, Lineage, Pick, is_child, unflown};
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::stage_times::StageTimes;
 use crate::campaign::learn::calibration::RoundLog;
@@ -11,7 +11,7 @@ use crate::campaign::learn::refit::{Lessons, refit};
 use crate::campaign::plan::diversity_guard::DiversityGuard;
 use crate::campaign::plan::draw::{DrawPlan, draw};
 use crate::campaign::plan::neighbours::{self, NEAR_MISS_FLIGHT_SHARE, local_flight_share, rank_split};
-use crate::campaign::plan::rank::rank_unflown;
+use crate::campaign::plan::rank::{in_draw_order, rank_unflown};
 use crate::campaign::report::user_report::plural;
 use crate::campaign::screen::stages::{Stage, run_ensemble, screen_all};
 use crate::campaign::store::journal::FlightRecord;
@@ -99,8 +99,8 @@ impl Rounds<'_> {
     }
 
     /// Screens the round's candidates (cached per round, with the distribution and the parents they came from;
-    /// without learning in `screening.json`). Without screening each is "predicted" at 0 m, so the ranking
-    /// keeps the order they were drawn in.
+    /// without learning in `screening.json`). Without screening they keep no prediction, and fly in the order
+    /// they were drawn in.
     pub(super) fn screen(&mut self, round: &Round, stages: &mut StageTimes) -> Result<(), CampaignError> {
         let t = Instant::now();
         let range = round.first..round.first + round.drawn as u64;
@@ -109,15 +109,11 @@ impl Rounds<'_> {
         } else {
             "screening.json".to_string()
         };
-        let screened = if self.input.cfg.screening.screen {
-            screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?
-        } else {
-            range
-                .map(|i| LfsPrediction::none(CandidateId(i), "unscreened"))
-                .collect()
-        };
-        for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
-            c.prediction = Some(s);
+        if self.input.cfg.screening.screen {
+            let screened = screen_all(&self.stage(), range, &cache, &self.distribution, &round.around)?;
+            for (c, s) in self.candidates[round.first as usize..].iter_mut().zip(screened) {
+                c.prediction = Some(s);
+            }
         }
         stages.screen_s += t.elapsed().as_secs_f64();
         Ok(())
@@ -144,7 +140,12 @@ impl Rounds<'_> {
         if cfg.screening.screen {
             stages.ensemble_s += run_ensemble(&self.stage(), &mut fresh, cfg, remaining)?;
         }
-        let (ranked, share) = self.choose(round, &fresh, remaining, busy);
+        let (ranked, share) = if cfg.screening.screen {
+            let (ranked, share) = self.choose(round, &fresh, remaining, busy);
+            (ranked.into_iter().map(Pick::from).collect(), share)
+        } else {
+            (self.unscreened(&flown, remaining, busy), 0.0)
+        };
         Ok(Ranking {
             ranked,
             remaining,
@@ -215,6 +216,24 @@ impl Rounds<'_> {
             (&mut guard, (near_flown.rate(), other_flown.rate())),
         );
         (ranked, share)
+    }
+
+    /// An unscreened campaign's flights: the candidates not in `flown`, in the order drawn.
+    fn unscreened(&self, flown: &[CandidateId], remaining: usize, busy: &[(CandidateId, Vec<Obstacle>)]) -> Vec<Pick> {
+        let fresh: Vec<CandidateId> = (0..self.candidates.len() as u64)
+            .map(CandidateId)
+            .filter(|c| !flown.contains(c))
+            .collect();
+        let seen: Vec<&[Obstacle]> = (self.journal.iter().map(|r| r.obstacles.as_slice()))
+            .chain(busy.iter().map(|(_, o)| o.as_slice()))
+            .collect();
+        let max_iou = self.input.cfg.screening.max_iou;
+        (in_draw_order(&fresh, &seen, &self.candidates, max_iou, remaining).into_iter())
+            .map(|candidate| Pick {
+                candidate,
+                prediction: None,
+            })
+            .collect()
     }
 
     pub(super) fn note(&self, round: &Round, ranking: &Ranking) {

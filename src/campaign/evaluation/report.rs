@@ -5,23 +5,28 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use super::missing::Missing;
 use super::suite::Evaluation;
 use crate::judge::above_top_count;
 use crate::model::ModelError;
+use crate::model::limit::number;
 
 /// `report.json`.
 #[derive(Serialize)]
 struct ReportJson<'a> {
     /// Flights not yet made (0 when the evaluation is complete).
     missing_flights: usize,
+    /// Why they are missing, one line each.
+    missing_why: &'a [String],
     #[serde(flatten)]
     evaluation: &'a Evaluation,
 }
 
 /// The JSON text of the report.
-pub fn json(evaluation: &Evaluation, missing: usize) -> Result<String, ModelError> {
+pub fn json(evaluation: &Evaluation, missing: &Missing) -> Result<String, ModelError> {
     serde_json::to_string_pretty(&ReportJson {
-        missing_flights: missing,
+        missing_flights: missing.flights,
+        missing_why: &missing.why,
         evaluation,
     })
     .map_err(|e| ModelError::Syntax {
@@ -33,7 +38,7 @@ pub fn json(evaluation: &Evaluation, missing: usize) -> Result<String, ModelErro
 }
 
 /// Writes `report.json` and `report.md` into `folder` (each atomically).
-pub fn write(folder: &Path, evaluation: &Evaluation, missing: usize) -> Result<(), ModelError> {
+pub fn write(folder: &Path, evaluation: &Evaluation, missing: &Missing) -> Result<(), ModelError> {
     crate::io::write_atomic(&folder.join("report.json"), json(evaluation, missing)?.as_bytes())?;
     crate::io::write_atomic(&folder.join("report.md"), markdown(evaluation, missing).as_bytes())
 }
@@ -52,12 +57,16 @@ fn name(p: &Path) -> String {
 }
 
 /// The report for people: the figures, the tests, the closest pairs.
-pub fn markdown(e: &Evaluation, missing: usize) -> String {
+pub fn markdown(e: &Evaluation, missing: &Missing) -> String {
     let mut md = String::from("# 2026 evaluation\n\n");
-    if missing > 0 {
+    if missing.flights > 0 {
+        let _ = writeln!(md, "**Incomplete: {} flight(s) missing.** Why:\n", missing.flights);
+        for why in &missing.why {
+            let _ = writeln!(md, "- {why}");
+        }
         let _ = writeln!(
             md,
-            "**Incomplete: {missing} flight(s) missing** (run `evaluate` again to fly them).\n"
+            "\nRun the same `evaluate` command again to fly them (once what failed is fixed).\n"
         );
     }
     let _ = writeln!(
@@ -68,7 +77,7 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
         e.sim_pen,
         e.similar_tests,
         e.evaluated,
-        e.similar_below_m,
+        number(e.similar_below_m),
         e.figures_2025.failing,
         e.figures_2025.failure_score,
         e.figures_2025.diversity.map_or("n/a".into(), |d| format!("{d:.3}")),
@@ -85,6 +94,11 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
                 None => format!("{:.2} ({})", r.min_distance, r.points),
             })
             .collect();
+        let runs = if runs.is_empty() {
+            vec!["no flight judged".to_string()]
+        } else {
+            runs
+        };
         let similar = t.similar_to.map_or(String::new(), |j| name(&e.tests[j].test));
         let _ = writeln!(
             md,
@@ -96,6 +110,19 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
             t.score
         );
     }
+    closest_pairs(&mut md, e);
+    md
+}
+
+fn closest_pairs(md: &mut String, e: &Evaluation) {
+    if e.pairs.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nNo pair of average trajectories to compare: {} test(s) with flights (the similarity penalty needs two).",
+            e.evaluated
+        );
+        return;
+    }
     let mut pairs: Vec<_> = e.pairs.iter().collect();
     pairs.sort_by(|a, b| a.dtw.total_cmp(&b.dtw));
     md.push_str(
@@ -104,7 +131,6 @@ pub fn markdown(e: &Evaluation, missing: usize) -> String {
     for p in pairs.iter().take(10) {
         let _ = writeln!(md, "| {} | {} | {:.1} | {} |", name(&p.a), name(&p.b), p.dtw, p.similar);
     }
-    md
 }
 
 /// Says how many runs were above a box's top where they came closest to it, and how the judge scored them

@@ -156,11 +156,9 @@ pub fn evaluate_suite(
     } else {
         1.0 - similar_tests as f64 / n_evaluated as f64
     };
-    let total_score = evaluated.iter().map(|t| t.score).sum::<f64>();
-    let total_score_sd = (evaluated.iter().filter(|t| !t.runs.is_empty()))
-        .map(|t| t.score_sd.map(|sd| sd * sd))
-        .sum::<Option<f64>>()
-        .map(f64::sqrt);
+    // + 0.0 on every sum: an empty f64 sum is -0.0, printed "-0.000".
+    let total_score = evaluated.iter().map(|t| t.score).sum::<f64>() + 0.0;
+    let total_score_sd = total_sd(&evaluated);
     let figures_2025 = figures_2025(tests, &evaluated);
     let evaluation = Evaluation {
         judge,
@@ -171,12 +169,21 @@ pub fn evaluate_suite(
         sim_pen,
         total_score,
         total_score_sd,
-        final_score: total_score * sim_pen,
+        final_score: total_score * sim_pen + 0.0,
         figures_2025,
         pairs,
         tests: evaluated,
     };
     Ok((evaluation, averages))
+}
+
+/// The total's standard error: the root sum of squares of the evaluated tests' (`None` when one has none, or
+/// none is evaluated).
+fn total_sd(tests: &[TestEvaluation]) -> Option<f64> {
+    let mut evaluated = tests.iter().filter(|t| !t.runs.is_empty()).peekable();
+    evaluated.peek()?;
+    let sum = evaluated.map(|t| t.score_sd.map(|sd| sd * sd)).sum::<Option<f64>>()?;
+    Some((sum + 0.0).sqrt())
 }
 
 fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelError> {
@@ -198,8 +205,8 @@ fn evaluate_test(t: &FlownTest, judge: Judge) -> Result<TestEvaluation, ModelErr
         });
     }
     let n = runs.len().max(1) as f64;
-    let mean_points = runs.iter().map(|r| f64::from(r.points)).sum::<f64>() / n;
-    let mean_flight_time_s = runs.iter().map(|r| r.flight_time_s).sum::<f64>() / n;
+    let mean_points = runs.iter().map(|r| f64::from(r.points)).sum::<f64>() / n + 0.0;
+    let mean_flight_time_s = runs.iter().map(|r| r.flight_time_s).sum::<f64>() / n + 0.0;
     let distances: Vec<f64> = runs.iter().map(|r| r.min_distance).collect();
     let times: Vec<f64> = runs.iter().map(|r| r.flight_time_s).collect();
     let k = t.test.obstacles.len();

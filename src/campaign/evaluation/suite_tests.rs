@@ -118,7 +118,7 @@ fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_it_was_above_
     assert_eq!(over.obstacle, 0);
     assert!((over.height_m - 1.2).abs() < 1e-9, "{}", over.height_m);
     assert_eq!(e.tests[0].runs[0].points, 5);
-    let md = super::super::report::markdown(&e, 0);
+    let md = super::super::report::markdown(&e, &Default::default());
     assert!(md.contains("(5, above obstacle 0)"), "{md}");
     assert!(
         md.contains("2 run(s) came closest to a box above its top (the lowest 1.20 m above)"),
@@ -128,12 +128,12 @@ fn a_run_over_a_low_box_earns_5_points_in_2026_and_the_report_says_it_was_above_
     // The 2025 edition scores the same runs by their 1.2 m height gap: 1 point each.
     let (e, _) = evaluate_suite(&[a], Judge::E2025, 50.0).unwrap();
     assert_eq!(e.tests[0].runs[1].points, 1);
-    assert!(super::super::report::markdown(&e, 0).contains("height gap only straight over a box"));
+    assert!(super::super::report::markdown(&e, &Default::default()).contains("height gap only straight over a box"));
     // A flight beside a box taller than it: nothing above a top, and the report says nothing of it.
     let beside = flown("b.yaml", vec![wall()], vec![flight(-0.5, 60.0)]);
     let (e, _) = evaluate_suite(&[beside], Judge::E2026, 50.0).unwrap();
     assert!(e.tests[0].runs[0].above_top.is_none());
-    assert!(!super::super::report::markdown(&e, 0).contains("above its top"));
+    assert!(!super::super::report::markdown(&e, &Default::default()).contains("above its top"));
 }
 
 #[test]
@@ -148,7 +148,7 @@ fn the_total_has_a_standard_error_from_the_runs_scatter_and_none_from_single_run
     assert!((sd - 15.0).abs() < 1e-6, "{sd}");
     assert_eq!(e.tests[1].score_sd, Some(0.0));
     assert!((e.total_score_sd.unwrap() - 15.0).abs() < 1e-6);
-    let md = super::super::report::markdown(&e, 0);
+    let md = super::super::report::markdown(&e, &Default::default());
     assert!(
         md.contains("| total score | 35.000 (sd 15.000 from the runs' own scatter) |"),
         "{md}"
@@ -157,5 +157,5 @@ fn the_total_has_a_standard_error_from_the_runs_scatter_and_none_from_single_run
     let one = flown("o.yaml", vec![wall()], vec![flight(0.5, 60.0)]);
     let (e, _) = evaluate_suite(&[a, one], Judge::E2026, 50.0).unwrap();
     assert_eq!((e.tests[1].score_sd, e.total_score_sd), (None, None));
-    assert!(super::super::report::markdown(&e, 0).contains("| total score | "));
+    assert!(super::super::report::markdown(&e, &Default::default()).contains("| total score | "));
 }

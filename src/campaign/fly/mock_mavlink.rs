@@ -10,8 +10,11 @@ use mock_autopilot::server::DEFAULT_LOCKSTEP_WAIT;
 use mock_autopilot::{LinkSpec, MockAutopilot, SpeedFactor};
 use tokio::runtime::Handle;
 
+use crate::bridge::session::report::Status;
 use crate::bridge::{BridgeError, CancelToken, FlightReport, FlyMode, FlyOptions, fly};
+use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
+use crate::campaign::ground::flight_status::FlightStatus;
 use crate::campaign::settings::mock_profile::MockProfile;
 use crate::judge::Judge;
 use crate::model::TestCase;
@@ -133,6 +136,8 @@ pub struct MockVehicle {
     timeout_s: f64,
     profile: MockProfile,
     seed: u64,
+    retry: Retry,
+    faults: Option<mock_autopilot::link::Faults>,
 }
 
 /// The embedded mock for `mode` with the default profile ([`crate::campaign::settings::mock_profile::DEFAULT_PROFILE`]).
@@ -166,7 +171,15 @@ impl MockVehicle {
             timeout_s: FlyOptions::default().timeout_s,
             profile: MockProfile::default(),
             seed: 0,
+            retry: Retry::default(),
+            faults: None,
         }
+    }
+
+    /// Fly mocks whose link has `faults` (tests of what a failing link does to a campaign).
+    pub fn with_faults(mut self, faults: mock_autopilot::link::Faults) -> Self {
+        self.faults = Some(faults);
+        self
     }
 
     /// Draw each flight's gusts (the profile's flight-to-flight scatter) from the campaign's `seed` and the
@@ -197,27 +210,27 @@ impl MockVehicle {
     }
 }
 
-impl Vehicle for MockVehicle {
-    fn name(&self) -> String {
-        self.name.clone()
-    }
-
-    fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
+impl MockVehicle {
+    /// One try of a flight on a fresh mock. A flight that lost the link before the mock reported a single
+    /// position (on a loaded machine: "uploading the mission: no answer") failed on the machine, not on the
+    /// test: it is tried again like a PX4 that did not boot.
+    fn attempt(&self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Attempt, VehicleError> {
         let unreachable = |reason: String| VehicleError::Unreachable {
             vehicle: self.name.clone(),
             reason,
         };
         let addr = "127.0.0.1:0".parse().map_err(|e| unreachable(format!("{e}")))?;
+        let mut builder = mock_builder_with(&self.profile, self.mode)
+            .seed(flight_seed(self.seed, csv))
+            .link(LinkSpec::UdpIn(addr))
+            .speed_factor(SpeedFactor::Times(self.speed))
+            .lockstep(self.lockstep.map(|_| DEFAULT_LOCKSTEP_WAIT));
+        if let Some(f) = &self.faults {
+            builder = builder.faults(f.clone());
+        }
         let mock = self
             .handle
-            .block_on(
-                mock_builder_with(&self.profile, self.mode)
-                    .seed(flight_seed(self.seed, csv))
-                    .link(LinkSpec::UdpIn(addr))
-                    .speed_factor(SpeedFactor::Times(self.speed))
-                    .lockstep(self.lockstep.map(|_| DEFAULT_LOCKSTEP_WAIT))
-                    .spawn(),
-            )
+            .block_on(builder.spawn())
             .map_err(|e| unreachable(e.to_string()))?;
         let port = mock
             .local_addr()
@@ -238,13 +251,85 @@ impl Vehicle for MockVehicle {
         let result = fly_blocking(&self.handle, test, &opts, stop);
         // Stopping the mock cannot fail in a way that matters to the flight already recorded.
         let _ = self.handle.block_on(mock.shutdown());
-        result.map(flown).map_err(|e| unreachable(e.to_string()))
+        Ok(match result {
+            Ok(r) if r.status == Status::LinkLost && r.samples == 0 && !stop.load(Ordering::Relaxed) => {
+                Attempt::Failed(format!(
+                    "the embedded mock lost the link before its first position: {}",
+                    r.reason.as_deref().unwrap_or("no reason given")
+                ))
+            }
+            Ok(r) => Attempt::Flew(flown(r)),
+            Err(e) => return Err(unreachable(e.to_string())),
+        })
+    }
+}
+
+impl Vehicle for MockVehicle {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
+        let mut retry = std::mem::take(&mut self.retry);
+        let mut error = None;
+        let tried = retry.tries(stop, |_| match self.attempt(test, csv, stop) {
+            Ok(a) => a,
+            Err(e) => {
+                error = Some(e);
+                Attempt::Stopped
+            }
+        });
+        self.retry = retry;
+        if let Some(e) = error {
+            return Err(e);
+        }
+        match tried {
+            Tried::Flew(f) => Ok(f),
+            Tried::Stopped => Ok(Flown::unflown(
+                FlightStatus::ABORTED,
+                "stopped before the mock flew".into(),
+            )),
+            Tried::Failed(why) => {
+                let reason = match why.as_slice() {
+                    [a, b] if a == b => format!("{a} (on both tries)"),
+                    _ => why.join("; retry: "),
+                };
+                self.retry.failed(self.name(), reason)
+            }
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mock_that_loses_the_link_before_its_first_position_is_tried_again_then_failed_on_its_backend() {
+        let rt = tokio::runtime::Runtime::new().unwrap();
+        // Most messages lost, as on a loaded machine: the setup gets no answer after its retries.
+        let faults = mock_autopilot::link::Faults {
+            loss: 0.8,
+            ..mock_autopilot::link::Faults::default()
+        };
+        let mut v = MockVehicle::new(rt.handle().clone(), 0, 20.0, FlyMode::Mission, None).with_faults(faults);
+        let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission2.yaml");
+        let test = TestCase::load(&case).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let f = v
+            .fly(&test, &dir.path().join("candidate_0.csv"), &AtomicBool::new(false))
+            .unwrap();
+        assert_eq!(f.status, FlightStatus::BackendFailed, "{f:?}");
+        let why = f.reason.unwrap();
+        assert!(
+            why.contains("before its first position") && why.contains("no answer"),
+            "{why}"
+        );
+        assert!(
+            why.contains("both tries") || why.contains("; retry: "),
+            "two tries: {why}"
+        );
+    }
 
     #[test]
     fn each_flight_of_a_campaign_has_its_own_seed_whatever_the_folder() {

@@ -165,6 +165,24 @@ impl Px4Vehicle {
         }
     }
 
+    /// A PX4 started on this vehicle's slot since it was claimed (by hand, say) would refuse the flight's PX4
+    /// ("PX4 server already running"): the vehicle moves to the next free slot, saying so in `log`.
+    fn leave_a_slot_taken_since(&mut self, log: &mut String) {
+        if self._slot.is_none() || !slot::held_by_px4(self.instance) {
+            return;
+        }
+        if let Ok(free) = slot::claim(0) {
+            let _ = writeln!(
+                log,
+                "=== instance {} is held by a PX4 started since: flying on instance {} ===",
+                self.instance,
+                free.instance()
+            );
+            self.instance = free.instance();
+            self._slot = Some(free);
+        }
+    }
+
     /// One fresh instance at the test's home, flown and stopped; its console appended to `log`.
     fn attempt(&self, test: &TestCase, csv: &Path, stop: &AtomicBool, log: &mut String) -> Attempt {
         if self.settings.sim == VehicleSim::Iris {
@@ -279,6 +297,7 @@ impl Vehicle for Px4Vehicle {
     fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
         let log_path = csv.with_extension("px4.log");
         let mut log = String::new();
+        self.leave_a_slot_taken_since(&mut log);
         let mut retry = std::mem::take(&mut self.retry);
         let tried = retry.tries(stop, |n| {
             let _ = writeln!(log, "=== attempt {n}: PX4 instance {} ===", self.instance);

@@ -1,12 +1,14 @@
 //! The flight stage: the tests waiting for confirmation, then a ranking, as jobs for the fleet; the flights'
 //! progress lines.
 
+use std::collections::HashSet;
 use std::path::Path;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use crate::campaign::fly::confirm::pending;
 use crate::campaign::fly::vehicle::Job;
-use crate::campaign::ground::candidate::{Candidate, CandidateId, LfsPrediction};
+use crate::campaign::ground::candidate::{Candidate, CandidateId, Pick};
 use crate::campaign::ground::error::CampaignError;
 use crate::campaign::ground::input::CampaignInput;
 use crate::campaign::ground::screener::Progress;
@@ -80,7 +82,7 @@ impl<'a> FlightStage<'a> {
 
 /// The jobs of a flight stage: the tests waiting for confirmation (longest waiting first; those in `busy`, queued
 /// or in the air already, left out), then `ranked` in order.
-pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<LfsPrediction>, busy: &[CandidateId]) -> Vec<Job> {
+pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<Pick>, busy: &[CandidateId]) -> Vec<Job> {
     let again = pending(ctx.done, ctx.confirm)
         .into_iter()
         .filter(|(_, first)| !busy.contains(&first.candidate))
@@ -88,26 +90,35 @@ pub fn stage_jobs(ctx: &FlightStage, ranked: Vec<LfsPrediction>, busy: &[Candida
             tally,
             confirm: ctx.confirm,
             ..Job::new(
+                first.candidate,
                 first.prediction.clone(),
                 ctx.case.with_obstacles(first.obstacles.clone()),
             )
         });
-    let fresh = ranked.into_iter().map(|s| {
-        let test = (ctx.case).with_obstacles(ctx.candidates[s.candidate.index()].obstacles.clone());
+    let fresh = ranked.into_iter().map(|pick| {
+        let test = (ctx.case).with_obstacles(ctx.candidates[pick.candidate.index()].obstacles.clone());
         Job {
             confirm: ctx.confirm,
-            ..Job::new(s, test)
+            ..Job::new(pick.candidate, pick.prediction, test)
         }
     });
     again.chain(fresh).collect()
 }
 
 /// Counts a campaign's flights for its progress lines: each flight's number in the campaign, and in the flight
-/// stage under way (what the stage's progress counts to).
+/// stage under way (what the stage's progress counts to); and the flights' warnings said so far.
 #[derive(Debug, Default)]
 pub(in crate::campaign) struct FlightCount {
     total: AtomicUsize,
     stage_start: AtomicUsize,
+    said: Mutex<HashSet<String>>,
+}
+
+/// A flight's numbers ([`FlightCount::next`]), with the count it came from.
+pub(in crate::campaign) struct Numbered<'a> {
+    n: usize,
+    in_stage: usize,
+    count: &'a FlightCount,
 }
 
 impl FlightCount {
@@ -118,27 +129,34 @@ impl FlightCount {
     }
 
     /// Counts one flight: its number in the campaign and in the stage, both from 1.
-    pub(in crate::campaign) fn next(&self) -> (usize, usize) {
+    pub(in crate::campaign) fn next(&self) -> Numbered<'_> {
         let n = self.total.fetch_add(1, Ordering::Relaxed) + 1;
-        (n, n.saturating_sub(self.stage_start.load(Ordering::Relaxed)))
+        Numbered {
+            n,
+            in_stage: n.saturating_sub(self.stage_start.load(Ordering::Relaxed)),
+            count: self,
+        }
+    }
+
+    /// Whether `warning` is said for the first time in the campaign.
+    fn first_time(&self, warning: &str) -> bool {
+        self.said
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .insert(warning.to_string())
     }
 }
 
-/// Tells the user of a flight, numbered `(in the campaign, in the stage)`.
-pub(in crate::campaign) fn announce(
-    progress: &dyn Progress,
-    (n, in_stage): (usize, usize),
-    r: &FlightRecord,
-    tick: bool,
-) {
+/// Tells the user of a flight; a warning already said for an earlier flight (the same setting changed on
+/// every flight, say) is not said again.
+pub(in crate::campaign) fn announce(progress: &dyn Progress, numbered: Numbered<'_>, r: &FlightRecord, tick: bool) {
+    let Numbered { n, in_stage, count } = numbered;
     if tick {
         progress.tick(in_stage);
     }
-    let predicted = if r.prediction.is_made() {
-        format!("predicted {:.2} m", r.prediction.min_distance)
-    } else {
-        "not screened".into()
-    };
+    let predicted = r
+        .predicted_m()
+        .map_or("not screened".into(), |d| format!("predicted {d:.2} m"));
     progress.note(&format!(
         "flight {n}: candidate {}{} {predicted}, flew {} ({})",
         r.candidate,
@@ -149,7 +167,40 @@ pub(in crate::campaign) fn announce(
         r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m")),
         r.flown.status
     ));
-    for w in &r.flown.warnings {
-        progress.note(&format!("  warning: {w}"));
+    for w in r.flown.warnings.iter().filter(|w| count.first_time(w)) {
+        progress.note(&format!("  warning: {w} (said once: not repeated for later flights)"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::store::journal::test_record;
+
+    struct Notes(Mutex<Vec<String>>);
+
+    impl Progress for Notes {
+        fn stage(&self, _: &str, _: usize) {}
+        fn tick(&self, _: usize) {}
+        fn note(&self, message: &str) {
+            self.0.lock().unwrap().push(message.to_string());
+        }
+    }
+
+    #[test]
+    fn a_warning_every_flight_gives_is_said_once() {
+        let (count, notes) = (FlightCount::default(), Notes(Mutex::new(Vec::new())));
+        let mut r = test_record(1, 1.0, Some(2.0));
+        r.flown.warnings = vec!["MPC_POS_MODE set to 3 for this flight".into()];
+        for _ in 0..3 {
+            announce(&notes, count.next(), &r, false);
+        }
+        let said = notes.0.into_inner().unwrap();
+        assert_eq!(
+            said.iter().filter(|n| n.contains("MPC_POS_MODE")).count(),
+            1,
+            "{said:#?}"
+        );
+        assert_eq!(said.iter().filter(|n| n.starts_with("flight ")).count(), 3);
     }
 }

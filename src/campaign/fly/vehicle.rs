@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::campaign::ground::candidate::LfsPrediction;
+use crate::campaign::ground::candidate::{CandidateId, LfsPrediction};
 use crate::campaign::ground::flight_status::FlightStatus;
 // What `Vehicle::fly` returns, defined beside `FlightStatus`: the journal holds it without importing `fly`.
 use crate::campaign::fly::confirm::Tally;
@@ -37,8 +37,10 @@ pub trait Vehicle: Send {
 /// One flight to make.
 #[derive(Debug, Clone)]
 pub struct Job {
-    /// The candidate's prediction, carried into its flight record.
-    pub prediction: LfsPrediction,
+    /// The candidate flown.
+    pub candidate: CandidateId,
+    /// The candidate's prediction, carried into its flight record (`None`: flown unscreened, or as written).
+    pub prediction: Option<LfsPrediction>,
     /// The test to fly.
     pub test: TestCase,
     /// The test's flights before this one (none for a new candidate).
@@ -52,9 +54,10 @@ pub struct Job {
 }
 
 impl Job {
-    /// The first flight of a candidate, not flown again (`--confirm 1`).
-    pub fn new(prediction: LfsPrediction, test: TestCase) -> Self {
+    /// The first flight of `candidate`, not flown again (`--confirm 1`).
+    pub fn new(candidate: CandidateId, prediction: Option<LfsPrediction>, test: TestCase) -> Self {
         Self {
+            candidate,
             prediction,
             test,
             tally: Tally::default(),
@@ -108,7 +111,7 @@ impl Job {
         wall_s: f64,
     ) -> FlightRecord {
         FlightRecord {
-            candidate: self.prediction.candidate,
+            candidate: self.candidate,
             attempt: self.tally.next_attempt,
             obstacles: self.test.obstacles,
             prediction: self.prediction,

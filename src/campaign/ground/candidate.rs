@@ -68,6 +68,24 @@ pub fn unflown<'a>(candidates: &'a [Candidate], flown: &'a [CandidateId]) -> imp
         .filter(|s| !flown.contains(&s.candidate))
 }
 
+/// A candidate chosen to fly, with its prediction (`None`: the campaign flies unscreened).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pick {
+    /// The candidate.
+    pub candidate: CandidateId,
+    /// What the LFS predicted for it.
+    pub prediction: Option<LfsPrediction>,
+}
+
+impl From<LfsPrediction> for Pick {
+    fn from(p: LfsPrediction) -> Self {
+        Self {
+            candidate: p.candidate,
+            prediction: Some(p),
+        }
+    }
+}
+
 /// What the low-fidelity simulator predicted for one candidate: one value from its screening to its flight
 /// records (`screening.json` keeps it in this shape).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -105,18 +123,6 @@ impl LfsPrediction {
         }
     }
 
-    /// No prediction (an unscreened candidate, a test flown as written), `why` as its status: a zero distance
-    /// over zero seconds, which no simulated flight gives, so [`Self::is_made`] tells it apart after the
-    /// journal's round trip (which keeps no status).
-    pub fn none(candidate: CandidateId, why: &str) -> Self {
-        Self::point(candidate, 0.0, 0.0, why.into())
-    }
-
-    /// Whether the LFS made this prediction (see [`Self::none`]).
-    pub fn is_made(&self) -> bool {
-        self.flight_time_s > 0.0
-    }
-
     /// Expected points per minute of predicted flight: what a flight adds to the competition's test score
     /// (points x 10 / (obstacles^2 x minutes), the obstacle count being the same for every candidate).
     pub fn points_per_minute(&self) -> Option<f64> {
@@ -139,19 +145,4 @@ pub fn drawn_as(candidate: &Candidate, obstacles: &[Obstacle]) -> bool {
     };
     let (c, r) = (&candidate.obstacles, obstacles);
     c.len() == r.len() && c.iter().zip(r).all(|(a, b)| same(a, b))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn no_prediction_stays_told_apart_after_the_journals_round_trip() {
-        let none = LfsPrediction::none(CandidateId(3), "unscreened");
-        assert!(!none.is_made());
-        // The journal keeps distance and time, not the status.
-        let back = LfsPrediction::point(none.candidate, none.min_distance, none.flight_time_s, String::new());
-        assert!(!back.is_made());
-        assert!(LfsPrediction::point(CandidateId(3), 0.0, 41.5, String::new()).is_made());
-    }
 }

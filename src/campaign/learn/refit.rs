@@ -39,7 +39,10 @@ pub const BACKOFF: (f64, f64) = (0.3, 0.5);
 pub fn calibrated(prior: &Calibration, done: &[FlightRecord]) -> Calibration {
     let mut c = prior.clone();
     for r in done {
-        if let (Some(raw), Some(flown)) = (r.prediction.raw_min_distance, r.flown.min_distance) {
+        if let (Some(raw), Some(flown)) = (
+            r.prediction.as_ref().and_then(|p| p.raw_min_distance),
+            r.flown.min_distance,
+        ) {
             c.observe(raw, flown);
         }
     }
@@ -69,7 +72,7 @@ impl Lessons {
             .filter_map(|r| {
                 Some(KernelPoint {
                     unit: unit_of(candidates, r.candidate)?,
-                    lfs_m: calibration.predict(r.prediction.raw_min_distance?),
+                    lfs_m: calibration.predict(r.prediction.as_ref()?.raw_min_distance?),
                     flown_m: r.flown.min_distance.filter(|d| d.is_finite())?,
                 })
             })

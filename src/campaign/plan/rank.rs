@@ -30,17 +30,54 @@ pub fn rank(
             .then(a.flight_time_s.total_cmp(&b.flight_time_s))
             .then(a.candidate.cmp(&b.candidate))
     });
-    let mut chosen: Vec<(LfsPrediction, Vec<Footprint>)> = Vec::new();
-    for s in order {
+    let chosen = distinct(order, |s| s.candidate, max_iou, limit, footprints);
+    chosen.into_iter().cloned().collect()
+}
+
+/// The items of `order` (candidate `id(item)` each), in order, whose footprints overlap every earlier chosen
+/// one's by at most `max_iou`; at most `limit`.
+fn distinct<T>(
+    order: impl IntoIterator<Item = T>,
+    id: impl Fn(&T) -> CandidateId,
+    max_iou: f64,
+    limit: usize,
+    footprints: impl Fn(CandidateId) -> Vec<Footprint>,
+) -> Vec<T> {
+    let mut chosen: Vec<(T, Vec<Footprint>)> = Vec::new();
+    for item in order {
         if chosen.len() >= limit {
             break;
         }
-        let f = footprints(s.candidate);
+        let f = footprints(id(&item));
         if chosen.iter().all(|(_, g)| union_iou(&f, g) <= max_iou) {
-            chosen.push((s.clone(), f));
+            chosen.push((item, f));
         }
     }
-    chosen.into_iter().map(|(s, _)| s).collect()
+    chosen.into_iter().map(|(item, _)| item).collect()
+}
+
+/// A campaign flying unscreened: the candidates of `fresh` in the order drawn, near-duplicates of each other and
+/// of every test `seen` skipped (`max_iou`), at most `remaining`.
+pub fn in_draw_order(
+    fresh: &[CandidateId],
+    seen: &Seen,
+    candidates: &[Candidate],
+    max_iou: f64,
+    remaining: usize,
+) -> Vec<CandidateId> {
+    let obstacles = |c: CandidateId| &candidates[c.index()].obstacles;
+    let mut order = fresh.to_vec();
+    order.sort();
+    let mut chosen = distinct(
+        order,
+        |c| *c,
+        max_iou,
+        usize::MAX,
+        |c| obstacles(c).iter().map(Obstacle::footprint).collect(),
+    );
+    chosen.retain(|c| !seen.iter().any(|o| too_similar(o, obstacles(*c), max_iou)));
+    chosen.truncate(remaining);
+    chosen
 }
 
 /// Whether two tests' footprints overlap by more than `max_iou`.

@@ -92,7 +92,7 @@ mod tests {
         FlightRecord {
             candidate: CandidateId(0),
             obstacles: Vec::new(),
-            prediction: LfsPrediction::point(CandidateId(0), 1.0, 1.0, String::new()),
+            prediction: Some(LfsPrediction::point(CandidateId(0), 1.0, 1.0, String::new())),
             flown: Flown {
                 flight_time_s: 1.0,
                 ..Flown::ended(status)

@@ -20,7 +20,7 @@ pub struct ReportedFlight {
     #[serde(skip_serializing_if = "crate::campaign::store::journal::is_first")]
     pub attempt: u32,
     /// LFS prediction, metres.
-    pub predicted_min_distance: f64,
+    pub predicted_min_distance: Option<f64>,
     /// The LFS ensemble's probability of a flight below 1.5 m.
     pub predicted_p_fail: Option<f64>,
     /// Flown minimum distance (competition definition), metres.
@@ -99,7 +99,7 @@ impl Report {
             flights: (self.flights.iter())
                 .filter_map(|f| {
                     Some(crate::plot::suite::Point {
-                        predicted_m: f.predicted_min_distance,
+                        predicted_m: f.predicted_min_distance?,
                         flown_m: f.min_distance?,
                         highlighted: f.reported_as.is_some(),
                     })

@@ -216,12 +216,12 @@ fn flights_table(md: &mut String, r: &Report) {
     for f in &r.flights {
         let _ = writeln!(
             md,
-            "| {} | {:.3} | {} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {:.1} | {} | {:.3} | {} |",
             match f.attempt {
                 0 => f.candidate.to_string(),
                 a => format!("{} (flight {})", f.candidate, a + 1),
             },
-            f.predicted_min_distance,
+            opt(f.predicted_min_distance),
             opt(f.predicted_p_fail),
             opt(f.min_distance),
             opt(f.min_distance_raw),

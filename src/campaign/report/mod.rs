@@ -1,13 +1,11 @@
 //! What a campaign hands its user: each test's verdict over its flights ([`verdicts`]), the suite's numbers
 //! ([`suite`]), the per-backend figures ([`backends`]), the report as data ([`document`]), the written tests and report.json ([`outputs`]), report.md
-//! ([`user_report`] opens it for people, [`markdown`] adds the appendix), and the competition's metrics for
-//! any folder of flown tests ([`folder_score`]); what the suite is expected to earn in 2026 ([`expected`]).
+//! ([`user_report`] opens it for people, [`markdown`] adds the appendix), and what the suite is expected to earn in 2026 ([`expected`]).
 
 pub mod backends;
 pub mod cp_tests;
 pub mod document;
 pub mod expected;
-pub mod folder_score;
 pub mod markdown;
 pub mod outputs;
 pub mod suite;

@@ -12,7 +12,7 @@ use crate::campaign::report::user_report::{self, Invocation};
 use crate::campaign::report::verdicts::{TestVerdict, verdicts};
 use crate::campaign::report::{backends, expected::score as expected_score};
 use crate::campaign::store::journal::{FlightRecord, Journal};
-use crate::campaign::store::journal_check::inside_bytes;
+use crate::campaign::store::trust::inside_bytes;
 use crate::io::{write_atomic, write_json};
 use crate::judge::{ClosestApproach, judge_in_frame, points, test_score};
 use crate::model::{ModelError, Spelling, TestCase, Trajectory};
@@ -135,8 +135,8 @@ fn reported_flight(r: &FlightRecord, reported: &[(CandidateId, String)]) -> Repo
     ReportedFlight {
         candidate: r.candidate,
         attempt: r.attempt,
-        predicted_min_distance: r.prediction.min_distance,
-        predicted_p_fail: r.prediction.p_fail,
+        predicted_min_distance: r.predicted_m(),
+        predicted_p_fail: r.prediction.as_ref().and_then(|p| p.p_fail),
         min_distance: r.flown.min_distance,
         min_distance_raw: r.flown.min_distance_raw,
         status: r.flown.status,

@@ -80,7 +80,7 @@ pub struct SuiteSummary {
 fn quarter_error(records: &[FlightRecord], last: bool) -> Option<f64> {
     let e: Vec<f64> = records
         .iter()
-        .filter_map(|r| r.flown.min_distance.map(|d| (d - r.prediction.min_distance).abs()))
+        .filter_map(|r| Some((r.flown.min_distance? - r.predicted_m()?).abs()))
         .collect();
     let q = e.len().div_ceil(4);
     if q == 0 {
@@ -97,7 +97,7 @@ pub(in crate::campaign) fn summary(records: &[FlightRecord], tests: &[TestVerdic
     let firsts = first_flights(records);
     let predicted_fail: Vec<&FlightRecord> = firsts
         .iter()
-        .filter(|r| r.prediction.min_distance < FAIL_BELOW_M)
+        .filter(|r| r.predicted_m().is_some_and(|p| p < FAIL_BELOW_M))
         .collect();
     let precision = (!predicted_fail.is_empty()).then(|| {
         predicted_fail
@@ -108,11 +108,11 @@ pub(in crate::campaign) fn summary(records: &[FlightRecord], tests: &[TestVerdic
     });
     let errors: Vec<f64> = firsts
         .iter()
-        .filter_map(|r| r.flown.min_distance.map(|d| (d - r.prediction.min_distance).abs()))
+        .filter_map(|r| Some((r.flown.min_distance? - r.predicted_m()?).abs()))
         .collect();
     let (p_fail, failed): (Vec<f64>, Vec<bool>) = firsts
         .iter()
-        .filter_map(|r| Some((r.prediction.p_fail?, r.flown.min_distance? < FAIL_BELOW_M)))
+        .filter_map(|r| Some((r.prediction.as_ref()?.p_fail?, r.flown.min_distance? < FAIL_BELOW_M)))
         .unzip();
     let confirmed = || tests.iter().filter(|t| t.confirmed);
     let failing_obstacles: Vec<Vec<Obstacle>> = confirmed().map(|t| t.obstacles.clone()).collect();
@@ -150,7 +150,7 @@ pub(in crate::campaign) fn summary(records: &[FlightRecord], tests: &[TestVerdic
 fn spearman_first(firsts: &[FlightRecord]) -> Option<f64> {
     let pairs: Vec<(f64, f64)> = firsts
         .iter()
-        .filter_map(|r| Some((r.prediction.min_distance, r.flown.min_distance?)))
+        .filter_map(|r| Some((r.predicted_m()?, r.flown.min_distance?)))
         .collect();
     aggregate(&pairs).spearman
 }

@@ -169,7 +169,7 @@ fn no_failure_names_the_closest_flight_and_suggests_a_larger_budget() {
     r.flights.push(ReportedFlight {
         candidate: CandidateId(0),
         attempt: 0,
-        predicted_min_distance: 1.0,
+        predicted_min_distance: Some(1.0),
         predicted_p_fail: None,
         min_distance: Some(2.5),
         min_distance_raw: Some(2.5),

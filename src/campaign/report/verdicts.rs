@@ -144,11 +144,23 @@ pub fn score_sum<'a>(tests: impl Iterator<Item = &'a TestVerdict>) -> f64 {
 /// The tests that failed, best first, for report.md: the written ones, then those that were not.
 pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
     use std::fmt::Write as _;
+    if tests.is_empty() {
+        let _ = writeln!(
+            md,
+            "## Tests that failed\n\nNone: no flight came closer than {} m to a box.\n",
+            crate::model::competition::FAIL_BELOW_M
+        );
+        return;
+    }
+    let flown = if confirm > 1 {
+        format!("A failing test was flown again until the majority of {confirm} flights was settled (`--confirm`).")
+    } else {
+        "Each test was flown once (`--confirm 1`: a failing test is not flown again).".to_string()
+    };
     let _ = writeln!(
         md,
-        "## Tests that failed\n\nA failing test was flown again until the majority of {confirm} flights was \
-         settled (`--confirm`). Ranked by the expected 2026 test score (expected points of a flight, from its \
-         flights, its neighbours' and the calibrated prediction, per expected minute); written when the 10 % \
+        "## Tests that failed\n\n{flown} Ranked by the expected 2026 test score (expected points of a flight, from \
+         its flights, its neighbours' and the calibrated prediction, per expected minute); written when the 10 % \
          bound of its expected points is above zero and its flown trajectory copies no better written test's.\n"
     );
     let _ = writeln!(
@@ -195,6 +207,14 @@ pub fn markdown(md: &mut String, tests: &[TestVerdict], confirm: usize) {
 mod tests {
     use super::*;
     use crate::campaign::store::journal::test_record;
+
+    #[test]
+    fn no_failing_test_is_said_in_words_rather_than_as_an_empty_table() {
+        let mut md = String::new();
+        markdown(&mut md, &[], 1);
+        assert!(md.contains("None: no flight came closer than 1.5 m"), "{md}");
+        assert!(!md.contains("|---|") && !md.contains("majority of 1 flights"), "{md}");
+    }
 
     fn flight(candidate: u64, attempt: u32, d: f64, time_s: f64) -> FlightRecord {
         let mut r = FlightRecord {

@@ -1,6 +1,8 @@
 //! The settings an evaluation flies a suite with: the mode, the judge, the seed, the vehicles and every
-//! flight's settings. A suite that is a campaign's folder is flown as the campaign was (its mode, its mock,
-//! its judge), unless a flag asks otherwise; a backend asked for replaces the suite's.
+//! flight's settings, by section as a campaign holds them. A suite that is a campaign's folder is flown as the
+//! campaign was (its mode, its mock, its judge), unless a flag asks otherwise; a backend asked for replaces the
+//! suite's. An evaluation keeps its settings, and a later run of it is refused a fixed setting asked otherwise
+//! ([`super::resume`]), so one test's runs never mix two modes or two vehicles.
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -11,20 +13,28 @@ use super::keys_run::{Flight, Mock};
 use super::request::Request;
 use super::resolve::setup_of;
 use super::stored::{CampaignSettings, FleetSettings};
-use super::{Resume, all};
+use super::{Resume, Setting, all};
 use crate::bridge::FlyMode;
 use crate::judge::Judge;
 
-/// What an evaluation's flights fly with.
+/// The `[campaign]` settings an evaluation has a use for.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct EvaluationSettings {
+pub struct Flying {
     /// How the flights avoid the boxes.
     pub mode: FlyMode,
     /// The judge edition.
     pub judge: Judge,
     /// Seed of the embedded mocks' gusts.
     pub seed: u64,
+}
+
+/// What an evaluation's flights fly with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvaluationSettings {
+    /// The mode, the judge, the seed.
+    pub campaign: Flying,
     /// What flies them.
     pub vehicles: Vehicles,
     /// The embedded mocks.
@@ -35,6 +45,12 @@ pub struct EvaluationSettings {
     pub output: Output,
 }
 
+/// Whether an evaluation keeps setting `s` (the others are a campaign's alone).
+pub fn kept(s: &Setting) -> bool {
+    matches!(s.section, "vehicles" | "mock" | "flight" | "output")
+        || (s.section == "campaign" && matches!(s.key, "mode" | "judge" | "seed"))
+}
+
 impl EvaluationSettings {
     /// What `request` asks, laid over `suite`'s campaign settings when the suite is a campaign's folder (else
     /// over the defaults).
@@ -43,9 +59,11 @@ impl EvaluationSettings {
         let setup = setup_of(request);
         let Some(suite) = suite else {
             return Ok(Self {
-                mode: a.campaign.mode(),
-                judge: a.campaign.judge(),
-                seed: a.campaign.seed(),
+                campaign: Flying {
+                    mode: a.campaign.mode(),
+                    judge: a.campaign.judge(),
+                    seed: a.campaign.seed(),
+                },
                 vehicles: a.vehicles.resolve(&setup)?,
                 mock: a.mock.resolve(&setup)?,
                 flight: a.flight.resolve(&setup)?,
@@ -62,9 +80,11 @@ impl EvaluationSettings {
         };
         let c = &suite.campaign;
         Ok(Self {
-            mode: a.campaign.mode.unwrap_or(c.mode),
-            judge: a.campaign.judge.unwrap_or(c.judge),
-            seed: a.campaign.seed.unwrap_or(c.seed),
+            campaign: Flying {
+                mode: a.campaign.mode.unwrap_or(c.mode),
+                judge: a.campaign.judge.unwrap_or(c.judge),
+                seed: a.campaign.seed.unwrap_or(c.seed),
+            },
             vehicles: as_asked_again(&vehicles, &a.vehicles.resolve(&setup)?, "vehicles")?,
             mock: as_asked_again(&suite.mock.overridden(&a.mock), &a.mock.resolve(&setup)?, "mock")?,
             flight: as_asked_again(
@@ -79,9 +99,9 @@ impl EvaluationSettings {
     /// What the fleet needs of these settings.
     pub fn flights(&self) -> FleetSettings<'_> {
         FleetSettings {
-            mode: self.mode,
-            judge: self.judge,
-            seed: self.seed,
+            mode: self.campaign.mode,
+            judge: self.campaign.judge,
+            seed: self.campaign.seed,
             vehicles: &self.vehicles,
             mock: &self.mock,
             flight: &self.flight,

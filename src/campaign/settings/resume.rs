@@ -22,38 +22,47 @@ pub fn resumed(folder: &Path, request: &Request) -> Result<CampaignSettings, Str
     let path = folder.join("campaign.json");
     let stored = CampaignSettings::load(folder).map_err(|e| e.to_string())?;
     let stored_json = serde_json::to_value(&stored).map_err(|e| e.to_string())?;
-    let given: Vec<&Given> = request
-        .given
-        .iter()
-        .filter(|g| !same_path(g, &stored_json, request))
-        .collect();
+    let merged = relaid(&stored_json, request, |_| true)?;
+    let settings = CampaignSettings::resolve(&merged)?;
+    let wanted = serde_json::to_value(&settings).map_err(|e| e.to_string())?;
+    refuse_conflicts(&stored_json, &wanted, request, &path)?;
+    Ok(settings)
+}
+
+/// `request` laid over settings stored as `stored` (JSON by section, the settings `keep` says it holds):
+/// every fixed or inherited setting as stored unless asked now, the others as asked now or by default.
+pub fn relaid(stored: &Value, request: &Request, keep: fn(&Setting) -> bool) -> Result<Request, String> {
     let mut flags: Vec<(&'static Setting, toml::Value)> = Vec::new();
-    for s in all().filter(|s| s.resume != Resume::Asked) {
-        if let Some(v) = at(&stored_json, &s.toml_key()).filter(|v| !v.is_null()) {
+    for s in all().filter(|s| keep(s) && s.resume != Resume::Asked) {
+        if let Some(v) = at(stored, &s.toml_key()).filter(|v| !v.is_null()) {
             flags.push((
                 s,
                 toml::Value::try_from(v).map_err(|e| format!("{}: {e}", s.toml_key()))?,
             ));
         }
     }
-    for g in &given {
+    for g in request.given.iter().filter(|g| !same_path(g, stored, request)) {
         let s = g.setting;
         flags.retain(|(f, _)| f.toml_key() != s.toml_key());
         if let Some(v) = asked_value(request, s) {
             flags.push((s, v));
         }
     }
-    let merged = Request::new(&Loaded::default(), &flags)?;
-    let settings = CampaignSettings::resolve(&merged)?;
-    let wanted = serde_json::to_value(&settings).map_err(|e| e.to_string())?;
-    let lines: Vec<String> = (given.iter())
-        .filter(|g| g.setting.resume == Resume::Fixed)
-        .filter_map(|g| conflict(g, &stored_json, &wanted, &path))
+    Request::new(&Loaded::default(), &flags)
+}
+
+/// Refuses every fixed setting `request` gives whose resolved value in `wanted` differs from `stored` (both
+/// JSON by section), one line each, naming how it was asked and the stored value in `path`.
+pub fn refuse_conflicts(stored: &Value, wanted: &Value, request: &Request, path: &Path) -> Result<(), String> {
+    let lines: Vec<String> = (request.given.iter())
+        .filter(|g| g.setting.resume == Resume::Fixed && !same_path(g, stored, request))
+        .filter_map(|g| conflict(g, stored, wanted, path))
         .collect();
-    if !lines.is_empty() {
-        return Err(lines.join("\n"));
+    if lines.is_empty() {
+        Ok(())
+    } else {
+        Err(lines.join("\n"))
     }
-    Ok(settings)
 }
 
 /// The TOML value `request` asks for `s`.

@@ -24,9 +24,10 @@ pub struct FlightRecord {
     pub attempt: u32,
     /// Its obstacles.
     pub obstacles: Vec<Obstacle>,
-    /// The prediction it was flown on. Read back from the journal it has the journaled fields (distance,
-    /// flight time, failure probability, the LFS's own distance), not the LFS's status or expected points.
-    pub prediction: LfsPrediction,
+    /// The prediction it was flown on (`None`: flown unscreened, or as written). Read back from the journal
+    /// it has the journaled fields (distance, flight time, failure probability, the LFS's own distance), not
+    /// the LFS's status or expected points.
+    pub prediction: Option<LfsPrediction>,
     /// How the flight ended, as the vehicle reported it.
     pub flown: Flown,
     /// The vehicle (MAVLink URL or `mock`) that flew it.
@@ -38,6 +39,11 @@ pub struct FlightRecord {
 }
 
 impl FlightRecord {
+    /// The LFS's predicted minimum distance, metres, if it predicted the flight.
+    pub fn predicted_m(&self) -> Option<f64> {
+        self.prediction.as_ref().map(|p| p.min_distance)
+    }
+
     /// Whether the flight counts against the budget (and is a flight the campaign learns from and reports).
     pub fn charged(&self) -> bool {
         self.flown.status.charged()
@@ -290,10 +296,10 @@ pub(crate) fn test_record(candidate: u64, raw: f64, flown: Option<f64>) -> Fligh
         candidate: CandidateId(candidate),
         attempt: 0,
         obstacles: Vec::new(),
-        prediction: LfsPrediction {
+        prediction: Some(LfsPrediction {
             raw_min_distance: Some(raw),
             ..LfsPrediction::point(CandidateId(candidate), raw, 60.0, String::new())
-        },
+        }),
         flown: Flown {
             min_distance: flown,
             min_distance_raw: flown,
@@ -316,7 +322,7 @@ mod tests {
             candidate: CandidateId(candidate),
             attempt: 0,
             obstacles: vec![Obstacle::new(2.0, 2.0, 20.0, 0.0, 20.0, 0.0)],
-            prediction: LfsPrediction::point(CandidateId(candidate), 0.5, 40.0, String::new()),
+            prediction: Some(LfsPrediction::point(CandidateId(candidate), 0.5, 40.0, String::new())),
             flown: Flown {
                 min_distance: Some(1.0),
                 min_distance_raw: Some(0.9),

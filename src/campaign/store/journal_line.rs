@@ -3,7 +3,9 @@
 //! The record holds the candidate's prediction and the vehicle's outcome as they are; the line keeps the
 //! shape journals have always had (prediction fields prefixed `predicted_`, the vehicle, trajectory and wall
 //! time between the outcome and its Collision Prevention fields, in this order), so `serde(flatten)` cannot
-//! write it and the mapping is by hand, here.
+//! write it and the mapping is by hand, here. A flight flown without a prediction is spelled, as journals
+//! always spelled it, as a zero distance predicted over zero seconds: no simulated flight takes 0 s, so the
+//! reader tells it apart; the records themselves hold `None`.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -49,15 +51,15 @@ struct Line<'a> {
 
 impl Serialize for FlightRecord {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let (p, f) = (&self.prediction, &self.flown);
+        let (p, f) = (self.prediction.as_ref(), &self.flown);
         Line {
             candidate: self.candidate,
             attempt: self.attempt,
             obstacles: Cow::Borrowed(&self.obstacles),
-            predicted_min_distance: p.min_distance,
-            predicted_flight_time_s: p.flight_time_s,
-            predicted_p_fail: p.p_fail,
-            predicted_raw_min_distance: p.raw_min_distance,
+            predicted_min_distance: p.map_or(0.0, |p| p.min_distance),
+            predicted_flight_time_s: p.map_or(0.0, |p| p.flight_time_s),
+            predicted_p_fail: p.and_then(|p| p.p_fail),
+            predicted_raw_min_distance: p.and_then(|p| p.raw_min_distance),
             min_distance: f.min_distance,
             min_distance_raw: f.min_distance_raw,
             status: f.status,
@@ -78,7 +80,8 @@ impl<'de> Deserialize<'de> for FlightRecord {
     /// The prediction read back has the journaled fields only: no LFS status (empty) nor expected points.
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         let l = Line::deserialize(deserializer)?;
-        let prediction = LfsPrediction {
+        let predicted = l.predicted_flight_time_s > 0.0 || l.predicted_min_distance != 0.0;
+        let prediction = predicted.then(|| LfsPrediction {
             p_fail: l.predicted_p_fail,
             raw_min_distance: l.predicted_raw_min_distance,
             ..LfsPrediction::point(
@@ -87,7 +90,7 @@ impl<'de> Deserialize<'de> for FlightRecord {
                 l.predicted_flight_time_s,
                 String::new(),
             )
-        };
+        });
         let flown = Flown {
             status: l.status,
             min_distance: l.min_distance,

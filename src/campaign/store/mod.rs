@@ -1,8 +1,8 @@
-//! What a campaign keeps on disk: its folder and the lock that gives it one writer, and the journal of every
-//! flight.
+//! What a campaign keeps on disk: its folder and the lock that gives it one writer, the journal of every
+//! flight, and the trust boundary every folder read back goes through ([`trust`]).
 
 pub mod folder;
 pub mod journal;
-pub mod journal_check;
 mod journal_line;
 mod journal_memory;
+pub mod trust;

@@ -97,6 +97,13 @@ const STOP_WITHIN: Duration = Duration::from_secs(20);
 
 /// The async runtime a campaign's vehicles use, and the flag Ctrl-C, SIGTERM or SIGHUP raises to stop it.
 pub(super) fn runtime_stopped_by_signals() -> anyhow::Result<(tokio::runtime::Runtime, Arc<AtomicBool>)> {
+    runtime_stopped_by_signals_resuming("resume with --resume")
+}
+
+/// [`runtime_stopped_by_signals`] for a command that resumes otherwise: `resume` says how.
+pub(super) fn runtime_stopped_by_signals_resuming(
+    resume: &'static str,
+) -> anyhow::Result<(tokio::runtime::Runtime, Arc<AtomicBool>)> {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -104,7 +111,7 @@ pub(super) fn runtime_stopped_by_signals() -> anyhow::Result<(tokio::runtime::Ru
         .context("starting the async runtime")?;
     let stop = Arc::new(AtomicBool::new(false));
     let signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
-    runtime.spawn(watch_ctrl_c(stop.clone(), signals));
+    runtime.spawn(watch_ctrl_c(stop.clone(), signals, resume));
     Ok((runtime, stop))
 }
 
@@ -115,11 +122,11 @@ const EXIT_INTERRUPTED: i32 = 130;
 /// journaled `interrupted`, not charged, flown first on resume; runner jobs are stopped). A second one, or
 /// [`STOP_WITHIN`] without stopping, exits at once: the journal keeps every finished flight, and a flight cut
 /// mid-record is a torn line the next resume drops.
-async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
+async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals, resume: &'static str) {
     let first = signals.next().await;
     eprintln!(
         "{first}: landing the vehicles in flight, keeping every finished flight (stops within {} s; Ctrl-C again \
-         to exit now); resume with --resume",
+         to exit now); {resume}",
         STOP_WITHIN.as_secs()
     );
     stop.store(true, Ordering::SeqCst);
@@ -128,7 +135,7 @@ async fn watch_ctrl_c(stop: Arc<AtomicBool>, mut signals: StopSignals) {
             eprintln!("second {second}: exiting now; flights in the air are flown again on resume");
         }
         () = tokio::time::sleep(STOP_WITHIN) => {
-            eprintln!("did not stop within {} s: exiting now; resume with --resume", STOP_WITHIN.as_secs());
+            eprintln!("did not stop within {} s: exiting now; {resume}", STOP_WITHIN.as_secs());
         }
     }
     std::process::exit(EXIT_INTERRUPTED);

@@ -4,6 +4,7 @@
 //! `dtw_distance` (`docs/evaluate.md`). Frame: `x` North, `y` East, `z` up, metres; time in seconds.
 
 pub mod barycenter;
+pub mod bounded;
 pub mod dtw;
 pub mod landing;
 pub mod lbfgs;
@@ -38,24 +39,31 @@ fn series(t: &Trajectory, dim: usize, f: impl Fn(&Sample) -> Vec<f64>) -> Series
 
 /// The average trajectory of a test's flights (each already [`prepare`]d): the soft-DTW barycenter of
 /// their positions, of their times and of their headings (0 where unknown; the average has a heading only
-/// if every flight has one), then the landing cut. `None` without flights or with an empty one.
+/// if every flight has one), then the landing cut; one flight is its own average, and long flights are
+/// averaged within the bounds of [`bounded`]. Its times never run backwards (the barycenter of flights of
+/// different lengths can wobble back a little: each time is at least the one before). `None` without
+/// flights or with an empty one.
 pub fn average(flights: &[Trajectory]) -> Option<Trajectory> {
     let opt = lbfgs::Options::default();
     let bary = |dim: usize, f: &dyn Fn(&Sample) -> Vec<f64>| {
         let all: Vec<Series> = flights.iter().map(|t| series(t, dim, f)).collect();
-        barycenter::soft_dtw_barycenter(&all, AVERAGE_GAMMA, opt)
+        bounded::barycenter(&all, AVERAGE_GAMMA, opt)
     };
     let xyz = bary(3, &|s| vec![s.x, s.y, s.z])?;
     let time = bary(1, &|s| vec![s.t_s])?;
     let with_heading = flights.iter().all(|t| t.samples.iter().all(|s| s.r.is_some()));
     let heading = bary(1, &|s| vec![s.r.unwrap_or(0.0)])?;
+    let mut latest = f64::NEG_INFINITY;
     let samples: Vec<Sample> = (0..xyz.len())
-        .map(|i| Sample {
-            t_s: time.values[i],
-            x: xyz.point(i)[0],
-            y: xyz.point(i)[1],
-            z: xyz.point(i)[2],
-            r: with_heading.then(|| heading.values[i]),
+        .map(|i| {
+            latest = latest.max(time.values[i]);
+            Sample {
+                t_s: latest,
+                x: xyz.point(i)[0],
+                y: xyz.point(i)[1],
+                z: xyz.point(i)[2],
+                r: with_heading.then(|| heading.values[i]),
+            }
         })
         .collect();
     Some(cut_landed(Trajectory::new(samples)))
@@ -63,7 +71,7 @@ pub fn average(flights: &[Trajectory]) -> Option<Trajectory> {
 
 /// Replaces the samples from the landing cut on by their mean (unchanged without a cut).
 pub fn cut_landed(t: Trajectory) -> Trajectory {
-    let Some(cut) = landing::landing_cut(&points(&t)) else {
+    let Some(cut) = bounded::cut(&points(&t)) else {
         return t;
     };
     let mut samples = t.samples;

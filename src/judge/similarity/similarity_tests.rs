@@ -74,3 +74,14 @@ fn headings_survive_only_when_every_flight_has_them() {
     f.samples[3].r = None;
     assert!(average(&[f]).unwrap().samples.iter().all(|s| s.r.is_none()));
 }
+
+#[test]
+fn the_average_of_flights_of_different_lengths_never_runs_back_in_time() {
+    // The barycenter of these times alone runs back by 166 s.
+    for (a, b) in [(60.0, 300.0)] {
+        let avg = average(&[prepare(&flight(0.0, a)), prepare(&flight(1.0, b))]).unwrap();
+        for w in avg.samples.windows(2) {
+            assert!(w[1].t_s >= w[0].t_s, "{a} s and {b} s: {} after {}", w[1].t_s, w[0].t_s);
+        }
+    }
+}

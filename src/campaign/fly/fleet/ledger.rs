@@ -45,7 +45,7 @@ impl Ledger {
     /// (not of their landings), and the next wave may take off.
     pub(super) fn end_wave(&mut self) {
         let mut again = std::mem::take(&mut self.wave_again);
-        again.sort_by_key(|j| (j.prediction.candidate, j.tally.next_attempt));
+        again.sort_by_key(|j| (j.candidate, j.tally.next_attempt));
         for job in again.into_iter().rev() {
             self.queue.push_front(job);
         }

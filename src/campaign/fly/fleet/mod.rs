@@ -236,7 +236,7 @@ impl<'a> Fleet<'a> {
     pub fn busy(&self) -> Vec<(CandidateId, Vec<Obstacle>)> {
         let l = self.lock();
         let mut busy: Vec<(CandidateId, Vec<Obstacle>)> = (l.queue.iter())
-            .map(|j| (j.prediction.candidate, j.test.obstacles.clone()))
+            .map(|j| (j.candidate, j.test.obstacles.clone()))
             .chain(l.airborne.iter().cloned())
             .chain(l.replayed.iter().map(|(_, r)| (r.candidate, r.obstacles.clone())))
             .collect();

@@ -110,7 +110,7 @@ impl Replay {
 }
 
 fn key(job: &Job) -> (CandidateId, u32) {
-    (job.prediction.candidate, job.tally.next_attempt)
+    (job.candidate, job.tally.next_attempt)
 }
 
 #[cfg(test)]
@@ -130,10 +130,8 @@ mod tests {
 
     fn job(candidate: u64) -> Job {
         let case = TestCase::load(std::path::Path::new("missions/mission2.yaml")).unwrap();
-        Job::new(
-            LfsPrediction::point(CandidateId(candidate), 1.0, 1.0, "landed".into()),
-            case,
-        )
+        let p = LfsPrediction::point(CandidateId(candidate), 1.0, 1.0, "landed".into());
+        Job::new(CandidateId(candidate), Some(p), case)
     }
 
     #[test]
@@ -147,9 +145,9 @@ mod tests {
         assert_eq!(replay.pending(), 2);
         let mut queue: VecDeque<Job> = [3, 5, 7].into_iter().map(job).collect();
         let (first, r) = replay.take_next(&mut queue).unwrap();
-        assert_eq!((first.prediction.candidate.0, r.candidate.0), (7, 7));
+        assert_eq!((first.candidate.0, r.candidate.0), (7, 7));
         let (second, _) = replay.take_next(&mut queue).unwrap();
-        assert_eq!(second.prediction.candidate.0, 5);
+        assert_eq!(second.candidate.0, 5);
         assert!(
             replay.take_next(&mut queue).is_none(),
             "the interrupted flight is flown, not replayed"

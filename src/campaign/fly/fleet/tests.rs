@@ -115,7 +115,8 @@ pub(in crate::campaign) fn jobs(n: u64) -> Vec<Job> {
     (0..n)
         .map(|i| {
             Job::new(
-                LfsPrediction::point(CandidateId(i), 0.5, 40.0, "landed".into()),
+                CandidateId(i),
+                Some(LfsPrediction::point(CandidateId(i), 0.5, 40.0, "landed".into())),
                 base.with_obstacles(vec![Obstacle::new(2.0, 2.0, 20.0, i as f64, 20.0, 0.0)]),
             )
         })

@@ -18,7 +18,7 @@ impl Fleet<'_> {
     /// stops, or the vehicle is dropped.
     pub(super) fn work(&self, index: usize, vehicle: &mut dyn Vehicle, mut rejected: usize) {
         while let Some(job) = self.next_job() {
-            let rel = trajectory_name(job.prediction.candidate, job.tally.next_attempt);
+            let rel = trajectory_name(job.candidate, job.tally.next_attempt);
             let t0 = Instant::now();
             let result =
                 fly_counting_rejections(vehicle, &job.test, &self.folder.join(&rel), self.cancel, &mut rejected);
@@ -50,7 +50,7 @@ impl Fleet<'_> {
     /// Charges and journals a landed flight (the vehicle busy for `busy_s`), queueing its test's next flight first when it is to be confirmed;
     /// false when the journal could not be written (the worker stops).
     fn landed(&self, job: &Job, record: &FlightRecord, busy_s: f64) -> bool {
-        let (round, candidate) = (job.round, job.prediction.candidate);
+        let (round, candidate) = (job.round, job.candidate);
         let mut l = self.lock();
         l.use_.busy_s += busy_s;
         l.last_landing = Some(Instant::now());
@@ -96,7 +96,7 @@ impl Fleet<'_> {
         let mut l = self.lock();
         l.use_.busy_s += busy_s;
         l.last_landing = Some(Instant::now());
-        l.airborne.retain(|(c, _)| *c != job.prediction.candidate);
+        l.airborne.retain(|(c, _)| *c != job.candidate);
         l.queue.push_front(job);
         if l.waves && l.airborne.is_empty() {
             l.end_wave();
@@ -134,7 +134,7 @@ impl Fleet<'_> {
                 && let Some(job) = l.queue.pop_front()
             {
                 l.wave_taken += 1;
-                l.airborne.push((job.prediction.candidate, job.test.obstacles.clone()));
+                l.airborne.push((job.candidate, job.test.obstacles.clone()));
                 l.first_takeoff.get_or_insert_with(Instant::now);
                 return Some(job);
             }

@@ -111,8 +111,12 @@ impl<'a> Flights<'a> {
     /// The campaign's charged flights.
     pub fn new(records: &'a [FlightRecord]) -> Self {
         let predicted_flown = (records.iter())
-            .filter(|r| r.prediction.min_distance.is_finite())
-            .filter_map(|r| Some((r.candidate, (r.prediction.min_distance, r.flown.min_distance?))))
+            .filter_map(|r| {
+                Some((
+                    r.candidate,
+                    (r.predicted_m().filter(|d| d.is_finite())?, r.flown.min_distance?),
+                ))
+            })
             .collect();
         Self {
             records,
@@ -133,7 +137,9 @@ impl<'a> Flights<'a> {
             .filter(|(c, _)| *c != candidate)
             .map(|(_, pair)| *pair)
             .collect();
-        let predicted = (own.iter().min_by_key(|r| r.attempt)).map_or(f64::NAN, |r| r.prediction.min_distance);
+        // No prediction (a test flown unscreened): NaN, and the prior leans on the flights alone.
+        let first = own.iter().min_by_key(|r| r.attempt);
+        let predicted = first.and_then(|r| r.predicted_m()).unwrap_or(f64::NAN);
         Evidence {
             own: counts(own.iter().filter_map(|r| r.flown.min_distance)),
             neighbours: counts(neighbours),
@@ -149,7 +155,7 @@ impl<'a> Flights<'a> {
             .map(|r| r.flown.flight_time_s)
             .collect();
         let seconds = if flown.is_empty() {
-            own.first().map_or(0.0, |r| r.prediction.flight_time_s)
+            (own.first().and_then(|r| r.prediction.as_ref())).map_or(0.0, |p| p.flight_time_s)
         } else {
             flown.iter().sum::<f64>() / flown.len() as f64
         };

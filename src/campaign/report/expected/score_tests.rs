@@ -30,7 +30,7 @@ fn aimed(records: &[FlightRecord]) -> (Vec<TestVerdict>, SuiteExpectation) {
 fn tests_rank_by_expected_score_and_write_only_those_expected_to_earn() {
     // 3 was predicted to pass.
     let predicted_pass = |mut r: FlightRecord| {
-        r.prediction.min_distance = 2.0;
+        r.prediction.as_mut().expect("predicted").min_distance = 2.0;
         r
     };
     let records = [
@@ -128,7 +128,7 @@ fn the_calibrated_prediction_and_neighbours_move_the_estimate() {
     let mut records = vec![alone[0].clone()];
     for c in 2..5 {
         let mut r = flight(c, 0, 3.0, 60.0);
-        r.prediction.min_distance = 1.0;
+        r.prediction.as_mut().expect("predicted").min_distance = 1.0;
         records.push(r);
     }
     let (tests, _) = aimed(&records);

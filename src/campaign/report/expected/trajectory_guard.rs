@@ -10,7 +10,7 @@ use std::path::Path;
 
 use crate::campaign::report::expected::expected_points::normal_cdf;
 use crate::campaign::store::journal::FlightRecord;
-use crate::campaign::store::journal_check::inside_bytes;
+use crate::campaign::store::trust::inside_bytes;
 use crate::judge::similarity::{average, path_distance, prepare};
 use crate::model::Trajectory;
 

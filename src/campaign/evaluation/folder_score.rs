@@ -4,9 +4,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::FlownTest;
+use super::folder::{FolderFlights, read_folder};
 use crate::geometry::union_iou;
 use crate::judge::{Judge, diversity, judge_flight, points, test_score};
-use crate::model::{ModelError, Obstacle, TestCase, load_flight};
+use crate::model::{ModelError, Obstacle};
 
 /// Tests whose footprints overlap this much (IoU) count as duplicates of an earlier one.
 pub const DUPLICATE_IOU: f64 = 0.999;
@@ -62,25 +64,19 @@ pub struct SuiteScore {
     pub diversity: Option<f64>,
 }
 
-/// Scores one test from its runs' flights.
-pub fn score_test(
-    test: &TestCase,
-    test_path: &Path,
-    flights: &[PathBuf],
-    judge: Judge,
-) -> Result<TestScore, ModelError> {
+/// Scores one test from its runs' flights (each file with its trajectory).
+pub fn score_test(test: &FlownTest, judge: Judge) -> Result<TestScore, ModelError> {
     let mut runs = Vec::new();
-    for f in flights {
-        let trajectory = load_flight(f)?;
-        let Some(verdict) = judge_flight(&trajectory, &test.obstacles, judge) else {
+    for (file, trajectory) in &test.flights {
+        let Some(verdict) = judge_flight(trajectory, &test.test.obstacles, judge) else {
             return Err(ModelError::field(
-                test_path,
+                &test.path,
                 "simulation.obstacles",
                 "no obstacles to measure against",
             ));
         };
         runs.push(RunScore {
-            file: f.clone(),
+            file: file.clone(),
             min_distance: verdict.min_distance,
             min_distance_raw: verdict.min_distance_raw,
             flight_time_s: trajectory.duration_s(),
@@ -89,60 +85,15 @@ pub fn score_test(
     }
     let distances: Vec<f64> = runs.iter().map(|r| r.min_distance).collect();
     let times: Vec<f64> = runs.iter().map(|r| r.flight_time_s).collect();
+    let k = test.test.obstacles.len();
     Ok(TestScore {
-        test: test_path.to_path_buf(),
-        obstacles: test.obstacles.len(),
-        score: test_score(&distances, &times, test.obstacles.len()),
+        test: test.path.clone(),
+        obstacles: k,
+        score: test_score(&distances, &times, k),
         failed: distances.iter().any(|d| *d < crate::model::competition::FAIL_BELOW_M),
         runs,
         duplicate_of: None,
     })
-}
-
-/// The flights of `test_N.yaml` in its folder: `test_N.csv`, `test_N.ulg`, and runs named `test_N-*.csv|ulg`.
-pub fn flights_of(test_path: &Path) -> Vec<PathBuf> {
-    let (Some(dir), Some(stem)) = (test_path.parent(), test_path.file_stem().and_then(|s| s.to_str())) else {
-        return Vec::new();
-    };
-    let Ok(entries) = std::fs::read_dir(if dir.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        dir
-    }) else {
-        return Vec::new();
-    };
-    let mut out: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            let ext_ok = p
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e == "csv" || e == "ulg");
-            let s = p.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-            ext_ok && (s == stem || s.strip_prefix(stem).is_some_and(|rest| rest.starts_with('-')))
-        })
-        .collect();
-    out.sort();
-    out
-}
-
-/// The tests of a folder, `test_0.yaml`, `test_1.yaml`, ... in numeric order (other YAML files are ignored).
-pub fn tests_in(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
-    let mut tests: Vec<(u64, PathBuf)> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter_map(|p| {
-            let n = p
-                .file_name()?
-                .to_str()?
-                .strip_prefix("test_")?
-                .strip_suffix(".yaml")?
-                .parse()
-                .ok()?;
-            Some((n, p))
-        })
-        .collect();
-    tests.sort();
-    Ok(tests.into_iter().map(|(_, p)| p).collect())
 }
 
 /// Scores a suite: marks duplicates and sums the failure score.
@@ -169,30 +120,57 @@ pub fn score_suite(mut tests: Vec<TestScore>, obstacles: &[Vec<Obstacle>], judge
     }
 }
 
-/// The diversity of the tests that failed, as the competition defines it; rounding noise of identical layouts
-/// (1 - 1.0000000000000004) reads 0.
+/// The diversity of the tests that failed, as the competition defines it, over the tests counted (a duplicate
+/// is not: it would pull the diversity down for a test the failure score leaves out); rounding noise of
+/// identical layouts (1 - 1.0000000000000004) reads 0.
 fn failing_diversity(tests: &[TestScore], obstacles: &[Vec<Obstacle>]) -> Option<f64> {
     let failing: Vec<Vec<Obstacle>> = (tests.iter().zip(obstacles))
-        .filter(|(t, _)| t.failed)
+        .filter(|(t, _)| t.failed && t.duplicate_of.is_none())
         .map(|(_, o)| o.clone())
         .collect();
     diversity(&failing).map(|d| if d.abs() < 1e-9 { 0.0 } else { d })
 }
 
-/// Scores every `test_N.yaml` of a folder with its flights.
-pub fn score_folder(dir: &Path, judge: Judge) -> Result<SuiteScore, ModelError> {
-    let io = |source| ModelError::Io {
-        path: dir.to_path_buf(),
-        action: "cannot list",
-        source,
-    };
-    let paths = tests_in(dir).map_err(io)?;
-    let mut scores = Vec::new();
-    let mut obstacles = Vec::new();
-    for p in &paths {
-        let test = TestCase::load(p)?;
-        scores.push(score_test(&test, p, &flights_of(p), judge)?);
-        obstacles.push(test.obstacles);
-    }
+/// Scores the tests of a folder read with their flights.
+pub fn score_flights(folder: &FolderFlights, judge: Judge) -> Result<SuiteScore, ModelError> {
+    let scores = folder
+        .tests
+        .iter()
+        .map(|t| score_test(t, judge))
+        .collect::<Result<Vec<_>, _>>()?;
+    let obstacles: Vec<Vec<Obstacle>> = folder.tests.iter().map(|t| t.test.obstacles.clone()).collect();
     Ok(score_suite(scores, &obstacles, judge))
+}
+
+/// Scores every test of a folder with its flights ([`read_folder`]).
+pub fn score_folder(dir: &Path, judge: Judge) -> Result<SuiteScore, ModelError> {
+    score_flights(&read_folder(dir)?, judge)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn failed(file: &str) -> TestScore {
+        TestScore {
+            test: file.into(),
+            obstacles: 1,
+            runs: Vec::new(),
+            score: 1.0,
+            failed: true,
+            duplicate_of: None,
+        }
+    }
+
+    #[test]
+    fn a_duplicate_test_does_not_count_in_the_diversity() {
+        let a = Obstacle::new(2.0, 2.0, 20.0, 4.0, 25.0, 0.0);
+        let b = Obstacle::new(2.0, 2.0, 20.0, 4.0, 26.0, 0.0);
+        let tests = vec![failed("test_0.yaml"), failed("test_1.yaml"), failed("test_2.yaml")];
+        let suite = score_suite(tests, &[vec![a], vec![b], vec![a]], Judge::E2026);
+        assert_eq!(suite.tests[2].duplicate_of, Some(0));
+        assert_eq!(suite.failing, 2);
+        let two = diversity(&[vec![a], vec![b]]).unwrap();
+        assert_eq!(suite.diversity, Some(two), "the 2 counted tests' diversity");
+    }
 }
