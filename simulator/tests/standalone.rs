@@ -38,7 +38,10 @@ async fn connect_as_px4() -> TcpStream {
 
 fn stderr_of(child: Child) -> (i32, String) {
     let out = child.wait_with_output().expect("exits");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 /// Sends `signal` to `child` (then [`stderr_of`] waits for it).
@@ -72,17 +75,25 @@ async fn prgenuav_sim_serves_a_px4_instance_in_lockstep_and_stops_on_ctrl_c() {
             last = s.time_usec;
             steps += 1;
             let answer = actuator_controls(s.time_usec, &[0.0; 4], false);
-            mavlink::write_v2_msg_async(&mut write, header, &answer).await.expect("answer");
+            mavlink::write_v2_msg_async(&mut write, header, &answer)
+                .await
+                .expect("answer");
         }
     }
     // A second simulator for the same instance is refused, naming the port and the fix.
     let (code, err) = stderr_of(start(&[]));
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("TCP port 4567 is in use") && err.contains("stop it"), "{err}");
+    assert!(
+        err.contains("TCP port 4567 is in use") && err.contains("stop it"),
+        "{err}"
+    );
     signal(&sim, "-INT");
     let (code, err) = stderr_of(sim);
     assert_eq!(code, 0, "Ctrl-C is a clean stop: {err}");
-    assert!(err.contains("waiting for PX4 instance 7") && err.contains("stopped:"), "{err}");
+    assert!(
+        err.contains("waiting for PX4 instance 7") && err.contains("stopped:"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -63,7 +63,8 @@ pub struct FlyOptions {
     /// The vehicle's time runs this many times faster than wall time (mock `--speed-factor`,
     /// `PX4_SIM_SPEED_FACTOR`); 1 for real vehicles.
     pub time_scale: f64,
-    /// Wait this long for the first autopilot heartbeat, seconds.
+    /// Wait this long for the first autopilot heartbeat, wall seconds: a vehicle's clock is unknown until it
+    /// speaks, and a PX4 boots on the wall clock whatever its speed factor.
     pub heartbeat_wait_s: f64,
     /// Silence longer than this during the flight is a lost link, seconds.
     pub link_loss_s: f64,

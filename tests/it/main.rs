@@ -30,6 +30,7 @@ mod pty;
 mod px4_campaign;
 mod px4_cp;
 mod px4_fake;
+mod px4_iris;
 mod px4_iris_fake;
 mod px4_reference;
 mod px4_release;

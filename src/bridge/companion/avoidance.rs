@@ -244,21 +244,27 @@ pub enum Pacing {
     SimulatedTime(SimPaced),
 }
 
-/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers them
-/// (see [`Pacing`]), counting its answers in `stats`.
+/// The companion's heartbeat until aborted: started as soon as the vehicle answers, seconds of vehicle time
+/// before COM_OBS_AVOID is set, so PX4 (which rates a companion's heartbeats about once a second) never
+/// runs its pre-flight check with the avoidance system missing.
+pub fn spawn_heartbeat(link: Arc<Link>) -> JoinHandle<()> {
+    tokio::spawn(beat(link))
+}
+
+/// Runs the companion's answers until aborted: a task that reads requests and answers them (see [`Pacing`]),
+/// counting its answers in `stats`.
 pub fn spawn(
     link: Arc<Link>,
     target: Target,
     steer: Box<dyn Steer>,
     stats: Arc<CompanionStats>,
     pacing: Pacing,
-) -> [JoinHandle<()>; 2] {
-    let answers = match pacing {
-        Pacing::FreeRunning => tokio::spawn(run(link.clone(), target, steer, stats)),
-        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link.clone(), target, steer, stats, latency)),
-        Pacing::SimulatedTime(paced) => tokio::spawn(super::sim_paced::run(link.clone(), target, steer, stats, paced)),
-    };
-    [tokio::spawn(beat(link.clone())), answers]
+) -> JoinHandle<()> {
+    match pacing {
+        Pacing::FreeRunning => tokio::spawn(run(link, target, steer, stats)),
+        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link, target, steer, stats, latency)),
+        Pacing::SimulatedTime(paced) => tokio::spawn(super::sim_paced::run(link, target, steer, stats, paced)),
+    }
 }
 
 /// Sends the companion's answers and publishes their counts and timing.

@@ -23,6 +23,9 @@ use crate::model::LocalProjection;
 
 /// GF_ACTION = 1: the fence only warns, so it never steers the test.
 const GF_WARNING_ONLY: f64 = 1.0;
+/// PX4 rates heartbeats every half of its 2.5 s heartbeat timeout, and none in its first 2.5 s (v1.14
+/// `MavlinkReceiver::CheckHeartbeats`): after this much vehicle time the companion counts as present.
+const COMPANION_SEEN: Duration = Duration::from_millis(3000);
 /// LOCAL_POSITION_NED rate requested, Hz: at least 30, so the recorded path (and the closest approach found
 /// on it) is dense whatever the vehicle streams by default.
 pub const POSITION_RATE_HZ: f64 = 50.0;
@@ -38,6 +41,7 @@ impl Session<'_> {
             FlyMode::CollisionPrevention => Some(self.check_collision_prevention().await?),
             _ => None,
         };
+        self.companion_seen().await?;
         self.set_params(cp).await?;
         if self.opts.mode != FlyMode::Mission {
             // PX4-Avoidance plans with the vehicle's cruise speed (its waypoint speed and line-pull distance);
@@ -61,15 +65,27 @@ impl Session<'_> {
                 (None, None) => avoidance::Pacing::FreeRunning,
             };
             let companion = self.companion.clone();
-            for t in avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing) {
-                self.tasks.push(t);
-            }
+            let answers = avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing);
+            self.tasks.push(answers);
         }
         self.upload_mission().await?;
         self.upload_fence().await?;
         self.request_streams().await;
         let mut st = ready::ReadyState::default();
         ready::wait_ready(self, &mut st).await
+    }
+
+    /// Waits until PX4 has rated the companion's heartbeats ([`COMPANION_SEEN`] after the first), so that
+    /// setting COM_OBS_AVOID never finds the avoidance system missing.
+    async fn companion_seen(&mut self) -> Result<(), Stop> {
+        let Some(from) = self.companion_beat_from else {
+            return Ok(());
+        };
+        let wait = self.link.clock().wall_until(from + COMPANION_SEEN);
+        tokio::select! {
+            _ = self.cancel.cancelled() => Err(Stop::new(Status::Aborted, "cancelled")),
+            _ = tokio::time::sleep(wait) => Ok(()),
+        }
     }
 
     async fn set_params(&mut self, cp: Option<crate::lfs::cp_params::CpParams>) -> Result<(), Stop> {

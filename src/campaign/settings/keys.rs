@@ -131,7 +131,7 @@ section! {
             help: "Fly flight controllers on a bench in the loop (HITL), one per serial URL: prgenuav's simulator \
                    feeds each board its sensors over that port on the wall clock and the flight goes through the \
                    simulator's gateway. Each board must run SYS_HITL 1 (airframe 1001, firmware with pwm_out_sim; \
-                   docs/px4.md#hardware-in-the-loop-hitl).",
+                   docs/hitl.md).",
         },
     }
 }
