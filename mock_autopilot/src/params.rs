@@ -100,6 +100,8 @@ const DEFAULTS: &[(&str, ParamValue)] = {
         ("RTL_RETURN_ALT", F(60.0)),
         ("SDLOG_PROFILE", I(1)),
         ("SYS_AUTOSTART", I(10040)),
+        // 1 on a board flown in the loop (HITL); the mock is SITL.
+        ("SYS_HITL", I(0)),
     ]
 };
 

@@ -13,7 +13,8 @@
 //!   folded from its messages ([`wire::vehicle`]). Every timeout is in vehicle time ([`wire::clock`]), so a
 //!   sped-up simulator keeps every timer in proportion.
 //!
-//! [`options`] and [`fly()`] sit on top.
+//! [`options`] and [`fly()`] sit on top. [`sitl`] starts PX4 SITL, [`hil`] runs prgenuav's iris simulator
+//! beside a flight (PX4 SITL in external-simulator mode, or a board in HITL).
 //!
 //! ```no_run
 //! # async fn demo(test: &prgenuav::model::TestCase) -> Result<(), prgenuav::bridge::BridgeError> {
@@ -26,6 +27,7 @@
 
 pub mod companion;
 pub mod fly;
+pub mod hil;
 pub mod options;
 pub mod px4_version;
 pub mod session;
@@ -34,7 +36,7 @@ pub mod wire;
 
 pub use companion::predict::{Prediction, predict};
 pub use fly::{fly, fly_on};
-pub use options::{BridgeError, FlyMode, FlyOptions};
+pub use options::{BridgeError, FlyMode, FlyOptions, SimLink, VehicleSim};
 pub use session::report::{FlightReport, Status};
 pub use wire::cancel::CancelToken;
 pub use wire::link::{LinkStats, Transport};

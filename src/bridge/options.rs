@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use super::hil::gate::SimGate;
 use super::wire::notices;
 use super::wire::url::{DEFAULT_URL, LinkAddress, UrlError};
 
@@ -23,6 +24,29 @@ pub enum FlyMode {
     CollisionPrevention,
 }
 
+/// What simulates the vehicle PX4 SITL flies (`--sim`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VehicleSim {
+    /// PX4's own SIH quadrotor inside PX4 (v1.14 and later).
+    #[default]
+    Sih,
+    /// prgenuav's iris simulator (the Gazebo Classic iris) in this process, feeding PX4 in external-simulator
+    /// mode over the HIL protocol (v1.12 and later).
+    Iris,
+}
+
+/// How the iris simulator's HIL link reaches PX4 SITL (`--sim-link`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SimLink {
+    /// PX4's TCP connection, in lockstep: simulated time drives PX4's clock.
+    #[default]
+    Tcp,
+    /// A serial pty bridged to PX4's TCP connection by `socat`, on the wall clock at 250 Hz (as a board).
+    Serial,
+}
+
 /// Options of one flight. Times are in the vehicle's seconds (see [`FlyOptions::time_scale`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlyOptions {
@@ -39,7 +63,8 @@ pub struct FlyOptions {
     /// The vehicle's time runs this many times faster than wall time (mock `--speed-factor`,
     /// `PX4_SIM_SPEED_FACTOR`); 1 for real vehicles.
     pub time_scale: f64,
-    /// Wait this long for the first autopilot heartbeat, seconds.
+    /// Wait this long for the first autopilot heartbeat, wall seconds: a vehicle's clock is unknown until it
+    /// speaks, and a PX4 boots on the wall clock whatever its speed factor.
     pub heartbeat_wait_s: f64,
     /// Silence longer than this during the flight is a lost link, seconds.
     pub link_loss_s: f64,
@@ -66,6 +91,11 @@ pub struct FlyOptions {
     pub detect_time_scale: bool,
     /// Live notices (vehicle messages, readiness, clock warnings), e.g. printed by the CLI.
     pub notices: Option<notices::NoticeSink>,
+    /// The gate of prgenuav's simulator in this process, feeding this PX4 in lockstep: the avoidance
+    /// companion answers on simulated time, holding it until each answer is out (set `lockstep` too).
+    pub sim_gate: Option<SimGate>,
+    /// The vehicle is a board in HITL: refuse it, before anything is set or armed, unless `SYS_HITL` is 1.
+    pub require_hitl: bool,
 }
 
 impl Default for FlyOptions {
@@ -87,6 +117,8 @@ impl Default for FlyOptions {
             ready_timeout_s: 60.0,
             detect_time_scale: false,
             notices: None,
+            sim_gate: None,
+            require_hitl: false,
         }
     }
 }

@@ -1,8 +1,8 @@
 //! Which PX4 release a vehicle or a build runs, and what that release can do: the per-release capability
-//! table every version-dependent choice reads (SIH's home variables, the avoidance interface, Collision
+//! table every version-dependent choice reads (SIH and its home variables, the external-simulator start-up, the avoidance interface, Collision
 //! Prevention, the modes that fly). A release not in the table is refused by name, never guessed.
 
-use super::options::FlyMode;
+use super::options::{FlyMode, VehicleSim};
 
 /// A PX4 version as its git tag (`v1.16.2`, `v1.14.0-beta2-325-g1555f2bd22`) or AUTOPILOT_VERSION says.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -80,7 +80,28 @@ pub enum Checked {
     Flown,
     /// Read from this release's sources only.
     Source,
+    /// Not possible on this release.
+    Absent,
 }
+
+/// How PX4 SITL of a release runs with an external simulator (`simulator_mavlink`; v1.12's `simulator`):
+/// the quadrotor airframe that has no simulator of its own, and what a build that can do it contains.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ExternalSim {
+    /// `PX4_SIM_MODEL` (with `PX4_SIMULATOR` unset): `none_iris` from v1.14, `iris` in v1.12.
+    pub model: &'static str,
+    /// The startup script given with `-s`, relative to the build's `etc` (v1.12's default is NuttX's rcS).
+    pub startup: Option<&'static str>,
+    /// The module's command in `BUILD/bin`: a build without it cannot feed PX4 from outside.
+    pub module: &'static str,
+}
+
+/// v1.14 and later: `none_iris` (airframe 10016), `simulator_mavlink start -c 4560+i`.
+const NONE_IRIS: ExternalSim = ExternalSim {
+    model: "none_iris",
+    startup: None,
+    module: "px4-simulator_mavlink",
+};
 
 /// What one PX4 major.minor release can do.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -89,8 +110,10 @@ pub struct Release {
     pub major: u32,
     /// Minor number.
     pub minor: u32,
-    /// SIH's home variables.
-    pub home: HomeUnits,
+    /// SIH in SITL and how it reads its home; `None`: no SIH in SITL (v1.12 comments it out of the board).
+    pub sih: Option<HomeUnits>,
+    /// The external-simulator start-up (`--sim iris`).
+    pub external: ExternalSim,
     /// The obstacle-avoidance interface (`COM_OBS_AVOID`, `TRAJECTORY_REPRESENTATION_WAYPOINTS`).
     pub avoidance_interface: bool,
     /// Collision Prevention (`CP_DIST`, fed by `OBSTACLE_DISTANCE`, acting in Position mode).
@@ -99,47 +122,72 @@ pub struct Release {
     /// only the velocity-based Position modes call it (0 direct, 3 smoothed; not PX4's default 4), from
     /// v1.16 only the acceleration-based one (4).
     pub cp_position_modes: &'static [u8],
-    /// How this row was established.
+    /// How this row was established with SIH (`--sim sih`).
     pub checked: Checked,
+    /// How it was established with prgenuav's iris simulator (`--sim iris`).
+    pub checked_iris: Checked,
 }
 
 /// Every release prgenuav has checked, oldest first.
-pub const RELEASES: [Release; 4] = [
+pub const RELEASES: [Release; 5] = [
+    Release {
+        major: 1,
+        minor: 12,
+        sih: None,
+        external: ExternalSim {
+            model: "iris",
+            startup: Some("etc/init.d-posix/rcS"),
+            module: "px4-simulator",
+        },
+        avoidance_interface: true,
+        collision_prevention: true,
+        cp_position_modes: &[3, 0],
+        checked: Checked::Absent,
+        checked_iris: Checked::Flown,
+    },
     Release {
         major: 1,
         minor: 14,
-        home: HomeUnits::IntE7,
+        sih: Some(HomeUnits::IntE7),
+        external: NONE_IRIS,
         avoidance_interface: true,
         collision_prevention: true,
         cp_position_modes: &[3, 0],
         checked: Checked::Flown,
+        checked_iris: Checked::Flown,
     },
     Release {
         major: 1,
         minor: 15,
-        home: HomeUnits::IntE7,
+        sih: Some(HomeUnits::IntE7),
+        external: NONE_IRIS,
         avoidance_interface: true,
         collision_prevention: true,
         cp_position_modes: &[3, 0],
         checked: Checked::Source,
+        checked_iris: Checked::Source,
     },
     Release {
         major: 1,
         minor: 16,
-        home: HomeUnits::FloatDegrees,
+        sih: Some(HomeUnits::FloatDegrees),
+        external: NONE_IRIS,
         avoidance_interface: false,
         collision_prevention: true,
         cp_position_modes: &[4],
         checked: Checked::Flown,
+        checked_iris: Checked::Flown,
     },
     Release {
         major: 1,
         minor: 17,
-        home: HomeUnits::FloatDegrees,
+        sih: Some(HomeUnits::FloatDegrees),
+        external: NONE_IRIS,
         avoidance_interface: false,
         collision_prevention: true,
         cp_position_modes: &[4],
         checked: Checked::Source,
+        checked_iris: Checked::Source,
     },
 ];
 
@@ -154,6 +202,18 @@ impl Release {
             FlyMode::Avoidance => self.avoidance_interface,
             FlyMode::Offboard | FlyMode::Mission => true,
             FlyMode::CollisionPrevention => self.collision_prevention,
+        }
+    }
+
+    /// Whether `sim` can feed this release's SITL; if not, the refusal (naming `version`).
+    pub fn sim_refusal(&self, version: &Px4Version, sim: VehicleSim) -> Option<String> {
+        match sim {
+            VehicleSim::Sih if self.sih.is_none() => Some(format!(
+                "--sim sih: PX4 {version} has no SIH in SITL (v1.{} leaves the SIH module out of its SITL build); \
+                 fly it with prgenuav's simulator: --sim iris",
+                self.minor
+            )),
+            _ => None,
         }
     }
 

@@ -37,7 +37,8 @@ fn the_table_splits_at_v1_16() {
         ("v1.17.0", false, HomeUnits::FloatDegrees),
     ] {
         let r = v(tag).release().unwrap();
-        assert_eq!((r.avoidance_interface, r.home), (avoid, home), "{tag}");
+        assert_eq!((r.avoidance_interface, r.sih), (avoid, Some(home)), "{tag}");
+        assert_eq!((r.external.model, r.external.startup), ("none_iris", None), "{tag}");
         assert!(r.collision_prevention, "{tag}");
         assert_eq!(r.supports(FlyMode::Avoidance), avoid, "{tag}");
         assert!(r.supports(FlyMode::Offboard) && r.supports(FlyMode::Mission), "{tag}");
@@ -57,9 +58,30 @@ fn the_table_splits_at_v1_16() {
 fn an_unchecked_release_is_refused_by_name() {
     let err = v("v1.18.0-beta1").release().unwrap_err().to_string();
     assert!(err.contains("PX4 v1.18.0-beta1 (read as 1.18)"), "{err}");
-    assert!(err.contains("checked: 1.14, 1.15, 1.16, 1.17"), "{err}");
+    assert!(err.contains("checked: 1.12, 1.14, 1.15, 1.16, 1.17"), "{err}");
     assert!(v("v1.13.3").release().is_err());
     assert!(v("v2.14.0").release().is_err());
+}
+
+#[test]
+fn v1_12_flies_only_with_an_external_simulator() {
+    let version = v("v1.12.3-dirty");
+    let r = version.release().unwrap();
+    assert_eq!(r.sih, None);
+    assert_eq!(
+        (r.external.model, r.external.startup, r.external.module),
+        ("iris", Some("etc/init.d-posix/rcS"), "px4-simulator")
+    );
+    assert_eq!((r.checked, r.checked_iris), (Checked::Absent, Checked::Flown));
+    let refused = r.sim_refusal(&version, VehicleSim::Sih).expect("no SIH in v1.12");
+    assert!(
+        refused.starts_with("--sim sih: PX4 v1.12.3-dirty has no SIH in SITL") && refused.ends_with("--sim iris"),
+        "{refused}"
+    );
+    assert_eq!(r.sim_refusal(&version, VehicleSim::Iris), None);
+    assert_eq!(r.modes(), "avoidance, offboard, mission, collision-prevention");
+    let v114 = v("v1.14.0");
+    assert_eq!(v114.release().unwrap().sim_refusal(&v114, VehicleSim::Sih), None);
 }
 
 #[test]

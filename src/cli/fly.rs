@@ -1,6 +1,6 @@
-//! `prgenuav fly TEST.yaml [--connect URL | --px4 BUILD_DIR] [--mode avoidance|offboard|mission] [--timeout S] [--json]
-//! [--trajectory out.csv] [--plot out.svg] [--world out.world] [--no-fence] [--judge 2025|2026]
-//! [--anchor-at-vehicle-home] [--strict]`.
+//! `prgenuav fly TEST.yaml [--connect URL | --px4 BUILD_DIR [--sim sih|iris] | --hitl serial:DEV:BAUD]
+//! [--mode avoidance|offboard|mission] [--timeout S] [--json] [--trajectory out.csv] [--plot out.svg]
+//! [--world out.world] [--no-fence] [--judge 2025|2026] [--anchor-at-vehicle-home] [--strict]`.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -8,9 +8,10 @@ use std::time::Duration;
 
 use anyhow::Context;
 use prgenuav::bridge::companion::predict::predict_cp;
+use prgenuav::bridge::hil::board::BoardPort;
+use prgenuav::bridge::hil::run::SimSummary;
 use prgenuav::bridge::session::gazebo::world_sdf;
-use prgenuav::bridge::sitl::slot::{self, Slot};
-use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
+use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
@@ -19,6 +20,7 @@ use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
+use super::fly_backend::{Simulated, Started, start_board, start_px4};
 use super::limits;
 use super::setting_flags::FlyFlags;
 use super::stop_signals::StopSignals;
@@ -93,6 +95,10 @@ struct Flight {
     px4: Option<PathBuf>,
     /// The speed factor of that instance when `--time-scale` does not say.
     px4_speed_factor: f64,
+    /// What simulates that instance.
+    simulated: Simulated,
+    /// `--hitl serial:DEVICE:BAUD`: a board fed by prgenuav's simulator.
+    board: Option<BoardPort>,
 }
 
 impl Flight {
@@ -105,6 +111,16 @@ impl Flight {
             anchor_at_vehicle_home: a.flight.anchor_at_vehicle_home(),
             px4: a.vehicles.px4.clone(),
             px4_speed_factor: a.vehicles.speed_factor(),
+            simulated: Simulated {
+                sim: a.vehicles.sim(),
+                link: a.vehicles.sim_link(),
+                seed: a.campaign.seed(),
+            },
+            board: match a.vehicles.hitl.as_deref() {
+                None => None,
+                Some([one]) => Some(BoardPort::parse(one).map_err(anyhow::Error::msg)?),
+                Some(_) => anyhow::bail!("fly --hitl takes one board (generate --hitl takes several)"),
+            },
         })
     }
 }
@@ -113,6 +129,9 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     // Arguments first, resources second.
     let flight = Flight::of(&args)?;
     LinkAddress::parse(&args.connect)?;
+    if flight.board.is_some() && args.connect != DEFAULT_URL {
+        anyhow::bail!("--hitl flies the board through prgenuav's simulator: give --hitl or --connect, not both");
+    }
     super::check_outputs(&[
         ("--plot", args.plot.as_deref()),
         ("--trajectory", args.trajectory.as_deref()),
@@ -127,12 +146,14 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     }
     let prediction = prediction(&args, &flight, &test);
     let mut opts = options(&args, &flight, prediction.as_ref())?;
-    // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
-    let px4 = match &build {
-        Some(b) => Some(start_px4(b, &test, &mut opts, args.json || args.quiet)?),
-        None => None,
-    };
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
+    let quiet = args.json || args.quiet;
+    // Started on the main thread, which outlives the flight: PX4 dies with the thread that started it.
+    let started = match (&build, &flight.board) {
+        (Some(b), _) => start_px4(&runtime, b, &flight.simulated, &test, &mut opts, quiet)?,
+        (None, Some(port)) => start_board(&runtime, port, flight.simulated.seed, &test, &mut opts, quiet)?,
+        (None, None) => Started::Nothing,
+    };
     // Ctrl-C, a scheduler's SIGTERM (`scancel`, a Kubernetes Job's end) and SIGHUP all land the vehicle.
     let mut signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
     let report = runtime.block_on(async {
@@ -148,29 +169,27 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
         }
         fly(&test, &opts, cancel).await
     })?;
-    if let Some((px4, slot)) = px4 {
-        if !report.status.completed() {
-            eprintln!("PX4's console, last 20 lines:");
-            px4.console_tail(20).iter().for_each(|l| eprintln!("  {l}"));
-        }
-        drop(px4); // the instance is gone before its slot is freed
-        drop(slot);
+    if let Some(tail) = started.console_tail(20).filter(|_| !report.status.completed()) {
+        eprintln!("PX4's console, last 20 lines:");
+        tail.iter().for_each(|l| eprintln!("  {l}"));
     }
+    let simulator = started.finish(&runtime);
     if let Some(path) = &args.plot {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
     }
     print_anchoring(&report);
-    print_report(&report, prediction.is_some(), args.json)?;
+    print_report(&report, prediction.is_some(), args.json, simulator.as_ref())?;
     Ok(exit_code(&report))
 }
 
-/// `--px4`: the checked build folder, refused when its release cannot fly `--mode`.
+/// `--px4`: the checked build folder, refused when its release cannot fly `--mode` with `--sim`.
 fn open_build(flight: &Flight) -> anyhow::Result<Option<Px4Build>> {
     let Some(dir) = flight.px4.as_deref() else {
         return Ok(None);
     };
     let build = Px4Build::open(dir)?;
     build.check_mode(flight.mode)?;
+    build.check_sim(flight.simulated.sim)?;
     Ok(Some(build))
 }
 
@@ -184,26 +203,37 @@ fn prediction(args: &FlyArgs, flight: &Flight, test: &TestCase) -> Option<Predic
         .and_then(|p| p.inspect_err(|e| eprintln!("warning: no LFS prediction: {e}")).ok())
 }
 
-/// `--json`: the report with the prediction's motion model; otherwise the text.
-fn print_report(report: &FlightReport, predicted: bool, json: bool) -> anyhow::Result<()> {
+/// `--json`: the report with the prediction's motion model and what the simulator did; otherwise the text.
+fn print_report(
+    report: &FlightReport,
+    predicted: bool,
+    json: bool,
+    simulator: Option<&SimSummary>,
+) -> anyhow::Result<()> {
     if json {
         let lfs_motion_model = predicted.then(|| prediction_model(report.mode));
         return super::print_json(&FlyJson {
             report,
             lfs_motion_model,
+            simulator,
         });
     }
     print_text(report);
+    if let Some(s) = simulator {
+        println!("simulator         {s}");
+    }
     Ok(())
 }
 
-/// `fly --json`: the flight's report and the motion model of the LFS prediction beside it.
+/// `fly --json`: the flight's report, the motion model of the LFS prediction and the simulator beside it.
 #[derive(serde::Serialize)]
 struct FlyJson<'a> {
     #[serde(flatten)]
     report: &'a FlightReport,
     /// `null` when there is no prediction (`--no-predict`, or it failed).
     lfs_motion_model: Option<&'static str>,
+    /// prgenuav's simulator (`--sim iris`, `--hitl`); `null` otherwise.
+    simulator: Option<&'a SimSummary>,
 }
 
 /// The LFS model that predicted a flight of `mode`.
@@ -277,27 +307,6 @@ fn options(args: &FlyArgs, flight: &Flight, prediction: Option<&Prediction>) -> 
     };
     opts.validate()?;
     Ok(opts)
-}
-
-/// `--px4`: a fresh SIH instance at the test's home on a free instance slot (held until the flight ends, so
-/// parallel `fly --px4` jobs on one machine do not share ports), booted; `opts` then fly it at its measured
-/// clock rate.
-fn start_px4(build: &Px4Build, test: &TestCase, opts: &mut FlyOptions, quiet: bool) -> anyhow::Result<(Px4Sitl, Slot)> {
-    let speed = opts.time_scale;
-    let slot = slot::claim(0)?;
-    let spec = SitlSpec::for_build(build, slot.instance(), speed).at(test.home);
-    if !quiet {
-        eprintln!(
-            "starting PX4 {} SIH instance {} at the test's home, speed factor {speed} ...",
-            build.version,
-            slot.instance()
-        );
-    }
-    let px4 = Px4Sitl::start(&spec)?;
-    opts.connect = px4.url();
-    opts.detect_time_scale = true;
-    opts.target_system = Some(slot.instance().saturating_add(1));
-    Ok((px4, slot))
 }
 
 /// `--plot`: the flown path over the predicted one.

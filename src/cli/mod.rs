@@ -7,6 +7,7 @@ mod doc;
 mod evaluate;
 mod fidelity;
 mod fly;
+mod fly_backend;
 mod generate;
 mod limits;
 mod out_folder;

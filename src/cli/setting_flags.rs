@@ -23,7 +23,8 @@ fn evaluate(s: &Setting) -> bool {
         )
 }
 
-/// `fly`: one flight's mode, judge, timeout and anchoring, on a PX4 started here or not.
+/// `fly`: one flight's mode, judge, timeout and anchoring, on a PX4 started here (and what simulates it, seeded)
+/// or a board in the loop, or not.
 fn fly(s: &Setting) -> bool {
     named(
         s,
@@ -32,7 +33,11 @@ fn fly(s: &Setting) -> bool {
             "campaign.judge",
             "flight.timeout_s",
             "flight.anchor_at_vehicle_home",
+            "campaign.seed",
             "vehicles.px4",
+            "vehicles.sim",
+            "vehicles.sim_link",
+            "vehicles.hitl",
         ],
     )
 }

@@ -42,6 +42,15 @@ fn pty() -> std::io::Result<(OwnedFd, OwnedFd, String)> {
     Ok((m, s, path))
 }
 
+/// One pseudo-terminal: its master end (the test plays the device through it) and the slave's path, which a
+/// program opens as a serial port. Closing the master is the device going away.
+pub fn lone_pty() -> std::io::Result<(File, String)> {
+    let (master, slave, path) = pty()?;
+    // The program opens the path itself; our slave handle would keep the device alive after the master goes.
+    drop(slave);
+    Ok((File::from(master), path))
+}
+
 fn copy(from: OwnedFd, to: OwnedFd) {
     std::thread::spawn(move || {
         let (mut r, mut w) = (File::from(from), File::from(to));

@@ -267,7 +267,7 @@ pub fn killed_parent_leaves_no_px4(build: &Path, settle: Duration, comm: Option<
 }
 
 /// (pid, command name) of every process whose parent is `pid`.
-fn children_of(pid: i32) -> Vec<(i32, String)> {
+pub fn children_of(pid: i32) -> Vec<(i32, String)> {
     let Ok(entries) = std::fs::read_dir("/proc") else {
         return Vec::new();
     };
@@ -284,7 +284,7 @@ fn children_of(pid: i32) -> Vec<(i32, String)> {
 }
 
 /// Whether `pid` is gone (or a zombie waiting for a reaper that is not ours) within `wait`.
-fn gone(pid: i32, wait: Duration) -> bool {
+pub fn gone(pid: i32, wait: Duration) -> bool {
     let t0 = Instant::now();
     loop {
         let stat = PathBuf::from(format!("/proc/{pid}/stat"));

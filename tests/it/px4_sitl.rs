@@ -82,7 +82,13 @@ pub(super) async fn fly_on(px4: &Px4Sitl, test: &TestCase, mode: FlyMode, what: 
 /// [`closest_at_height`]) and may then land where PX4 puts it. On a failure the panic carries the flight's
 /// last positions and PX4's console tail, so a rare PX4 outcome can be explained from the one run that showed
 /// it.
-fn assert_landed_at_the_land_point(px4: &Px4Sitl, r: &FlightReport, test: &TestCase, mode: FlyMode, what: &str) {
+pub(super) fn assert_landed_at_the_land_point(
+    px4: &Px4Sitl,
+    r: &FlightReport,
+    test: &TestCase,
+    mode: FlyMode,
+    what: &str,
+) {
     if let Err(problem) = landed_at_the_land_point(r, test, mode) {
         let samples = &r.trajectory.samples;
         let last: Vec<String> = samples
@@ -208,7 +214,7 @@ pub(super) async fn all_modes(bin: &Path, instance: u8, mission: u32) {
 }
 
 /// Refused on the vehicle's reported release, before the mission was uploaded or the vehicle armed.
-fn assert_refused_before_arming(r: &FlightReport, what: &str) {
+pub(super) fn assert_refused_before_arming(r: &FlightReport, what: &str) {
     let reason = r.reason.clone().unwrap_or_default();
     assert_eq!(r.status, Status::Rejected, "{what}: {reason}");
     assert!(

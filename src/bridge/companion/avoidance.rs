@@ -19,6 +19,7 @@ use tokio::task::JoinHandle;
 
 use super::answers::AnswerCounts;
 use super::pose_history::PoseHistory;
+pub use super::sim_paced::SimPaced;
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
 use super::timing::AnswerTiming;
@@ -225,7 +226,7 @@ impl CompanionStats {
 }
 
 /// How the companion paces its answers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub enum Pacing {
     /// As PX4-Avoidance: answer at 10 Hz (vehicle time) with the latest finished plan.
     #[default]
@@ -237,26 +238,37 @@ pub enum Pacing {
         /// Age of the pose each plan is made from (vehicle time; 20 ms resolution at PX4's 50 Hz stream).
         latency: Duration,
     },
+    /// Answer on simulated time: prgenuav's simulator, in this process, holds PX4's clock at every answer
+    /// period until the answer to PX4's latest request, planned on the true pose of that instant, is sent
+    /// ([`super::sim_paced`]): however loaded the machine, no answer is late.
+    SimulatedTime(SimPaced),
 }
 
-/// Runs the companion until aborted: a heartbeat task, and a task that reads requests and answers them
-/// (see [`Pacing`]), counting its answers in `stats`.
+/// The companion's heartbeat until aborted: started as soon as the vehicle answers, seconds of vehicle time
+/// before COM_OBS_AVOID is set, so PX4 (which rates a companion's heartbeats about once a second) never
+/// runs its pre-flight check with the avoidance system missing.
+pub fn spawn_heartbeat(link: Arc<Link>) -> JoinHandle<()> {
+    tokio::spawn(beat(link))
+}
+
+/// Runs the companion's answers until aborted: a task that reads requests and answers them (see [`Pacing`]),
+/// counting its answers in `stats`.
 pub fn spawn(
     link: Arc<Link>,
     target: Target,
     steer: Box<dyn Steer>,
     stats: Arc<CompanionStats>,
     pacing: Pacing,
-) -> [JoinHandle<()>; 2] {
-    let answers = match pacing {
-        Pacing::FreeRunning => tokio::spawn(run(link.clone(), target, steer, stats)),
-        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link.clone(), target, steer, stats, latency)),
-    };
-    [tokio::spawn(beat(link.clone())), answers]
+) -> JoinHandle<()> {
+    match pacing {
+        Pacing::FreeRunning => tokio::spawn(run(link, target, steer, stats)),
+        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link, target, steer, stats, latency)),
+        Pacing::SimulatedTime(paced) => tokio::spawn(super::sim_paced::run(link, target, steer, stats, paced)),
+    }
 }
 
 /// Sends the companion's answers and publishes their counts and timing.
-struct Answers {
+pub(super) struct Answers {
     link: Arc<Link>,
     stats: Arc<CompanionStats>,
     /// Wall instant of the oldest request not answered yet.
@@ -265,14 +277,23 @@ struct Answers {
 
 #[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
 impl Answers {
+    /// Answers on `link`, counted in `stats`.
+    pub(super) fn new(link: Arc<Link>, stats: Arc<CompanionStats>) -> Self {
+        Self {
+            link,
+            stats,
+            asked: None,
+        }
+    }
+
     /// A request arrived now (only the oldest unanswered one is timed).
-    fn asked(&mut self) {
+    pub(super) fn asked(&mut self) {
         self.asked.get_or_insert_with(Instant::now);
     }
 
     /// Sends the answer to PX4's latest request (if it is still asking) with `planned`, the latest result of
     /// `worker`, at vehicle time `now`.
-    async fn send(
+    pub(super) async fn send(
         &mut self,
         companion: &mut Companion,
         worker: &mut SteerWorker,
@@ -305,7 +326,8 @@ impl Answers {
     }
 }
 
-fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> bool {
+/// Whether a message with this header is PX4's request (not our own answer echoed back).
+pub(super) fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> bool {
     inb_header.component_id != AVOIDANCE_COMPONENT_ID && inb_header.system_id == u32::from(target.system)
 }
 
@@ -323,11 +345,7 @@ async fn run_lockstep(
     let mut history = PoseHistory::default();
     let mut companion = Companion::default();
     let mut worker = SteerWorker::new(steer);
-    let mut answers = Answers {
-        link: link.clone(),
-        stats,
-        asked: None,
-    };
+    let mut answers = Answers::new(link.clone(), stats);
     loop {
         let inb = match rx.recv().await {
             Ok(inb) => inb,
@@ -381,11 +399,7 @@ async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<
     let mut companion = Companion::default();
     let mut worker = SteerWorker::new(steer);
     let mut next_answer = clock.now();
-    let mut answers = Answers {
-        link: link.clone(),
-        stats,
-        asked: None,
-    };
+    let mut answers = Answers::new(link.clone(), stats);
     loop {
         let now = clock.now();
         if now >= next_answer {

@@ -10,6 +10,7 @@ pub mod offboard;
 pub mod planner_steer;
 mod pose_history;
 pub mod predict;
+pub mod sim_paced;
 pub mod steer;
 pub mod steer_worker;
 pub mod timing;

@@ -93,6 +93,8 @@ pub struct Session<'a> {
     pub px4_version: Option<Px4Version>,
     /// Who answered.
     pub identity: super::identify::VehicleIdentity,
+    /// Vehicle time the companion's heartbeat started at (avoidance mode).
+    pub companion_beat_from: Option<Duration>,
 }
 
 /// Readiness as timed for the report and the arming budget.

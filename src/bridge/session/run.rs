@@ -3,7 +3,7 @@
 //! [`super::flight`] and finally restore what was changed. Vehicle refusals end in a report, not an error.
 
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::{HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType};
 use tokio::sync::broadcast;
@@ -37,9 +37,12 @@ pub async fn run(
     let anchored = std::sync::OnceLock::new();
     let (mut s, clock_report) = connect(test, opts, transport, cancel).await?;
     s.ready.started = Some(s.link.clock().now());
-    let stop = match s.place(&anchored).await {
-        Ok(()) => match s.prepare().await {
-            Ok(()) => flight::follow(&mut s, &mut recorder).await,
+    let stop = match s.check_hitl().await {
+        Ok(()) => match s.place(&anchored).await {
+            Ok(()) => match s.prepare().await {
+                Ok(()) => flight::follow(&mut s, &mut recorder).await,
+                Err(stop) => stop,
+            },
             Err(stop) => stop,
         },
         Err(stop) => stop,
@@ -67,8 +70,12 @@ async fn connect<'a>(
     let mut rx = link.subscribe();
     // Subscribed before the heartbeat wait, so nothing the vehicle says from the start is missed.
     let texts_rx = link.subscribe();
-    let (target, heartbeat) = wait_heartbeat(&link, &mut rx, opts, &cancel).await?;
+    let (target, heartbeat) = wait_heartbeat(&mut rx, opts, &cancel).await?;
     link.lock(target.system);
+    let companion_beat_from = (opts.mode == crate::bridge::FlyMode::Avoidance).then(|| {
+        tasks.push(crate::bridge::companion::avoidance::spawn_heartbeat(link.clone()));
+        link.clock().now()
+    });
     // Its own receiver: the session's keeps every message the vehicle sends meanwhile. The release decides
     // which modes and parameters this vehicle has (see `capability`).
     let mut answers = link.subscribe();
@@ -105,6 +112,7 @@ async fn connect<'a>(
         ready: Readiness::default(),
         px4_version: super::identify::px4_version(&heartbeat, flight_sw),
         identity,
+        companion_beat_from,
     };
     Ok((s, clock_report))
 }
@@ -182,14 +190,13 @@ async fn gcs_heartbeat(link: Arc<Link>) {
 
 /// Waits (bounded) for an autopilot's heartbeat: the vehicle to fly, and what its heartbeat says.
 async fn wait_heartbeat(
-    link: &Link,
     rx: &mut broadcast::Receiver<Arc<Inbound>>,
     opts: &FlyOptions,
     cancel: &CancelToken,
 ) -> Result<(Target, HEARTBEAT_DATA), BridgeError> {
-    let deadline = link.clock().now() + secs(opts.heartbeat_wait_s);
+    let deadline = Instant::now() + secs(opts.heartbeat_wait_s);
     loop {
-        let wait = link.clock().wall_until(deadline);
+        let wait = deadline.saturating_duration_since(Instant::now());
         tokio::select! {
             biased;
             _ = cancel.cancelled() => return Err(BridgeError::Cancelled),
@@ -210,7 +217,7 @@ async fn wait_heartbeat(
                 return Err(BridgeError::NoHeartbeat { url: opts.connect.clone(), waited_s: opts.heartbeat_wait_s });
             }
         }
-        if link.clock().now() >= deadline {
+        if Instant::now() >= deadline {
             return Err(BridgeError::NoHeartbeat {
                 url: opts.connect.clone(),
                 waited_s: opts.heartbeat_wait_s,

@@ -23,9 +23,16 @@ use crate::model::LocalProjection;
 
 /// GF_ACTION = 1: the fence only warns, so it never steers the test.
 const GF_WARNING_ONLY: f64 = 1.0;
+/// PX4 rates heartbeats every half of its 2.5 s heartbeat timeout, and none in its first 2.5 s (v1.14
+/// `MavlinkReceiver::CheckHeartbeats`): after this much vehicle time the companion counts as present.
+const COMPANION_SEEN: Duration = Duration::from_millis(3000);
 /// LOCAL_POSITION_NED rate requested, Hz: at least 30, so the recorded path (and the closest approach found
 /// on it) is dense whatever the vehicle streams by default.
 pub const POSITION_RATE_HZ: f64 = 50.0;
+/// TRAJECTORY_REPRESENTATION_WAYPOINTS rate requested when the companion runs on simulated time, Hz.
+pub const REQUEST_RATE_HZ: f64 = 50.0;
+/// TRAJECTORY_REPRESENTATION_WAYPOINTS' message id.
+const TRAJECTORY_REPRESENTATION_WAYPOINTS_ID: u16 = 332;
 
 impl Session<'_> {
     /// Everything before the first command of the flight.
@@ -34,6 +41,7 @@ impl Session<'_> {
             FlyMode::CollisionPrevention => Some(self.check_collision_prevention().await?),
             _ => None,
         };
+        self.companion_seen().await?;
         self.set_params(cp).await?;
         if self.opts.mode != FlyMode::Mission {
             // PX4-Avoidance plans with the vehicle's cruise speed (its waypoint speed and line-pull distance);
@@ -46,20 +54,38 @@ impl Session<'_> {
         }
         if self.opts.mode == FlyMode::Avoidance {
             let steer = flight::steer_for(self.test, self.opts, self.frame, self.mpc_xy_cruise_m_s);
-            let pacing = match self.opts.lockstep {
-                Some(latency) => avoidance::Pacing::Lockstep { latency },
-                None => avoidance::Pacing::FreeRunning,
+            let pacing = match (&self.opts.sim_gate, self.opts.lockstep) {
+                (Some(gate), _) => avoidance::Pacing::SimulatedTime(avoidance::SimPaced {
+                    gate: gate.clone(),
+                    frame: self.frame,
+                    test_home: self.test.home,
+                    period: avoidance::ANSWER_PERIOD,
+                }),
+                (None, Some(latency)) => avoidance::Pacing::Lockstep { latency },
+                (None, None) => avoidance::Pacing::FreeRunning,
             };
             let companion = self.companion.clone();
-            for t in avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing) {
-                self.tasks.push(t);
-            }
+            let answers = avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing);
+            self.tasks.push(answers);
         }
         self.upload_mission().await?;
         self.upload_fence().await?;
         self.request_streams().await;
         let mut st = ready::ReadyState::default();
         ready::wait_ready(self, &mut st).await
+    }
+
+    /// Waits until PX4 has rated the companion's heartbeats ([`COMPANION_SEEN`] after the first), so that
+    /// setting COM_OBS_AVOID never finds the avoidance system missing.
+    async fn companion_seen(&mut self) -> Result<(), Stop> {
+        let Some(from) = self.companion_beat_from else {
+            return Ok(());
+        };
+        let wait = self.link.clock().wall_until(from + COMPANION_SEEN);
+        tokio::select! {
+            _ = self.cancel.cancelled() => Err(Stop::new(Status::Aborted, "cancelled")),
+            _ = tokio::time::sleep(wait) => Ok(()),
+        }
     }
 
     async fn set_params(&mut self, cp: Option<crate::lfs::cp_params::CpParams>) -> Result<(), Stop> {
@@ -172,12 +198,16 @@ impl Session<'_> {
 
     /// LOCAL_POSITION_NED at [`POSITION_RATE_HZ`]; ATTITUDE as fast, for the heading. Refusals are warnings.
     async fn request_streams(&mut self) {
-        let interval_us = (1e6 / POSITION_RATE_HZ) as f32;
-        for id in [32.0, 30.0] {
-            let p = [id, interval_us, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let mut streams = vec![(32.0, POSITION_RATE_HZ), (30.0, POSITION_RATE_HZ)];
+        if self.opts.sim_gate.is_some() && self.opts.mode == FlyMode::Avoidance {
+            // On simulated time the companion answers the newest request at each hold: at PX4's 5 Hz the
+            // request it has would be up to 200 ms old, by when the stream happened to tick.
+            streams.push((f32::from(TRAJECTORY_REPRESENTATION_WAYPOINTS_ID), REQUEST_RATE_HZ));
+        }
+        for (id, hz) in streams {
+            let p = [id, (1e6 / hz) as f32, 0.0, 0.0, 0.0, 0.0, 0.0];
             if let Err(e) = self.command(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, p).await {
-                self.warnings
-                    .push(format!("message {id} at {POSITION_RATE_HZ} Hz: {e}"));
+                self.warnings.push(format!("message {id} at {hz} Hz: {e}"));
             }
         }
     }

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::bridge::options::FlyMode;
+use crate::bridge::options::{FlyMode, VehicleSim};
 use crate::bridge::px4_version::{Px4Version, Release, mode_refusal};
 
 /// The startup script PX4's POSIX main runs, relative to the build folder.
@@ -28,7 +28,7 @@ pub struct Px4Build {
 /// Why a folder is not a PX4 SITL build.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "{root}: not a PX4 SITL build folder prgenuav can fly (build/px4_sitl_default of PX4-Autopilot v1.14 to \
+    "{root}: not a PX4 SITL build folder prgenuav can fly (build/px4_sitl_default of PX4-Autopilot v1.12 to \
      v1.17, built with `make px4_sitl_default`): {missing}"
 )]
 pub struct NotABuild {
@@ -88,6 +88,28 @@ impl Px4Build {
             self.root.display(),
             mode_refusal(&self.version, self.release, mode)
         )))
+    }
+}
+
+impl Px4Build {
+    /// Whether this build can fly with `sim`: v1.12 has no SIH in SITL, and an external simulator needs
+    /// the build's `simulator_mavlink` module (v1.12: `simulator`), whose command sits in `bin/`.
+    pub fn check_sim(&self, sim: VehicleSim) -> Result<(), ModeUnsupported> {
+        let root = self.root.display();
+        if let Some(why) = self.release.sim_refusal(&self.version, sim) {
+            return Err(ModeUnsupported(format!("{root}: {why}")));
+        }
+        let module = self.root.join("bin").join(self.release.external.module);
+        if sim == VehicleSim::Iris && !module.exists() {
+            let name = self.release.external.module.trim_start_matches("px4-");
+            return Err(ModeUnsupported(format!(
+                "{root}: --sim iris: {} is missing, so this build has no external-simulator support (PX4's \
+                 `{name}` module); build px4_sitl_default with its simulation modules (CONFIG_COMMON_SIMULATION=y \
+                 from v1.14, `{name}` in boards/px4/sitl/default.cmake in v1.12), or fly --sim sih",
+                module.display()
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -254,6 +276,28 @@ mod tests {
             Some("v1.15.4")
         );
         assert_eq!(tag_in_header("#define PX4_GIT_TAG_STR_X \"v1\""), None);
+    }
+
+    #[test]
+    fn a_build_without_the_external_simulator_module_is_refused_for_the_iris_and_v1_12_for_sih() {
+        let dir = folder(&ALL);
+        let b = Px4Build::open(dir.path()).unwrap();
+        let e = b.check_sim(VehicleSim::Iris).unwrap_err().to_string();
+        assert!(
+            e.contains("bin/px4-simulator_mavlink is missing") && e.contains("no external-simulator support"),
+            "{e}"
+        );
+        assert_eq!(b.check_sim(VehicleSim::Sih), Ok(()));
+        std::fs::write(dir.path().join("bin/px4-simulator_mavlink"), "").unwrap();
+        assert_eq!(b.check_sim(VehicleSim::Iris), Ok(()));
+        write_header(dir.path(), &header("v1.12.3"));
+        let v112 = Px4Build::open(dir.path()).unwrap();
+        let e = v112.check_sim(VehicleSim::Sih).unwrap_err().to_string();
+        assert!(e.contains("has no SIH in SITL") && e.contains("--sim iris"), "{e}");
+        let e = v112.check_sim(VehicleSim::Iris).unwrap_err().to_string();
+        assert!(e.contains("bin/px4-simulator is missing"), "{e}");
+        std::fs::write(dir.path().join("bin/px4-simulator"), "").unwrap();
+        assert_eq!(v112.check_sim(VehicleSim::Iris), Ok(()));
     }
 
     #[test]

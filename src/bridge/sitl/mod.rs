@@ -1,7 +1,8 @@
-//! Starting a PX4 SITL binary the user built (PX4 v1.14 to v1.17, SIH quadrotor, headless) for tests and reference
-//! runs. Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
-//! `make px4_sitl sihsim_quadx` target does, in a private working directory, and stops it when dropped
-//! (`spawn`: also when prgenuav is killed). `build` checks the user's build folder.
+//! Starting a PX4 SITL binary the user built (PX4 v1.12 to v1.17, headless) for tests and reference runs:
+//! with its own SIH quadrotor (v1.14 on), or in external-simulator mode for prgenuav's iris simulator
+//! ([`super::hil`]). Nothing here builds PX4: it runs `BUILD/bin/px4` with its `BUILD/etc` the way PX4's own
+//! `make px4_sitl sihsim_quadx` (or `none_iris`) target does, in a private working directory, and stops it
+//! when dropped (`spawn`: also when prgenuav is killed). `build` checks the user's build folder.
 
 mod build;
 mod console;
@@ -17,8 +18,10 @@ use std::time::{Duration, Instant};
 
 pub use build::{ModeUnsupported, NotABuild, Px4Build, VERSION_HEADER};
 use console::{CONSOLE_LINES, Console};
+pub(crate) use spawn::{stop as kill_group, tie_to_parent};
 
-use crate::bridge::px4_version::HomeUnits;
+use crate::bridge::options::VehicleSim;
+use crate::bridge::px4_version::{ExternalSim, HomeUnits};
 use crate::model::{GeoPoint, SIM_HOME};
 
 /// How long the startup script may take before [`Px4Sitl::start`] gives up (a loaded machine boots PX4 in
@@ -28,6 +31,15 @@ pub const BOOT_TIMEOUT: Duration = Duration::from_secs(60);
 /// The competition's home (PX4 1.14's SIH reads these integer parameters in 1e-7 degrees).
 pub const COMPETITION_HOME_E7: (i64, i64) = (473_977_420, 85_455_940);
 
+/// What simulates the vehicle of an instance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SitlSim {
+    /// PX4's own SIH quadrotor, reading its home from the environment in these units.
+    Sih(HomeUnits),
+    /// An external simulator PX4 connects to on TCP `4560 + instance`, started this way.
+    External(ExternalSim),
+}
+
 /// What to start.
 #[derive(Debug, Clone)]
 pub struct SitlSpec {
@@ -35,12 +47,12 @@ pub struct SitlSpec {
     pub bin: PathBuf,
     /// Instance number: MAVLink system id `instance + 1`, API link sending to UDP `14540 + instance`.
     pub instance: u8,
-    /// `PX4_SIM_SPEED_FACTOR` (SIH's lockstep speed-up).
+    /// `PX4_SIM_SPEED_FACTOR` (SIH's lockstep speed-up; an external simulator sets its own pace).
     pub speed_factor: f64,
     /// Home (WGS-84 degrees, metres AMSL).
     pub home: GeoPoint,
-    /// How this build's SIH reads its home from the environment.
-    pub home_units: HomeUnits,
+    /// What simulates the vehicle.
+    pub sim: SitlSim,
     /// How long the startup script may take.
     pub boot_timeout: Duration,
 }
@@ -53,15 +65,25 @@ impl SitlSpec {
             instance,
             speed_factor,
             home: SIM_HOME,
-            home_units: HomeUnits::IntE7,
+            sim: SitlSim::Sih(HomeUnits::IntE7),
             boot_timeout: BOOT_TIMEOUT,
         }
     }
 
-    /// [`Self::new`] for a checked build: its `bin/px4`, its release's home units.
+    /// [`Self::new`] for a checked build: its `bin/px4`, its release's SIH home units.
     pub fn for_build(build: &Px4Build, instance: u8, speed_factor: f64) -> Self {
+        Self::with_sim(build, instance, speed_factor, VehicleSim::Sih)
+    }
+
+    /// [`Self::new`] for a checked build flown with `sim`: SIH in its release's home units, or the
+    /// release's external-simulator start-up (whether the build can is [`Px4Build::check_sim`]'s to say).
+    pub fn with_sim(build: &Px4Build, instance: u8, speed_factor: f64, sim: VehicleSim) -> Self {
+        let sim = match (sim, build.release.sih) {
+            (VehicleSim::Sih, Some(units)) => SitlSim::Sih(units),
+            _ => SitlSim::External(build.release.external),
+        };
         SitlSpec {
-            home_units: build.release.home,
+            sim,
             ..Self::new(build.bin(), instance, speed_factor)
         }
     }
@@ -72,9 +94,13 @@ impl SitlSpec {
         self
     }
 
-    /// `PX4_HOME_*` as this build's SIH start-up script reads them.
+    /// `PX4_HOME_*` as this build's SIH start-up script reads them (none for an external simulator, whose
+    /// GPS says where the vehicle is).
     pub fn home_env(&self) -> Vec<(&'static str, String)> {
-        match self.home_units {
+        let SitlSim::Sih(units) = self.sim else {
+            return Vec::new();
+        };
+        match units {
             HomeUnits::IntE7 => {
                 let (lat, lon) = home_e7(self.home);
                 vec![("PX4_HOME_LAT", lat.to_string()), ("PX4_HOME_LON", lon.to_string())]
@@ -360,8 +386,8 @@ mod tests {
             ]
         );
         let new = SitlSpec {
-            home_units: HomeUnits::FloatDegrees,
-            ..old
+            sim: SitlSim::Sih(HomeUnits::FloatDegrees),
+            ..old.clone()
         };
         assert_eq!(
             new.home_env(),

@@ -3,13 +3,16 @@
 //! with one number break each other's flights. Parallel flights on one machine (a campaign's `--px4` fleet,
 //! `fly --px4` jobs of a Slurm node or of `xargs -P`) each claim a free slot: an exclusive lock on
 //! `TMPDIR/prgenuav-px4-slot-<i>.lock`, held until the flight ends (the OS drops it if the process dies), and
-//! ports nobody else has bound. A PX4 started by hand holds its instance's own server lock, which PX4 checks
-//! before it starts ("PX4 server already running for instance i"): such a slot is skipped too.
+//! ports nobody else has bound; with prgenuav's simulator, also TCP `4560 + i`, where PX4 connects to its
+//! simulator. A PX4 started by hand holds its instance's own server lock, which PX4 checks before it starts
+//! ("PX4 server already running for instance i"): such a slot is skipped too.
 
 use std::fs::{File, OpenOptions, TryLockError};
-use std::net::UdpSocket;
+use std::net::{TcpListener, UdpSocket};
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
+
+use crate::bridge::options::VehicleSim;
 
 /// Instances on one machine: instance 10's bridge port would be 14550, where every instance's GCS link sends
 /// (QGroundControl's port).
@@ -39,7 +42,8 @@ impl Slot {
 #[derive(Debug, thiserror::Error)]
 #[error(
     "no free PX4 instance slot on this machine: instances {tried} are in use (by other prgenuav flights, \
-     holding {dir}/prgenuav-px4-slot-<i>.lock, or by PX4s started by hand on their UDP ports); wait for \
+     holding {dir}/prgenuav-px4-slot-<i>.lock, or by PX4s started by hand on their UDP ports, or, for --sim \
+     iris, by another simulator on TCP 4560+i); wait for \
      them, or run fewer flights at once"
 )]
 pub struct NoFreeSlot {
@@ -47,10 +51,15 @@ pub struct NoFreeSlot {
     dir: String,
 }
 
-/// Claims the lowest free slot from `from` on.
+/// Claims the lowest free slot from `from` on (for SIH).
 pub fn claim(from: u8) -> Result<Slot, NoFreeSlot> {
+    claim_with(from, VehicleSim::Sih)
+}
+
+/// Claims the lowest free slot from `from` on whose ports `sim` needs are free.
+pub fn claim_with(from: u8, sim: VehicleSim) -> Result<Slot, NoFreeSlot> {
     for instance in from..SLOTS {
-        if let Some(slot) = try_claim(instance) {
+        if let Some(slot) = try_claim(instance, sim) {
             return Ok(slot);
         }
     }
@@ -60,12 +69,17 @@ pub fn claim(from: u8) -> Result<Slot, NoFreeSlot> {
     })
 }
 
-/// Claims `k` distinct slots, lowest first.
+/// Claims `k` distinct slots, lowest first (for SIH).
 pub fn claim_many(k: usize) -> Result<Vec<Slot>, NoFreeSlot> {
+    claim_many_with(k, VehicleSim::Sih)
+}
+
+/// Claims `k` distinct slots whose ports `sim` needs are free, lowest first.
+pub fn claim_many_with(k: usize, sim: VehicleSim) -> Result<Vec<Slot>, NoFreeSlot> {
     let mut slots: Vec<Slot> = Vec::with_capacity(k);
     while slots.len() < k {
         let from = slots.last().map_or(0, |s| s.instance + 1);
-        slots.push(claim(from)?);
+        slots.push(claim_with(from, sim)?);
     }
     Ok(slots)
 }
@@ -108,7 +122,7 @@ fn lock_path(instance: u8) -> PathBuf {
     std::env::temp_dir().join(format!("prgenuav-px4-slot-{instance}.lock"))
 }
 
-fn try_claim(instance: u8) -> Option<Slot> {
+fn try_claim(instance: u8, sim: VehicleSim) -> Option<Slot> {
     let file = OpenOptions::new()
         .create(true)
         .write(true)
@@ -121,7 +135,10 @@ fn try_claim(instance: u8) -> Option<Slot> {
     }
     // Held by nobody of ours; a PX4 or a bridge started by hand may still own the instance or its ports.
     let free = !held_by_px4(instance) && ports(instance).iter().all(|p| UdpSocket::bind(("0.0.0.0", *p)).is_ok());
-    free.then_some(Slot { instance, _lock: file })
+    // Another simulator (Gazebo, jMAVSim, prgenuav-sim) serving this instance's TCP port.
+    let simulator_port = 4560 + u16::from(instance);
+    let tcp_free = sim == VehicleSim::Sih || TcpListener::bind(("127.0.0.1", simulator_port)).is_ok();
+    (free && tcp_free).then_some(Slot { instance, _lock: file })
 }
 
 #[cfg(test)]
@@ -148,6 +165,14 @@ mod tests {
         assert_ne!(got.instance(), freed);
         drop(squatter);
         drop(got);
+        // A simulator already serving a slot's TCP port: that slot is not handed out for the iris.
+        let tcp = TcpListener::bind(("127.0.0.1", 4560 + u16::from(freed))).expect("bind");
+        let iris = claim_with(freed, VehicleSim::Iris).expect("another slot");
+        assert_ne!(iris.instance(), freed);
+        drop(iris);
+        let sih = claim_with(freed, VehicleSim::Sih).expect("SIH does not need it");
+        assert_eq!(sih.instance(), freed);
+        drop(tcp);
         // A PX4 started by hand on the free slot: its server lock is held, so the slot is skipped.
         if let Some(px4) = hold_as_px4(&px4_lock_path(freed), false) {
             let got = claim(freed).expect("another slot");

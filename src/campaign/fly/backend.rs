@@ -7,6 +7,7 @@ use std::time::Duration;
 use tokio::runtime::Handle;
 
 use crate::bridge::sitl::Px4Build;
+use crate::campaign::fly::hitl::{HitlSettings, HitlVehicle};
 use crate::campaign::fly::mock_mavlink::{LinkVehicle, MockVehicle};
 use crate::campaign::fly::px4::{Px4Settings, Px4Vehicle, default_instances, instance_slots};
 use crate::campaign::fly::runner::{RunnerSettings, RunnerVehicle, Template};
@@ -44,13 +45,14 @@ pub fn runner_settings(s: &FleetSettings, campaign_folder: PathBuf) -> Result<Op
 }
 
 /// The PX4 build a `--px4` campaign flies, checked: a build of a release prgenuav checked, that can fly the
-/// campaign's mode, with the instances asked for.
+/// campaign's mode with its simulator, with the instances asked for.
 pub fn px4_build(s: &FleetSettings) -> Result<Option<Px4Build>, CampaignError> {
     let Backend::Px4(folder) = s.backend() else {
         return Ok(None);
     };
     let build = Px4Build::open(folder).map_err(|e| config(e.to_string()))?;
     build.check_mode(s.mode).map_err(|e| config(e.to_string()))?;
+    build.check_sim(s.vehicles.sim).map_err(|e| config(e.to_string()))?;
     if let Some(k) = s.vehicles.instances.or(s.vehicles.jobs) {
         instance_slots(k).map_err(config)?;
     }
@@ -75,6 +77,9 @@ pub fn fleet(s: &FleetSettings, folder: PathBuf, handle: &Handle) -> Result<Vec<
                 judge: s.judge,
                 anchor: s.flight.anchor_at_vehicle_home,
                 timeout_s: s.flight.timeout_s,
+                sim: s.vehicles.sim,
+                sim_link: s.vehicles.sim_link,
+                seed: s.seed,
                 ..Px4Settings::new(build, speed_factor)
             };
             let k = (s.vehicles.instances.or(s.vehicles.jobs))
@@ -83,6 +88,18 @@ pub fn fleet(s: &FleetSettings, folder: PathBuf, handle: &Handle) -> Result<Vec<
             Ok(fleet.into_iter().map(|v| Box::new(v) as Box<dyn Vehicle>).collect())
         }
         Backend::Mock => mocks(s, handle),
+        Backend::Hitl(urls) => {
+            let settings = HitlSettings {
+                mode,
+                judge: s.judge,
+                timeout_s: s.flight.timeout_s,
+                seed: s.seed,
+            };
+            urls.iter()
+                .map(|url| HitlVehicle::new(handle.clone(), url, settings).map(|v| Box::new(v) as Box<dyn Vehicle>))
+                .collect::<Result<_, _>>()
+                .map_err(config)
+        }
         Backend::Links(urls) => Ok(urls
             .iter()
             .map(|url| {

@@ -114,9 +114,9 @@ impl Vehicle for LinkVehicle {
     }
 }
 
-/// The mock's seed for the flight recorded in `trajectory_csv` of a campaign seeded with `seed`: its file name
-/// (FNV-1a) mixed with the seed.
-fn flight_seed(seed: u64, trajectory_csv: &Path) -> u64 {
+/// The seed of the flight recorded in `trajectory_csv` of a campaign seeded with `seed` (the mock's gusts, the
+/// iris simulator's sensor noise): its file name (FNV-1a) mixed with the seed.
+pub(in crate::campaign) fn flight_seed(seed: u64, trajectory_csv: &Path) -> u64 {
     let name = trajectory_csv
         .file_name()
         .map(|n| n.as_encoded_bytes())

@@ -1,6 +1,7 @@
-//! PX4 SITL instances prgenuav starts itself (`--px4 BUILD`): every flight on a fresh SIH instance at the
-//! test's home, so no flight inherits another's state (a reused PX4 1.14 SIH instance can stop arming:
-//! "Preflight Fail: horizontal velocity unstable"), in the instance slot its vehicle owns.
+//! PX4 SITL instances prgenuav starts itself (`--px4 BUILD`): every flight on a fresh instance at the test's
+//! home, so no flight inherits another's state (a reused PX4 1.14 SIH instance can stop arming: "Preflight
+//! Fail: horizontal velocity unstable"), in the instance slot its vehicle owns; simulated by PX4's SIH or
+//! by prgenuav's iris simulator ([`super::px4_iris`]).
 //!
 //! A PX4 that never boots, dies or cannot be flown is the backend's fault, not the test's: the flight is
 //! retried once on a fresh instance and, if that fails too, journaled as [`crate::campaign::ground::flight_status::FlightStatus::BackendFailed`] (not charged).
@@ -16,7 +17,7 @@ use tokio::runtime::Handle;
 use crate::bridge::companion::answers::AnswerCounts;
 use crate::bridge::sitl::slot::{self, Slot};
 use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
-use crate::bridge::{FlyMode, FlyOptions};
+use crate::bridge::{BridgeError, FlightReport, FlyMode, FlyOptions, SimLink, VehicleSim};
 use crate::campaign::fly::mock_mavlink::{flown, fly_blocking};
 use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
@@ -79,6 +80,12 @@ pub struct Px4Settings {
     pub timeout_s: f64,
     /// How long PX4's startup script may take.
     pub boot_timeout: Duration,
+    /// What simulates the vehicle.
+    pub sim: VehicleSim,
+    /// With the iris simulator: its link to PX4.
+    pub sim_link: SimLink,
+    /// The campaign's seed: with the iris simulator, each flight's sensor noise is drawn from it and the flight.
+    pub seed: u64,
 }
 
 impl Px4Settings {
@@ -93,6 +100,29 @@ impl Px4Settings {
             anchor: false,
             timeout_s: FlyOptions::default().timeout_s,
             boot_timeout: BOOT_TIMEOUT,
+            sim: VehicleSim::Sih,
+            sim_link: SimLink::Tcp,
+            seed: 0,
+        }
+    }
+
+    /// The bridge's options for a flight on instance `instance` (reached at `connect`), recorded to `csv`.
+    pub(super) fn fly_options(&self, connect: String, instance: u8, csv: &Path) -> FlyOptions {
+        FlyOptions {
+            connect,
+            mode: self.mode,
+            time_scale: self.speed_factor,
+            // Under load an instance holds less than its speed factor: measured at connection.
+            detect_time_scale: true,
+            trajectory_csv: Some(csv.to_path_buf()),
+            heartbeat_wait_s: 30.0,
+            // Instance i is system i + 1: another vehicle heard on the port (a mock, a hand-started PX4) is not
+            // flown by mistake.
+            target_system: Some(instance.saturating_add(1)),
+            judge: self.judge,
+            anchor_at_vehicle_home: self.anchor,
+            timeout_s: self.timeout_s,
+            ..FlyOptions::default()
         }
     }
 }
@@ -112,7 +142,7 @@ impl Px4Vehicle {
     /// campaign or `fly --px4` job on the machine takes others).
     pub fn fleet(handle: &Handle, settings: &Px4Settings, k: usize) -> Result<Vec<Px4Vehicle>, String> {
         instance_slots(k)?;
-        let slots = slot::claim_many(k).map_err(|e| e.to_string())?;
+        let slots = slot::claim_many_with(k, settings.sim).map_err(|e| e.to_string())?;
         Ok(slots
             .into_iter()
             .map(|s| Px4Vehicle::new(handle.clone(), settings.clone(), s.instance()).claimed(s))
@@ -155,6 +185,9 @@ impl Px4Vehicle {
 
     /// One fresh instance at the test's home, flown and stopped; its console appended to `log`.
     fn attempt(&self, test: &TestCase, csv: &Path, stop: &AtomicBool, log: &mut String) -> Attempt {
+        if self.settings.sim == VehicleSim::Iris {
+            return self.attempt_iris(test, csv, stop, log);
+        }
         let s = &self.settings;
         let spec = SitlSpec {
             boot_timeout: s.boot_timeout,
@@ -162,46 +195,70 @@ impl Px4Vehicle {
         };
         let mut px4 = match Px4Sitl::start_until(&spec, stop) {
             Ok(px4) => px4,
-            Err(SitlError::Cancelled { .. }) => return Attempt::Stopped,
-            Err(e) => {
-                if let SitlError::Boot { tail, .. } | SitlError::Died { tail, .. } = &e {
-                    push_lines(log, tail);
-                }
-                return Attempt::Failed(e.to_string());
-            }
+            Err(e) => return boot_failed(e, log),
         };
-        let opts = FlyOptions {
-            connect: px4.url(),
-            mode: s.mode,
-            time_scale: s.speed_factor,
-            // Under load an instance holds less than its speed factor: measured at connection.
-            detect_time_scale: true,
-            trajectory_csv: Some(csv.to_path_buf()),
-            heartbeat_wait_s: 30.0,
-            // Instance i is system i + 1: another vehicle heard on the port (a mock, a hand-started PX4) is not
-            // flown by mistake.
-            target_system: Some(self.instance.saturating_add(1)),
-            judge: s.judge,
-            anchor_at_vehicle_home: s.anchor,
-            timeout_s: s.timeout_s,
-            ..FlyOptions::default()
-        };
+        let opts = s.fly_options(px4.url(), self.instance, csv);
         let result = fly_blocking(&self.handle, test, &opts, stop);
         let died = px4.exited();
-        if s.keep_ulog {
-            keep_ulog(&px4, &csv.with_extension("ulg"), log);
+        self.keep_console(&px4, csv, log);
+        drop(px4);
+        outcome(result, died, self.instance, None)
+    }
+
+    /// PX4's ULog (with `--keep-ulog`) beside the trajectory, and its console into `log`.
+    pub(super) fn keep_console(&self, px4: &Px4Sitl, csv: &Path, log: &mut String) {
+        if self.settings.keep_ulog {
+            keep_ulog(px4, &csv.with_extension("ulg"), log);
         }
         push_lines(log, &px4.console_tail(usize::MAX));
-        drop(px4);
-        match (result, died) {
-            (Ok(r), _) if let Some(why) = starved(r.companion_answers, self.instance) => Attempt::Failed(why),
-            (Ok(r), _) if r.status.completed() => Attempt::Flew(flown(r)),
-            (_, Some(status)) => {
-                Attempt::Failed(format!("PX4 instance {} exited mid-flight ({status})", self.instance))
+    }
+
+    /// The instance number.
+    pub(super) fn instance(&self) -> u8 {
+        self.instance
+    }
+
+    /// How every flight is started and flown.
+    pub(super) fn settings(&self) -> &Px4Settings {
+        &self.settings
+    }
+
+    /// The runtime flights are flown on.
+    pub(super) fn handle(&self) -> &Handle {
+        &self.handle
+    }
+}
+
+/// A PX4 that did not boot: the campaign's stop, or a backend failure with its console's last words in `log`.
+pub(super) fn boot_failed(e: SitlError, log: &mut String) -> Attempt {
+    match e {
+        SitlError::Cancelled { .. } => Attempt::Stopped,
+        e => {
+            if let SitlError::Boot { tail, .. } | SitlError::Died { tail, .. } = &e {
+                push_lines(log, tail);
             }
-            (Err(e), None) => Attempt::Failed(format!("PX4 instance {}: {e}", self.instance)),
-            (Ok(r), None) => never_ready(flown(r), self.instance),
+            Attempt::Failed(e.to_string())
         }
+    }
+}
+
+/// How a flight on a fresh instance came out: the flight, or why the backend (not the test) failed it: the
+/// companion starved, PX4 died, the simulator lost PX4 (`simulator`), or PX4 was never ready.
+pub(super) fn outcome(
+    result: Result<FlightReport, BridgeError>,
+    died: Option<String>,
+    instance: u8,
+    simulator: Option<String>,
+) -> Attempt {
+    match (result, died) {
+        (Ok(r), _) if let Some(why) = starved(r.companion_answers, instance) => Attempt::Failed(why),
+        (Ok(r), _) if r.status.completed() => Attempt::Flew(flown(r)),
+        (_, Some(status)) => Attempt::Failed(format!("PX4 instance {instance} exited mid-flight ({status})")),
+        (_, None) if let Some(why) = simulator => Attempt::Failed(format!(
+            "prgenuav's simulator of PX4 instance {instance} stopped: {why}"
+        )),
+        (Err(e), None) => Attempt::Failed(format!("PX4 instance {instance}: {e}")),
+        (Ok(r), None) => never_ready(flown(r), instance),
     }
 }
 
@@ -230,7 +287,11 @@ fn never_ready(f: Flown, instance: u8) -> Attempt {
 
 impl Vehicle for Px4Vehicle {
     fn name(&self) -> String {
-        format!("px4-sih#{}", self.instance)
+        let sim = match self.settings.sim {
+            VehicleSim::Sih => "sih",
+            VehicleSim::Iris => "iris",
+        };
+        format!("px4-{sim}#{}", self.instance)
     }
 
     fn fly(&mut self, test: &TestCase, csv: &Path, stop: &AtomicBool) -> Result<Flown, VehicleError> {
@@ -262,7 +323,7 @@ impl Vehicle for Px4Vehicle {
     }
 }
 
-fn push_lines(log: &mut String, lines: &[String]) {
+pub(super) fn push_lines(log: &mut String, lines: &[String]) {
     for l in lines {
         log.push_str(l);
         log.push('\n');

@@ -57,6 +57,17 @@ impl CampaignSettings {
                 "--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)".into(),
             );
         }
+        if v.sim_link == crate::bridge::SimLink::Serial && v.sim != crate::bridge::VehicleSim::Iris {
+            return Err("--sim-link serial is the link of prgenuav's simulator: give --sim iris too".into());
+        }
+        if let Some(boards) = &v.hitl {
+            if boards.is_empty() {
+                return Err("--hitl names no board".into());
+            }
+            for b in boards {
+                crate::bridge::hil::board::BoardPort::parse(b)?;
+            }
+        }
         if v.connect.is_empty() {
             return Err("--connect names no vehicle".into());
         }

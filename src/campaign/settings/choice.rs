@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use crate::bridge::FlyMode;
+use crate::bridge::{FlyMode, SimLink, VehicleSim};
 use crate::generator::Family;
 use crate::judge::Judge;
 use crate::lfs::sim::Motion;
@@ -75,6 +75,16 @@ choice!(FlyMode {
     FlyMode::Offboard => "offboard": "prgenuav flies the waypoints in OFFBOARD mode with the planner's setpoints (any PX4).",
     FlyMode::Mission => "mission": "PX4 flies the plain mission, no avoidance (the baseline).",
     FlyMode::CollisionPrevention => "collision-prevention": "PX4's Collision Prevention is tested: prgenuav flies Position mode as a pilot and feeds a virtual lidar.",
+});
+
+choice!(VehicleSim {
+    VehicleSim::Sih => "sih": "PX4's own SIH quadrotor inside PX4 SITL (v1.14 on).",
+    VehicleSim::Iris => "iris": "prgenuav's iris simulator in this process, PX4 SITL in external-simulator mode (v1.12 on).",
+});
+
+choice!(SimLink {
+    SimLink::Tcp => "tcp": "PX4's TCP connection to the simulator, in lockstep.",
+    SimLink::Serial => "serial": "A serial pty joined to PX4's TCP port by socat, on the wall clock (as a board).",
 });
 
 choice!(Motion {
@@ -216,6 +226,8 @@ mod tests {
         names_are_serde_names::<Spelling>();
         names_are_serde_names::<Family>();
         names_are_serde_names::<ProfileName>();
+        names_are_serde_names::<VehicleSim>();
+        names_are_serde_names::<SimLink>();
     }
 
     #[test]

@@ -9,8 +9,28 @@ use crate::model::ModelError;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 
 /// The format of `campaign.json` this version writes. A file without a format is one written before settings
-/// were sectioned: [`super::legacy`] reads it.
-pub const FORMAT: u64 = 2;
+/// were sectioned: [`super::legacy`] reads it. Format 2 lacks the keys format 3 added (`format_3_keys`).
+pub const FORMAT: u64 = 3;
+
+/// The `[vehicles]` keys format 3 added, each with what a format-2 campaign flew with before it existed:
+/// PX4's own SIH, no link of ours, no board in the loop.
+fn format_3_keys() -> [(&'static str, serde_json::Value); 3] {
+    [
+        ("sim", serde_json::json!("sih")),
+        ("sim_link", serde_json::json!("tcp")),
+        ("hitl", serde_json::Value::Null),
+    ]
+}
+
+/// A format-2 file read as format 3.
+fn from_format_2(value: &mut serde_json::Value) {
+    let Some(vehicles) = value.get_mut("vehicles").and_then(|v| v.as_object_mut()) else {
+        return;
+    };
+    for (key, before) in format_3_keys() {
+        vehicles.entry(key).or_insert(before);
+    }
+}
 
 impl CampaignSettings {
     /// Reads `folder/campaign.json` (a link there is refused), of this format or an older one.
@@ -34,6 +54,10 @@ impl CampaignSettings {
         match object.remove("format") {
             None => super::legacy::upgrade(value),
             Some(f) if f.as_u64() == Some(FORMAT) => serde_json::from_value(value).map_err(|e| e.to_string()),
+            Some(f) if f.as_u64() == Some(2) => {
+                from_format_2(&mut value);
+                serde_json::from_value(value).map_err(|e| e.to_string())
+            }
             Some(f) => Err(format!(
                 "format {f}: this prgenuav reads campaign files of format {FORMAT} and older; a newer prgenuav wrote \
                  it"

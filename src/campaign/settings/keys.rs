@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use super::declare::section;
 use super::{Flag, Resume};
-use crate::bridge::FlyMode;
+use crate::bridge::{FlyMode, SimLink, VehicleSim};
 use crate::judge::Judge;
 use crate::model::Limit;
 
@@ -37,7 +37,8 @@ section! {
         },
         seed: u64 = [value 0] {
             flag: Some(Flag::value("--seed", "S").short('s').visible()),
-            help: "Seed of every random draw: the same seed draws the same candidates.",
+            help: "Seed of every random draw: the same seed draws the same candidates (and, with --sim iris, the same \
+                   sensor noise of each flight).",
         },
         mode: FlyMode = [value FlyMode::Avoidance] {
             flag: Some(Flag::value("--mode", "MODE")),
@@ -108,6 +109,29 @@ section! {
         keep_ulog: bool = [value false] {
             flag: Some(Flag::switch("--keep-ulog", true)),
             help: "Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg.",
+        },
+        sim: VehicleSim = [value VehicleSim::Sih] {
+            flag: Some(Flag::value("--sim", "SIM").visible()),
+            help: "What simulates the vehicle of the --px4 instances: `sih` (PX4's own, v1.14 on) or `iris` \
+                   (prgenuav's Gazebo-Classic iris in this process, PX4 in external-simulator mode, v1.12 on; in \
+                   lockstep the avoidance companion runs on simulated time, so no flight starves; docs/px4.md).",
+        },
+        sim_link: SimLink = [value SimLink::Tcp] {
+            flag: Some(Flag::value("--sim-link", "LINK")),
+            help: "With --sim iris: the simulator's HIL link to PX4, `tcp` (PX4's connection, in lockstep) or \
+                   `serial` (a pty joined to PX4's TCP port by socat, on the wall clock at 250 Hz, as a board's; \
+                   real time only).",
+        },
+        hitl: Vec<String> = [absent "none: no board in the loop", "serial:/dev/ttyACM0:921600"] {
+            flag: Some(Flag {
+                conflicts_with: "px4",
+                ..Flag::value("--hitl", "serial:DEVICE:BAUD,...")
+            }),
+            resume: Resume::Inherited,
+            help: "Fly flight controllers on a bench in the loop (HITL), one per serial URL: prgenuav's simulator \
+                   feeds each board its sensors over that port on the wall clock and the flight goes through the \
+                   simulator's gateway. Each board must run SYS_HITL 1 (airframe 1001, firmware with pwm_out_sim; \
+                   docs/hitl.md).",
         },
     }
 }

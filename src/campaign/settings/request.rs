@@ -113,6 +113,19 @@ impl Request {
         if v.px4.is_none() && (given("instances") || given("speed_factor") || given("keep_ulog")) {
             return Err("--instances, --speed-factor and --keep-ulog need --px4 BUILD_DIR".into());
         }
+        if v.px4.is_none() && (given("sim") || given("sim_link")) {
+            return Err(
+                "--sim and --sim-link say how the --px4 instances are simulated: they need --px4 BUILD_DIR".into(),
+            );
+        }
+        if v.hitl.is_some() && (v.runner.is_some() || v.connect.as_ref().is_some_and(|c| c != &["mock"])) {
+            return Err("--hitl boards are the vehicles: not with --runner or --connect".into());
+        }
+        if v.hitl.is_some() && v.jobs.is_some() {
+            return Err(
+                "--jobs: each --hitl board flies one flight at a time; give more boards for more at once".into(),
+            );
+        }
         if v.runner.is_none() && (given("job_timeout_s") || given("runner_cancel")) {
             return Err("--job-timeout and --runner-cancel go with --runner".into());
         }
@@ -147,6 +160,10 @@ impl Request {
     /// `--jobs` sets the number of embedded mocks (no `--mock-vehicles` given, the mocks fly).
     fn on_mock_by_jobs(&self) -> bool {
         let v = &self.asked.vehicles;
-        v.runner.is_none() && v.px4.is_none() && v.connect() == ["mock"] && !self.gives("mock", "vehicles")
+        v.runner.is_none()
+            && v.px4.is_none()
+            && v.hitl.is_none()
+            && v.connect() == ["mock"]
+            && !self.gives("mock", "vehicles")
     }
 }

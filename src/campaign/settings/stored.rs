@@ -64,11 +64,12 @@ impl<'a> FleetSettings<'a> {
 
 /// What `v` names.
 fn backend_of(v: &Vehicles) -> Backend<'_> {
-    match (&v.runner, &v.px4) {
-        (Some(t), _) => Backend::Runner(t),
-        (None, Some(b)) => Backend::Px4(b),
-        (None, None) if v.connect == ["mock"] => Backend::Mock,
-        (None, None) => Backend::Links(&v.connect),
+    match (&v.runner, &v.px4, &v.hitl) {
+        (Some(t), ..) => Backend::Runner(t),
+        (None, Some(b), _) => Backend::Px4(b),
+        (None, None, Some(boards)) => Backend::Hitl(boards),
+        (None, None, None) if v.connect == ["mock"] => Backend::Mock,
+        (None, None, None) => Backend::Links(&v.connect),
     }
 }
 
@@ -83,6 +84,8 @@ pub enum Backend<'a> {
     Px4(&'a Path),
     /// A job per flight, this shell command template.
     Runner(&'a str),
+    /// Boards in the loop on these serial ports, fed by prgenuav's simulator.
+    Hitl(&'a [String]),
 }
 
 impl CampaignSettings {

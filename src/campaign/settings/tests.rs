@@ -163,6 +163,59 @@ fn campaign_json_is_the_settings_and_reads_back_as_they_were() {
     assert!(CampaignSettings::from_json(stray).unwrap_err().contains("thresold_m"));
 }
 
+#[test]
+fn a_format_2_campaign_reads_as_flown_on_sih_with_no_board() {
+    let s = CampaignSettings::resolve(&request(vec![], &Loaded::default()).unwrap()).unwrap();
+    let mut old = s.to_json().unwrap();
+    old["format"] = serde_json::json!(2);
+    for key in ["sim", "sim_link", "hitl"] {
+        old["vehicles"].as_object_mut().unwrap().remove(key);
+    }
+    let read = CampaignSettings::from_json(old).unwrap();
+    assert_eq!(read, s);
+    assert_eq!(
+        (read.vehicles.sim, read.vehicles.sim_link, read.vehicles.hitl),
+        (crate::bridge::VehicleSim::Sih, crate::bridge::SimLink::Tcp, None)
+    );
+}
+
+#[test]
+fn the_iris_simulator_and_boards_are_refused_where_they_cannot_fly() {
+    let sim = |v: &str| (find("vehicles", "sim").unwrap(), toml::Value::String(v.into()));
+    let link = |v: &str| (find("vehicles", "sim_link").unwrap(), toml::Value::String(v.into()));
+    let e = request(vec![sim("iris")], &Loaded::default())
+        .and_then(|r| r.check())
+        .unwrap_err();
+    assert!(e.contains("need --px4"), "{e}");
+    let px4 = (
+        find("vehicles", "px4").unwrap(),
+        toml::Value::String("/b/px4_sitl_default".into()),
+    );
+    let r = request(vec![px4.clone(), link("serial")], &Loaded::default()).unwrap();
+    r.check().unwrap();
+    let e = CampaignSettings::resolve(&r).unwrap().check().unwrap_err();
+    assert!(e.contains("give --sim iris too"), "{e}");
+    let r = request(vec![px4, link("serial"), sim("iris")], &Loaded::default()).unwrap();
+    CampaignSettings::resolve(&r).unwrap().check().unwrap();
+    let hitl = |v: &str| {
+        (
+            find("vehicles", "hitl").unwrap(),
+            <Vec<String> as SettingValue>::parse(v).unwrap(),
+        )
+    };
+    let r = request(
+        vec![hitl("serial:/dev/ttyACM0:921600,serial:/dev/ttyACM1:921600")],
+        &Loaded::default(),
+    )
+    .unwrap();
+    let s = CampaignSettings::resolve(&r).unwrap();
+    s.check().unwrap();
+    assert!(matches!(s.backend(), Backend::Hitl(b) if b.len() == 2));
+    let r = request(vec![hitl("serial:/dev/ttyACM0:9600")], &Loaded::default()).unwrap();
+    let e = CampaignSettings::resolve(&r).unwrap().check().unwrap_err();
+    assert!(e.contains("too slow for HIL"), "{e}");
+}
+
 /// Each setting's default is declared once: every key `campaign.json` holds is a declared setting's, so no
 /// default can hide in the stored type; and no declared default is a second spelling of another's.
 #[test]

@@ -8,6 +8,7 @@ use anyhow::bail;
 use clap::ArgMatches;
 use clap::parser::ValueSource;
 use prgenuav::campaign::run::{CampaignSettings, check_new};
+use prgenuav::campaign::settings::Choice;
 use prgenuav::campaign::settings::resume::{changes_since_first_run, resumed};
 use prgenuav::campaign::settings::{Backend, Loaded};
 
@@ -63,9 +64,10 @@ pub fn plan(args: &GenerateArgs, matches: &ArgMatches) -> anyhow::Result<Plan> {
 fn stored_summary(s: &CampaignSettings, path: &std::path::Path) -> String {
     let vehicles = match s.backend() {
         Backend::Runner(t) => format!("runner `{t}`"),
-        Backend::Px4(b) => format!("PX4 build {}", b.display()),
+        Backend::Px4(b) => format!("PX4 build {} (--sim {})", b.display(), s.vehicles.sim.name()),
         Backend::Mock => "mock".into(),
         Backend::Links(urls) => urls.join(","),
+        Backend::Hitl(urls) => format!("boards {}", urls.join(",")),
     };
     format!(
         "resuming as {} says: case {}, budget {}, seed {}, vehicles {vehicles}",
