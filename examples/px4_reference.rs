@@ -9,16 +9,20 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters)
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `SIM=iris`: PX4 in external-simulator mode fed by
+//! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
+//! from v1.12, which has no SIH)
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use prgenuav::bridge::sitl::{Px4Sitl, SitlSpec};
-use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, fly};
+use prgenuav::bridge::hil::sitl::{IrisSitl, IrisSpec};
+use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
+use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, SimLink, fly};
 use prgenuav::lfs::fidelity::{FlightCase, load_dir};
 use prgenuav::model::TestCase;
 
@@ -46,25 +50,69 @@ fn csv_field(s: &str) -> String {
     }
 }
 
+/// PX4 flying one case: SIH, or PX4 and prgenuav's iris simulator (`SIM=iris`), stopped when dropped.
+enum Vehicle {
+    Sih(Px4Sitl),
+    Iris(IrisSitl),
+}
+
+impl Vehicle {
+    fn start(bin: &Path, instance: u8, test: &TestCase) -> anyhow::Result<Vehicle> {
+        if std::env::var("SIM").as_deref() != Ok("iris") {
+            return Ok(Vehicle::Sih(Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED))?));
+        }
+        let root = bin
+            .parent()
+            .and_then(Path::parent)
+            .context("PX4_SITL_BIN is BUILD/bin/px4")?;
+        let spec = IrisSpec {
+            build: Px4Build::open(root)?,
+            instance,
+            home: test.home,
+            seed: 0,
+            speed_factor: SPEED,
+            link: SimLink::Tcp,
+            paced: true,
+            boot_timeout: Duration::from_secs(60),
+        };
+        let pair = IrisSitl::start(&tokio::runtime::Handle::current(), &spec, &AtomicBool::new(false))?;
+        Ok(Vehicle::Iris(pair))
+    }
+
+    fn options(&self) -> FlyOptions {
+        match self {
+            Vehicle::Sih(px4) => FlyOptions {
+                connect: px4.url(),
+                ..FlyOptions::default()
+            },
+            Vehicle::Iris(pair) => FlyOptions {
+                connect: pair.px4.url(),
+                sim_gate: pair.gate(),
+                lockstep: Some(Duration::ZERO),
+                ..FlyOptions::default()
+            },
+        }
+    }
+}
+
 async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> anyhow::Result<String> {
     let test = test_of(case)?;
-    let px4 = tokio::task::block_in_place(|| Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED)))?;
+    let vehicle = tokio::task::block_in_place(|| Vehicle::start(bin, instance, &test))?;
     let opts = FlyOptions {
-        connect: px4.url(),
         mode: FlyMode::Avoidance,
         time_scale: SPEED,
         timeout_s: TIMEOUT_S,
         heartbeat_wait_s: 60.0,
         // The recorded flights' definition (fidelity compares like for like).
         judge: prgenuav::judge::Judge::E2025,
-        ..FlyOptions::default()
+        ..vehicle.options()
     };
     let wall = Instant::now();
     let r = tokio::time::timeout(Duration::from_secs(600), fly(&test, &opts, CancelToken::new()))
         .await
         .context("flight within 10 min of wall time")??;
     let wall_s = wall.elapsed().as_secs_f64();
-    drop(px4);
+    tokio::task::block_in_place(|| drop(vehicle));
     let traj = r.trajectory.binned(0.5);
     let tmp = out.join("traj").join(format!("{}.csv.tmp", case.id));
     std::fs::write(&tmp, traj.to_csv())?;

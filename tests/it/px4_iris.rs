@@ -6,8 +6,8 @@
 //! v1.16.x and a v1.12.x build).
 //!
 //! Missions 1-3 in every mode: the release's modes land and are judged exactly as the trajectory recomputes,
-//! with no pre-flight, failsafe or timeout message from PX4 (beyond mission mode's geofence breach), no lockstep wait timed out and no hold of
-//! simulated time released late; a mode the release lacks is refused before anything is armed. One line per
+//! with no pre-flight, failsafe or timeout message from PX4 (beyond mission mode's geofence breach), at most one
+//! lockstep wait in 10 000 timed out and no hold of simulated time released late; a mode the release lacks is refused before anything is armed. One line per
 //! flight goes to stderr (docs/simulator.md's conformance table is made from them).
 
 use std::path::Path;
@@ -25,6 +25,8 @@ use super::px4_sitl_bin;
 
 /// The lockstep cap (PX4_SIM_SPEED_FACTOR) of every pair.
 const SPEED: f64 = 5.0;
+/// At most one lockstep step in this many may go on without PX4's answer.
+const MAX_TIMEOUT_SHARE: u64 = 10_000;
 /// PX4 messages no SIH flight of the same test gives.
 const UNWANTED: [&str; 5] = ["Preflight Fail", "Failsafe", "timeout", "not ready", "no RC"];
 
@@ -83,9 +85,10 @@ fn fly_iris(rt: &tokio::runtime::Runtime, bin: &Path, instance: u8, test: &TestC
         .filter(|t| mode != FlyMode::Mission && UNWANTED.iter().any(|u| t.contains(u)))
         .collect();
     assert!(unwanted.is_empty(), "{what} {mode:?}: PX4 said {unwanted:?}");
-    assert_eq!(
-        (summary.actuator_timeouts, summary.late_releases),
-        (0, 0),
+    // A lockstep step taken without PX4's answer (100 ms of wall time) is rare but not nil on a loaded
+    // machine (v1.12.3: 1 in 17 089 steps while a test suite ran beside it; 2 in 75 216 by hand).
+    assert!(
+        summary.actuator_timeouts * MAX_TIMEOUT_SHARE <= summary.steps && summary.late_releases == 0,
         "{what} {mode:?}: {summary}"
     );
     assert_eq!(summary.error, None, "{what} {mode:?}");

@@ -44,6 +44,8 @@ const REQUEST_INTERVAL: Duration = Duration::from_millis(200);
 const REQUEST_SLACK: Duration = Duration::from_millis(20);
 /// The longest wall wait at a hold for overdue requests (sent by PX4, not yet through the UDP link).
 const OVERDUE_WAIT: Duration = Duration::from_millis(50);
+/// The longest wall wait at a hold for a session's turn (its sends take microseconds).
+const TURN_WAIT: Duration = Duration::from_millis(200);
 /// Wall time PX4's MAVLink receiver is given to take the answer before simulated time goes on, so the
 /// answer lands at the instant it was planned for on an idle machine.
 const SETTLE: Duration = Duration::from_micros(2000);
@@ -94,6 +96,7 @@ pub(super) async fn run(
         };
         let usec = hold.truth.time.as_micros();
         answers.send(&mut st.companion, &mut worker, planned, now, usec).await;
+        paced.gate.serve_turns(hold.at, TURN_WAIT).await;
         settle().await;
         hold.release();
     }

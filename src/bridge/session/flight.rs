@@ -286,6 +286,9 @@ async fn execute(
             super::ready::arm(s).await
         }
         (Action::Start, _) => {
+            if super::held_start::start_at_a_hold(s).await {
+                return Ok(());
+            }
             super::ready::arm(s).await?;
             let last = s.test.mission.items.len().saturating_sub(1) as f32;
             s.command(MavCmd::MAV_CMD_MISSION_START, [0.0, last, 0.0, 0.0, 0.0, 0.0, 0.0])

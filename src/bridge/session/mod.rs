@@ -10,6 +10,7 @@ pub mod context;
 pub mod cp_setup;
 pub mod flight;
 pub mod gazebo;
+pub mod held_start;
 pub mod hitl;
 pub mod identify;
 pub mod placement;

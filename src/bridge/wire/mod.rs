@@ -5,6 +5,7 @@
 pub mod cancel;
 pub mod clock;
 pub mod command;
+pub mod command_batch;
 pub mod exchange;
 pub mod geo_view;
 pub mod link;
