@@ -35,6 +35,8 @@ fn options(url: String, speed: f64) -> FlyOptions {
         time_scale: speed,
         timeout_s: 400.0,
         heartbeat_wait_s: 60.0,
+        // As `fly --px4` does: the bridge times by the vehicle's measured clock (uncapped, the machine's pace).
+        detect_time_scale: true,
         ..FlyOptions::default()
     }
 }

@@ -9,7 +9,7 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `SIM=iris`: PX4 in external-simulator mode fed by
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `SIM=iris`: PX4 in external-simulator mode fed by
 //! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
 //! from v1.12, which has no SIH)
 
@@ -105,6 +105,8 @@ async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> an
         heartbeat_wait_s: 60.0,
         // The recorded flights' definition (fidelity compares like for like).
         judge: prgenuav::judge::Judge::E2025,
+        // NO_FENCE=1: the boxes are not uploaded as geofence exclusions (what PX4's mission check reads).
+        fence: std::env::var("NO_FENCE").is_err(),
         ..vehicle.options()
     };
     let wall = Instant::now();

@@ -7,7 +7,7 @@
 //!
 //! Missions 1-3 in every mode: the release's modes land and are judged exactly as the trajectory recomputes,
 //! with no pre-flight, failsafe or timeout message from PX4 (beyond mission mode's geofence breach), at most one
-//! lockstep wait in 10 000 timed out and no hold of simulated time released late; a mode the release lacks is refused before anything is armed. One line per
+//! lockstep wait in 5 000 timed out and no hold of simulated time released late; a mode the release lacks is refused before anything is armed. One line per
 //! flight goes to stderr (docs/simulator.md's conformance table is made from them).
 
 use std::path::Path;
@@ -26,7 +26,7 @@ use super::px4_sitl_bin;
 /// The lockstep cap (PX4_SIM_SPEED_FACTOR) of every pair.
 const SPEED: f64 = 5.0;
 /// At most one lockstep step in this many may go on without PX4's answer.
-const MAX_TIMEOUT_SHARE: u64 = 10_000;
+const MAX_TIMEOUT_SHARE: u64 = 5_000;
 /// PX4 messages no SIH flight of the same test gives.
 const UNWANTED: [&str; 5] = ["Preflight Fail", "Failsafe", "timeout", "not ready", "no RC"];
 
@@ -52,6 +52,7 @@ fn fly_iris(rt: &tokio::runtime::Runtime, bin: &Path, instance: u8, test: &TestC
         timeout_s: 400.0,
         heartbeat_wait_s: 60.0,
         lockstep: Some(Duration::ZERO),
+        detect_time_scale: true,
         sim_gate: pair.gate(),
         ..FlyOptions::default()
     };
@@ -85,8 +86,8 @@ fn fly_iris(rt: &tokio::runtime::Runtime, bin: &Path, instance: u8, test: &TestC
         .filter(|t| mode != FlyMode::Mission && UNWANTED.iter().any(|u| t.contains(u)))
         .collect();
     assert!(unwanted.is_empty(), "{what} {mode:?}: PX4 said {unwanted:?}");
-    // A lockstep step taken without PX4's answer (100 ms of wall time) is rare but not nil on a loaded
-    // machine (v1.12.3: 1 in 17 089 steps while a test suite ran beside it; 2 in 75 216 by hand).
+    // A lockstep step taken without PX4's answer (100 ms of wall time) is rare but not nil: v1.12.3 misses
+    // 1-2 answers a flight (of 14 000-21 000 steps), v1.14 and v1.16.2 none.
     assert!(
         summary.actuator_timeouts * MAX_TIMEOUT_SHARE <= summary.steps && summary.late_releases == 0,
         "{what} {mode:?}: {summary}"

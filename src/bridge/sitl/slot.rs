@@ -172,6 +172,7 @@ mod tests {
         drop(iris);
         let sih = claim_with(freed, VehicleSim::Sih).expect("SIH does not need it");
         assert_eq!(sih.instance(), freed);
+        drop(sih);
         drop(tcp);
         // A PX4 started by hand on the free slot: its server lock is held, so the slot is skipped.
         if let Some(px4) = hold_as_px4(&px4_lock_path(freed), false) {
