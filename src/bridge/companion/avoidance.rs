@@ -19,7 +19,6 @@ use tokio::task::JoinHandle;
 
 use super::answers::AnswerCounts;
 use super::pose_history::PoseHistory;
-pub use super::sim_paced::SimPaced;
 use super::steer::{Nav, Steer, SteerInput, SteerOutput};
 use super::steer_worker::SteerWorker;
 use super::timing::AnswerTiming;
@@ -225,46 +224,11 @@ impl CompanionStats {
     }
 }
 
-/// How the companion paces its answers.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub enum Pacing {
-    /// As PX4-Avoidance: answer at 10 Hz (vehicle time) with the latest finished plan.
-    #[default]
-    FreeRunning,
-    /// Answer every request at once, timed by the request's own timestamp (for a vehicle that holds its clock
-    /// until the answer: the mock's lockstep), with a plan made from the pose `latency` before the request:
-    /// a real companion plans on a camera frame and a pose that are already old when the answer lands.
-    Lockstep {
-        /// Age of the pose each plan is made from (vehicle time; 20 ms resolution at PX4's 50 Hz stream).
-        latency: Duration,
-    },
-    /// Answer on simulated time: prgenuav's simulator, in this process, holds PX4's clock at every answer
-    /// period until the answer to PX4's latest request, planned on the true pose of that instant, is sent
-    /// ([`super::sim_paced`]): however loaded the machine, no answer is late.
-    SimulatedTime(SimPaced),
-}
-
 /// The companion's heartbeat until aborted: started as soon as the vehicle answers, seconds of vehicle time
 /// before COM_OBS_AVOID is set, so PX4 (which rates a companion's heartbeats about once a second) never
 /// runs its pre-flight check with the avoidance system missing.
 pub fn spawn_heartbeat(link: Arc<Link>) -> JoinHandle<()> {
     tokio::spawn(beat(link))
-}
-
-/// Runs the companion's answers until aborted: a task that reads requests and answers them (see [`Pacing`]),
-/// counting its answers in `stats`.
-pub fn spawn(
-    link: Arc<Link>,
-    target: Target,
-    steer: Box<dyn Steer>,
-    stats: Arc<CompanionStats>,
-    pacing: Pacing,
-) -> JoinHandle<()> {
-    match pacing {
-        Pacing::FreeRunning => tokio::spawn(run(link, target, steer, stats)),
-        Pacing::Lockstep { latency } => tokio::spawn(run_lockstep(link, target, steer, stats, latency)),
-        Pacing::SimulatedTime(paced) => tokio::spawn(super::sim_paced::run(link, target, steer, stats, paced)),
-    }
 }
 
 /// Sends the companion's answers and publishes their counts and timing.
@@ -332,7 +296,7 @@ pub(super) fn is_request(inb_header: &mavlink::MavHeader, target: Target) -> boo
 }
 
 #[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
-async fn run_lockstep(
+pub(super) async fn run_lockstep(
     link: Arc<Link>,
     target: Target,
     steer: Box<dyn Steer>,
@@ -392,7 +356,7 @@ async fn beat(link: Arc<Link>) {
 }
 
 #[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
-async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<CompanionStats>) {
+pub(super) async fn run(link: Arc<Link>, target: Target, steer: Box<dyn Steer>, stats: Arc<CompanionStats>) {
     let clock = link.clock();
     let mut rx = link.subscribe();
     let mut view = VehicleView::default();

@@ -7,6 +7,7 @@ pub mod avoidance;
 pub mod cp_feed;
 pub mod frame;
 pub mod offboard;
+pub mod pacing;
 pub mod planner_steer;
 mod pose_history;
 pub mod predict;

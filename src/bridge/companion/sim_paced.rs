@@ -1,4 +1,4 @@
-//! The avoidance companion on simulated time ([`super::avoidance::Pacing::SimulatedTime`]): prgenuav's
+//! The avoidance companion on simulated time ([`super::pacing::Pacing::SimulatedTime`]): prgenuav's
 //! simulator, in this process, holds PX4's clock at every answer period (its gate) until the companion has
 //! answered PX4's latest request with a plan made from the vehicle's true pose at that instant, then lets
 //! time go on. A loaded machine only slows the flight down: no answer is late, none mirrors PX4's setpoint

@@ -11,7 +11,7 @@ use super::context::{Session, Stop, stop_for};
 use super::flight;
 use super::ready;
 use super::report::Status;
-use crate::bridge::companion::avoidance;
+use crate::bridge::companion::{avoidance, pacing};
 use crate::bridge::options::FlyMode;
 use crate::bridge::wire::cancel::CancelToken;
 use crate::bridge::wire::exchange::{ProtocolError, RetryPolicy};
@@ -55,17 +55,17 @@ impl Session<'_> {
         if self.opts.mode == FlyMode::Avoidance {
             let steer = flight::steer_for(self.test, self.opts, self.frame, self.mpc_xy_cruise_m_s);
             let pacing = match (&self.opts.sim_gate, self.opts.lockstep) {
-                (Some(gate), _) => avoidance::Pacing::SimulatedTime(avoidance::SimPaced {
+                (Some(gate), _) => pacing::Pacing::SimulatedTime(pacing::SimPaced {
                     gate: gate.clone(),
                     frame: self.frame,
                     test_home: self.test.home,
                     period: avoidance::ANSWER_PERIOD,
                 }),
-                (None, Some(latency)) => avoidance::Pacing::Lockstep { latency },
-                (None, None) => avoidance::Pacing::FreeRunning,
+                (None, Some(latency)) => pacing::Pacing::Lockstep { latency },
+                (None, None) => pacing::Pacing::FreeRunning,
             };
             let companion = self.companion.clone();
-            let answers = avoidance::spawn(self.link.clone(), self.target, steer, companion, pacing);
+            let answers = pacing::spawn(self.link.clone(), self.target, steer, companion, pacing);
             self.tasks.push(answers);
         }
         self.upload_mission().await?;

@@ -111,7 +111,7 @@ section! {
             help: "Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg.",
         },
         sim: VehicleSim = [value VehicleSim::Sih] {
-            flag: Some(Flag::value("--sim", "SIM").visible()),
+            flag: Some(Flag::value("--sim", "SIM")),
             help: "What simulates the vehicle of the --px4 instances: `sih` (PX4's own, v1.14 on) or `iris` \
                    (prgenuav's Gazebo-Classic iris in this process, PX4 in external-simulator mode, v1.12 on; in \
                    lockstep the avoidance companion runs on simulated time, so no flight starves; docs/px4.md).",
