@@ -20,7 +20,7 @@ use crate::model::GeoPoint;
 
 /// The freewheel before PX4's first motor command runs at the speed factor, at most this (PX4's start-up
 /// times out under a flood of sensor time).
-const FREEWHEEL_MAX: f64 = 10.0;
+pub const FREEWHEEL_MAX: f64 = 10.0;
 /// PX4 connects within its boot; the simulator waits this much longer before it gives up on it.
 const ACCEPT_SLACK: Duration = Duration::from_secs(30);
 /// The pty's nominal baud rate (a pty ignores it; a board's USB port is this fast).
