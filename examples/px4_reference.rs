@@ -9,7 +9,7 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `SIM=iris`: PX4 in external-simulator mode fed by
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `SIM=iris`: PX4 in external-simulator mode fed by
 //! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
 //! from v1.12, which has no SIH)
 
@@ -114,6 +114,14 @@ async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> an
         .await
         .context("flight within 10 min of wall time")??;
     let wall_s = wall.elapsed().as_secs_f64();
+    if r.status == prgenuav::bridge::Status::Rejected && std::env::var_os("CONSOLE").is_some() {
+        // CONSOLE=1: why PX4 refused, in its own words.
+        let px4 = match &vehicle {
+            Vehicle::Sih(px4) => px4,
+            Vehicle::Iris(pair) => &pair.px4,
+        };
+        eprintln!("{}: PX4 console:\n{}", case.id, px4.console_tail(80).join("\n"));
+    }
     tokio::task::block_in_place(|| drop(vehicle));
     let traj = r.trajectory.binned(0.5);
     let tmp = out.join("traj").join(format!("{}.csv.tmp", case.id));
