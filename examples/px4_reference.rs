@@ -9,7 +9,7 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `SIM=iris`: PX4 in external-simulator mode fed by
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `FIRST_INSTANCE=K`: PX4 instances from K; `SIM=iris`: PX4 in external-simulator mode fed by
 //! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
 //! from v1.12, which has no SIH)
 
@@ -193,7 +193,12 @@ fn main() -> anyhow::Result<()> {
         .build()?;
     rt.block_on(async {
         let mut workers = Vec::new();
-        for instance in 0..instances.max(1) {
+        // FIRST_INSTANCE=K: PX4 instances K.. (v1.12.3 with the iris refuses avoidance flights on instance 0).
+        let first: u8 = std::env::var("FIRST_INSTANCE")
+            .ok()
+            .and_then(|k| k.parse().ok())
+            .unwrap_or(0);
+        for instance in (0..instances.max(1)).map(|i| i.saturating_add(first)) {
             let (queue, bin, out, table) = (queue.clone(), bin.clone(), out.clone(), table.clone());
             workers.push(tokio::spawn(async move {
                 loop {

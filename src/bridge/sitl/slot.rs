@@ -56,8 +56,15 @@ pub fn claim(from: u8) -> Result<Slot, NoFreeSlot> {
     claim_with(from, VehicleSim::Sih)
 }
 
-/// Claims the lowest free slot from `from` on whose ports `sim` needs are free.
+/// Claims the lowest free slot from `from` on whose ports `sim` needs are free. The iris never gets instance 0:
+/// PX4 v1.12.3 instance 0 in external-simulator mode sent the avoidance companion no request in 8 flights
+/// (the mission refused: "Obstacle Avoidance system failed, loitering"), while instances 3, 4 and 5 flew.
 pub fn claim_with(from: u8, sim: VehicleSim) -> Result<Slot, NoFreeSlot> {
+    let from = if sim == VehicleSim::Iris {
+        from.max(FIRST_IRIS)
+    } else {
+        from
+    };
     for instance in from..SLOTS {
         if let Some(slot) = try_claim(instance, sim) {
             return Ok(slot);
@@ -68,6 +75,9 @@ pub fn claim_with(from: u8, sim: VehicleSim) -> Result<Slot, NoFreeSlot> {
         dir: std::env::temp_dir().display().to_string(),
     })
 }
+
+/// The lowest instance the iris flies on (see [`claim_with`]).
+pub const FIRST_IRIS: u8 = 1;
 
 /// Claims `k` distinct slots, lowest first (for SIH).
 pub fn claim_many(k: usize) -> Result<Vec<Slot>, NoFreeSlot> {
@@ -174,6 +184,9 @@ mod tests {
         assert_eq!(sih.instance(), freed);
         drop(sih);
         drop(tcp);
+        let iris = claim_with(0, VehicleSim::Iris).expect("a slot for the iris");
+        assert!(iris.instance() >= FIRST_IRIS, "the iris never flies instance 0");
+        drop(iris);
         // A PX4 started by hand on the free slot: its server lock is held, so the slot is skipped.
         if let Some(px4) = hold_as_px4(&px4_lock_path(freed), false) {
             let got = claim(freed).expect("another slot");
