@@ -9,6 +9,10 @@
 //! 50 random orders of obstacle sets, each predicted by the LFS (`px4` motion) plus the bias learnt from the
 //! flights before it, mean absolute error over the first 25 flights (a campaign's early quarter) and all.
 //!
+//! Last, the competition bench's targets on tiers A and B: median absolute and signed error, Spearman, the
+//! share with the recorded verdict (below 1.5 m or not) and the median ratio of flight times (PX4's over the
+//! recorded `duration_s`).
+//!
 //! `cargo run --release --example px4_compare -- [DIR=tests/data/hfs-flights] [PX4_DIR=tests/data/px4-flights]
 //! [MOCK_CSV]`
 
@@ -94,6 +98,44 @@ fn recorded_samples(dir: &Path, id: &str) -> Option<Vec<(f64, f64, f64)>> {
         .collect()
 }
 
+/// The competition bench's targets on tiers A and B (recorded duration from each case's `duration_s`).
+fn bench_targets(rows: &[Row], px4: &BTreeMap<String, px4_flights::Px4Flight>, dir: &Path) {
+    let ab: Vec<&Row> = rows.iter().filter(|r| r.tier == "A" || r.tier == "B").collect();
+    let pairs: Vec<(f64, f64)> = ab.iter().filter_map(|r| Some((r.px4?, r.real))).collect();
+    if pairs.is_empty() {
+        return;
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let abs = median(pairs.iter().map(|(p, t)| (p - t).abs()).collect());
+    let signed = median(pairs.iter().map(|(p, t)| p - t).collect());
+    let same = pairs.iter().filter(|(p, t)| (*p < 1.5) == (*t < 1.5)).count();
+    let spearman = aggregate(&pairs).spearman.map_or("-".into(), |s| format!("{s:.3}"));
+    let ratios: Vec<f64> = ab
+        .iter()
+        .filter_map(|r| {
+            let flown = px4.get(&r.id)?.flight_time_s;
+            let text = std::fs::read_to_string(dir.join(format!("{}.json", r.id))).ok()?;
+            let recorded = serde_json::from_str::<serde_json::Value>(&text).ok()?["duration_s"].as_f64()?;
+            (recorded > 0.0 && flown > 0.0).then_some(flown / recorded)
+        })
+        .collect();
+    let ratio = if ratios.is_empty() {
+        "-".into()
+    } else {
+        format!("{:.2} ({} flights)", median(ratios.clone()), ratios.len())
+    };
+    println!(
+        "\n### bench targets, tiers A and B\n\n| n | median abs error | median signed error | Spearman | same verdict | flight time ratio (median) |\n|---|---|---|---|---|---|\n| {} | {abs:.3} m | {signed:+.3} m | {spearman} | {} of {} ({:.0} %) | {ratio} |",
+        pairs.len(),
+        same,
+        pairs.len(),
+        100.0 * same as f64 / pairs.len() as f64
+    );
+}
+
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let dir = PathBuf::from(args.next().unwrap_or_else(|| "tests/data/hfs-flights".into()));
@@ -173,6 +215,7 @@ fn main() -> anyhow::Result<()> {
         print!("LFS px4: ");
         split(rs, |r| r.lfs_px4);
     }
+    bench_targets(&rows, &px4, &dir);
     // The recorded simulator's own noise: spread of repeats of one obstacle set.
     let mut groups: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for r in &rows {
