@@ -6,6 +6,7 @@
 
 mod build;
 mod console;
+mod error;
 pub mod slot;
 mod spawn;
 mod workdir;
@@ -18,6 +19,7 @@ use std::time::{Duration, Instant};
 
 pub use build::{ModeUnsupported, NotABuild, Px4Build, VERSION_HEADER};
 use console::{CONSOLE_LINES, Console};
+pub use error::SitlError;
 pub(crate) use spawn::{stop as kill_group, tie_to_parent};
 
 use crate::bridge::options::VehicleSim;
@@ -119,65 +121,6 @@ impl SitlSpec {
 /// are judged above the ground, so the altitude does not matter).
 pub fn home_e7(home: GeoPoint) -> (i64, i64) {
     ((home.lat_deg * 1e7).round() as i64, (home.lon_deg * 1e7).round() as i64)
-}
-
-/// Why an instance did not start.
-#[derive(Debug, thiserror::Error)]
-pub enum SitlError {
-    /// The binary is not `BUILD/bin/px4` with a `BUILD/etc` beside `bin`.
-    #[error("{bin}: not BUILD/bin/px4 of a PX4 SITL build ({etc} is missing)")]
-    NoEtc {
-        /// The binary given.
-        bin: String,
-        /// Where `etc` was looked for.
-        etc: String,
-    },
-    /// The process could not be started.
-    #[error("starting {bin}: {source}")]
-    Spawn {
-        /// The binary given.
-        bin: String,
-        /// The operating system's error.
-        source: std::io::Error,
-    },
-    /// The startup script did not finish in time.
-    #[error(
-        "PX4 instance {instance} did not finish its startup script within {secs} s{}",
-        last_words(tail)
-    )]
-    Boot {
-        /// The instance number.
-        instance: u8,
-        /// The bound waited.
-        secs: u64,
-        /// The console's last lines.
-        tail: Vec<String>,
-    },
-    /// The process ended before its startup script finished.
-    #[error("PX4 instance {instance} exited during its startup ({status}){}", last_words(tail))]
-    Died {
-        /// The instance number.
-        instance: u8,
-        /// Its exit status, in words.
-        status: String,
-        /// The console's last lines.
-        tail: Vec<String>,
-    },
-    /// The caller's stop flag was raised while it booted.
-    #[error("PX4 instance {instance}: stopped while booting")]
-    Cancelled {
-        /// The instance number.
-        instance: u8,
-    },
-}
-
-/// `; PX4 said: "a" | "b"` for the last three console lines, or nothing.
-fn last_words(tail: &[String]) -> String {
-    let last: Vec<&str> = tail.iter().map(|l| l.trim()).filter(|l| !l.is_empty()).collect();
-    if last.is_empty() {
-        return String::new();
-    }
-    format!("; PX4 said: {}", last[last.len().saturating_sub(3)..].join(" | "))
 }
 
 /// One running instance; its process group killed (and its working directory removed) when dropped.

@@ -10,6 +10,7 @@ pub mod hitl;
 pub mod mock_mavlink;
 pub mod px4;
 pub mod px4_iris;
+mod px4_leaves;
 pub mod retry;
 pub mod runner;
 pub mod stage;

@@ -8,7 +8,7 @@
 
 use crate::campaign::ground::flight_status::FlightStatus;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
@@ -19,6 +19,9 @@ use crate::bridge::sitl::slot::{self, Slot};
 use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
 use crate::bridge::{BridgeError, FlightReport, FlyMode, FlyOptions, SimLink, VehicleSim};
 use crate::campaign::fly::mock_mavlink::{flown, fly_blocking};
+use crate::campaign::fly::px4_leaves::{
+    console_note, keep_ulog, pointing_to_console, stopped_before_flying, write_log,
+};
 use crate::campaign::fly::retry::{Attempt, Retry, Tried};
 use crate::campaign::fly::vehicle::{Flown, Vehicle, VehicleError};
 use crate::judge::Judge;
@@ -330,76 +333,6 @@ pub(super) fn push_lines(log: &mut String, lines: &[String]) {
     }
 }
 
-/// Writes PX4's console beside the trajectory; the path as the journal shows it (`flights/candidate_N.px4.log`),
-/// or why it could not be written.
-fn write_log(path: &Path, log: &str) -> Result<String, String> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    }
-    crate::io::write_atomic(path, log.as_bytes()).map_err(|e| e.to_string())?;
-    Ok(shown(path).display().to_string())
-}
-
-/// `flights/candidate_N.px4.log` of `.../campaign/flights/candidate_N.px4.log`.
-fn shown(path: &Path) -> PathBuf {
-    let parts: Vec<_> = path.components().collect();
-    parts[parts.len().saturating_sub(2)..].iter().collect()
-}
-
-fn console_note(written: &Result<String, String>) -> String {
-    match written {
-        Ok(p) => format!("PX4's console: {p}"),
-        Err(e) => format!("PX4's console not kept: {e}"),
-    }
-}
-
-/// A flight that did not run to its end names PX4's console in its reason.
-fn pointing_to_console(mut f: Flown, written: &Result<String, String>) -> Flown {
-    if !f.status.completed() {
-        let note = console_note(written);
-        f.reason = Some(match f.reason {
-            Some(r) => format!("{r}; {note}"),
-            None => note,
-        });
-    }
-    f
-}
-
-/// The campaign's stop came before the flight took off: `aborted`, which the fleet journals as interrupted.
-fn stopped_before_flying(written: &Result<String, String>) -> Flown {
-    Flown::unflown(
-        FlightStatus::ABORTED,
-        format!("stopped before PX4 was flying; {}", console_note(written)),
-    )
-}
-
-/// Copies the instance's newest ULog to `to` (PX4 closes it at disarm, a moment after the landing the bridge
-/// saw, so the copy waits until its size settles, bounded).
-fn keep_ulog(px4: &Px4Sitl, to: &Path, log: &mut String) {
-    let Some(newest) = px4.ulogs().pop() else {
-        let _ = writeln!(log, "(--keep-ulog: PX4 wrote no ULog)");
-        return;
-    };
-    let size = || std::fs::metadata(&newest).map_or(0, |m| m.len());
-    let mut last = size();
-    for _ in 0..20 {
-        std::thread::sleep(Duration::from_millis(100));
-        let now = size();
-        if now == last {
-            break;
-        }
-        last = now;
-    }
-    if let Err(e) = std::fs::copy(&newest, to) {
-        let _ = writeln!(
-            log,
-            "(--keep-ulog: copying {} to {}: {e})",
-            newest.display(),
-            to.display()
-        );
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -456,26 +389,5 @@ mod tests {
         assert_eq!(default_instances(1, 1000.0), 1, "at least one");
         assert_eq!(default_instances(64, 1.0), MAX_INSTANCES, "at most the slots there are");
         assert_eq!(default_instances(2, 0.0), 1, "a nonsense factor (refused earlier): one");
-    }
-
-    #[test]
-    fn the_console_is_named_relative_to_the_campaign() {
-        let p = Path::new("/x/campaign/flights/candidate_4.px4.log");
-        assert_eq!(shown(p), PathBuf::from("flights/candidate_4.px4.log"));
-        let f = Flown {
-            status: FlightStatus::TIMEOUT,
-            min_distance: None,
-            min_distance_raw: None,
-            flight_time_s: 1.0,
-            warnings: Vec::new(),
-            reason: Some("still flying".into()),
-            closest_centre_m: None,
-            inside_cp_dist: None,
-        };
-        let f = pointing_to_console(f, &Ok("flights/candidate_4.px4.log".into()));
-        assert_eq!(
-            f.reason.as_deref(),
-            Some("still flying; PX4's console: flights/candidate_4.px4.log")
-        );
     }
 }
