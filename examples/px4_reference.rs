@@ -9,7 +9,7 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `FIRST_INSTANCE=K`: PX4 instances from K; `SIM=iris`: PX4 in external-simulator mode fed by
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `FIRST_INSTANCE=K`: PX4 instances from K; `HEADING=DEG`, `SPEED=F`: see below; `SIM=iris`: PX4 in external-simulator mode fed by
 //! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
 //! from v1.12, which has no SIH)
 
@@ -26,8 +26,18 @@ use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, SimLink, fly};
 use prgenuav::lfs::fidelity::{FlightCase, load_dir};
 use prgenuav::model::TestCase;
 
-/// PX4_SIM_SPEED_FACTOR.
-const SPEED: f64 = 5.0;
+/// PX4_SIM_SPEED_FACTOR (env `SPEED`: another; with `SIM=iris` the lockstep's cap, 1000 = uncapped).
+fn speed() -> f64 {
+    std::env::var("SPEED").ok().and_then(|s| s.parse().ok()).unwrap_or(5.0)
+}
+
+/// `HEADING=DEG`: the iris's nose at rest, clockwise from North (Gazebo Classic spawns it East, 90).
+fn heading_deg() -> anyhow::Result<f64> {
+    match std::env::var("HEADING") {
+        Ok(s) => s.parse().map_err(|_| anyhow::anyhow!("HEADING={s:?} is not degrees")),
+        Err(_) => Ok(0.0),
+    }
+}
 /// Vehicle seconds before the bridge lands the vehicle (the competition's limit is 300 s of wall time at x1).
 const TIMEOUT_S: f64 = 400.0;
 const HEADER: &str = "id,tier,mission,real_m,px4_m,status,reason,flight_time_s,wall_s,answer_p99_ms,clock_rate";
@@ -59,7 +69,7 @@ enum Vehicle {
 impl Vehicle {
     fn start(bin: &Path, instance: u8, test: &TestCase) -> anyhow::Result<Vehicle> {
         if std::env::var("SIM").as_deref() != Ok("iris") {
-            return Ok(Vehicle::Sih(Px4Sitl::start(&SitlSpec::new(bin, instance, SPEED))?));
+            return Ok(Vehicle::Sih(Px4Sitl::start(&SitlSpec::new(bin, instance, speed()))?));
         }
         let root = bin
             .parent()
@@ -69,8 +79,9 @@ impl Vehicle {
             build: Px4Build::open(root)?,
             instance,
             home: test.home,
+            heading_deg: heading_deg()?,
             seed: 0,
-            speed_factor: SPEED,
+            speed_factor: speed(),
             link: SimLink::Tcp,
             paced: true,
             boot_timeout: Duration::from_secs(60),
@@ -89,6 +100,8 @@ impl Vehicle {
                 connect: pair.px4.url(),
                 sim_gate: pair.gate(),
                 lockstep: Some(Duration::ZERO),
+                // Uncapped (`SPEED=1000`), the lockstep runs at the machine's pace: time by the measured clock.
+                detect_time_scale: true,
                 ..FlyOptions::default()
             },
         }
@@ -100,7 +113,7 @@ async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> an
     let vehicle = tokio::task::block_in_place(|| Vehicle::start(bin, instance, &test))?;
     let opts = FlyOptions {
         mode: FlyMode::Avoidance,
-        time_scale: SPEED,
+        time_scale: speed(),
         timeout_s: TIMEOUT_S,
         heartbeat_wait_s: 60.0,
         // The recorded flights' definition (fidelity compares like for like).

@@ -10,6 +10,7 @@ use crate::sensors::{SensorConfig, SensorFrame, Sensors};
 use crate::time::{STEP, SimTime};
 use crate::vehicle::Vehicle;
 use crate::vehicle::iris::{COMMAND, CommandMapping};
+use crate::vehicle::rigid_body::BodyState;
 use crate::world::wind::{Wind, WindConfig};
 
 /// Everything a simulation is made of.
@@ -27,6 +28,9 @@ pub struct SimConfig {
     pub actuator_timeout: Duration,
     /// How commands become rotor speeds.
     pub command: CommandMapping,
+    /// Where the nose points at rest, degrees clockwise from North (NED yaw). 0 as jMAVSim and SIH start;
+    /// Gazebo Classic spawns the iris at ENU yaw 0, that is facing East (90).
+    pub heading_deg: f64,
 }
 
 impl Default for SimConfig {
@@ -38,6 +42,7 @@ impl Default for SimConfig {
             wind: WindConfig::default(),
             actuator_timeout: Duration::from_millis(200),
             command: COMMAND,
+            heading_deg: 0.0,
         }
     }
 }
@@ -86,9 +91,10 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// The iris resting at the home at time zero.
+    /// The iris resting at the home at time zero, its nose at `config.heading_deg`.
     pub fn new(config: SimConfig) -> Self {
-        let vehicle = Vehicle::iris();
+        let mut vehicle = Vehicle::iris();
+        vehicle.body = BodyState::at_rest(Vector3::zeros(), config.heading_deg.to_radians());
         Self {
             projection: LocalProjection::new(config.home),
             sensors: Sensors::new(config.sensors, config.home, vehicle.gravity_m_s2, config.seed),
@@ -178,6 +184,7 @@ impl Simulation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sensors::mag::MagNoise;
 
     #[test]
     fn stale_commands_stop_the_rotors() {
@@ -190,6 +197,42 @@ mod tests {
         }
         // 244 ms after the command: the references are zero and the rotors spin down.
         assert_eq!(sim.rotor_refs()[0], 0.0);
+    }
+
+    #[test]
+    fn a_heading_of_90_degrees_rests_the_nose_east() {
+        let at = |heading_deg| {
+            let mut sim = Simulation::new(SimConfig {
+                heading_deg,
+                sensors: SensorConfig {
+                    mag: MagNoise {
+                        noise_density: 0.0,
+                        random_walk: 0.0,
+                        bias_tau_s: 600.0,
+                    },
+                    ..SensorConfig::default()
+                },
+                ..SimConfig::default()
+            });
+            let frame = sim.step();
+            (sim.truth(), frame.mag_frd_gauss)
+        };
+        let (north, mag_n) = at(0.0);
+        let (east, mag_e) = at(90.0);
+        let yaw = |t: &GroundTruth| t.attitude.euler_angles().2.to_degrees();
+        assert!(yaw(&north).abs() < 1e-9 && (yaw(&east) - 90.0).abs() < 1e-9);
+        // Facing East, the body's x axis reads the field's East part and its y axis (to the right, South)
+        // minus its North part; z is unchanged.
+        let (n, e) = (
+            mag_n.expect("mag at the first step"),
+            mag_e.expect("mag at the first step"),
+        );
+        assert!(
+            (e.x - n.y).abs() < 1e-9 && (e.y + n.x).abs() < 1e-9 && (e.z - n.z).abs() < 1e-9,
+            "{n:?} {e:?}"
+        );
+        assert!(n.x > 0.1, "the field points North at the home: {n:?}");
+        assert!(east.on_ground && east.position_ned_m.norm() < 1e-9);
     }
 
     #[test]

@@ -25,6 +25,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod bench;
 pub mod companion;
 pub mod fly;
 pub mod hil;
@@ -34,6 +35,7 @@ pub mod session;
 pub mod sitl;
 pub mod wire;
 
+pub use bench::Bench;
 pub use companion::predict::{Prediction, predict};
 pub use fly::{fly, fly_on};
 pub use options::{BridgeError, FlyMode, FlyOptions, SimLink, VehicleSim};

@@ -103,7 +103,9 @@ struct Flight {
 
 impl Flight {
     fn of(args: &FlyArgs) -> anyhow::Result<Self> {
-        let a = args.settings.request(&Loaded::default())?.asked;
+        let request = args.settings.request(&Loaded::default())?;
+        request.check().map_err(anyhow::Error::msg)?;
+        let a = request.asked;
         Ok(Self {
             mode: a.campaign.mode(),
             judge: a.campaign.judge(),
@@ -112,9 +114,10 @@ impl Flight {
             px4: a.vehicles.px4.clone(),
             px4_speed_factor: a.vehicles.speed_factor(),
             simulated: Simulated {
-                sim: a.vehicles.sim(),
+                sim: a.vehicles.sim.unwrap_or_else(|| a.vehicles.bench().sim()),
                 link: a.vehicles.sim_link(),
                 seed: a.campaign.seed(),
+                bench: a.vehicles.bench(),
             },
             board: match a.vehicles.hitl.as_deref() {
                 None => None,
@@ -140,6 +143,12 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     let build = open_build(&flight)?;
     let Some(test) = super::load_test(&args.test, args.strict)? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
+    };
+    // The bench's parameters over the test's, on the PX4 instance flown here.
+    let test = if build.is_some() {
+        flight.simulated.bench.flown(&test)
+    } else {
+        test
     };
     if write_world(&args, &test)? && args.world_only {
         return Ok(ExitCode::SUCCESS);
@@ -189,6 +198,10 @@ fn open_build(flight: &Flight) -> anyhow::Result<Option<Px4Build>> {
     };
     let build = Px4Build::open(dir)?;
     build.check_mode(flight.mode)?;
+    if let Some(why) = flight.simulated.bench.sim_refusal(flight.simulated.sim) {
+        anyhow::bail!(why);
+    }
+    build.check_bench(flight.simulated.bench)?;
     build.check_sim(flight.simulated.sim)?;
     Ok(Some(build))
 }

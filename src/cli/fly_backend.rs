@@ -7,7 +7,7 @@ use prgenuav::bridge::hil::run::SimSummary;
 use prgenuav::bridge::hil::sitl::{IrisSitl, IrisSpec};
 use prgenuav::bridge::sitl::slot::{self, Slot};
 use prgenuav::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlSpec};
-use prgenuav::bridge::{FlyMode, FlyOptions, SimLink, VehicleSim};
+use prgenuav::bridge::{Bench, FlyMode, FlyOptions, SimLink, VehicleSim};
 use prgenuav::model::TestCase;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -21,6 +21,8 @@ pub struct Simulated {
     pub link: SimLink,
     /// The simulator's seed.
     pub seed: u64,
+    /// What the flight reproduces.
+    pub bench: Bench,
 }
 
 /// What runs for the flight; stopped by [`Started::finish`] (or when dropped), the slot freed last.
@@ -74,6 +76,7 @@ pub fn start_px4(
         build: build.clone(),
         instance: i,
         home: test.home,
+        heading_deg: sim.bench.heading_deg(),
         seed: sim.seed,
         speed_factor: speed,
         link: sim.link,

@@ -35,6 +35,7 @@ fn fly(s: &Setting) -> bool {
             "flight.anchor_at_vehicle_home",
             "campaign.seed",
             "vehicles.px4",
+            "vehicles.bench",
             "vehicles.sim",
             "vehicles.sim_link",
             "vehicles.hitl",

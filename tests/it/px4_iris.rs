@@ -37,6 +37,7 @@ fn fly_iris(rt: &tokio::runtime::Runtime, bin: &Path, instance: u8, test: &TestC
         build: build.clone(),
         instance,
         home: test.home,
+        heading_deg: 0.0,
         seed: 0,
         speed_factor: SPEED,
         link: SimLink::Tcp,

@@ -136,6 +136,7 @@ fn spec(build: &Path, instance: u8) -> IrisSpec {
         build: Px4Build::open(build).expect("a build"),
         instance,
         home: case(2).home,
+        heading_deg: 0.0,
         seed: 7,
         speed_factor: 5.0,
         link: SimLink::Tcp,

@@ -180,3 +180,59 @@ async fn a_vehicle_reporting_v1_14_keeps_its_avoidance_parameter() {
         r.warnings
     );
 }
+
+#[test]
+fn the_competition_bench_is_refused_on_a_release_it_was_not_checked_on_and_with_sih() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mark = tmp.path().join("started");
+    let build = fake_build_tagged(&marking(&mark), "v1.14.0");
+    let b = build.path().to_str().unwrap();
+    let (_d, test) = test_file(2, valid_pair());
+    let t = test.to_str().unwrap();
+    let (code, _, err) = super::prgenuav(&["fly", t, "--px4", b, "--bench", "competition", "--quiet"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--bench competition was checked on PX4 v1.12") && err.contains("v1.14.0"),
+        "{err}"
+    );
+    let out = tempfile::tempdir().unwrap();
+    let o = out.path().to_str().unwrap();
+    let generate = |extra: &[&str]| {
+        let mut args = vec![
+            "generate",
+            "missions/mission2.yaml",
+            "3",
+            "--px4",
+            b,
+            "--no-screen",
+            "--quiet",
+            "--out",
+            o,
+        ];
+        args.extend_from_slice(extra);
+        super::prgenuav(&args)
+    };
+    let (code, _, err) = generate(&["--bench", "competition"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("v1.14.0"), "{err}");
+    let v112 = fake_build_tagged(&marking(&mark), "v1.12.3");
+    let b12 = v112.path().to_str().unwrap();
+    let (code, _, err) = super::prgenuav(&[
+        "fly",
+        t,
+        "--px4",
+        b12,
+        "--bench",
+        "competition",
+        "--sim",
+        "sih",
+        "--quiet",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("give --sim iris or leave --sim out"), "{err}");
+    let (code, _, err) = super::prgenuav(&["fly", t, "--bench", "competition", "--quiet"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("need --px4"), "{err}");
+    assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0, "nothing written");
+    assert!(!mark.exists(), "no PX4 was started");
+}

@@ -35,6 +35,8 @@ pub struct IrisSpec {
     pub instance: u8,
     /// Where the simulator puts the vehicle at rest (the test's home).
     pub home: GeoPoint,
+    /// Where its nose points at rest, degrees clockwise from North (Gazebo Classic's spawn: 90, East).
+    pub heading_deg: f64,
     /// The simulator's seed (sensor noise): the same seed and commands give the same sensor stream.
     pub seed: u64,
     /// The highest real-time factor in lockstep (like `PX4_SIM_SPEED_FACTOR`).
@@ -87,6 +89,7 @@ impl IrisSitl {
         let config = SimConfig {
             home: spec.home,
             seed: spec.seed,
+            heading_deg: spec.heading_deg,
             ..SimConfig::default()
         };
         let (sim, gate, pty) = match spec.link {

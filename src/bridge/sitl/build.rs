@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::bridge::bench::Bench;
 use crate::bridge::options::{FlyMode, VehicleSim};
 use crate::bridge::px4_version::{Px4Version, Release, mode_refusal};
 
@@ -110,6 +111,16 @@ impl Px4Build {
             )));
         }
         Ok(())
+    }
+}
+
+impl Px4Build {
+    /// Whether this build's release may fly `bench` ([`Bench::release_refusal`]).
+    pub fn check_bench(&self, bench: Bench) -> Result<(), ModeUnsupported> {
+        match bench.release_refusal(&self.version) {
+            Some(why) => Err(ModeUnsupported(format!("{}: {why}", self.root.display()))),
+            None => Ok(()),
+        }
     }
 }
 

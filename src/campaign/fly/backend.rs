@@ -52,6 +52,7 @@ pub fn px4_build(s: &FleetSettings) -> Result<Option<Px4Build>, CampaignError> {
     };
     let build = Px4Build::open(folder).map_err(|e| config(e.to_string()))?;
     build.check_mode(s.mode).map_err(|e| config(e.to_string()))?;
+    build.check_bench(s.vehicles.bench).map_err(|e| config(e.to_string()))?;
     build.check_sim(s.vehicles.sim).map_err(|e| config(e.to_string()))?;
     if let Some(k) = s.vehicles.instances.or(s.vehicles.jobs) {
         instance_slots(k).map_err(config)?;
@@ -79,6 +80,7 @@ pub fn fleet(s: &FleetSettings, folder: PathBuf, handle: &Handle) -> Result<Vec<
                 timeout_s: s.flight.timeout_s,
                 sim: s.vehicles.sim,
                 sim_link: s.vehicles.sim_link,
+                bench: s.vehicles.bench,
                 seed: s.seed,
                 ..Px4Settings::new(build, speed_factor)
             };

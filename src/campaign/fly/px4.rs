@@ -17,7 +17,7 @@ use tokio::runtime::Handle;
 use crate::bridge::companion::answers::AnswerCounts;
 use crate::bridge::sitl::slot::{self, Slot};
 use crate::bridge::sitl::{BOOT_TIMEOUT, Px4Build, Px4Sitl, SitlError, SitlSpec};
-use crate::bridge::{BridgeError, FlightReport, FlyMode, FlyOptions, SimLink, VehicleSim};
+use crate::bridge::{Bench, BridgeError, FlightReport, FlyMode, FlyOptions, SimLink, VehicleSim};
 use crate::campaign::fly::mock_mavlink::{flown, fly_blocking};
 use crate::campaign::fly::px4_leaves::{
     console_note, keep_ulog, pointing_to_console, stopped_before_flying, write_log,
@@ -87,6 +87,8 @@ pub struct Px4Settings {
     pub sim: VehicleSim,
     /// With the iris simulator: its link to PX4.
     pub sim_link: SimLink,
+    /// What the flights reproduce (the iris's heading at rest, parameters over the test's).
+    pub bench: Bench,
     /// The campaign's seed: with the iris simulator, each flight's sensor noise is drawn from it and the flight.
     pub seed: u64,
 }
@@ -105,6 +107,7 @@ impl Px4Settings {
             boot_timeout: BOOT_TIMEOUT,
             sim: VehicleSim::Sih,
             sim_link: SimLink::Tcp,
+            bench: Bench::Plain,
             seed: 0,
         }
     }

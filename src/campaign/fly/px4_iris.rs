@@ -26,11 +26,13 @@ impl Px4Vehicle {
     /// account appended to `log`.
     pub(super) fn attempt_iris(&self, test: &TestCase, csv: &Path, stop: &AtomicBool, log: &mut String) -> Attempt {
         let s = self.settings();
+        let test = &s.bench.flown(test);
         let tcp = s.sim_link == SimLink::Tcp;
         let spec = IrisSpec {
             build: s.build.clone(),
             instance: self.instance(),
             home: test.home,
+            heading_deg: s.bench.heading_deg(),
             seed: flight_seed(s.seed, csv),
             speed_factor: s.speed_factor,
             link: s.sim_link,

@@ -57,6 +57,9 @@ impl CampaignSettings {
                 "--runner and --px4 are two ways to fly: give one (a runner's command may start PX4 itself)".into(),
             );
         }
+        if let Some(why) = v.bench.sim_refusal(v.sim) {
+            return Err(why);
+        }
         if v.sim_link == crate::bridge::SimLink::Serial && v.sim != crate::bridge::VehicleSim::Iris {
             return Err("--sim-link serial is the link of prgenuav's simulator: give --sim iris too".into());
         }

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use crate::bridge::{FlyMode, SimLink, VehicleSim};
+use crate::bridge::{Bench, FlyMode, SimLink, VehicleSim};
 use crate::generator::Family;
 use crate::judge::Judge;
 use crate::lfs::sim::Motion;
@@ -80,6 +80,11 @@ choice!(FlyMode {
 choice!(VehicleSim {
     VehicleSim::Sih => "sih": "PX4's own SIH quadrotor inside PX4 SITL (v1.14 on).",
     VehicleSim::Iris => "iris": "prgenuav's iris simulator in this process, PX4 SITL in external-simulator mode (v1.12 on).",
+});
+
+choice!(Bench {
+    Bench::Plain => "plain": "The build, --sim and the test's parameters as given.",
+    Bench::Competition => "competition": "The competition's simulator as reproduced here: PX4 v1.12, the iris facing East, fitted parameters.",
 });
 
 choice!(SimLink {

@@ -9,8 +9,9 @@ use crate::model::ModelError;
 use crate::model::safe_files::{MAX_READ_BYTES, read_capped_no_follow};
 
 /// The format of `campaign.json` this version writes. A file without a format is one written before settings
-/// were sectioned: [`super::legacy`] reads it. Format 2 lacks the keys format 3 added (`format_3_keys`).
-pub const FORMAT: u64 = 3;
+/// were sectioned: [`super::legacy`] reads it. Format 2 lacks the keys formats 3 and 4 added (`format_3_keys`,
+/// `format_4_keys`), format 3 those of format 4.
+pub const FORMAT: u64 = 4;
 
 /// The `[vehicles]` keys format 3 added, each with what a format-2 campaign flew with before it existed:
 /// PX4's own SIH, no link of ours, no board in the loop.
@@ -22,12 +23,23 @@ fn format_3_keys() -> [(&'static str, serde_json::Value); 3] {
     ]
 }
 
-/// A format-2 file read as format 3.
-fn from_format_2(value: &mut serde_json::Value) {
+/// The `[vehicles]` key format 4 added, with what a format-3 campaign flew with before it existed: no bench.
+fn format_4_keys() -> [(&'static str, serde_json::Value); 1] {
+    [("bench", serde_json::json!("plain"))]
+}
+
+/// A format-2 or format-3 file read as format 4: each missing key as the campaign flew without it.
+fn from_older(value: &mut serde_json::Value, format: u64) {
     let Some(vehicles) = value.get_mut("vehicles").and_then(|v| v.as_object_mut()) else {
         return;
     };
-    for (key, before) in format_3_keys() {
+    let added = format_4_keys().into_iter();
+    let keys: Vec<_> = if format < 3 {
+        format_3_keys().into_iter().chain(added).collect()
+    } else {
+        added.collect()
+    };
+    for (key, before) in keys {
         vehicles.entry(key).or_insert(before);
     }
 }
@@ -54,8 +66,8 @@ impl CampaignSettings {
         match object.remove("format") {
             None => super::legacy::upgrade(value),
             Some(f) if f.as_u64() == Some(FORMAT) => serde_json::from_value(value).map_err(|e| e.to_string()),
-            Some(f) if f.as_u64() == Some(2) => {
-                from_format_2(&mut value);
+            Some(f) if let Some(older @ (2 | 3)) = f.as_u64() => {
+                from_older(&mut value, older);
                 serde_json::from_value(value).map_err(|e| e.to_string())
             }
             Some(f) => Err(format!(

@@ -5,8 +5,9 @@
 use std::path::PathBuf;
 
 use super::declare::section;
+use super::rules;
 use super::{Flag, Resume};
-use crate::bridge::{FlyMode, SimLink, VehicleSim};
+use crate::bridge::{Bench, FlyMode, SimLink, VehicleSim};
 use crate::judge::Judge;
 use crate::model::Limit;
 
@@ -110,7 +111,14 @@ section! {
             flag: Some(Flag::switch("--keep-ulog", true)),
             help: "Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg.",
         },
-        sim: VehicleSim = [value VehicleSim::Sih] {
+        bench: Bench = [value Bench::Plain] {
+            flag: Some(Flag::value("--bench", "BENCH")),
+            help: "What the --px4 instances reproduce: `plain` (the build, --sim and the test's parameters as given) \
+                   or `competition` (the competition's simulator as far as prgenuav reproduces it: PX4 v1.12 only, \
+                   prgenuav's iris facing East at rest as Gazebo spawns it, and the parameters fitted to the \
+                   competition's recorded flights; docs/validation/competition-bench.md).",
+        },
+        sim: VehicleSim = [rule rules::sim, "the bench's: iris with --bench competition, else sih", "iris"] {
             flag: Some(Flag::value("--sim", "SIM")),
             help: "What simulates the vehicle of the --px4 instances: `sih` (PX4's own, v1.14 on) or `iris` \
                    (prgenuav's Gazebo-Classic iris in this process, PX4 in external-simulator mode, v1.12 on; in \

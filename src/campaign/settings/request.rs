@@ -113,9 +113,11 @@ impl Request {
         if v.px4.is_none() && (given("instances") || given("speed_factor") || given("keep_ulog")) {
             return Err("--instances, --speed-factor and --keep-ulog need --px4 BUILD_DIR".into());
         }
-        if v.px4.is_none() && (given("sim") || given("sim_link")) {
+        if v.px4.is_none() && (given("sim") || given("sim_link") || given("bench")) {
             return Err(
-                "--sim and --sim-link say how the --px4 instances are simulated: they need --px4 BUILD_DIR".into(),
+                "--sim, --sim-link and --bench say how the --px4 instances are simulated: they need --px4 \
+                        BUILD_DIR"
+                    .into(),
             );
         }
         if v.hitl.is_some() && (v.runner.is_some() || v.connect.as_ref().is_some_and(|c| c != &["mock"])) {

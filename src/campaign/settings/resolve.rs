@@ -22,6 +22,7 @@ pub fn setup_of(request: &Request) -> Setup {
         gusts_m_s2: a.mock.gust_acc_m_s2.unwrap_or_else(|| profile_gusts(profile)),
         jobs: a.vehicles.jobs,
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        bench: a.vehicles.bench(),
     }
 }
 

@@ -2,7 +2,7 @@
 //! in its setting's declaration, and the setup they read.
 
 use super::mock_profile::{MockProfile, ProfileName};
-use crate::bridge::FlyMode;
+use crate::bridge::{Bench, FlyMode, VehicleSim};
 
 /// What the setup-dependent defaults depend on, read from the request before any section is resolved.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,6 +21,8 @@ pub struct Setup {
     pub jobs: Option<usize>,
     /// The cores this process may run on.
     pub cores: usize,
+    /// The bench the --px4 instances reproduce.
+    pub bench: Bench,
 }
 
 /// The gusts of the mocks' profile `p`, m/s² RMS per horizontal axis.
@@ -40,6 +42,11 @@ pub const SCATTERING_CONFIRM: usize = 3;
 pub const CP_MOCK_SPEED: f64 = 20.0;
 /// The embedded mocks' speed otherwise, times real time (in lockstep an upper bound).
 pub const MOCK_SPEED: f64 = 100.0;
+
+/// `vehicles.sim`: the bench's simulator.
+pub fn sim(s: &Setup) -> VehicleSim {
+    s.bench.sim()
+}
 
 /// `screening.candidates`: 3 x the budget, at least 20.
 pub fn candidates(s: &Setup) -> usize {

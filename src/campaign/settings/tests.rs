@@ -168,7 +168,7 @@ fn a_format_2_campaign_reads_as_flown_on_sih_with_no_board() {
     let s = CampaignSettings::resolve(&request(vec![], &Loaded::default()).unwrap()).unwrap();
     let mut old = s.to_json().unwrap();
     old["format"] = serde_json::json!(2);
-    for key in ["sim", "sim_link", "hitl"] {
+    for key in ["sim", "sim_link", "hitl", "bench"] {
         old["vehicles"].as_object_mut().unwrap().remove(key);
     }
     let read = CampaignSettings::from_json(old).unwrap();
@@ -177,6 +177,43 @@ fn a_format_2_campaign_reads_as_flown_on_sih_with_no_board() {
         (read.vehicles.sim, read.vehicles.sim_link, read.vehicles.hitl),
         (crate::bridge::VehicleSim::Sih, crate::bridge::SimLink::Tcp, None)
     );
+}
+
+#[test]
+fn a_format_3_campaign_reads_as_flown_on_no_bench() {
+    let s = CampaignSettings::resolve(&request(vec![], &Loaded::default()).unwrap()).unwrap();
+    let mut old = s.to_json().unwrap();
+    old["format"] = serde_json::json!(3);
+    old["vehicles"].as_object_mut().unwrap().remove("bench");
+    let read = CampaignSettings::from_json(old).unwrap();
+    assert_eq!((read.vehicles.bench, &read), (crate::bridge::Bench::Plain, &s));
+}
+
+#[test]
+fn the_competition_bench_flies_the_iris_on_px4_and_refuses_sih() {
+    let bench = (
+        find("vehicles", "bench").unwrap(),
+        toml::Value::String("competition".into()),
+    );
+    let sim = |v: &str| (find("vehicles", "sim").unwrap(), toml::Value::String(v.into()));
+    let px4 = (
+        find("vehicles", "px4").unwrap(),
+        toml::Value::String("/b/px4_sitl_default".into()),
+    );
+    let e = request(vec![bench.clone()], &Loaded::default())
+        .and_then(|r| r.check())
+        .unwrap_err();
+    assert!(e.contains("--bench") && e.contains("--px4"), "{e}");
+    let r = request(vec![px4.clone(), bench.clone()], &Loaded::default()).unwrap();
+    r.check().unwrap();
+    let s = CampaignSettings::resolve(&r).unwrap();
+    s.check().unwrap();
+    assert_eq!(s.vehicles.sim, crate::bridge::VehicleSim::Iris, "the bench's simulator");
+    let r = request(vec![px4.clone(), bench, sim("sih")], &Loaded::default()).unwrap();
+    let e = CampaignSettings::resolve(&r).unwrap().check().unwrap_err();
+    assert!(e.contains("--sim iris"), "{e}");
+    let plain = CampaignSettings::resolve(&request(vec![px4], &Loaded::default()).unwrap()).unwrap();
+    assert_eq!(plain.vehicles.sim, crate::bridge::VehicleSim::Sih);
 }
 
 #[test]
