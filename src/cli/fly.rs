@@ -141,14 +141,8 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
         ("--world", args.world.as_deref()),
     ])?;
     let build = open_build(&flight)?;
-    let Some(test) = super::load_test(&args.test, args.strict)? else {
+    let Some(test) = flown_test(&args, &flight, build.is_some())? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
-    };
-    // The bench's parameters over the test's, on the PX4 instance flown here.
-    let test = if build.is_some() {
-        flight.simulated.bench.flown(&test)
-    } else {
-        test
     };
     if write_world(&args, &test)? && args.world_only {
         return Ok(ExitCode::SUCCESS);
@@ -189,6 +183,12 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     print_anchoring(&report);
     print_report(&report, prediction.is_some(), args.json, simulator.as_ref())?;
     Ok(exit_code(&report))
+}
+
+/// The test as flown: the bench's parameters over the test's on a PX4 instance started here.
+fn flown_test(args: &FlyArgs, flight: &Flight, px4: bool) -> anyhow::Result<Option<TestCase>> {
+    let test = super::load_test(&args.test, args.strict)?;
+    Ok(test.map(|t| if px4 { flight.simulated.bench.flown(&t) } else { t }))
 }
 
 /// `--px4`: the checked build folder, refused when its release cannot fly `--mode` with `--sim`.

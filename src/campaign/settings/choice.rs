@@ -84,7 +84,7 @@ choice!(VehicleSim {
 
 choice!(Bench {
     Bench::Plain => "plain": "The build, --sim and the test's parameters as given.",
-    Bench::Competition => "competition": "The competition's simulator as reproduced here: PX4 v1.12, the iris facing East, fitted parameters.",
+    Bench::Competition => "competition": "The competition's simulator as reproduced here: PX4 v1.12, the iris facing East, MPC_XY_CRUISE 2.3 (cross-validated).",
 });
 
 choice!(SimLink {

@@ -115,8 +115,8 @@ section! {
             flag: Some(Flag::value("--bench", "BENCH")),
             help: "What the --px4 instances reproduce: `plain` (the build, --sim and the test's parameters as given) \
                    or `competition` (the competition's simulator as far as prgenuav reproduces it: PX4 v1.12 only, \
-                   prgenuav's iris facing East at rest as Gazebo spawns it, and the parameters fitted to the \
-                   competition's recorded flights; docs/validation/competition-bench.md).",
+                   prgenuav's iris facing East at rest as Gazebo spawns it, and MPC_XY_CRUISE 2.3, chosen by \
+                   cross-validation on the competition's recorded flights; docs/validation/competition-bench-fit.md).",
         },
         sim: VehicleSim = [rule rules::sim, "the bench's: iris with --bench competition, else sih", "iris"] {
             flag: Some(Flag::value("--sim", "SIM")),
