@@ -8,6 +8,10 @@
 //!
 //! `cargo run --release --example bench_fit -- DIR NAME=PX4_DIR [NAME=PX4_DIR ...]`
 
+#[path = "common/flight_stats.rs"]
+#[allow(dead_code)] // shared with competition_flights; this example needs only its median
+mod flight_stats;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -26,17 +30,9 @@ struct Flown {
     time_ratio: Option<f64>,
 }
 
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+/// The median (the two middle values' mean for an even count); `None` when empty.
+fn median(v: Vec<f64>) -> Option<f64> {
+    (!v.is_empty()).then(|| flight_stats::median(&v))
 }
 
 /// The targets' figures of `rows`: n, median |error|, median error, Spearman, same verdict, median time ratio.
