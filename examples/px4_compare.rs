@@ -2,7 +2,7 @@
 //! cases (DIR), the PX4 reference (PX4_DIR, written by `examples/px4_reference.rs`) and optionally the mock's
 //! distances (MOCK_CSV: `id,real_m,mock_m`, the output of `examples/mock_fidelity.rs`), simulates the LFS
 //! (`paper` and `px4` motion) and prints, overall and per tier: each source against the recorded flights and
-//! against PX4 (MAE, Spearman, precision / recall of "< 1.5 m", mean signed error), the split of the LFS's
+//! against PX4 (MAE, Spearman, precision / recall of "< 1.5 m", mean signed error, ROC AUC of its failures; a PX4 flight that did not land is no truth), the split of the LFS's
 //! squared error into LFS-vs-PX4 and PX4-vs-recorded, the recorded simulator's own repeat noise, and the
 //! horizontal speeds flown (tier A, the only recorded trajectories); then the prequential cross-validation of
 //! the online calibration's prior weight (`campaign::learn::calibration`): for each truth (recorded, PX4) the flights in
@@ -20,10 +20,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use prgenuav::campaign::learn::calibration::{Calibration, prequential_errors};
+use prgenuav::lfs::eval::calibration::roc_auc;
 use prgenuav::lfs::fidelity::{FlightCase, aggregate, evaluate, load_dir};
 use prgenuav::lfs::px4_flights;
 use prgenuav::lfs::sim::{MotionModel, SimConfig};
 use prgenuav::model::Trajectory;
+use prgenuav::model::competition::FAIL_BELOW_M;
 
 /// Per case: recorded, PX4, LFS paper, LFS px4, mock.
 #[derive(Debug, Clone)]
@@ -43,14 +45,18 @@ fn line(name: &str, rows: &[&Row], pred: impl Fn(&Row) -> Option<f64>, truth: im
     let a = aggregate(&pairs);
     let bias = (!pairs.is_empty()).then(|| pairs.iter().map(|(p, t)| p - t).sum::<f64>() / pairs.len() as f64);
     let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+    // How well the prediction separates the truth's failures: the closer predicted, the likelier failing.
+    let scores: Vec<f64> = pairs.iter().map(|(p, _)| -p).collect();
+    let failed: Vec<bool> = pairs.iter().map(|(_, t)| *t < FAIL_BELOW_M).collect();
     println!(
-        "| {name} | {} | {} | {} | {} | {} | {} |",
+        "| {name} | {} | {} | {} | {} | {} | {} | {} |",
         a.n,
         f(a.mae),
         f(a.spearman),
         f(a.precision),
         f(a.recall),
-        f(bias)
+        f(bias),
+        f(roc_auc(&scores, &failed))
     );
 }
 
@@ -177,7 +183,11 @@ fn main() -> anyhow::Result<()> {
             tier: c.tier.clone(),
             group: c.repeat_group.clone(),
             real: c.real_m,
-            px4: px4.get(&c.id).and_then(|f| f.min_distance),
+            // A flight that did not land has no judged distance: never a truth.
+            px4: px4
+                .get(&c.id)
+                .filter(|f| f.status == "landed")
+                .and_then(|f| f.min_distance),
             paper: paper.get(&c.id).copied().flatten(),
             lfs_px4: lfs_px4.get(&c.id).copied().flatten(),
             mock: mock.get(&c.id).copied(),
@@ -199,9 +209,9 @@ fn main() -> anyhow::Result<()> {
     }
     for (tier, rs) in &tiers {
         println!(
-            "\n### tier {tier}\n\n| prediction vs truth | n | MAE | Spearman | precision | recall | mean signed error |"
+            "\n### tier {tier}\n\n| prediction vs truth | n | MAE | Spearman | precision | recall | mean signed error | ROC AUC |"
         );
-        println!("|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|");
         let real = |r: &Row| Some(r.real);
         line("PX4 vs recorded", rs, |r| r.px4, real);
         line("LFS paper vs recorded", rs, |r| r.paper, real);

@@ -30,6 +30,11 @@ pub struct BenchProfile {
     pub heading_deg: f64,
     /// PX4 parameters set after the test's own (they win over the test's).
     pub params: &'static [(&'static str, f64)],
+    /// The most obstacles of the tests it was checked on; a test with more is flown with a caveat.
+    pub checked_obstacles: usize,
+    /// A box whose top lies less than this above the flight altitude, metres, is flown with a caveat: the
+    /// vehicle may cross over it (0: no caveat).
+    pub low_box_margin_m: f64,
 }
 
 /// The competition's bench. Gazebo Classic spawns the iris at ENU yaw 0 (Aerialist's launch file gives no
@@ -42,6 +47,11 @@ pub const COMPETITION: BenchProfile = BenchProfile {
     releases: &[(1, 12)],
     heading_deg: 90.0,
     params: &[("MPC_XY_CRUISE", 2.3)],
+    // 49 of the 50 recorded cases it was fitted on have 1 or 2 boxes; the one with 3 hovered to the timeout.
+    checked_obstacles: 2,
+    // 28 of the 50 fitted cases have a box at most 1.7 m above the 10 m flight (26 exactly 10 m): there the
+    // bench erred more (median 0.93 m against 0.72 m) and all 3 of its timeouts were among them.
+    low_box_margin_m: 2.0,
 };
 
 /// Nothing added.
@@ -50,6 +60,8 @@ const PLAIN: BenchProfile = BenchProfile {
     releases: &[],
     heading_deg: 0.0,
     params: &[],
+    checked_obstacles: usize::MAX,
+    low_box_margin_m: 0.0,
 };
 
 impl BenchProfile {
@@ -65,6 +77,33 @@ impl BenchProfile {
             });
         }
         t
+    }
+
+    /// What in `test` this bench was not checked on, one sentence each: the test is flown all the same and
+    /// each caveat is said with the flight (its report's warnings, the campaign's notes and journal).
+    pub fn caveats(&self, test: &TestCase) -> Vec<String> {
+        let mut out = Vec::new();
+        let n = test.obstacles.len();
+        if n > self.checked_obstacles {
+            out.push(format!(
+                "{n} obstacles: this bench was checked on tests with at most {} (flown as given; its distance is \
+                 not checked against the competition's simulator)",
+                self.checked_obstacles
+            ));
+        }
+        let altitude = test.mission.cruise_altitude_m();
+        for (i, o) in test.obstacles.iter().enumerate() {
+            let above = o.size.h - altitude;
+            if above < self.low_box_margin_m {
+                out.push(format!(
+                    "simulation.obstacles[{i}] is {:.1} m high, {above:.1} m above the flight altitude {altitude:.1} m: \
+                     the vehicle may cross over it; the report says when a run came closest above a box's top \
+                     (the 2026 judge scores such a crossing 0 m)",
+                    o.size.h
+                ));
+            }
+        }
+        out
     }
 }
 
@@ -114,6 +153,11 @@ impl Bench {
         self.profile().flown(test)
     }
 
+    /// What in `test` this bench was not checked on ([`BenchProfile::caveats`]).
+    pub fn caveats(self, test: &TestCase) -> Vec<String> {
+        self.profile().caveats(test)
+    }
+
     /// The vehicle's nose at rest, degrees clockwise from North.
     pub fn heading_deg(self) -> f64 {
         self.profile().heading_deg
@@ -147,6 +191,30 @@ mod tests {
             "{e}"
         );
         assert_eq!(Bench::Plain.release_refusal(&version("v1.16.2")), None);
+    }
+
+    #[test]
+    fn a_third_box_and_a_low_box_are_flown_with_a_caveat_each_on_the_competition_bench_only() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("missions/mission1.yaml");
+        let mut test = TestCase::load(&path).expect("mission 1");
+        let altitude = test.mission.cruise_altitude_m();
+        let boxed = |x: f64, h: f64| crate::model::Obstacle::new(2.0, 2.0, h, x, 20.0, 0.0);
+        test.obstacles = vec![boxed(-20.0, 20.0), boxed(0.0, 20.0)];
+        assert!(Bench::Competition.caveats(&test).is_empty());
+        test.obstacles.push(boxed(20.0, altitude + 1.5));
+        let c = Bench::Competition.caveats(&test);
+        assert_eq!(c.len(), 2, "{c:?}");
+        assert!(
+            c[0].starts_with("3 obstacles") && c[0].contains("at most 2"),
+            "{}",
+            c[0]
+        );
+        assert!(
+            c[1].starts_with("simulation.obstacles[2]") && c[1].contains("1.5 m above"),
+            "{}",
+            c[1]
+        );
+        assert!(Bench::Plain.caveats(&test).is_empty());
     }
 
     #[test]

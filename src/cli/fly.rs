@@ -11,7 +11,6 @@ use prgenuav::bridge::companion::predict::predict_cp;
 use prgenuav::bridge::hil::board::BoardPort;
 use prgenuav::bridge::hil::run::SimSummary;
 use prgenuav::bridge::session::gazebo::world_sdf;
-use prgenuav::bridge::sitl::Px4Build;
 use prgenuav::bridge::wire::notices::NoticeSink;
 use prgenuav::bridge::{
     CancelToken, DEFAULT_URL, FlightReport, FlyMode, FlyOptions, LinkAddress, Prediction, Status, fly, predict,
@@ -20,7 +19,7 @@ use prgenuav::io::write_atomic;
 use prgenuav::model::TestCase;
 use prgenuav::plot::{FlightPlot, PathStyle};
 
-use super::fly_backend::{Simulated, Started, start_board, start_px4};
+use super::fly_backend::{Simulated, Started, open_build, start_board, start_px4};
 use super::limits;
 use super::setting_flags::FlyFlags;
 use super::stop_signals::StopSignals;
@@ -140,7 +139,11 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
         ("--trajectory", args.trajectory.as_deref()),
         ("--world", args.world.as_deref()),
     ])?;
-    let build = open_build(&flight)?;
+    let build = flight
+        .px4
+        .as_deref()
+        .map(|dir| open_build(dir, flight.mode, &flight.simulated))
+        .transpose()?;
     let Some(test) = flown_test(&args, &flight, build.is_some())? else {
         return Ok(ExitCode::from(super::EXIT_FAIL));
     };
@@ -159,7 +162,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     };
     // Ctrl-C, a scheduler's SIGTERM (`scancel`, a Kubernetes Job's end) and SIGHUP all land the vehicle.
     let mut signals = StopSignals::register(runtime.handle()).context("handling Ctrl-C, SIGTERM and SIGHUP")?;
-    let report = runtime.block_on(async {
+    let mut report = runtime.block_on(async {
         let cancel = CancelToken::new();
         let on_stop = cancel.clone();
         tokio::spawn(async move {
@@ -172,6 +175,9 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
         }
         fly(&test, &opts, cancel).await
     })?;
+    if build.is_some() {
+        report.warnings.extend(flight.simulated.bench.caveats(&test));
+    }
     if let Some(tail) = started.console_tail(20).filter(|_| !report.status.completed()) {
         eprintln!("PX4's console, last 20 lines:");
         tail.iter().for_each(|l| eprintln!("  {l}"));
@@ -189,21 +195,6 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
 fn flown_test(args: &FlyArgs, flight: &Flight, px4: bool) -> anyhow::Result<Option<TestCase>> {
     let test = super::load_test(&args.test, args.strict)?;
     Ok(test.map(|t| if px4 { flight.simulated.bench.flown(&t) } else { t }))
-}
-
-/// `--px4`: the checked build folder, refused when its release cannot fly `--mode` with `--sim`.
-fn open_build(flight: &Flight) -> anyhow::Result<Option<Px4Build>> {
-    let Some(dir) = flight.px4.as_deref() else {
-        return Ok(None);
-    };
-    let build = Px4Build::open(dir)?;
-    build.check_mode(flight.mode)?;
-    if let Some(why) = flight.simulated.bench.sim_refusal(flight.simulated.sim) {
-        anyhow::bail!(why);
-    }
-    build.check_bench(flight.simulated.bench)?;
-    build.check_sim(flight.simulated.sim)?;
-    Ok(Some(build))
 }
 
 /// The LFS prediction for the mode flown (none with `--no-predict`; a failure is a warning).

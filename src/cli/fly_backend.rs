@@ -25,6 +25,18 @@ pub struct Simulated {
     pub bench: Bench,
 }
 
+/// `--px4 DIR`: the checked build folder, refused when its release cannot fly `mode` as `sim` says.
+pub fn open_build(dir: &std::path::Path, mode: FlyMode, sim: &Simulated) -> anyhow::Result<Px4Build> {
+    let build = Px4Build::open(dir)?;
+    build.check_mode(mode)?;
+    if let Some(why) = sim.bench.sim_refusal(sim.sim) {
+        anyhow::bail!(why);
+    }
+    build.check_bench(sim.bench)?;
+    build.check_sim(sim.sim)?;
+    Ok(build)
+}
+
 /// What runs for the flight; stopped by [`Started::finish`] (or when dropped), the slot freed last.
 pub enum Started {
     /// Nothing: a vehicle the user started.

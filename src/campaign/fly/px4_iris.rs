@@ -65,6 +65,10 @@ impl Px4Vehicle {
             Attempt::Flew(_) if let Some(why) = summary.as_ref().and_then(|s| late(s, self.instance())) => {
                 Attempt::Failed(why)
             }
+            Attempt::Flew(mut flown) => {
+                flown.warnings.extend(s.bench.caveats(test));
+                Attempt::Flew(flown)
+            }
             other => other,
         }
     }
