@@ -8,7 +8,12 @@
 //!
 //! `cargo run --release --example px4_campaign_draws -- [PARALLEL=2]` (about 25 minutes on 2 cores; env
 //! `NO_MOCK=1`: the LFS alone, about 3 minutes; `MOCK_PROFILE=NAME` or `MOCK_SETTING=...`: that mock profile or
-//! setting, as `mock_fit` takes them; `ONLY=no-screen` or `ONLY=learning`: those tests only)
+//! setting, as `mock_fit` takes them; `ONLY=no-screen` or `ONLY=learning`: those tests only; `DATA=FILE`: that
+//! file instead)
+//!
+//! `... -- collect OUT.jsonl MISSION DRAWS FOLDER`: appends the tests of one `generate` folder (its
+//! `journal.jsonl`: every charged flight of a candidate, in journal order) to OUT.jsonl, labelled `DRAWS`
+//! (`learning` or `no-screen`); a candidate whose first flight did not land is left out.
 
 #[path = "common/mock_flight.rs"]
 mod mock_flight;
@@ -48,11 +53,16 @@ struct Judged {
 }
 
 fn main() -> anyhow::Result<()> {
-    let parallel: usize = std::env::args().nth(1).map_or(Ok(2), |a| a.parse())?;
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("collect") {
+        return collect(&args[1..]);
+    }
+    let parallel: usize = args.first().map_or(Ok(2), |a| a.parse())?;
     let with_mock = std::env::var_os("NO_MOCK").is_none();
-    let text = std::fs::read_to_string(DATA).with_context(|| format!("reading {DATA}"))?;
+    let data = std::env::var("DATA").unwrap_or_else(|_| DATA.to_string());
+    let text = std::fs::read_to_string(&data).with_context(|| format!("reading {data}"))?;
     let mut rows: Vec<Row> = (text.lines().enumerate())
-        .map(|(i, l)| serde_json::from_str(l).with_context(|| format!("{DATA}:{}", i + 1)))
+        .map(|(i, l)| serde_json::from_str(l).with_context(|| format!("{data}:{}", i + 1)))
         .collect::<anyhow::Result<_>>()?;
     if let Ok(only) = std::env::var("ONLY") {
         rows.retain(|r| r.draws == only);
@@ -151,4 +161,49 @@ fn auc(pairs: &[(f64, f64)]) -> Option<f64> {
         })
         .sum();
     Some(wins / (fail.len() * pass.len()) as f64)
+}
+
+/// One journal line, as much of it as a test's row needs.
+#[derive(Deserialize)]
+struct Flown {
+    candidate: u64,
+    obstacles: Vec<Obstacle>,
+    min_distance: Option<f64>,
+    status: String,
+}
+
+/// `collect OUT.jsonl MISSION DRAWS FOLDER`: one row per candidate of the folder's journal.
+fn collect(args: &[String]) -> anyhow::Result<()> {
+    let [out, mission, draws, folder] = args else {
+        anyhow::bail!("usage: collect OUT.jsonl MISSION DRAWS FOLDER");
+    };
+    let mission: u32 = mission.parse().context("MISSION: a number")?;
+    let journal = Path::new(folder).join("journal.jsonl");
+    let text = std::fs::read_to_string(&journal).with_context(|| format!("reading {}", journal.display()))?;
+    let mut tests: BTreeMap<u64, (Vec<Obstacle>, Vec<(String, Option<f64>)>)> = BTreeMap::new();
+    for (i, line) in text.lines().enumerate() {
+        let f: Flown = serde_json::from_str(line).with_context(|| format!("{}:{}", journal.display(), i + 1))?;
+        let entry = tests.entry(f.candidate).or_insert_with(|| (f.obstacles, Vec::new()));
+        entry.1.push((f.status, f.min_distance));
+    }
+    let mut lines = String::new();
+    for (candidate, (obstacles, flights)) in &tests {
+        if flights.first().is_none_or(|(s, d)| s != "landed" || d.is_none()) {
+            continue;
+        }
+        let landed: Vec<f64> = flights
+            .iter()
+            .filter(|(s, _)| s == "landed")
+            .filter_map(|f| f.1)
+            .collect();
+        let row = serde_json::json!({
+            "mission": mission, "campaign": folder, "draws": draws, "candidate": candidate,
+            "obstacles": obstacles, "px4_min_distance": landed,
+        });
+        lines.push_str(&format!("{row}\n"));
+    }
+    let mut file = std::fs::OpenOptions::new().create(true).append(true).open(out)?;
+    std::io::Write::write_all(&mut file, lines.as_bytes())?;
+    println!("{}: {} tests", journal.display(), lines.lines().count());
+    Ok(())
 }

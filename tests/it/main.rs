@@ -27,6 +27,7 @@ mod missions;
 mod pinned;
 mod pinned_static;
 mod pty;
+mod px4_bench;
 mod px4_campaign;
 mod px4_cp;
 mod px4_fake;
