@@ -80,7 +80,8 @@ impl BenchProfile {
     }
 
     /// What in `test` this bench was not checked on, one sentence each: the test is flown all the same and
-    /// each caveat is said with the flight (its report's warnings, the campaign's notes and journal).
+    /// each caveat is said with the flight (its report's warnings; `generate` and `evaluate` say it once and
+    /// journal it).
     pub fn caveats(&self, test: &TestCase) -> Vec<String> {
         let mut out = Vec::new();
         let n = test.obstacles.len();

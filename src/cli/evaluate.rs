@@ -83,6 +83,8 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
     let flights = settings.flights();
     let mut fleet = backend::fleet(&flights, args.folder.join(EVALUATION_DIR), runtime.handle())?;
     let quiet = args.quiet || args.json;
+    // A flight's warnings (a bench's caveats among them), each said once, as a campaign says them.
+    let said = std::sync::Mutex::new(std::collections::BTreeSet::new());
     let on_flight = move |r: &FlightRecord| {
         if !quiet {
             let d = r.flown.min_distance.map_or("-".into(), |d| format!("{d:.2} m"));
@@ -90,6 +92,10 @@ pub fn run(args: EvaluateArgs) -> anyhow::Result<ExitCode> {
                 "flight candidate {}: {} {d} ({:.0} s)",
                 r.candidate, r.flown.status, r.flown.flight_time_s
             );
+        }
+        let mut said = said.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for w in r.flown.warnings.iter().filter(|w| said.insert((*w).clone())) {
+            eprintln!("warning: {w} (candidate {}; said once)", r.candidate);
         }
     };
     let started = Instant::now();

@@ -178,10 +178,7 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     if build.is_some() {
         report.warnings.extend(flight.simulated.bench.caveats(&test));
     }
-    if let Some(tail) = started.console_tail(20).filter(|_| !report.status.completed()) {
-        eprintln!("PX4's console, last 20 lines:");
-        tail.iter().for_each(|l| eprintln!("  {l}"));
-    }
+    print_console_tail(&started, &report);
     let simulator = started.finish(&runtime);
     if let Some(path) = &args.plot {
         write_plot(path, &test, prediction.as_ref(), &report, opts.mode)?;
@@ -189,6 +186,14 @@ pub fn run(args: FlyArgs) -> anyhow::Result<ExitCode> {
     print_anchoring(&report);
     print_report(&report, prediction.is_some(), args.json, simulator.as_ref())?;
     Ok(exit_code(&report))
+}
+
+/// PX4's last console lines, for a flight that did not end.
+fn print_console_tail(started: &Started, report: &FlightReport) {
+    if let Some(tail) = started.console_tail(20).filter(|_| !report.status.completed()) {
+        eprintln!("PX4's console, last 20 lines:");
+        tail.iter().for_each(|l| eprintln!("  {l}"));
+    }
 }
 
 /// The test as flown: the bench's parameters over the test's on a PX4 instance started here.

@@ -112,7 +112,7 @@ section! {
             help: "Copy each --px4 flight's ULog beside its trajectory, flights/candidate_N.ulg.",
         },
         bench: Bench = [value Bench::Plain] {
-            flag: Some(Flag::value("--bench", "BENCH").visible()),
+            flag: Some(Flag::value("--bench", "BENCH")),
             help: "What the --px4 instances reproduce: `plain` (the build, --sim and the test's parameters as given) \
                    or `competition` (the competition's simulator as far as prgenuav reproduces it: PX4 v1.12 only, \
                    prgenuav's iris facing East at rest as Gazebo spawns it, and MPC_XY_CRUISE 2.3, chosen by \
