@@ -172,6 +172,9 @@ struct Flown {
     status: String,
 }
 
+/// A flight's status and distance.
+type Flight = (String, Option<f64>);
+
 /// `collect OUT.jsonl MISSION DRAWS FOLDER`: one row per candidate of the folder's journal.
 fn collect(args: &[String]) -> anyhow::Result<()> {
     let [out, mission, draws, folder] = args else {
@@ -180,7 +183,7 @@ fn collect(args: &[String]) -> anyhow::Result<()> {
     let mission: u32 = mission.parse().context("MISSION: a number")?;
     let journal = Path::new(folder).join("journal.jsonl");
     let text = std::fs::read_to_string(&journal).with_context(|| format!("reading {}", journal.display()))?;
-    let mut tests: BTreeMap<u64, (Vec<Obstacle>, Vec<(String, Option<f64>)>)> = BTreeMap::new();
+    let mut tests: BTreeMap<u64, (Vec<Obstacle>, Vec<Flight>)> = BTreeMap::new();
     for (i, line) in text.lines().enumerate() {
         let f: Flown = serde_json::from_str(line).with_context(|| format!("{}:{}", journal.display(), i + 1))?;
         let entry = tests.entry(f.candidate).or_insert_with(|| (f.obstacles, Vec::new()));
