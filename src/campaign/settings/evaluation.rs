@@ -12,6 +12,7 @@ use super::keys_draw::Output;
 use super::keys_run::{Flight, Mock};
 use super::request::Request;
 use super::resolve::setup_of;
+use super::rules::Setup;
 use super::stored::{CampaignSettings, FleetSettings};
 use super::{Resume, Setting, all};
 use crate::bridge::FlyMode;
@@ -74,7 +75,16 @@ impl EvaluationSettings {
             .iter()
             .any(|k| request.gives("vehicles", k));
         let vehicles = if backend_asked {
-            a.vehicles.resolve(&setup)?
+            // A suite flown on a named bench is evaluated on it when --px4 comes without --bench.
+            let mut asked = a.vehicles.clone();
+            if asked.px4.is_some() && suite.vehicles.px4.is_some() {
+                asked.bench = asked.bench.or(Some(suite.vehicles.bench));
+            }
+            let setup = Setup {
+                bench: asked.bench(),
+                ..setup
+            };
+            asked.resolve(&setup)?
         } else {
             suite.vehicles.overridden(&a.vehicles)
         };

@@ -217,6 +217,29 @@ fn the_competition_bench_flies_the_iris_on_px4_and_refuses_sih() {
 }
 
 #[test]
+fn a_suite_flown_on_the_competition_bench_is_evaluated_on_it_unless_another_bench_is_asked() {
+    use super::evaluation::EvaluationSettings;
+    let value = |key: &str, v: &str| (find("vehicles", key).unwrap(), toml::Value::String(v.into()));
+    let px4 = value("px4", "/b/px4_sitl_default");
+    let suite = request(vec![px4.clone(), value("bench", "competition")], &Loaded::default()).unwrap();
+    let suite = CampaignSettings::resolve(&suite).unwrap();
+    let again = |asked: Vec<(&'static super::Setting, toml::Value)>| {
+        let r = request(asked, &Loaded::default()).unwrap();
+        EvaluationSettings::resolve(&r, Some(&suite)).unwrap().vehicles
+    };
+    let v = again(vec![px4.clone()]);
+    assert_eq!(
+        (v.bench, v.sim),
+        (crate::bridge::Bench::Competition, crate::bridge::VehicleSim::Iris)
+    );
+    let v = again(vec![px4, value("bench", "plain")]);
+    assert_eq!(
+        (v.bench, v.sim),
+        (crate::bridge::Bench::Plain, crate::bridge::VehicleSim::Sih)
+    );
+}
+
+#[test]
 fn the_iris_simulator_and_boards_are_refused_where_they_cannot_fly() {
     let sim = |v: &str| (find("vehicles", "sim").unwrap(), toml::Value::String(v.into()));
     let link = |v: &str| (find("vehicles", "sim_link").unwrap(), toml::Value::String(v.into()));
