@@ -6,7 +6,8 @@
 //!
 //! `cargo run --release --example competition_flights -- [DIR=tests/data/hfs-flights]
 //! [PX4_DIR=tests/data/px4-flights] [HELDOUT=tests/data/px4-heldout/px4]` (env `TRACE=ID`: also print that
-//! case's speed and clearance per 10 s, recorded and on PX4)
+//! case's speed and clearance per 10 s, recorded and on PX4; `PX4_LABEL=NAME`: what the PX4_DIR flights are
+//! called in the tables, for example `PX4_LABEL="competition bench"` with `tests/data/competition-bench-fit/h90c23`)
 
 #[path = "common/flight_stats.rs"]
 mod flight_stats;
@@ -72,6 +73,11 @@ fn clearance_row(name: &str, fl: &[&Flight], keep: &dyn Fn(&Flight, usize) -> bo
     println!("| {name} | {} |", cells.join(" | "));
 }
 
+/// What the second folder's flights are called (env `PX4_LABEL`; the default is the folder's usual content).
+fn label() -> String {
+    std::env::var("PX4_LABEL").unwrap_or_else(|_| "PX4 v1.14 SIH".into())
+}
+
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let dir = PathBuf::from(args.next().unwrap_or_else(|| "tests/data/hfs-flights".into()));
@@ -99,11 +105,12 @@ fn main() -> anyhow::Result<()> {
     let sih: Vec<Flight> = px4_tracks.iter().filter_map(analyse).collect();
     let sih_by_id: BTreeMap<&str, &Flight> = sih.iter().map(|f| (f.id.as_str(), f)).collect();
     println!(
-        "{} recorded tier-A flights ({} with boxes, {} landed), {} of their cases flown on PX4 v1.14 SIH and landed",
+        "{} recorded tier-A flights ({} with boxes, {} landed), {} of their cases flown on {px4} and landed",
         rec.len(),
         rec.iter().filter(|f| f.d.is_some()).count(),
         rec_tracks.iter().filter(|t| t.landed == Some(true)).count(),
-        sih.len()
+        sih.len(),
+        px4 = label()
     );
     if let Ok(id) = std::env::var("TRACE") {
         for f in rec.iter().chain(&sih).filter(|f| f.id == id) {
@@ -147,16 +154,16 @@ fn main() -> anyhow::Result<()> {
         "recorded, without",
         &rec.iter().filter(|f| f.crawls.is_empty()).collect::<Vec<_>>(),
     );
-    source_row("PX4 v1.14 SIH, same cases", &sih.iter().collect::<Vec<_>>());
+    source_row(&format!("{}, same cases", label()), &sih.iter().collect::<Vec<_>>());
     for s in &sources {
         let ids: Vec<&str> = rec.iter().filter(|f| f.source == *s).map(|f| f.id.as_str()).collect();
         source_row(
-            &format!("PX4 v1.14 SIH, {s}'s cases"),
+            &format!("{}, {s}'s cases", label()),
             &sih.iter().filter(|f| ids.contains(&f.id.as_str())).collect::<Vec<_>>(),
         );
     }
 
-    println!("\n## 2. Per flight: recorded / PX4 v1.14 SIH\n");
+    println!("\n## 2. Per flight: recorded / {}\n", label());
     println!(
         "| case | source | s per px | time at altitude s | median m/s | p90 m/s | latched crawl s | stops | distance m |"
     );
@@ -219,7 +226,8 @@ fn crawl_tables(rec: &[Flight], sih: &[Flight]) {
         range(&turning, 2)
     );
     println!(
-        "PX4 v1.14 SIH: {} latched crawls in {} flights",
+        "{}: {} latched crawls in {} flights",
+        label(),
         sih.iter().map(|f| f.crawls.len()).sum::<usize>(),
         sih.len()
     );
@@ -249,7 +257,7 @@ fn clearance_tables(rec: &[Flight], sih: &[Flight]) {
     clearance_row("recorded", &boxed(rec), &|_, _| true);
     clearance_row("recorded, outside latched crawls", &boxed(rec), &|f, i| !in_crawl(f, i));
     clearance_row("recorded, inside latched crawls", &boxed(rec), &in_crawl);
-    clearance_row("PX4 v1.14 SIH", &boxed(sih), &|_, _| true);
+    clearance_row(&label(), &boxed(sih), &|_, _| true);
 }
 
 fn stop_tables(rec: &[Flight], sih: &[Flight]) {
@@ -258,7 +266,7 @@ fn stop_tables(rec: &[Flight], sih: &[Flight]) {
         "| flights | stops | per flight | duration s | clearance at the stop m | course change > 30 deg | heading change > 30 deg |"
     );
     println!("|---|---|---|---|---|---|---|");
-    for (name, fl) in [("recorded", rec), ("PX4 v1.14 SIH", sih)] {
+    for (name, fl) in [("recorded", rec), (label().as_str(), sih)] {
         let s: Vec<&Stop> = fl.iter().flat_map(|f| &f.stops).collect();
         let dur: Vec<f64> = s.iter().map(|x| x.dur_s).collect();
         let clear: Vec<f64> = s.iter().map(|x| x.clear_m).filter(|c| c.is_finite()).collect();
@@ -286,7 +294,7 @@ fn distance_tables(rec: &[Flight], sih: &BTreeMap<&str, &Flight>) {
     println!("|---|---|---|---|");
     for (name, fl) in [
         ("recorded", rec.iter().collect::<Vec<_>>()),
-        ("PX4 v1.14 SIH", sih.values().copied().collect()),
+        (label().as_str(), sih.values().copied().collect()),
     ] {
         let pairs: Vec<(f64, f64, f64)> = fl
             .iter()
@@ -332,7 +340,8 @@ fn time_table(rec: &[Flight], sih: &BTreeMap<&str, &Flight>) {
         "Without the crawls: each crawl's path flown at the flight's median speed outside crawls and stops. PX4 with the lock: PX4's flight with v1.12.3's turning lock replayed on its path (see `lock_replay_s`).\n"
     );
     println!(
-        "| flights | n | recorded s | without crawls s | PX4 v1.14 SIH s | PX4 / recorded | PX4 / without crawls | PX4 with the lock replayed s | its flights slowed 2x or more |"
+        "| flights | n | recorded s | without crawls s | {} s | PX4 / recorded | PX4 / without crawls | PX4 with the lock replayed s | its flights slowed 2x or more |",
+        label()
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for (name, crawled) in [
@@ -405,7 +414,7 @@ fn formula_table() {
 }
 
 fn bench_timing(px4: &BTreeMap<String, px4_flights::Px4Flight>, heldout: &Path) {
-    println!("\n## 9. The bench's companion (PX4 v1.14 SIH, speed factor 5)\n");
+    println!("\n## 9. The bench's companion ({}, speed factor 5)\n", label());
     let p99: Vec<f64> = px4.values().filter_map(|f| f.answer_p99_ms).collect();
     let not_landed = px4.values().filter(|f| f.status != "landed").count();
     println!(
