@@ -73,9 +73,11 @@ fn clearance_row(name: &str, fl: &[&Flight], keep: &dyn Fn(&Flight, usize) -> bo
     println!("| {name} | {} |", cells.join(" | "));
 }
 
-/// What the second folder's flights are called (env `PX4_LABEL`; the default is the folder's usual content).
-fn label() -> String {
-    std::env::var("PX4_LABEL").unwrap_or_else(|_| "PX4 v1.14 SIH".into())
+/// What the second folder's flights are called (env `PX4_LABEL`, read once; the default is the folder's usual
+/// content).
+fn label() -> &'static str {
+    static LABEL: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    LABEL.get_or_init(|| std::env::var("PX4_LABEL").unwrap_or_else(|_| "PX4 v1.14 SIH".into()))
 }
 
 fn main() -> anyhow::Result<()> {
@@ -257,7 +259,7 @@ fn clearance_tables(rec: &[Flight], sih: &[Flight]) {
     clearance_row("recorded", &boxed(rec), &|_, _| true);
     clearance_row("recorded, outside latched crawls", &boxed(rec), &|f, i| !in_crawl(f, i));
     clearance_row("recorded, inside latched crawls", &boxed(rec), &in_crawl);
-    clearance_row(&label(), &boxed(sih), &|_, _| true);
+    clearance_row(label(), &boxed(sih), &|_, _| true);
 }
 
 fn stop_tables(rec: &[Flight], sih: &[Flight]) {
@@ -266,7 +268,7 @@ fn stop_tables(rec: &[Flight], sih: &[Flight]) {
         "| flights | stops | per flight | duration s | clearance at the stop m | course change > 30 deg | heading change > 30 deg |"
     );
     println!("|---|---|---|---|---|---|---|");
-    for (name, fl) in [("recorded", rec), (label().as_str(), sih)] {
+    for (name, fl) in [("recorded", rec), (label(), sih)] {
         let s: Vec<&Stop> = fl.iter().flat_map(|f| &f.stops).collect();
         let dur: Vec<f64> = s.iter().map(|x| x.dur_s).collect();
         let clear: Vec<f64> = s.iter().map(|x| x.clear_m).filter(|c| c.is_finite()).collect();
@@ -294,7 +296,7 @@ fn distance_tables(rec: &[Flight], sih: &BTreeMap<&str, &Flight>) {
     println!("|---|---|---|---|");
     for (name, fl) in [
         ("recorded", rec.iter().collect::<Vec<_>>()),
-        (label().as_str(), sih.values().copied().collect()),
+        (label(), sih.values().copied().collect()),
     ] {
         let pairs: Vec<(f64, f64, f64)> = fl
             .iter()
@@ -414,11 +416,11 @@ fn formula_table() {
 }
 
 fn bench_timing(px4: &BTreeMap<String, px4_flights::Px4Flight>, heldout: &Path) {
-    println!("\n## 9. The bench's companion ({}, speed factor 5)\n", label());
+    println!("\n## 9. The bench's companion ({})\n", label());
     let p99: Vec<f64> = px4.values().filter_map(|f| f.answer_p99_ms).collect();
     let not_landed = px4.values().filter(|f| f.status != "landed").count();
     println!(
-        "Recorded cases: {} flights, {not_landed} not landed; answer latency p99 {} ms wall (x5 in vehicle time)",
+        "Recorded cases: {} flights, {not_landed} not landed; answer latency p99 {} ms wall",
         px4.len(),
         range(&p99, 1)
     );
@@ -437,7 +439,7 @@ fn bench_timing(px4: &BTreeMap<String, px4_flights::Px4Flight>, heldout: &Path) 
         lat.extend(v["companion_timing"]["request_to_answer_ms"]["p99"].as_f64());
     }
     println!(
-        "Held-out tests: {status:?}; request-to-answer p99 {} ms wall",
+        "Held-out tests (HELDOUT): {status:?}; request-to-answer p99 {} ms wall",
         range(&lat, 1)
     );
 }

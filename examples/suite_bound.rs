@@ -7,10 +7,15 @@
 //! `cargo run --release --example suite_bound -- A1 A2 B1 B2` (each an evaluated campaign folder, or its
 //! `evaluation/report.json`; A = the learning campaign's suite, B = `--no-screen`'s)
 
+#[path = "common/evaluation_report.rs"]
+#[allow(dead_code)] // shared with the campaign examples; this one reads report files, not campaign folders
+mod evaluation_report;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use evaluation_report::{read_report, tests_by_name};
 
 /// One test's runs in one evaluation: (points, flight time s), and its score per (point per minute).
 #[derive(Debug, Clone)]
@@ -49,15 +54,9 @@ fn report_path(arg: &str) -> PathBuf {
 }
 
 fn load(arg: &str) -> anyhow::Result<Evaluation> {
-    let path = report_path(arg);
-    let text = std::fs::read_to_string(&path).with_context(|| format!("{}", path.display()))?;
-    let json: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    let json = read_report(&report_path(arg))?;
     let mut tests = BTreeMap::new();
-    for t in json["tests"].as_array().context("no tests[]")? {
-        let name = t["test"]
-            .as_str()
-            .and_then(|p| Path::new(p).file_name()?.to_str())
-            .context("test name")?;
+    for (name, t) in tests_by_name(&json)? {
         let runs: Vec<(f64, f64)> = t["runs"]
             .as_array()
             .context("runs[]")?
@@ -66,7 +65,7 @@ fn load(arg: &str) -> anyhow::Result<Evaluation> {
             .collect();
         let obstacles = t["obstacles"].as_f64().context("obstacles")?;
         let scale = 10.0 / (obstacles * obstacles);
-        tests.insert(name.to_string(), Runs { runs, scale });
+        tests.insert(name, Runs { runs, scale });
     }
     Ok(Evaluation {
         tests,

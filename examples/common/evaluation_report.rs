@@ -9,16 +9,26 @@ use anyhow::Context;
 /// has no evaluation.
 pub fn evaluated_tests(folder: &Path) -> anyhow::Result<Option<HashMap<String, serde_json::Value>>> {
     let path = folder.join("evaluation/report.json");
-    let Ok(text) = std::fs::read_to_string(&path) else {
+    if !path.exists() {
         return Ok(None);
-    };
-    let json: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}", path.display()))?;
-    let tests = json["tests"].as_array().context("evaluation: no tests[]")?;
+    }
+    tests_by_name(&read_report(&path)?).map(Some)
+}
+
+/// An evaluation's `report.json`.
+pub fn read_report(path: &Path) -> anyhow::Result<serde_json::Value> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}", path.display()))
+}
+
+/// A report's `tests[]` by each test YAML's file name.
+pub fn tests_by_name(report: &serde_json::Value) -> anyhow::Result<HashMap<String, serde_json::Value>> {
+    let tests = report["tests"].as_array().context("evaluation: no tests[]")?;
     let named = tests.iter().filter_map(|t| {
         let name = t["test"].as_str().and_then(|p| Path::new(p).file_name()?.to_str())?;
         Some((name.to_string(), t.clone()))
     });
-    Ok(Some(named.collect()))
+    Ok(named.collect())
 }
 
 /// The campaign folders named on the command line; at least one, or the usage of `example`.
