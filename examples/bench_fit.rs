@@ -4,9 +4,11 @@
 //! obstacle set (`fidelity::fold_of`): in each fold the candidate with the lowest objective on the other four
 //! folds is chosen and judged on the held-out one, and the held-out flights are pooled. The objective is the
 //! median absolute error of the judged distance plus |ln(median flight-time ratio)|, both on the training
-//! folds. Candidates named `info:...` are reported but never chosen (settings fixed from code, not fitted).
+//! folds. Candidates named `info:...` are reported but never chosen (settings fixed from code, not fitted). Each
+//! other candidate is also compared case by case with the first one (median difference, sign test).
 //!
-//! `cargo run --release --example bench_fit -- DIR NAME=PX4_DIR [NAME=PX4_DIR ...]`
+//! `cargo run --release --example bench_fit -- DIR NAME=PX4_DIR [NAME=PX4_DIR ...]`; a `NAME=FILE.json` is the LFS's
+//! per-case predictions instead (`prgenuav fidelity DIR --json`), landed ones only, with no flight time.
 
 #[path = "common/flight_stats.rs"]
 #[allow(dead_code)] // shared with competition_flights; this example needs only its median
@@ -91,6 +93,72 @@ fn candidate(dir: &Path, px4_dir: &Path, cases: &[FlightCase]) -> anyhow::Result
         .collect())
 }
 
+/// The LFS's landed predictions of `cases` from `prgenuav fidelity --json` output (no flight times).
+fn lfs_candidate(file: &Path, cases: &[FlightCase]) -> anyhow::Result<BTreeMap<String, Flown>> {
+    let text = std::fs::read_to_string(file).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let report: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: not JSON: {e}", file.display()))?;
+    let rows = report["cases"]
+        .as_array()
+        .ok_or_else(|| anyhow::anyhow!("{}: no `cases` array (expected `fidelity --json`)", file.display()))?;
+    let real: BTreeMap<&str, f64> = cases.iter().map(|c| (c.id.as_str(), c.real_m)).collect();
+    Ok(rows
+        .iter()
+        .filter(|r| r["status"] == "landed")
+        .filter_map(|r| {
+            let id = r["id"].as_str()?;
+            let flown = Flown {
+                px4_m: r["predicted"].as_f64()?,
+                real_m: *real.get(id)?,
+                time_ratio: None,
+            };
+            Some((id.to_string(), flown))
+        })
+        .collect())
+}
+
+/// Exact two-sided sign test: the chance of a split at least as uneven as `a` against `b` when both are equally
+/// likely.
+fn sign_test_p(a: usize, b: usize) -> f64 {
+    let n = a + b;
+    let mut choose = 1.0_f64; // C(n, j), built up term by term
+    let mut tail = 0.0;
+    for j in 0..=a.min(b) {
+        if j > 0 {
+            choose *= (n + 1 - j) as f64 / j as f64;
+        }
+        tail += choose;
+    }
+    (2.0 * tail / 2.0_f64.powi(n as i32)).min(1.0)
+}
+
+/// Each fitted candidate's distances against the first one's, case by case (both landed): the median
+/// difference, how many came closer or went wider, and the sign test's p.
+fn paired(fitted: &[&(String, BTreeMap<String, Flown>)]) {
+    let Some((base_name, base)) = fitted.first().map(|c| (&c.0, &c.1)) else {
+        return;
+    };
+    println!("\n### Paired against {base_name} (cases both landed)\n");
+    println!("| candidate | n | median difference | closer | wider | sign test p |");
+    println!("|---|---|---|---|---|---|");
+    for (name, rows) in &fitted[1..] {
+        let d: Vec<f64> = rows
+            .iter()
+            .filter_map(|(id, r)| base.get(id).map(|b| r.px4_m - b.px4_m))
+            .collect();
+        let (closer, wider) = (
+            d.iter().filter(|x| **x < 0.0).count(),
+            d.iter().filter(|x| **x > 0.0).count(),
+        );
+        let med = median(d.clone()).map_or("-".into(), |m| format!("{m:+.3} m"));
+        println!(
+            "| {name} | {} | {med} | {closer} | {wider} | {:.3} |",
+            d.len(),
+            sign_test_p(closer, wider)
+        );
+    }
+}
+
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let dir = PathBuf::from(args.next().ok_or_else(|| anyhow::anyhow!("DIR NAME=PX4_DIR ..."))?);
@@ -104,7 +172,12 @@ fn main() -> anyhow::Result<()> {
         let (name, d) = a
             .split_once('=')
             .ok_or_else(|| anyhow::anyhow!("{a:?} is not NAME=PX4_DIR"))?;
-        named.push((name.to_string(), candidate(&dir, Path::new(d), &cases)?));
+        let rows = if d.ends_with(".json") {
+            lfs_candidate(Path::new(d), &cases)?
+        } else {
+            candidate(&dir, Path::new(d), &cases)?
+        };
+        named.push((name.to_string(), rows));
     }
     let fold: BTreeMap<&str, usize> = cases.iter().map(|c| (c.id.as_str(), fold_of(c, FOLDS))).collect();
     println!("{} recorded cases of tiers A and B with obstacles\n", cases.len());
@@ -119,6 +192,7 @@ fn main() -> anyhow::Result<()> {
     if fitted.is_empty() {
         return Ok(());
     }
+    paired(&fitted);
     let mut held_out: Vec<Flown> = Vec::new();
     println!("\n### Cross-validated choice ({FOLDS} folds by obstacle set)\n");
     for k in 0..FOLDS {

@@ -5,7 +5,8 @@
 //! (paper), `gain`, `vmax`, `acc`, `jerk` (px4; `jerk` > 0 selects the jerk-limited tracker), `tilt_tau`,
 //! `tilt_drag` (enable the camera pitch model), `delay` (control delay, ticks), `shift` (move every obstacle
 //! North, metres: a chance perturbation), `c_mission` (a flight file whose mission the tier-C flights fly
-//! instead of their inferred one), `camera` (preset), `jobs`, `dump` (write the per-case JSON).
+//! instead of their inferred one), `camera` (preset), `cruise` (MPC_XY_CRUISE on every flight), `jobs`, `dump`
+//! (write the per-case JSON).
 //! Halves: `prgenuav::lfs::fidelity::split_half` (a hash of the repeat group or id). Not a test: it takes a
 //! minute per evaluation.
 
@@ -44,6 +45,7 @@ fn main() {
     let mut shift = 0.0;
     let mut c_mission: Option<String> = None;
     let mut dump: Option<String> = None;
+    let mut cruise: Option<f64> = None;
     for kv in args {
         let Some((k, v)) = kv.split_once('=') else {
             eprintln!("error: expected key=value, got {kv:?}");
@@ -75,6 +77,7 @@ fn main() {
             }
             "jobs" => jobs = v.parse().unwrap_or(2),
             "dump" => dump = Some(v.to_string()),
+            "cruise" => cruise = Some(x),
             _ => {
                 eprintln!("error: unknown key {k}");
                 std::process::exit(2);
@@ -102,6 +105,14 @@ fn main() {
     for c in &mut cases {
         for o in &mut c.obstacles {
             o.position.x += shift;
+        }
+        // `cruise`: MPC_XY_CRUISE on every flight (the planner's cruise speed and lead, as the bench sets it).
+        if let Some(v) = cruise {
+            c.params.retain(|p| p.name != "MPC_XY_CRUISE");
+            c.params.push(prgenuav::model::Param {
+                name: "MPC_XY_CRUISE".into(),
+                value: v,
+            });
         }
     }
     // `c_mission` flies the tier-C flights (whose mission was inferred) on the mission of another flight file.

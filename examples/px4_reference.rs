@@ -9,7 +9,7 @@
 //!
 //! `PX4_SITL_BIN=BUILD/bin/px4 cargo run --release --example px4_reference -- [DIR=tests/data/hfs-flights]
 //! [OUT=tests/data/px4-flights] [INSTANCES=1]` (env `ONLY=id,id`: just those cases; `TIER=A`: just that tier;
-//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `CONSOLE=1`: PX4's console of a refused flight; `FIRST_INSTANCE=K`: PX4 instances from K; `HEADING=DEG`, `SPEED=F`: see below; `SIM=iris`: PX4 in external-simulator mode fed by
+//! `EXTRA_PARAMS=NAME=V,...`: more vehicle parameters; `NO_FENCE=1`: no geofence; `PLAN_AGE=1`, `YAW_RATE=0`: companion styles, see `companion_style`; `CONSOLE=1`: PX4's console of a refused flight; `FIRST_INSTANCE=K`: PX4 instances from K; `HEADING=DEG`, `SPEED=F`: see below; `SIM=iris`: PX4 in external-simulator mode fed by
 //! prgenuav's iris simulator in lockstep, the companion on simulated time, at the case's home; any release
 //! from v1.12, which has no SIH)
 
@@ -20,6 +20,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
+use prgenuav::bridge::companion::planner_steer::{CompanionStyle, PlanAge, YawRateField};
 use prgenuav::bridge::hil::sitl::{IrisSitl, IrisSpec};
 use prgenuav::bridge::sitl::{Px4Build, Px4Sitl, SitlSpec};
 use prgenuav::bridge::{CancelToken, FlyMode, FlyOptions, SimLink, fly};
@@ -38,6 +39,24 @@ fn heading_deg() -> anyhow::Result<f64> {
         Err(_) => Ok(0.0),
     }
 }
+/// `PLAN_AGE=1`: the companion's waypoint generator follows the previous step's path; `YAW_RATE=0`: its answers
+/// carry a yaw rate of 0 (as PX4-Avoidance's do) instead of NaN.
+fn companion_style() -> CompanionStyle {
+    let on = |name: &str, value: &str| std::env::var(name).as_deref() == Ok(value);
+    CompanionStyle {
+        plan_age: if on("PLAN_AGE", "1") {
+            PlanAge::OnePeriod
+        } else {
+            PlanAge::Fresh
+        },
+        yaw_rate: if on("YAW_RATE", "0") {
+            YawRateField::Zero
+        } else {
+            YawRateField::Unset
+        },
+    }
+}
+
 /// Vehicle seconds before the bridge lands the vehicle (the competition's limit is 300 s of wall time at x1).
 const TIMEOUT_S: f64 = 400.0;
 const HEADER: &str = "id,tier,mission,real_m,px4_m,status,reason,flight_time_s,wall_s,answer_p99_ms,clock_rate";
@@ -120,6 +139,7 @@ async fn fly_case(case: &FlightCase, bin: &Path, instance: u8, out: &Path) -> an
         judge: prgenuav::judge::Judge::E2025,
         // NO_FENCE=1: the boxes are not uploaded as geofence exclusions (what PX4's mission check reads).
         fence: std::env::var("NO_FENCE").is_err(),
+        companion: companion_style(),
         ..vehicle.options()
     };
     let wall = Instant::now();
@@ -211,6 +231,14 @@ fn main() -> anyhow::Result<()> {
             .ok()
             .and_then(|k| k.parse().ok())
             .unwrap_or(0);
+        let last = u32::from(first) + u32::from(instances.max(1)) - 1;
+        if last >= u32::from(prgenuav::bridge::sitl::slot::SLOTS) {
+            // PX4 sends instance 10 and up's API link to 14549, not 14540 + i (px4-rc.mavlink): no heartbeat.
+            anyhow::bail!(
+                "FIRST_INSTANCE={first} with INSTANCES={instances} reaches instance {last}: PX4 instances 0-{} only",
+                prgenuav::bridge::sitl::slot::SLOTS - 1
+            );
+        }
         for instance in (0..instances.max(1)).map(|i| i.saturating_add(first)) {
             let (queue, bin, out, table) = (queue.clone(), bin.clone(), out.clone(), table.clone());
             workers.push(tokio::spawn(async move {

@@ -96,6 +96,8 @@ pub struct FlyOptions {
     pub sim_gate: Option<SimGate>,
     /// The vehicle is a board in HITL: refuse it, before anything is set or armed, unless `SYS_HITL` is 1.
     pub require_hitl: bool,
+    /// How the avoidance companion plans and answers (its waypoint generator's path age, the yaw-rate field).
+    pub companion: crate::bridge::companion::planner_steer::CompanionStyle,
 }
 
 impl Default for FlyOptions {
@@ -119,6 +121,7 @@ impl Default for FlyOptions {
             notices: None,
             sim_gate: None,
             require_hitl: false,
+            companion: Default::default(),
         }
     }
 }

@@ -155,6 +155,7 @@ impl Companion {
                 let [vx, vy, vz] = sp.vel_ned.map(|v| v.map_or(f32::NAN, |v| v as f32));
                 (out.vel_x[0], out.vel_y[0], out.vel_z[0]) = (vx, vy, vz);
                 out.pos_yaw[0] = sp.yaw_rad.map_or(f32::NAN, |y| y as f32);
+                out.vel_yaw[0] = sp.yaw_rate_rad_s.map_or(f32::NAN, |r| r as f32);
             }
             None => {
                 // Mirror PX4's point 0 (position and/or velocity): the interface's "cannot plan" answer.

@@ -127,6 +127,7 @@ fn landing_answer_is_a_descent_velocity_with_z_unset() {
         pos_ned: [50.0, 0.0, f64::NAN],
         vel_ned: [None, None, Some(1.5)],
         yaw_rad: None,
+        yaw_rate_rad_s: None,
     };
     assert!(sp.is_complete());
     let a = c.answer_with(Some(sp), Duration::ZERO, 0).unwrap();
@@ -136,6 +137,18 @@ fn landing_answer_is_a_descent_velocity_with_z_unset() {
     let m = c.answer_with(None, Duration::ZERO, 0).unwrap();
     assert!(m.pos_z[0].is_nan() && m.vel_z[0] == 1.5);
     assert!(!SteerOutput::position([0.0, 0.0, f64::NAN], None).is_complete());
+}
+
+#[test]
+#[expect(deprecated, reason = "PX4 <= 1.15's avoidance interface, deprecated upstream")]
+fn the_answer_carries_the_yaw_rate_when_set_and_nan_when_not() {
+    let mut c = Companion::default();
+    c.on_request(&px4_land(), Duration::ZERO);
+    let mut sp = SteerOutput::position([1.0, 2.0, -3.0], Some(0.5));
+    let unset = c.answer_with(Some(sp), Duration::ZERO, 0).unwrap();
+    assert!(unset.vel_yaw[0].is_nan() && unset.pos_yaw[0] == 0.5);
+    sp.yaw_rate_rad_s = Some(0.0);
+    assert_eq!(c.answer_with(Some(sp), Duration::ZERO, 0).unwrap().vel_yaw[0], 0.0);
 }
 
 #[test]

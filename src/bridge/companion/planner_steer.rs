@@ -18,6 +18,41 @@ use geodesy::frames::{enu_to_ned, ned_to_enu, yaw_enu_to_ned_rad, yaw_ned_to_enu
 /// Planner period assumed for the first step, seconds.
 const FIRST_DT_S: f64 = 0.1;
 
+/// How the companion plans and answers where PX4-Avoidance's behaviour is a matter of its timing or of a field
+/// it leaves unset (both default to prgenuav's original companion).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub struct CompanionStyle {
+    /// How old the path is that the waypoint generator follows.
+    pub plan_age: PlanAge,
+    /// What the answer's yaw-rate field carries.
+    pub yaw_rate: YawRateField,
+}
+
+/// The answer's yaw-rate field (point 0's `vel_yaw`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum YawRateField {
+    /// NaN: PX4 v1.12 then feeds the yaw setpoint's rate of change forward (`FlightTaskAuto::_limitYawRate`).
+    #[default]
+    Unset,
+    /// 0 rad/s, so PX4 tracks the yaw setpoint on its attitude gain alone: PX4-Avoidance fills the field from a
+    /// member its live code never sets (`angular_velocity_wp`, read as zero here: an inference).
+    Zero,
+}
+
+/// How old the path is that the waypoint generator follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlanAge {
+    /// The path planned in the same step, from the same pose (age 0).
+    #[default]
+    Fresh,
+    /// The path of the previous step (one planner period old, planned from the pose of then): PX4-Avoidance's
+    /// waypoint loop runs on its own 10 Hz timer after the planner, whose tree comes from a cloud and a pose
+    /// already old, and advances the carrot by the path's age times the cruise speed.
+    OnePeriod,
+}
+
 /// Planner + camera + waypoint generator over a fixed set of virtual boxes.
 pub struct PlannerSteer {
     scene: Scene,
@@ -28,6 +63,7 @@ pub struct PlannerSteer {
     planner: Planner,
     generator: WaypointGenerator,
     last_s: Option<f64>,
+    style: CompanionStyle,
 }
 
 impl std::fmt::Debug for PlannerSteer {
@@ -73,7 +109,14 @@ impl PlannerSteer {
             generator: WaypointGenerator::with_fovs(params.fovs.clone()),
             planner: Planner::new(params)?,
             last_s: None,
+            style: CompanionStyle::default(),
         })
+    }
+
+    /// The same steering in `style`.
+    pub fn with_style(mut self, style: CompanionStyle) -> Self {
+        self.style = style;
+        self
     }
 }
 
@@ -92,6 +135,7 @@ impl Steer for PlannerSteer {
         let goal = ned_to_enu(&v3(input.goal_ned));
         let prev_goal = ned_to_enu(&v3(input.prev_goal_ned));
         let cruising = input.airborne && matches!(input.nav, Nav::Mission | Nav::Offboard);
+        let previous = (self.style.plan_age == PlanAge::OnePeriod).then(|| self.planner.last_plan().clone());
         if cruising {
             let plan_input = PlanInput {
                 state,
@@ -113,11 +157,15 @@ impl Steer for PlannerSteer {
                 is_land_waypoint: input.nav == Nav::Land,
                 is_takeoff_waypoint: input.nav == Nav::Takeoff,
                 desired_vel_enu: input.desired_vel_ned.map(|v| ned_to_enu(&v3(v))),
-                plan: self.planner.last_plan(),
+                plan: previous.as_ref().unwrap_or(self.planner.last_plan()),
             },
             input.now_s,
         );
-        setpoint_ned(&out)
+        let yaw_rate = (self.style.yaw_rate == YawRateField::Zero).then_some(0.0);
+        setpoint_ned(&out).map(|sp| SteerOutput {
+            yaw_rate_rad_s: yaw_rate,
+            ..sp
+        })
     }
 }
 
@@ -163,6 +211,7 @@ fn setpoint_ned(out: &WaypointOutput) -> Option<SteerOutput> {
         pos_ned: [f64::from(sp.x), f64::from(sp.y), f64::from(sp.z)],
         vel_ned: vel,
         yaw_rad: Some(yaw_enu_to_ned_rad(f64::from(out.yaw_enu_rad))),
+        yaw_rate_rad_s: None,
     };
     out.is_complete().then_some(out)
 }
@@ -209,6 +258,48 @@ mod tests {
         let deflected = (sp.pos_ned[1] - free_sp.pos_ned[1]).abs() > 0.5;
         let braking = sp.pos_ned[0] < free_sp.pos_ned[0] - 0.5;
         assert!(deflected || braking, "blocked {sp:?} vs free {free_sp:?}");
+    }
+
+    fn wall_run(style: CompanionStyle, steps: u32) -> Vec<SteerOutput> {
+        let wall = Obstacle::new(2.0, 16.0, 20.0, 6.0, 0.0, 0.0);
+        let mut steer = PlannerSteer::new(&[wall], Camera::hfs()).unwrap().with_style(style);
+        (0..steps)
+            .map(|k| {
+                steer
+                    .steer(&input(f64::from(k) * 0.1, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0]))
+                    .unwrap()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_one_period_old_path_gives_other_setpoints() {
+        let old = CompanionStyle {
+            plan_age: PlanAge::OnePeriod,
+            ..CompanionStyle::default()
+        };
+        let (fresh, late) = (wall_run(CompanionStyle::default(), 20), wall_run(old, 20));
+        let mut free = PlannerSteer::new(&[], Camera::hfs()).unwrap();
+        let straight = free.steer(&input(0.0, [0.0, 0.0, -5.0], [30.0, 0.0, -5.0])).unwrap();
+        // Step 0 has no earlier path: straight for the goal, as with no wall.
+        assert_eq!(late[0].pos_ned, straight.pos_ned);
+        // Then the previous step's path, its carrot further along it by the path's age: another setpoint.
+        let differs = fresh.iter().zip(&late).filter(|(a, b)| a.pos_ned != b.pos_ned).count();
+        assert!(differs >= 10, "{differs} of 20 setpoints differ");
+    }
+
+    #[test]
+    fn the_yaw_rate_field_is_nan_or_zero_by_style() {
+        assert!(
+            wall_run(CompanionStyle::default(), 3)
+                .iter()
+                .all(|o| o.yaw_rate_rad_s.is_none())
+        );
+        let zero = CompanionStyle {
+            yaw_rate: YawRateField::Zero,
+            ..CompanionStyle::default()
+        };
+        assert!(wall_run(zero, 3).iter().all(|o| o.yaw_rate_rad_s == Some(0.0)));
     }
 
     #[test]

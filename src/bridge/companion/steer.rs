@@ -52,6 +52,8 @@ pub struct SteerOutput {
     pub vel_ned: [Option<f64>; 3],
     /// Yaw setpoint.
     pub yaw_rad: Option<f64>,
+    /// Yaw-rate setpoint, rad/s; `None` = unset (PX4 then makes its feed-forward from the yaw setpoint's steps).
+    pub yaw_rate_rad_s: Option<f64>,
 }
 
 impl SteerOutput {
@@ -61,6 +63,7 @@ impl SteerOutput {
             pos_ned,
             vel_ned: [None; 3],
             yaw_rad,
+            yaw_rate_rad_s: None,
         }
     }
 

@@ -38,7 +38,8 @@ pub fn steer_for(
     frame: Option<TestFrame>,
     mpc_xy_cruise_m_s: Option<f64>,
 ) -> Box<dyn Steer> {
-    let steer = PlannerSteer::with_cruise(&test.obstacles, Camera::hfs(), mpc_xy_cruise_m_s);
+    let steer = PlannerSteer::with_cruise(&test.obstacles, Camera::hfs(), mpc_xy_cruise_m_s)
+        .map(|s| s.with_style(opts.companion));
     let planned: Box<dyn Steer> = match (steer, opts.mode) {
         (Ok(p), Mode::Avoidance | Mode::Offboard) => Box::new(p),
         (_, Mode::Avoidance) => return Box::new(MirrorSetpoint),

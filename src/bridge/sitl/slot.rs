@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use crate::bridge::options::VehicleSim;
 
 /// Instances on one machine: instance 10's bridge port would be 14550, where every instance's GCS link sends
-/// (QGroundControl's port).
+/// (QGroundControl's port), and PX4 (`px4-rc.mavlink`) sends the API link of instances above 9 to 14549.
 pub const SLOTS: u8 = 10;
 
 /// UDP ports of instance `i`: the bridge's, and PX4's own two.
