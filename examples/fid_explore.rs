@@ -108,11 +108,7 @@ fn main() {
         }
         // `cruise`: MPC_XY_CRUISE on every flight (the planner's cruise speed and lead, as the bench sets it).
         if let Some(v) = cruise {
-            c.params.retain(|p| p.name != "MPC_XY_CRUISE");
-            c.params.push(prgenuav::model::Param {
-                name: "MPC_XY_CRUISE".into(),
-                value: v,
-            });
+            prgenuav::model::Param::set(&mut c.params, "MPC_XY_CRUISE", v);
         }
     }
     // `c_mission` flies the tier-C flights (whose mission was inferred) on the mission of another flight file.

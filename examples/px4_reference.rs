@@ -40,7 +40,7 @@ fn heading_deg() -> anyhow::Result<f64> {
     }
 }
 /// `PLAN_AGE=1`: the companion's waypoint generator follows the previous step's path; `YAW_RATE=0`: its answers
-/// carry a yaw rate of 0 (as PX4-Avoidance's do) instead of NaN.
+/// carry a yaw rate of 0 (PX4-Avoidance's, as read) instead of NaN.
 fn companion_style() -> CompanionStyle {
     let on = |name: &str, value: &str| std::env::var(name).as_deref() == Ok(value);
     CompanionStyle {

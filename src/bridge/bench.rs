@@ -70,11 +70,7 @@ impl BenchProfile {
     pub fn flown(&self, test: &TestCase) -> TestCase {
         let mut t = test.clone();
         for (name, value) in self.params {
-            t.params.retain(|p| p.name != *name);
-            t.params.push(Param {
-                name: (*name).to_string(),
-                value: *value,
-            });
+            Param::set(&mut t.params, name, *value);
         }
         t
     }

@@ -16,6 +16,15 @@ pub struct Param {
 }
 
 impl Param {
+    /// Sets `name` to `value` in `params`, replacing any earlier value of it (the last one set wins).
+    pub fn set(params: &mut Vec<Param>, name: &str, value: f64) {
+        params.retain(|p| p.name != name);
+        params.push(Param {
+            name: name.to_string(),
+            value,
+        });
+    }
+
     /// Overrides (or adds) parameters from `NAME=VALUE,NAME=VALUE` (an experiment's command-line list);
     /// the error names the item that is not `NAME=number`.
     pub fn override_from_list(params: &mut Vec<Param>, list: &str) -> std::result::Result<(), String> {
@@ -25,9 +34,7 @@ impl Param {
                 .trim()
                 .parse()
                 .map_err(|_| format!("{kv:?}: the value is not a number"))?;
-            let name = name.trim().to_string();
-            params.retain(|p| p.name != name);
-            params.push(Param { name, value });
+            Param::set(params, name.trim(), value);
         }
         Ok(())
     }
